@@ -1,0 +1,78 @@
+"""rotor: rotational dynamics of piston engines.
+
+Crank kinematics, reduced inertia I(θ), gas and inertia torques, and the crankshaft's
+speed fluctuation, in JAX (float64 is switched on when rotor is imported).
+"""
+
+import jax as _jax
+
+_jax.config.update("jax_enable_x64", True)
+
+from ._checks import EngineError  # noqa: E402
+from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
+from .engine_file import engine_from_dict, load_engine, preset_names  # noqa: E402
+from .forces import (  # noqa: E402
+    crank_forces,
+    cylinder_gas_torques,
+    cylinder_pressure,
+    gas_torque,
+    imep_pa,
+    indicated_power_w,
+    mean_gas_torque,
+    reciprocating_inertia_torque,
+)
+from .inertia import (  # noqa: E402
+    cylinder_inertia,
+    inertia_coefficients,
+    mean_reduced_inertia,
+    reduced_inertia,
+    reduced_inertia_derivative,
+)
+from .kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
+from .mechanism import engine_piston_motion  # noqa: E402
+from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle, periodic_pchip  # noqa: E402
+from .summary import engine_summary  # noqa: E402
+from .table import CrankTable, crank_table  # noqa: E402
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "EngineError",
+    "Engine",
+    "Geometry",
+    "Masses",
+    "Crankshaft",
+    "Layout",
+    "Operating",
+    "Articulated",
+    "PressureTable",
+    "WiebeCycle",
+    "MotoredCycle",
+    "NoPressure",
+    "load_engine",
+    "engine_from_dict",
+    "preset_names",
+    "piston_motion",
+    "rod_motion",
+    "PistonMotion",
+    "RodMotion",
+    "mean_piston_speed",
+    "engine_piston_motion",
+    "reduced_inertia",
+    "reduced_inertia_derivative",
+    "cylinder_inertia",
+    "inertia_coefficients",
+    "mean_reduced_inertia",
+    "cylinder_pressure",
+    "cylinder_gas_torques",
+    "gas_torque",
+    "reciprocating_inertia_torque",
+    "crank_forces",
+    "imep_pa",
+    "mean_gas_torque",
+    "indicated_power_w",
+    "periodic_pchip",
+    "crank_table",
+    "CrankTable",
+    "engine_summary",
+]

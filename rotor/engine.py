@@ -1,0 +1,395 @@
+"""The engine description: equinox Modules that mirror the engine file table by table.
+
+``engine.geometry.bore_m`` is ``[geometry] bore_m`` of the file, and so on. Every
+numeric field is a float64 JAX array, so ``jax.grad`` works over any of them (use
+``eqx.tree_at`` to replace one). Each module checks its own values when it is built
+and :class:`Engine` checks how the tables fit together; a problem raises
+:class:`rotor.EngineError` (a ``ValueError``) that names the key.
+
+Angles: ``throw_angles_deg[i]`` is the crank angle at which throw i points along an
+unbanked cylinder axis (its TDC); ``bank_angles_deg[i]`` is the angle of cylinder i's
+axis in the direction of rotation. Cylinder i therefore sees the mechanical crank angle
+θ − (throw_i + bank_i). The engine's crank angle θ equals cylinder 1's cycle angle
+when throw 1 and bank 1 are zero: θ = 0 is cylinder 1's TDC at the start of intake.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar, Optional, Union
+
+import numpy as np
+import equinox as eqx
+import jax.numpy as jnp
+
+from ._checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
+from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle
+
+__all__ = [
+    "Geometry",
+    "Masses",
+    "Crankshaft",
+    "Layout",
+    "Operating",
+    "Articulated",
+    "Engine",
+    "PressureSource",
+]
+
+PressureSource = Union[PressureTable, WiebeCycle, MotoredCycle, NoPressure]
+
+
+def _tuple_of_ints(x):
+    return tuple(int(v) for v in x)
+
+
+class Geometry(eqx.Module):
+    """``[geometry]``: cylinder and crank dimensions.
+
+    **Fields:** ``bore_m`` [m]; ``stroke_m`` [m] (= 2R); ``rod_length_m``: connecting
+    rod, centre to centre [m]; ``pin_offset_m``: desaxial offset k of the piston pin [m].
+    """
+
+    bore_m: jnp.ndarray = eqx.field(converter=as_f64)
+    stroke_m: jnp.ndarray = eqx.field(converter=as_f64)
+    rod_length_m: jnp.ndarray = eqx.field(converter=as_f64)
+    pin_offset_m: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    table: ClassVar[str] = "geometry"
+
+    def __check_init__(self):
+        for key in ("bore_m", "stroke_m", "rod_length_m"):
+            check_positive(self.table, key, getattr(self, key))
+        check_finite(self.table, "pin_offset_m", self.pin_offset_m)
+        R, L, k = concrete(self.crank_radius_m), concrete(self.rod_length_m), concrete(self.pin_offset_m)
+        if R is not None and L is not None and k is not None and not L > R + abs(k):
+            extra = f" plus the pin offset |k| = {abs(k):g} m" if k != 0 else ""
+            raise EngineError(
+                f"{where(self.table, 'rod_length_m')} = {fmt(L)}: the rod must be longer than the crank "
+                f"radius R = stroke_m/2 = {fmt(R)} m{extra}, or the crank cannot turn"
+            )
+
+    @property
+    def crank_radius_m(self):
+        """R = stroke/2 [m]."""
+        return self.stroke_m / 2
+
+    @property
+    def rod_ratio(self):
+        """λ = R/L [-]."""
+        return self.crank_radius_m / self.rod_length_m
+
+    @property
+    def piston_area_m2(self):
+        """π·bore²/4 [m²]."""
+        return jnp.pi * self.bore_m**2 / 4
+
+    @property
+    def displacement_m3(self):
+        """Swept volume of one cylinder [m³]."""
+        return self.piston_area_m2 * self.stroke_m
+
+
+class Masses(eqx.Module):
+    """``[masses]``, per cylinder.
+
+    Two-mass model (default): ``reciprocating_kg`` is the piston group plus the rod's
+    share that moves with the piston; ``rotating_kg`` the rod's share at the crank pin
+    plus the throw's unbalanced mass, at radius R.
+
+    Full rod (give all three of ``rod_kg``, ``rod_cg_from_big_end_m`` [m],
+    ``rod_inertia_kgm2`` [kg·m², about the rod's centre of mass]): the rod is modelled
+    as a rigid body, and then ``reciprocating_kg`` is the piston group alone and
+    ``rotating_kg`` the throw's unbalanced mass alone.
+    """
+
+    reciprocating_kg: jnp.ndarray = eqx.field(converter=as_f64)
+    rotating_kg: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    rod_kg: Optional[jnp.ndarray] = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
+    rod_cg_from_big_end_m: Optional[jnp.ndarray] = eqx.field(
+        converter=lambda x: None if x is None else as_f64(x), default=None
+    )
+    rod_inertia_kgm2: Optional[jnp.ndarray] = eqx.field(
+        converter=lambda x: None if x is None else as_f64(x), default=None
+    )
+    table: ClassVar[str] = "masses"
+
+    def __check_init__(self):
+        t = self.table
+        check_positive(t, "reciprocating_kg", self.reciprocating_kg)
+        check_positive(t, "rotating_kg", self.rotating_kg, allow_zero=True)
+        rod = {k: getattr(self, k) for k in ("rod_kg", "rod_cg_from_big_end_m", "rod_inertia_kgm2")}
+        given = [k for k, v in rod.items() if v is not None]
+        if given and len(given) != 3:
+            missing = [k for k in rod if rod[k] is None]
+            raise EngineError(
+                f"{where(t, missing[0])} is missing: a full rod needs rod_kg, rod_cg_from_big_end_m and "
+                f"rod_inertia_kgm2 together (or none of them for the two-mass model)"
+            )
+        if given:
+            check_positive(t, "rod_kg", self.rod_kg)
+            check_positive(t, "rod_cg_from_big_end_m", self.rod_cg_from_big_end_m, allow_zero=True)
+            check_positive(t, "rod_inertia_kgm2", self.rod_inertia_kgm2, allow_zero=True)
+
+    @property
+    def full_rod(self) -> bool:
+        return self.rod_kg is not None
+
+    def two_mass_split(self, rod_length_m):
+        """(reciprocating, rotating) masses [kg] of the equivalent two-mass model.
+
+        For a full rod, its mass is split statically between the pin (m·a/L) and the crank
+        pin (m·(L − a)/L), a being the distance of its centre of mass from the big end.
+        """
+        if not self.full_rod:
+            return self.reciprocating_kg, self.rotating_kg
+        a_over_l = self.rod_cg_from_big_end_m / rod_length_m
+        return (
+            self.reciprocating_kg + self.rod_kg * a_over_l,
+            self.rotating_kg + self.rod_kg * (1 - a_over_l),
+        )
+
+
+class Crankshaft(eqx.Module):
+    """``[crankshaft]``: ``inertia_kgm2``, the constant moment of inertia of the crankshaft,
+    flywheel and everything rigidly attached [kg·m²] (not the rods and pistons)."""
+
+    inertia_kgm2: jnp.ndarray = eqx.field(converter=as_f64)
+    table: ClassVar[str] = "crankshaft"
+
+    def __check_init__(self):
+        check_positive(self.table, "inertia_kgm2", self.inertia_kgm2)
+
+
+class Layout(eqx.Module):
+    """``[layout]``: crank throws, cylinder banks and the firing order.
+
+    **Fields:** ``throw_angles_deg`` [deg] (one per cylinder); ``bank_angles_deg`` [deg]
+    (one per cylinder; zeros for an inline engine); ``firing_order``: cylinder numbers
+    1…n in firing sequence (static).
+    """
+
+    throw_angles_deg: jnp.ndarray = eqx.field(converter=as_f64)
+    firing_order: tuple = eqx.field(static=True, converter=_tuple_of_ints)
+    bank_angles_deg: Optional[jnp.ndarray] = eqx.field(
+        converter=lambda x: None if x is None else as_f64(x), default=None
+    )
+    table: ClassVar[str] = "layout"
+
+    def __check_init__(self):
+        check_finite(self.table, "throw_angles_deg", self.throw_angles_deg)
+        if self.bank_angles_deg is not None:
+            check_finite(self.table, "bank_angles_deg", self.bank_angles_deg)
+
+    @property
+    def banks_deg(self):
+        """Bank angles [deg], zeros when the file gives none."""
+        if self.bank_angles_deg is None:
+            return jnp.zeros_like(self.throw_angles_deg)
+        return self.bank_angles_deg
+
+
+class Operating(eqx.Module):
+    """``[operating]``: ``rpm``, the operating speed [rev/min] (the one place rpm is stored)."""
+
+    rpm: jnp.ndarray = eqx.field(converter=as_f64)
+    table: ClassVar[str] = "operating"
+
+    def __check_init__(self):
+        check_positive(self.table, "rpm", self.rpm)
+
+    @property
+    def omega(self):
+        """Operating speed [rad/s]."""
+        return self.rpm * jnp.pi / 30
+
+
+class Articulated(eqx.Module):
+    """``[articulated]``: slave rods hinged on a master rod (V and radial engines, seeds 000/001).
+
+    **Fields:** ``slaves``: cylinder numbers driven by a slave rod; ``masters``: the
+    master cylinder of each (same crank throw); ``knuckle_radius_m``: big-end centre to
+    knuckle pin, r₁ [m]; ``knuckle_angle_deg``: the knuckle pin's angle from the master
+    rod axis, towards the slave (usually the bank angle between them) [deg];
+    ``rod_length_m``: slave rod, knuckle pin to piston pin [m]; ``rod_knuckle_kg``: the
+    slave rod's share carried at the knuckle pin [kg] (its share at the piston pin is
+    part of ``[masses] reciprocating_kg``).
+    """
+
+    slaves: tuple = eqx.field(static=True, converter=_tuple_of_ints)
+    masters: tuple = eqx.field(static=True, converter=_tuple_of_ints)
+    knuckle_radius_m: jnp.ndarray = eqx.field(converter=as_f64)
+    knuckle_angle_deg: jnp.ndarray = eqx.field(converter=as_f64)
+    rod_length_m: jnp.ndarray = eqx.field(converter=as_f64)
+    rod_knuckle_kg: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    table: ClassVar[str] = "articulated"
+
+    def __check_init__(self):
+        t = self.table
+        if len(self.slaves) != len(self.masters):
+            raise EngineError(
+                f"{where(t, 'masters')}: one master per slave is needed "
+                f"({len(self.slaves)} slaves, {len(self.masters)} masters)"
+            )
+        check_positive(t, "knuckle_radius_m", self.knuckle_radius_m, allow_zero=True)
+        check_finite(t, "knuckle_angle_deg", self.knuckle_angle_deg)
+        check_positive(t, "rod_length_m", self.rod_length_m)
+        check_positive(t, "rod_knuckle_kg", self.rod_knuckle_kg, allow_zero=True)
+
+
+def _firing_tdc_deg(xp, tdc_deg, order, strokes):
+    """Engine angle [deg] of each cylinder's firing TDC, walking the firing order.
+
+    Each next cylinder fires at the first of its TDCs after the previous firing (a
+    four-stroke cylinder passes TDC every 360°, only one of them fires). Returns the angles
+    (indexed by cylinder) and the angle span of the walk, which must stay below one cycle.
+    """
+    cycle = 360.0 * strokes / 2
+    n = len(order)
+    start = order.index(1)
+    walk = order[start:] + order[:start]
+    first = walk[0] - 1
+    tdc1 = tdc_deg[first] + (360.0 if strokes == 4 else 0.0)
+    angles = [None] * n
+    angles[first] = tdc1
+    prev = tdc1
+    for c in walk[1:]:
+        gap = xp.mod(tdc_deg[c - 1] - prev, 360.0)
+        if strokes == 4:
+            gap = xp.where(gap < 1e-9, 360.0, gap)
+        prev = prev + gap
+        angles[c - 1] = prev
+    return angles, prev - tdc1, cycle
+
+
+class Engine(eqx.Module):
+    """An engine: the whole engine file as one pytree.
+
+    **Fields:** ``name``, ``strokes`` (2 or 4), ``cylinders`` (static); ``geometry``,
+    ``masses``, ``crankshaft``, ``layout``, ``pressure``, ``operating`` and, optionally,
+    ``articulated`` — one per table of the file.
+    """
+
+    name: str = eqx.field(static=True)
+    strokes: int = eqx.field(static=True)
+    cylinders: int = eqx.field(static=True)
+    geometry: Geometry
+    masses: Masses
+    crankshaft: Crankshaft
+    layout: Layout
+    pressure: PressureSource = eqx.field(default_factory=NoPressure)
+    operating: Operating = eqx.field(default_factory=lambda: Operating(rpm=1000.0))
+    articulated: Optional[Articulated] = None
+
+    def __check_init__(self):
+        if self.strokes not in (2, 4):
+            raise EngineError(f"strokes = {self.strokes!r}: must be 2 or 4")
+        if not (isinstance(self.cylinders, int) and self.cylinders >= 1):
+            raise EngineError(f"cylinders = {self.cylinders!r}: must be a whole number, 1 or more")
+        n = self.cylinders
+        lay = self.layout
+        for key, arr in (("throw_angles_deg", lay.throw_angles_deg), ("bank_angles_deg", lay.bank_angles_deg)):
+            if arr is not None and (jnp.ndim(arr) != 1 or arr.shape[0] != n):
+                raise EngineError(
+                    f"{where('layout', key)}: needs one angle per cylinder ({n}), got {np.size(arr)}"
+                )
+        fo = lay.firing_order
+        if len(fo) != n or sorted(fo) != list(range(1, n + 1)):
+            raise EngineError(
+                f"{where('layout', 'firing_order')} = {list(fo)}: must list each cylinder 1…{n} exactly once"
+            )
+        tdc = concrete(self.tdc_angles_deg)
+        if tdc is not None:
+            _, span, cycle = _firing_tdc_deg(np, tdc, fo, self.strokes)
+            if span >= cycle - 1e-9 and n > 1:
+                raise EngineError(
+                    f"{where('layout', 'firing_order')} = {'-'.join(map(str, fo))}: cannot fire in this order "
+                    f"with throw angles {fmt(concrete(lay.throw_angles_deg))}° and bank angles "
+                    f"{fmt(concrete(lay.banks_deg))}°: the firings do not fit into one {cycle:g}° cycle"
+                )
+        self.pressure.validate_for(self.strokes)
+        if self.masses.full_rod:
+            a, L = concrete(self.masses.rod_cg_from_big_end_m), concrete(self.geometry.rod_length_m)
+            if a is not None and L is not None and a > L:
+                raise EngineError(
+                    f"{where('masses', 'rod_cg_from_big_end_m')} = {fmt(a)}: the rod's centre of mass must lie "
+                    f"on the rod, within rod_length_m = {fmt(L)} m of the big end"
+                )
+        if self.articulated is not None:
+            self._check_articulated()
+
+    def _check_articulated(self):
+        art, n = self.articulated, self.cylinders
+        for key, cyls in (("slaves", art.slaves), ("masters", art.masters)):
+            bad = [c for c in cyls if not 1 <= c <= n]
+            if bad:
+                raise EngineError(f"{where('articulated', key)}: cylinder {bad[0]} does not exist (1…{n})")
+        if len(set(art.slaves)) != len(art.slaves) or set(art.slaves) & set(art.masters):
+            raise EngineError(
+                f"{where('articulated', 'slaves')} = {list(art.slaves)}: each slave must be listed once and "
+                "cannot itself be a master"
+            )
+        throws = concrete(self.layout.throw_angles_deg)
+        if throws is not None:
+            for s, m in zip(art.slaves, art.masters):
+                if not np.isclose(throws[s - 1], throws[m - 1]):
+                    raise EngineError(
+                        f"{where('articulated', 'masters')}: slave cylinder {s} must share the crank throw of its "
+                        f"master {m} (throw angles {throws[s - 1]:g}° and {throws[m - 1]:g}°)"
+                    )
+        r1, l1 = concrete(art.knuckle_radius_m), concrete(art.rod_length_m)
+        R = concrete(self.geometry.crank_radius_m)
+        if r1 is not None and R is not None and l1 is not None and not l1 > R + r1:
+            raise EngineError(
+                f"{where('articulated', 'rod_length_m')} = {fmt(l1)}: the slave rod must be longer than the crank "
+                f"radius plus the knuckle radius ({fmt(R + r1)} m)"
+            )
+
+    # ------------------------------------------------------------------ derived angles
+    @property
+    def cycle_rad(self) -> float:
+        """Length of one working cycle [rad]: 4π (four-stroke) or 2π (two-stroke)."""
+        return 2 * np.pi * self.strokes / 2
+
+    @property
+    def tdc_angles_deg(self):
+        """Engine crank angle at which each cylinder's piston is at TDC [deg] (mod 360)."""
+        return self.layout.throw_angles_deg + self.layout.banks_deg
+
+    @property
+    def firing_angles_rad(self):
+        """Engine crank angle of each cylinder's firing TDC [rad], cylinder 1 first.
+
+        From the throw and bank angles and the firing order; cylinder 1 fires at 2π
+        (four-stroke, where θ = 0 is its TDC at the start of intake) or at 0 (two-stroke).
+        """
+        angles, _, _ = _firing_tdc_deg(jnp, self.tdc_angles_deg, self.layout.firing_order, self.strokes)
+        return jnp.deg2rad(jnp.stack([jnp.asarray(a, dtype=jnp.float64) for a in angles]))
+
+    def mechanical_angles(self, theta):
+        """Each cylinder's crank angle from its own axis [rad], shape ``theta.shape + (cylinders,)``.
+
+        **Arguments:** ``theta``: engine crank angle [rad].
+        """
+        theta = jnp.asarray(theta, dtype=jnp.float64)
+        return theta[..., None] - jnp.deg2rad(self.tdc_angles_deg)
+
+    def cycle_angles(self, theta):
+        """Each cylinder's cycle angle (0 = TDC before intake) [rad], in [0, cycle), shape
+        ``theta.shape + (cylinders,)``.
+
+        **Arguments:** ``theta``: engine crank angle [rad].
+        """
+        theta = jnp.asarray(theta, dtype=jnp.float64)
+        firing_cycle_angle = np.pi * 2 if self.strokes == 4 else 0.0
+        return jnp.mod(theta[..., None] - self.firing_angles_rad + firing_cycle_angle, self.cycle_rad)
+
+    def slave_index(self) -> dict:
+        """{slave cylinder index: master cylinder index}, 0-based."""
+        if self.articulated is None:
+            return {}
+        return {s - 1: m - 1 for s, m in zip(self.articulated.slaves, self.articulated.masters)}
+
+    def replace(self, **changes) -> "Engine":
+        """A copy with some whole tables replaced, e.g. ``engine.replace(pressure=NoPressure())``."""
+        fields = {f: getattr(self, f) for f in self.__dataclass_fields__}
+        fields.update(changes)
+        return Engine(**fields)

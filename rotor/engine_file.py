@@ -1,0 +1,199 @@
+"""Engine files (TOML) and the built-in presets.
+
+An engine file has the top-level keys ``name``, ``strokes`` and ``cylinders`` and the
+tables ``[geometry]``, ``[masses]``, ``[crankshaft]``, ``[layout]``, ``[pressure]``,
+``[operating]`` and, optionally, ``[articulated]``; each table becomes the module of
+the same name on :class:`rotor.Engine`. Unknown keys and tables are errors (a typo
+must not be ignored), and so are values of the wrong type.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ._checks import EngineError
+from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
+from .pressure import PRESSURE_KINDS
+
+__all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path"]
+
+_NUM, _NUMS, _INTS, _STR, _INT = "a number", "a list of numbers", "a list of whole numbers", "a string", "a whole number"
+
+_TOP = {"name": _STR, "strokes": _INT, "cylinders": _INT}
+_TABLES = {
+    "geometry": Geometry,
+    "masses": Masses,
+    "crankshaft": Crankshaft,
+    "layout": Layout,
+    "operating": Operating,
+    "articulated": Articulated,
+}
+_REQUIRED_TABLES = ("geometry", "masses", "crankshaft", "layout", "operating")
+_LIST_KEYS = {
+    "throw_angles_deg": _NUMS,
+    "bank_angles_deg": _NUMS,
+    "firing_order": _INTS,
+    "angle_deg": _NUMS,
+    "pressure_pa": _NUMS,
+    "slaves": _INTS,
+    "masters": _INTS,
+}
+
+
+def _suggest(word, options):
+    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _fields(cls):
+    """{key: required?} of a module's file keys."""
+    out = {}
+    for f in dataclasses.fields(cls):
+        if f.name == "kind":
+            continue
+        no_default = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        out[f.name] = no_default
+    return out
+
+
+def _typed(table, key, value, kind):
+    where = f"[{table}] {key}" if table else key
+    if kind == _STR:
+        if not isinstance(value, str):
+            raise EngineError(f"{where} = {value!r}: expected {kind}")
+        return value
+    if kind == _INT:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise EngineError(f"{where} = {value!r}: expected {kind}")
+        return value
+    if kind == _NUM:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise EngineError(f"{where} = {value!r}: expected {kind}")
+        return float(value)
+    if not isinstance(value, list):
+        raise EngineError(f"{where} = {value!r}: expected {kind}")
+    want_int = kind == _INTS
+    for i, v in enumerate(value, 1):
+        ok = isinstance(v, int) if want_int else isinstance(v, (int, float))
+        if isinstance(v, bool) or not ok:
+            raise EngineError(f"{where}: item {i} is {v!r}, expected {'a whole number' if want_int else 'a number'}")
+    return [int(v) for v in value] if want_int else np.asarray(value, dtype=np.float64)
+
+
+def _build(table, cls, data):
+    if not isinstance(data, dict):
+        raise EngineError(f"[{table}] must be a table, got {data!r}")
+    fields = _fields(cls)
+    kwargs = {}
+    for key, value in data.items():
+        if key not in fields:
+            raise EngineError(
+                f"[{table}] {key}: unknown key{_suggest(key, fields)}; known keys: {', '.join(fields)}"
+            )
+        kwargs[key] = _typed(table, key, value, _LIST_KEYS.get(key, _NUM))
+    for key, required in fields.items():
+        if required and key not in kwargs:
+            raise EngineError(f"[{table}] {key} is missing")
+    return cls(**kwargs)
+
+
+def _build_pressure(data, strokes):
+    data = dict(data)
+    kind = data.pop("kind", None)
+    if kind is None:
+        raise EngineError(f"[pressure] kind is missing: one of {', '.join(map(repr, PRESSURE_KINDS))}")
+    if kind not in PRESSURE_KINDS:
+        raise EngineError(f"[pressure] kind = {kind!r}: unknown{_suggest(str(kind), PRESSURE_KINDS)}; "
+                          f"one of {', '.join(map(repr, PRESSURE_KINDS))}")
+    if kind == "table":
+        a, p = data.get("angle_deg"), data.get("pressure_pa")
+        cycle = 360 * strokes / 2 if strokes in (2, 4) else None
+        # a closing point at the full cycle that repeats the 0° point is redundant: drop it
+        if (cycle is not None and isinstance(a, list) and isinstance(p, list) and len(a) == len(p) and len(a) > 1
+                and a[0] == 0 and a[-1] == cycle and p[-1] == p[0]):
+            data["angle_deg"], data["pressure_pa"] = a[:-1], p[:-1]
+    return _build("pressure", PRESSURE_KINDS[kind], data)
+
+
+def engine_from_dict(data: dict) -> Engine:
+    """Build and validate an :class:`rotor.Engine` from the parsed contents of an engine file.
+
+    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) naming the key and the problem.
+    """
+    if not isinstance(data, dict):
+        raise EngineError("an engine description must be a table of keys")
+    known = set(_TOP) | set(_TABLES) | {"pressure"}
+    for key in data:
+        if key not in known:
+            kind = "table" if isinstance(data[key], dict) else "key"
+            raise EngineError(f"{key}: unknown {kind}{_suggest(key, known)}; known: {', '.join(sorted(known))}")
+    top = {}
+    for key, kind in _TOP.items():
+        if key not in data:
+            raise EngineError(f"{key} is missing (a top-level key)")
+        top[key] = _typed("", key, data[key], kind)
+    for table in _REQUIRED_TABLES:
+        if table not in data:
+            raise EngineError(f"[{table}] is missing")
+    parts = {t: _build(t, _TABLES[t], data[t]) for t in _TABLES if t in data}
+    if "pressure" in data:
+        if not isinstance(data["pressure"], dict):
+            raise EngineError(f"[pressure] must be a table, got {data['pressure']!r}")
+        parts["pressure"] = _build_pressure(data["pressure"], top["strokes"])
+    return Engine(**top, **parts)
+
+
+def preset_names() -> list[str]:
+    """Names of the built-in engines (``rotor.load_engine(name)``)."""
+    files = resources.files("rotor.presets")
+    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+
+
+def preset_path(name: str):
+    """The packaged TOML file of a preset."""
+    return resources.files("rotor.presets") / f"{name}.toml"
+
+
+def load_engine(path_or_name) -> Engine:
+    """Load an engine from a TOML file or a preset name.
+
+    **Arguments:** ``path_or_name``: a path to an engine file, or one of
+    :func:`preset_names` (``"4chn15"``, ``"tue-single"``, ``"mwm6"``, ``"v8"``).
+
+    **Returns:** a validated :class:`rotor.Engine`.
+
+    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) for a missing or malformed
+    file, naming the file, the key and the problem.
+    """
+    text_source = None
+    path = Path(path_or_name)
+    name = str(path_or_name)
+    if path.suffix != ".toml" and name in preset_names():
+        text_source = preset_path(name)
+        label = f"preset {name!r}"
+    elif path.is_file():
+        text_source = path
+        label = str(path)
+    else:
+        raise EngineError(
+            f"{name}: neither an engine file nor a preset; presets: {', '.join(preset_names())}"
+        )
+    try:
+        raw = text_source.read_bytes()
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise EngineError(f"{label}: not a TOML file (not UTF-8 text)") from None
+    except tomllib.TOMLDecodeError as e:
+        raise EngineError(f"{label}: not a valid TOML file: {e}") from None
+    except OSError as e:
+        raise EngineError(f"{label}: cannot read: {e.strerror}") from None
+    try:
+        return engine_from_dict(data)
+    except EngineError as e:
+        raise EngineError(f"{label}: {e}") from None

@@ -1,0 +1,171 @@
+"""Forces and torques of the crank mechanism (seed 004 §3.2.2, signs as there).
+
+Per cylinder, at crank speed ω (the textbook calculation holds ω constant):
+
+- gas force P_g = (p − p_crankcase)·A_p, positive towards the crank axis;
+- reciprocating inertia force P_j = −m_rec·j, j = ω²·d²s/dθ²;
+- total P_Σ = P_g + P_j;
+- side force on the liner N = P_Σ·tan β; force along the rod K = P_Σ / cos β;
+- radial force on the throw Z = K·cos(θ + β); tangential force T = K·sin(θ + β);
+- torque M = T·R (= P_Σ·ds/dθ by virtual work, which also holds for slave rods).
+
+Equation-of-motion fidelity: the *textbook* (``"constant"``) model adds the inertia
+torque of the reciprocating masses, −m_rec·ω²·s″·s′, to the gas torque; the
+*variable-inertia* model must not, because there that torque is −½·I′(θ)·ω² and comes
+out of I(θ). :func:`gas_torque` is the gas torque alone; :func:`reciprocating_inertia_torque`
+the textbook inertia torque.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import jax.numpy as jnp
+
+from .kinematics import piston_motion, rod_motion
+from .mechanism import engine_piston_motion
+
+__all__ = [
+    "cylinder_pressure",
+    "cylinder_gas_torques",
+    "gas_torque",
+    "reciprocating_inertia_torque",
+    "crank_forces",
+    "imep_pa",
+    "mean_gas_torque",
+    "indicated_power_w",
+]
+
+
+def cylinder_pressure(engine, theta):
+    """Absolute pressure in every cylinder [Pa], shape ``theta.shape + (cylinders,)``.
+
+    **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
+    """
+    phi = engine.cycle_angles(theta)
+    return engine.pressure(phi, engine.geometry, engine.strokes)
+
+
+def cylinder_gas_torques(engine, theta, model: str = "exact"):
+    """Gas torque of each cylinder, (p − p_cc)·A·ds/dθ [N·m], shape ``theta.shape + (cylinders,)``.
+
+    **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``model``: piston
+    kinematics, ``"exact"`` or ``"series"``.
+    """
+    ds = engine_piston_motion(engine, theta, model).ds
+    force = (cylinder_pressure(engine, theta) - engine.pressure.crankcase_pa) * engine.geometry.piston_area_m2
+    return force * ds
+
+
+def gas_torque(engine, theta, model: str = "exact"):
+    """Total gas torque of the engine on the crankshaft [N·m], shape of ``theta``.
+
+    **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``model``: ``"exact"``/``"series"``.
+    """
+    return jnp.sum(cylinder_gas_torques(engine, theta, model), axis=-1)
+
+
+def reciprocating_inertia_torque(engine, theta, omega, model: str = "exact"):
+    """Textbook inertia torque of the reciprocating masses at constant speed [N·m].
+
+    Σ −m_rec·ω²·(d²s/dθ²)·(ds/dθ) = −½·I′_rec(θ)·ω²; its mean over a revolution is zero.
+    Use it only with a constant inertia (the textbook model), never with I(θ).
+
+    **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``omega``: crank speed
+    [rad/s]; ``model``: ``"exact"``/``"series"``.
+    """
+    pm = engine_piston_motion(engine, theta, model)
+    m_rec, _ = engine.masses.two_mass_split(engine.geometry.rod_length_m)
+    return jnp.sum(-m_rec * omega**2 * pm.d2s * pm.ds, axis=-1)
+
+
+def crank_forces(engine, theta, omega, cylinder: int = 1, model: str = "exact") -> dict:
+    """The seed 004 forces of one cylinder at constant crank speed.
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`.
+    - ``theta``: engine crank angle [rad] (array).
+    - ``omega``: crank speed [rad/s].
+    - ``cylinder``: cylinder number, 1…n (not a slave of an articulated rod).
+    - ``model``: piston kinematics, ``"exact"`` or ``"series"``.
+
+    **Returns:** a dict of arrays: ``s_m``, ``v_m_s``, ``j_m_s2``, ``pg_N``, ``pj_N``,
+    ``psum_N``, ``n_N``, ``k_N``, ``z_N``, ``t_N``, ``m_Nm`` (SI units as named).
+    """
+    if not 1 <= cylinder <= engine.cylinders:
+        raise ValueError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
+    i = cylinder - 1
+    if i in engine.slave_index():
+        raise ValueError(f"cylinder {cylinder} is driven by a slave rod: the seed 004 table is for ordinary rods")
+    g = engine.geometry
+    theta = jnp.asarray(theta, dtype=jnp.float64)
+    alpha = engine.mechanical_angles(theta)[..., i]
+    pm = engine_piston_motion(engine, theta, model)
+    s, ds, d2s = pm.s[..., i], pm.ds[..., i], pm.d2s[..., i]
+    beta = rod_motion(alpha, g.crank_radius_m, g.rod_length_m, g.pin_offset_m).beta
+    m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
+    v = ds * omega
+    j = d2s * omega**2
+    pg = (cylinder_pressure(engine, theta)[..., i] - engine.pressure.crankcase_pa) * g.piston_area_m2
+    pj = -m_rec * j
+    psum = pg + pj
+    k = psum / jnp.cos(beta)
+    t = k * jnp.sin(alpha + beta)
+    return {
+        "s_m": s,
+        "v_m_s": v,
+        "j_m_s2": j,
+        "pg_N": pg,
+        "pj_N": pj,
+        "psum_N": psum,
+        "n_N": psum * jnp.tan(beta),
+        "k_N": k,
+        "z_N": k * jnp.cos(alpha + beta),
+        "t_N": t,
+        "m_Nm": t * g.crank_radius_m,
+    }
+
+
+def _cycle_grid(engine, points_per_rev: int = 1440):
+    n = int(points_per_rev * engine.strokes / 2)
+    return jnp.linspace(0.0, engine.cycle_rad, n, endpoint=False)
+
+
+def imep_pa(engine):
+    """Indicated mean effective pressure of one cylinder, ∮p·dV / V_h [Pa].
+
+    Computed as the cycle mean of the gas torque (which is the same integral), on a
+    grid of 0.25°.
+    """
+    phi = _cycle_grid(engine)
+    g = engine.geometry
+    # one cylinder at its own cycle angle: cycle angle φ is its mechanical angle (TDC at 0)
+    ds = piston_motion(phi, g.crank_radius_m, g.rod_length_m, g.pin_offset_m).ds
+    p = engine.pressure(phi, g, engine.strokes)
+    work = jnp.mean(p * g.piston_area_m2 * ds) * engine.cycle_rad
+    return work / g.displacement_m3
+
+
+def mean_gas_torque(engine):
+    """Cycle mean of the engine's gas torque [N·m] = n·IMEP·V_h / (cycle angle)."""
+    theta = _cycle_grid(engine)
+    return jnp.mean(gas_torque(engine, theta))
+
+
+def indicated_power_w(engine, omega=None):
+    """Indicated power [W] = mean gas torque × ω.
+
+    **Arguments:** ``omega``: crank speed [rad/s]; default the engine's ``[operating] rpm``.
+    """
+    omega = engine.operating.omega if omega is None else omega
+    return mean_gas_torque(engine) * omega
+
+
+def table_angles_deg(engine, step_deg: float) -> np.ndarray:
+    """Angles 0, step, …, cycle (inclusive, as in seed 004's tables) [deg]."""
+    cycle = 360.0 * engine.strokes / 2
+    if not (np.isfinite(step_deg) and 0 < step_deg <= cycle):
+        raise ValueError(f"step must be a positive angle up to {cycle:g} degrees, got {step_deg!r}")
+    n = int(round(cycle / step_deg))
+    if not np.isclose(n * step_deg, cycle):
+        raise ValueError(f"step {step_deg:g}° must divide the {cycle:g}° cycle evenly")
+    return np.linspace(0.0, cycle, n + 1)

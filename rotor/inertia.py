@@ -1,0 +1,145 @@
+"""Reduced moment of inertia of the crank train, I(θ), and its derivative (seeds 001, 003).
+
+The kinetic energy of the moving parts at crank speed ω is ½·I(θ)·ω², with
+
+    I(θ) = J + Σ_cylinders [ m_rot·R² + m_rec·(ds/dθ)² + rod terms ]
+
+where J is ``[crankshaft] inertia_kgm2``. The rod terms are, for the full rod, its
+mass times the squared velocity of its centre of mass per unit ω plus its own inertia
+times (dβ/dθ)²; for a slave rod, its knuckle-pin share times the knuckle pin's squared
+velocity per unit ω.
+
+Models (``model=``):
+
+- ``"exact"``: the expression above (default).
+- ``"coefficients"``: each cylinder's I_cyl(α) replaced by the seed 003 form
+  A·cos²α + B·cosα + C, with A, B, C chosen so that the mean and the first and second
+  harmonics of the exact I_cyl are kept (see :func:`inertia_coefficients`). For a
+  central two-mass cylinder A ≈ −m_rec·R², B ≈ m_rec·R²·λ/2, C ≈ m_rot·R² + m_rec·R²·(1 + λ²/8);
+  it neglects the 3rd and 4th harmonics, of relative size λ/2 and λ²/8 of m_rec·R².
+  (The coefficients printed in seed 003 are the moment of the masses about the crank
+  axis, m·x², which contains L²-terms and is not the kinetic-energy inertia; rotor keeps
+  the seed's form but fits it to the kinetic energy.)
+- ``"mean"``: the cycle mean of I(θ), a constant.
+
+I'(θ) comes from automatic differentiation of the same expression.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from .articulated import knuckle_velocity_sq, slave_piston_motion
+from .kinematics import piston_motion, rod_motion
+from .mechanism import slave_geometry
+
+__all__ = [
+    "cylinder_inertia",
+    "reduced_inertia",
+    "reduced_inertia_derivative",
+    "inertia_coefficients",
+    "mean_reduced_inertia",
+]
+
+_MODELS = ("exact", "coefficients", "mean")
+_FOURIER_POINTS = 256
+
+
+def _ordinary_cylinder_inertia(alpha, geometry, masses):
+    R, L, k = geometry.crank_radius_m, geometry.rod_length_m, geometry.pin_offset_m
+    ds = piston_motion(alpha, R, L, k).ds
+    if not masses.full_rod:
+        return masses.rotating_kg * R**2 + masses.reciprocating_kg * ds**2
+    beta, dbeta, _ = rod_motion(alpha, R, L, k)
+    a = masses.rod_cg_from_big_end_m
+    # centre of mass = crank pin + a·(unit vector big end → piston pin)
+    vx = -R * jnp.sin(alpha) - a * dbeta * jnp.sin(beta)
+    vy = R * jnp.cos(alpha) - a * dbeta * jnp.cos(beta)
+    return (
+        masses.rotating_kg * R**2
+        + masses.reciprocating_kg * ds**2
+        + masses.rod_kg * (vx**2 + vy**2)
+        + masses.rod_inertia_kgm2 * dbeta**2
+    )
+
+
+def cylinder_inertia(engine, theta):
+    """Each cylinder's contribution to I(θ) [kg·m²], shape ``theta.shape + (cylinders,)``.
+
+    **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
+    """
+    alpha = engine.mechanical_angles(theta)
+    out = _ordinary_cylinder_inertia(alpha, engine.geometry, engine.masses)
+    for s, m in engine.slave_index().items():
+        sg = slave_geometry(engine, s, m)
+        a_master = alpha[..., s] + sg.bank_rad
+        ds = slave_piston_motion(a_master, sg).ds
+        i_slave = engine.masses.reciprocating_kg * ds**2 + engine.articulated.rod_knuckle_kg * knuckle_velocity_sq(
+            a_master, sg
+        )
+        out = out.at[..., s].set(i_slave)
+    return out
+
+
+def inertia_coefficients(engine):
+    """The seed 003 coefficients of each cylinder: I_cyl(α) ≈ A·cos²α + B·cosα + C.
+
+    Chosen so that the form has the same mean and the same first and second cosine
+    harmonics as the exact I_cyl(α), α being the cylinder's own crank angle: with
+    aₙ = (1/π)∫₀^{2π} I_cyl(α) cos(nα) dα, A = 2a₂, B = a₁ and C = mean − a₂.
+
+    **Returns:** ``(A, B, C)`` [kg·m²], each of shape ``(cylinders,)``.
+    """
+    theta = jnp.linspace(0.0, 2 * jnp.pi, _FOURIER_POINTS, endpoint=False)
+    ci = cylinder_inertia(engine, theta)  # (points, cylinders)
+    alpha = engine.mechanical_angles(theta)  # each cylinder's own angle
+    mean = jnp.mean(ci, axis=0)
+    a1 = 2 * jnp.mean(ci * jnp.cos(alpha), axis=0)
+    a2 = 2 * jnp.mean(ci * jnp.cos(2 * alpha), axis=0)
+    return 2 * a2, a1, mean - a2
+
+
+def _check_model(model):
+    if model not in _MODELS:
+        raise ValueError(f"inertia model must be one of {_MODELS}, got {model!r}")
+
+
+def reduced_inertia(engine, theta, model: str = "exact"):
+    """Reduced moment of inertia of the whole engine I(θ) [kg·m²].
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`.
+    - ``theta``: engine crank angle [rad], any shape.
+    - ``model``: ``"exact"`` (default), ``"coefficients"`` (seed 003 form) or ``"mean"``.
+
+    **Returns:** I(θ), shape of ``theta`` [kg·m²].
+    """
+    _check_model(model)
+    theta = jnp.asarray(theta, dtype=jnp.float64)
+    J = engine.crankshaft.inertia_kgm2
+    if model == "exact":
+        return J + jnp.sum(cylinder_inertia(engine, theta), axis=-1)
+    if model == "mean":
+        return jnp.broadcast_to(mean_reduced_inertia(engine), theta.shape)
+    A, B, C = inertia_coefficients(engine)
+    c = jnp.cos(engine.mechanical_angles(theta))
+    return J + jnp.sum(A * c**2 + B * c + C, axis=-1)
+
+
+def reduced_inertia_derivative(engine, theta, model: str = "exact"):
+    """dI/dθ [kg·m²/rad] by automatic differentiation of :func:`reduced_inertia`.
+
+    **Arguments:** as :func:`reduced_inertia`.
+    """
+    theta = jnp.asarray(theta, dtype=jnp.float64)
+    return jax.jvp(lambda t: reduced_inertia(engine, t, model), (theta,), (jnp.ones_like(theta),))[1]
+
+
+def mean_reduced_inertia(engine):
+    """Mean of I(θ) over a revolution [kg·m²] (exact, by spectral quadrature).
+
+    For a central two-mass engine this is J + n·(m_rot·R² + m_rec·R²·(½ + λ²/8 + O(λ⁴))).
+    """
+    theta = jnp.linspace(0.0, 2 * jnp.pi, _FOURIER_POINTS, endpoint=False)
+    return jnp.mean(reduced_inertia(engine, theta))

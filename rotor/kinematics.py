@@ -1,0 +1,126 @@
+"""Kinematics of the crank mechanism (seeds 000, 002, 004).
+
+Conventions: ``theta`` is the crank angle [rad] of the throw measured from the cylinder
+axis in the direction of rotation (0 = the throw points at the cylinder head). The
+piston pin may be offset by ``k`` [m] from the line through the crank centre (desaxial
+mechanism, offset ratio z = k/R); then the rod angle obeys sin β = λ (sin θ − z).
+
+Everything is returned as derivatives with respect to the crank angle, so that the
+same functions serve a constant and a varying crank speed: the piston velocity is
+``ds/dθ · ω`` [m/s] and its acceleration ``d²s/dθ² · ω² + ds/dθ · ε`` [m/s²].
+
+``model="exact"`` is the reference. ``model="series"`` is the textbook λ-series
+(seed 000 and seed 004 §3.2.1), accurate to O(λ³) for a central mechanism and to
+O(λ³ + λ²z²) for an offset one.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+__all__ = [
+    "PistonMotion",
+    "RodMotion",
+    "piston_motion",
+    "rod_motion",
+    "mean_piston_speed",
+]
+
+_MODELS = ("exact", "series")
+
+
+class PistonMotion(NamedTuple):
+    """Piston displacement from TDC and its crank-angle derivatives.
+
+    **Fields:**
+    - ``s``: displacement from top dead centre, towards the crank [m].
+    - ``ds``: ds/dθ [m/rad] (velocity = ds·ω).
+    - ``d2s``: d²s/dθ² [m/rad²] (acceleration at constant speed = d2s·ω²).
+    """
+
+    s: jnp.ndarray
+    ds: jnp.ndarray
+    d2s: jnp.ndarray
+
+
+class RodMotion(NamedTuple):
+    """Connecting-rod swing angle and its crank-angle derivatives.
+
+    **Fields:**
+    - ``beta``: rod angle from the cylinder axis [rad].
+    - ``dbeta``: dβ/dθ [-] (rod angular velocity = dbeta·ω).
+    - ``d2beta``: d²β/dθ² [-] (rod angular acceleration at constant speed = d2beta·ω²).
+    """
+
+    beta: jnp.ndarray
+    dbeta: jnp.ndarray
+    d2beta: jnp.ndarray
+
+
+def _check_model(model: str) -> None:
+    if model not in _MODELS:
+        raise ValueError(f"kinematics model must be one of {_MODELS}, got {model!r}")
+
+
+def rod_motion(theta, crank_radius_m, rod_length_m, pin_offset_m=0.0) -> RodMotion:
+    """Exact rod angle β(θ) and its derivatives (seed 000).
+
+    **Arguments:**
+    - ``theta``: crank angle from the cylinder axis [rad].
+    - ``crank_radius_m``: R [m]. ``rod_length_m``: L, centre to centre [m].
+    - ``pin_offset_m``: piston-pin offset k [m] (0 for a central mechanism).
+
+    **Returns:** a :class:`RodMotion`.
+    """
+    theta = jnp.asarray(theta, dtype=jnp.float64)
+    R, L, k = crank_radius_m, rod_length_m, pin_offset_m
+    sin_beta = (R * jnp.sin(theta) - k) / L
+    beta = jnp.arcsin(sin_beta)
+    cos_beta = jnp.sqrt(1.0 - sin_beta**2)
+    dbeta = R * jnp.cos(theta) / (L * cos_beta)
+    d2beta = jnp.tan(beta) * dbeta**2 - R * jnp.sin(theta) / (L * cos_beta)
+    return RodMotion(beta, dbeta, d2beta)
+
+
+def piston_motion(theta, crank_radius_m, rod_length_m, pin_offset_m=0.0, model="exact") -> PistonMotion:
+    """Piston displacement from TDC, ds/dθ and d²s/dθ² (seeds 000, 002, 004).
+
+    Exact: s = R[√((1+1/λ)² − z²) − cos θ − cos β / λ], ds/dθ = R sin(θ+β)/cos β,
+    d²s/dθ² = R[cos(θ+β)/cos β + λ cos²θ / cos³β].
+
+    Series: s = R[(1 + λ/4) − cos θ − (λ/4) cos 2θ − λ z sin θ],
+    ds/dθ = R(sin θ + (λ/2) sin 2θ − λ z cos θ), d²s/dθ² = R(cos θ + λ cos 2θ + λ z sin θ).
+
+    **Arguments:**
+    - ``theta``: crank angle from the cylinder axis [rad].
+    - ``crank_radius_m``: R [m]. ``rod_length_m``: L [m]. ``pin_offset_m``: k [m].
+    - ``model``: ``"exact"`` (default) or ``"series"``.
+
+    **Returns:** a :class:`PistonMotion` [m, m/rad, m/rad²].
+    """
+    _check_model(model)
+    theta = jnp.asarray(theta, dtype=jnp.float64)
+    R, L, k = crank_radius_m, rod_length_m, pin_offset_m
+    lam = R / L
+    z = k / R
+    if model == "series":
+        s = R * ((1 + lam / 4) - jnp.cos(theta) - lam / 4 * jnp.cos(2 * theta) - lam * z * jnp.sin(theta))
+        ds = R * (jnp.sin(theta) + lam / 2 * jnp.sin(2 * theta) - lam * z * jnp.cos(theta))
+        d2s = R * (jnp.cos(theta) + lam * jnp.cos(2 * theta) + lam * z * jnp.sin(theta))
+        return PistonMotion(s, ds, d2s)
+    beta, dbeta, _ = rod_motion(theta, R, L, k)
+    cos_beta = jnp.cos(beta)
+    s = jnp.sqrt((R + L) ** 2 - k**2) - R * jnp.cos(theta) - L * cos_beta
+    ds = R * jnp.sin(theta + beta) / cos_beta
+    d2s = R * jnp.cos(theta + beta) / cos_beta + L * dbeta**2 / cos_beta
+    return PistonMotion(s, ds, d2s)
+
+
+def mean_piston_speed(stroke_m, omega):
+    """Mean piston speed v_m = S·n/30 = S·ω/π [m/s].
+
+    **Arguments:** ``stroke_m``: S [m]; ``omega``: mean crank speed [rad/s].
+    """
+    return stroke_m * omega / jnp.pi

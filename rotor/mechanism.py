@@ -1,0 +1,51 @@
+"""Engine-level crank mechanism: every cylinder's piston motion at the engine crank angle.
+
+Ordinary cylinders use the closed forms of :mod:`rotor.kinematics` at their own
+mechanical angle; slave cylinders of articulated rods use :mod:`rotor.articulated`.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from .articulated import SlaveGeometry, slave_piston_motion
+from .kinematics import PistonMotion, piston_motion
+
+__all__ = ["slave_geometry", "engine_piston_motion"]
+
+
+def slave_geometry(engine, slave: int, master: int) -> SlaveGeometry:
+    """The :class:`rotor.articulated.SlaveGeometry` of 0-based cylinder ``slave`` on ``master``."""
+    g, art = engine.geometry, engine.articulated
+    banks = engine.layout.banks_deg
+    return SlaveGeometry(
+        g.crank_radius_m,
+        g.rod_length_m,
+        g.pin_offset_m,
+        art.knuckle_radius_m,
+        jnp.deg2rad(art.knuckle_angle_deg),
+        art.rod_length_m,
+        jnp.deg2rad(banks[slave] - banks[master]),
+    )
+
+
+def engine_piston_motion(engine, theta, model: str = "exact") -> PistonMotion:
+    """Piston displacement and its crank-angle derivatives for every cylinder.
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`.
+    - ``theta``: engine crank angle [rad], any shape.
+    - ``model``: ``"exact"`` or ``"series"`` (slave pistons are always exact).
+
+    **Returns:** a :class:`rotor.kinematics.PistonMotion` whose fields have shape
+    ``theta.shape + (cylinders,)`` [m, m/rad, m/rad²].
+    """
+    g = engine.geometry
+    alpha = engine.mechanical_angles(theta)
+    pm = piston_motion(alpha, g.crank_radius_m, g.rod_length_m, g.pin_offset_m, model=model)
+    for s, m in engine.slave_index().items():
+        sg = slave_geometry(engine, s, m)
+        alpha_master = alpha[..., s] + sg.bank_rad
+        sm = slave_piston_motion(alpha_master, sg)
+        pm = PistonMotion(*(full.at[..., s].set(part) for full, part in zip(pm, sm)))
+    return pm
