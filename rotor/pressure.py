@@ -203,7 +203,6 @@ class _SingleZone(_Source):
     intake_pa: jnp.ndarray = eqx.field(converter=as_f64)
     exhaust_pa: jnp.ndarray = eqx.field(converter=as_f64)
     compression_exponent: jnp.ndarray = eqx.field(converter=as_f64, default=1.35)
-    expansion_exponent: jnp.ndarray = eqx.field(converter=as_f64, default=1.30)
     exhaust_open_deg: jnp.ndarray = eqx.field(converter=as_f64, default=500.0)
     blowdown_deg: jnp.ndarray = eqx.field(converter=as_f64, default=60.0)
     overlap_deg: jnp.ndarray = eqx.field(converter=as_f64, default=20.0)
@@ -219,6 +218,8 @@ class _SingleZone(_Source):
         if eps is not None and not eps > 1:
             raise EngineError(f"{where(t, 'compression_ratio')} = {fmt(eps)}: must be greater than 1")
         for key in ("compression_exponent", "expansion_exponent"):
+            if not hasattr(self, key):
+                continue
             n = concrete(getattr(self, key))
             if n is not None and not (1.0 <= n <= 2.0):
                 raise EngineError(f"{where(t, key)} = {fmt(n)}: a polytropic exponent must lie in 1…2")
@@ -241,7 +242,8 @@ class _SingleZone(_Source):
     def _closed_parts(self, phi, geometry, burn):
         """Closed-cycle pressure (no gas exchange) at φ ∈ [π, 3π] as (p0, p1), and V(φ)."""
         eps = self.compression_ratio
-        nc, ne = self.compression_exponent, self.expansion_exponent
+        nc = self.compression_exponent
+        ne = getattr(self, "expansion_exponent", nc)
         V = lambda x: cylinder_volume_m3(x, geometry, eps)  # noqa: E731
         v = V(phi)
         v_bdc = V(jnp.pi)
@@ -334,11 +336,13 @@ class WiebeCycle(_SingleZone):
 
     **Fields** (angles in cycle degrees, pressures absolute [Pa]): ``compression_ratio`` [-],
     ``intake_pa``, ``exhaust_pa``, ``imep_pa``, ``start_deg``, ``duration_deg``,
-    ``form_factor`` [-], ``compression_exponent`` [-], ``expansion_exponent`` [-],
+    ``form_factor`` [-], ``compression_exponent`` [-], ``expansion_exponent`` [-] (from
+    firing TDC on; before TDC the compression exponent applies),
     ``exhaust_open_deg``, ``blowdown_deg``, ``overlap_deg``, ``crankcase_pa``.
     """
 
     imep_pa: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
+    expansion_exponent: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True, default=1.30)
     start_deg: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
     duration_deg: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
     form_factor: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True, default=2.0)
@@ -373,9 +377,13 @@ class WiebeCycle(_SingleZone):
 
 
 class MotoredCycle(_SingleZone):
-    """Four-stroke cycle without combustion: compression and expansion polytropes, gas exchange.
+    """Four-stroke cycle without combustion: the trace of a motored or misfiring cylinder.
 
-    **Fields:** as :class:`WiebeCycle` without the heat-release keys.
+    The closed part is a reversible polytrope with ``compression_exponent`` both ways
+    (symmetric about TDC); the cycle's negative work comes from the gas exchange.
+
+    **Fields:** as :class:`WiebeCycle` without the heat-release keys and without
+    ``expansion_exponent`` (a burnt-gas property).
     """
 
     kind: ClassVar[str] = "motored"
@@ -392,7 +400,6 @@ _SINGLE_ZONE_FIELDS = (
     "intake_pa",
     "exhaust_pa",
     "compression_exponent",
-    "expansion_exponent",
     "exhaust_open_deg",
     "blowdown_deg",
     "overlap_deg",
