@@ -37,6 +37,11 @@ mwm-diesel (six-cylinder MWM diesel)
     WiebeCycle is fitted to it with imep_pa = that trace's IMEP and the compression
     ratio fixed at 17 (the fitted value is reported as well; see ``MWM_COMPRESSION_RATIO``).
 
+The fit uses a finite-difference Jacobian: JAX's derivative of a WiebeCycle with respect
+to ``start_deg``, ``duration_deg`` and ``form_factor`` is NaN (reverse mode), and every
+forward-mode derivative is NaN, because the Wiebe integral evaluates u**(m + 1) and
+w**(1/(m + 1)) at u = w = 0 for the angles before the start of combustion.
+
 Fit errors are given as a percentage of the measured peak pressure: RMS and maximum of
 |p_fit − p_data| over the 1° grid (and, for the MWM curve, at its digitised points).
 """
@@ -103,9 +108,9 @@ BOUNDS = {
     "form_factor": (0.0, 6.0),
     "compression_exponent": (1.0, 1.6),
     "expansion_exponent": (1.0, 1.6),
-    "exhaust_open_deg": (420.0, 560.0),
-    "blowdown_deg": (5.0, 90.0),
-    "overlap_deg": (2.0, 100.0),
+    "exhaust_open_deg": (420.0, 540.0),
+    "blowdown_deg": (5.0, 120.0),
+    "overlap_deg": (2.0, 110.0),
 }
 
 

@@ -59,7 +59,7 @@ class CrankTable:
         buf.write(",".join(TABLE_COLUMNS) + "\n")
         data = np.column_stack([self.columns[c] for c in TABLE_COLUMNS])
         for row in data:
-            buf.write(",".join(f"{v:.10g}" for v in row) + "\n")
+            buf.write(",".join(f"{v + 0.0:.10g}" for v in row) + "\n")  # + 0.0: no "-0"
         return buf.getvalue()
 
     def to_text(self) -> str:
@@ -76,7 +76,8 @@ class CrankTable:
         for i in range(len(self)):
             cells = []
             for (col, _, _, scale, dec), w in zip(_TEXT, widths):
-                cells.append(f"{self.columns[col][i] * scale:.{dec}f}".rjust(w))
+                value = round(float(self.columns[col][i]) * scale, dec) + 0.0  # no "-0.000"
+                cells.append(f"{value:.{dec}f}".rjust(w))
             lines.append(" ".join(cells))
         return "\n".join(lines) + "\n"
 

@@ -1,0 +1,66 @@
+"""The command line: table formats, info, plots, demo, presets."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from rotor.cli import main
+
+
+def test_table_text(capsys):
+    assert main(["table", "4chn15", "--step", "30"]) == 0
+    out = capsys.readouterr().out
+    assert "4ChN15/20.5" in out and "series kinematics" in out
+    rows = [l for l in out.splitlines() if l.strip() and l.split()[0].replace(".", "").isdigit()]
+    assert len(rows) == 25  # 0, 30, ..., 720
+
+
+def test_table_exact_and_rpm_and_output_file(tmp_path, capsys):
+    path = tmp_path / "t.csv"
+    assert main(["table", "v8", "--rpm", "2000", "--kinematics", "exact", "--format", "csv", "-o", str(path)]) == 0
+    lines = path.read_text().splitlines()
+    assert lines[0].startswith("angle_deg,s_m,")
+    assert len(lines) == 1 + 73
+    assert not list(tmp_path.glob(".rotor-*"))  # no temporary file left behind
+
+
+@pytest.mark.parametrize("args", [["--step", "7"], ["--step", "-1"], ["--rpm", "0"], ["--cylinder", "9"],
+                                  ["--format", "xml"]])
+def test_table_bad_arguments_exit_2(args, capsys):
+    with pytest.raises(SystemExit) as exc:
+        rc = main(["table", "4chn15", *args])
+        raise SystemExit(rc)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error" in err
+
+
+def test_info_json(capsys):
+    assert main(["info", "4chn15", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["cylinders"] == 4 and s["rpm"] == 1250
+    assert np.isclose(s["indicated_power_w"], s["mean_gas_torque_Nm"] * 1250 * np.pi / 30)
+    assert 0.9e6 < s["imep_pa"] < 1.05e6
+
+
+def test_plot_and_demo_write_pngs(tmp_path, capsys):
+    out = tmp_path / "plots"
+    assert main(["demo", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "IMEP" in text
+    for name in ("kinematics.png", "forces.png", "torque.png", "inertia.png"):
+        p = out / name
+        assert p.is_file() and p.stat().st_size > 10_000
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_presets_lists_names(capsys):
+    assert main(["presets"]) == 0
+    assert "4chn15" in capsys.readouterr().out
+
+
+def test_unwritable_output_is_a_clean_error(tmp_path, capsys):
+    assert main(["table", "4chn15", "-o", str(tmp_path / "missing" / "t.csv")]) == 2
+    assert capsys.readouterr().err.startswith("rotor: error:")
