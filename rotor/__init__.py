@@ -31,6 +31,7 @@ from .inertia import (  # noqa: E402
 from .kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
 from .mechanism import engine_piston_motion  # noqa: E402
 from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle, periodic_pchip  # noqa: E402
+from . import summary  # noqa: E402
 from .summary import engine_summary  # noqa: E402
 from .table import CrankTable, crank_table  # noqa: E402
 
