@@ -15,6 +15,7 @@ when throw 1 and bank 1 are zero: θ = 0 is cylinder 1's TDC at the start of int
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar, Optional, Union
 
 import numpy as np
@@ -390,6 +391,6 @@ class Engine(eqx.Module):
 
     def replace(self, **changes) -> "Engine":
         """A copy with some whole tables replaced, e.g. ``engine.replace(pressure=NoPressure())``."""
-        fields = {f: getattr(self, f) for f in self.__dataclass_fields__}
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         fields.update(changes)
         return Engine(**fields)

@@ -298,6 +298,12 @@ class _SingleZone(_Source):
         return jnp.sum(p0 * dv) * w / vh, jnp.sum(p1 * dv) * w / vh
 
 
+def _safe_pow(u, a):
+    """u**a for u > 0 and 0 for u <= 0, with finite derivatives everywhere (no 0**a NaNs)."""
+    pos = u > 0
+    return jnp.where(pos, jnp.where(pos, u, 1.0) ** a, 0.0)
+
+
 class _WiebeBurn(eqx.Module):
     """Wiebe burnt fraction x(φ) = 1 − exp(−a·((φ − φ_s)/Δφ)^(m+1))."""
 
@@ -309,8 +315,8 @@ class _WiebeBurn(eqx.Module):
     def integral(self, phi, V, n, lower):
         """∫ V(ψ)^(n−1) dx(ψ) from max(φ_s, lower) to φ, by Gauss–Legendre in w = u^(m+1)."""
         def w_of(x):
-            u = jnp.clip((x - self.start) / self.duration, 0.0, None)
-            return u ** (self.m + 1)
+            u = (x - self.start) / self.duration
+            return _safe_pow(u, self.m + 1)
 
         lo = self.start if lower is None else jnp.maximum(self.start, lower)
         w0 = w_of(lo)
@@ -318,7 +324,7 @@ class _WiebeBurn(eqx.Module):
         xg, wg = np.polynomial.legendre.leggauss(self.nodes)
         half = (w1 - w0)[..., None] / 2
         wq = (w1 + w0)[..., None] / 2 + half * xg
-        psi = self.start + self.duration * wq ** (1.0 / (self.m + 1))
+        psi = self.start + self.duration * _safe_pow(wq, 1.0 / (self.m + 1))
         f = _WIEBE_A * jnp.exp(-_WIEBE_A * wq) * V(psi) ** (n - 1)
         return jnp.sum(f * wg, axis=-1) * half[..., 0]
 
