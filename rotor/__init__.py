@@ -20,6 +20,7 @@ from .forces import (  # noqa: E402
     indicated_power_w,
     mean_gas_torque,
     reciprocating_inertia_torque,
+    total_torque,
 )
 from .inertia import (  # noqa: E402
     cylinder_inertia,
@@ -68,6 +69,7 @@ __all__ = [
     "cylinder_gas_torques",
     "gas_torque",
     "reciprocating_inertia_torque",
+    "total_torque",
     "crank_forces",
     "imep_pa",
     "mean_gas_torque",

@@ -29,6 +29,7 @@ __all__ = [
     "cylinder_gas_torques",
     "gas_torque",
     "reciprocating_inertia_torque",
+    "total_torque",
     "crank_forces",
     "imep_pa",
     "mean_gas_torque",
@@ -76,6 +77,17 @@ def reciprocating_inertia_torque(engine, theta, omega, model: str = "exact"):
     pm = engine_piston_motion(engine, theta, model)
     m_rec, _ = engine.masses.two_mass_split(engine.geometry.rod_length_m)
     return jnp.sum(-m_rec * omega**2 * pm.d2s * pm.ds, axis=-1)
+
+
+def total_torque(engine, theta, omega, model: str = "exact"):
+    """Textbook total torque of the engine at constant speed [N·m]: gas torque plus the
+    reciprocating inertia torque, summed over the cylinders at their phases (seed 004
+    §3.2.3 and §3.2.11; the total tangential force is this divided by R).
+
+    **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``omega``: crank speed
+    [rad/s]; ``model``: piston kinematics, ``"exact"`` or ``"series"``.
+    """
+    return gas_torque(engine, theta, model) + reciprocating_inertia_torque(engine, theta, omega, model)
 
 
 def crank_forces(engine, theta, omega, cylinder: int = 1, model: str = "exact") -> dict:

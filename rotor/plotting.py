@@ -71,15 +71,15 @@ def plot_torque(engine, rpm=None, ax=None, points_per_deg: int = 2):
 
     **Returns:** the Axes.
     """
-    from .forces import gas_torque, reciprocating_inertia_torque
+    from .forces import gas_torque, total_torque
 
     rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
     cycle_deg = 360 * engine.strokes / 2
     deg = np.linspace(0, cycle_deg, int(cycle_deg * points_per_deg) + 1)
     theta = jnp.deg2rad(deg)
     gas = np.asarray(gas_torque(engine, theta))
-    inertia = np.asarray(reciprocating_inertia_torque(engine, theta, rpm * np.pi / 30))
-    total = gas + inertia
+    total = np.asarray(total_torque(engine, theta, rpm * np.pi / 30))
+    inertia = total - gas
     axis = _axes(ax)
     axis.plot(deg, gas, lw=1, alpha=0.7, label="gas")
     axis.plot(deg, inertia, lw=1, alpha=0.7, label="reciprocating inertia")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import jax.numpy as jnp
 
-from .forces import gas_torque, imep_pa, mean_gas_torque, reciprocating_inertia_torque
+from .forces import imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
 from .kinematics import mean_piston_speed
 
@@ -24,7 +24,7 @@ def engine_summary(engine, rpm=None) -> dict:
     omega = rpm * np.pi / 30
     g = engine.geometry
     theta = jnp.linspace(0.0, engine.cycle_rad, int(720 * engine.strokes / 2), endpoint=False)
-    total = gas_torque(engine, theta) + reciprocating_inertia_torque(engine, theta, omega)
+    total = total_torque(engine, theta, omega)
     inertia = reduced_inertia(engine, theta)
     torque = float(mean_gas_torque(engine))
     A, B, C = inertia_coefficients(engine)
