@@ -145,8 +145,8 @@ def _cycle_grid(engine, points_per_rev: int = 1440):
 def imep_pa(engine):
     """Indicated mean effective pressure of one cylinder, ∮p·dV / V_h [Pa].
 
-    Computed as the cycle mean of the gas torque (which is the same integral), on a
-    grid of 0.25°.
+    ∮ p·A·(ds/dφ)·dφ over the cycle on a grid of 0.25° (the tests check it against the
+    mean gas torque, the same work reached through the forces).
     """
     phi = _cycle_grid(engine)
     g = engine.geometry

@@ -240,7 +240,7 @@ class _SingleZone(_Source):
 
     # p(φ) is affine in the heat released: p = p0(φ) + heat·p1(φ)
     def _closed_parts(self, phi, geometry, burn):
-        """Closed-cycle pressure (no gas exchange) at φ ∈ [π, 3π] as (p0, p1), and V(φ)."""
+        """Closed-cycle pressure (no gas exchange) at φ ∈ [π, 3π] as the affine pair (p0, p1)."""
         eps = self.compression_ratio
         nc = self.compression_exponent
         ne = getattr(self, "expansion_exponent", nc)
@@ -252,7 +252,7 @@ class _SingleZone(_Source):
         p_tdc0 = self.intake_pa * (v_bdc / v_tdc) ** nc
         p0 = jnp.where(phi <= 2 * jnp.pi, p_comp, p_tdc0 * (v_tdc / v) ** ne)
         if burn is None:
-            return p0, jnp.zeros_like(p0), v
+            return p0, jnp.zeros_like(p0)
         # heat part: d(p V^n)/dφ = (n − 1) V^(n−1) dQ/dφ, piecewise n = nc before TDC, ne after
         i_c = burn.integral(jnp.minimum(phi, 2 * jnp.pi), V, nc, lower=None)
         i_c_tdc = burn.integral(jnp.asarray(2 * jnp.pi), V, nc, lower=None)
@@ -261,13 +261,13 @@ class _SingleZone(_Source):
         p1_tdc = (nc - 1) * i_c_tdc / v_tdc**nc
         p1_after = p1_tdc * (v_tdc / v) ** ne + (ne - 1) * i_e / v**ne
         p1 = jnp.where(phi <= 2 * jnp.pi, p1_before, p1_after)
-        return p0, p1, v
+        return p0, p1
 
     def _parts(self, phi, geometry, burn):
         """Full-cycle pressure as the affine pair (p0, p1) at cycle angles φ [rad]."""
         phi = jnp.mod(jnp.asarray(phi, dtype=jnp.float64), 4 * jnp.pi)
         closed_phi = jnp.clip(phi, jnp.pi, 3 * jnp.pi)
-        p0c, p1c, _ = self._closed_parts(closed_phi, geometry, burn)
+        p0c, p1c = self._closed_parts(closed_phi, geometry, burn)
         deg = jnp.rad2deg(phi)
         # blowdown: closed cycle → exhaust pressure after the exhaust valve opens
         sb = _smoothstep((deg - self.exhaust_open_deg) / self.blowdown_deg)
