@@ -37,10 +37,9 @@ mwm-diesel (six-cylinder MWM diesel)
     WiebeCycle is fitted to it with imep_pa = that trace's IMEP and the compression
     ratio fixed at 17 (the fitted value is reported as well; see ``MWM_COMPRESSION_RATIO``).
 
-The fit uses a finite-difference Jacobian: JAX's derivative of a WiebeCycle with respect
-to ``start_deg``, ``duration_deg`` and ``form_factor`` is NaN (reverse mode), and every
-forward-mode derivative is NaN, because the Wiebe integral evaluates u**(m + 1) and
-w**(1/(m + 1)) at u = w = 0 for the angles before the start of combustion.
+The fit uses scipy's finite-difference Jacobian on bounded, scaled parameters (a few
+hundred evaluations; JAX's derivatives of WiebeCycle are finite and tested, and could
+replace it).
 
 Fit errors are given as a percentage of the measured peak pressure: RMS and maximum of
 |p_fit − p_data| over the 1° grid (and, for the MWM curve, at its digitised points).
@@ -134,12 +133,9 @@ def trace_imep_pa(angle_deg, pressure_pa, geom: rotor.Geometry) -> float:
 
 
 def cylinder_volume(theta_deg, geom: dict, compression_ratio: float):
-    """V(θ) [m³], θ from TDC [deg] (numpy)."""
-    R, L = geom["stroke_m"] / 2, geom["rod_length_m"]
-    area = np.pi * geom["bore_m"] ** 2 / 4
-    x = np.deg2rad(theta_deg)
-    s = R * (1 - np.cos(x)) + L * (1 - np.sqrt(1 - (R / L * np.sin(x)) ** 2))
-    return area * 2 * R / (compression_ratio - 1) + area * s
+    """V(θ) [m³], θ from TDC [deg], as numpy: rotor's own cylinder volume."""
+    theta = jnp.deg2rad(jnp.asarray(theta_deg, dtype=jnp.float64))
+    return np.asarray(rotor.pressure.cylinder_volume_m3(theta, rotor.Geometry(**geom), compression_ratio))
 
 
 # ----------------------------------------------------------------------------- tue: signals
@@ -394,8 +390,7 @@ def fit_wiebe(angle_deg, pressure_pa, geom: rotor.Geometry, fixed: dict, start: 
         return (np.asarray(f(jnp.asarray(unpack(z)))) - pressure_pa) / peak
 
     z0 = np.clip((np.array([start[k] for k in keys]) - lo) / scale, 1e-6, 1 - 1e-6)
-    # finite-difference Jacobian: JAX's derivative of WiebeCycle with respect to start_deg,
-    # duration_deg and form_factor is NaN (see the module docstring), so it cannot be used
+    # finite-difference Jacobian on the bounded, scaled parameters (see the module docstring)
     sol = least_squares(res, z0, jac="3-point", bounds=(0.0, 1.0), x_scale="jac", max_nfev=300,
                         xtol=1e-10, ftol=1e-10, gtol=1e-10, diff_step=1e-5)
     params = dict(fixed)
