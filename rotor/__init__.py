@@ -32,6 +32,22 @@ from .inertia import (  # noqa: E402
 from .kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
 from .mechanism import engine_piston_motion  # noqa: E402
 from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle, periodic_pchip  # noqa: E402
+from .friction import Friction  # noqa: E402
+from .loads import (  # noqa: E402
+    ConstantLoad,
+    Governor,
+    Load,
+    LoadStep,
+    PolynomialLoad,
+    PropellerLoad,
+    TableLoad,
+    parse_load,
+)
+from .combustion import combustion_pattern  # noqa: E402
+from .crank_train import CrankTrain, crank_train  # noqa: E402
+from .speed_result import Orders, SpeedResult  # noqa: E402
+from .steady_state import NoSteadyStateError, steady_state  # noqa: E402
+from .transient import simulate  # noqa: E402
 from . import summary  # noqa: E402
 from .summary import engine_summary  # noqa: E402
 from .table import CrankTable, crank_table  # noqa: E402
@@ -78,4 +94,21 @@ __all__ = [
     "crank_table",
     "CrankTable",
     "engine_summary",
+    "Friction",
+    "Load",
+    "ConstantLoad",
+    "PolynomialLoad",
+    "PropellerLoad",
+    "TableLoad",
+    "LoadStep",
+    "Governor",
+    "parse_load",
+    "combustion_pattern",
+    "CrankTrain",
+    "crank_train",
+    "SpeedResult",
+    "Orders",
+    "steady_state",
+    "simulate",
+    "NoSteadyStateError",
 ]

@@ -23,6 +23,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ._checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
+from .friction import Friction
 from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle
 
 __all__ = [
@@ -266,7 +267,7 @@ class Engine(eqx.Module):
 
     **Fields:** ``name``, ``strokes`` (2 or 4), ``cylinders`` (static); ``geometry``,
     ``masses``, ``crankshaft``, ``layout``, ``pressure``, ``operating`` and, optionally,
-    ``articulated`` — one per table of the file.
+    ``articulated`` and ``friction`` — one per table of the file.
     """
 
     name: str = eqx.field(static=True)
@@ -279,6 +280,7 @@ class Engine(eqx.Module):
     pressure: PressureSource = eqx.field(default_factory=NoPressure)
     operating: Operating = eqx.field(default_factory=lambda: Operating(rpm=1000.0))
     articulated: Optional[Articulated] = None
+    friction: Optional[Friction] = None
 
     def __check_init__(self):
         if self.strokes not in (2, 4):

@@ -2,7 +2,7 @@
 
 An engine file has the top-level keys ``name``, ``strokes`` and ``cylinders`` and the
 tables ``[geometry]``, ``[masses]``, ``[crankshaft]``, ``[layout]``, ``[pressure]``,
-``[operating]`` and, optionally, ``[articulated]``; each table becomes the module of
+``[operating]`` and, optionally, ``[articulated]`` and ``[friction]``; each table becomes the module of
 the same name on :class:`rotor.Engine`. Unknown keys and tables are errors (a typo
 must not be ignored), and so are values of the wrong type.
 """
@@ -19,6 +19,7 @@ import numpy as np
 
 from ._checks import EngineError
 from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
+from .friction import Friction
 from .pressure import PRESSURE_KINDS
 
 __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path"]
@@ -33,6 +34,7 @@ _TABLES = {
     "layout": Layout,
     "operating": Operating,
     "articulated": Articulated,
+    "friction": Friction,
 }
 _REQUIRED_TABLES = ("geometry", "masses", "crankshaft", "layout", "operating")
 _LIST_KEYS = {

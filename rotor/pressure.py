@@ -116,6 +116,10 @@ class _Source(eqx.Module):
     def validate_for(self, strokes: int) -> None:
         """Cross-checks that need the engine (cycle length)."""
 
+    def motored(self, strokes: int = 4) -> "_Source":
+        """The trace of the same cylinder without combustion (a misfire)."""
+        return self
+
 
 class NoPressure(_Source):
     """No gas force: the cylinder pressure equals the crankcase pressure.
@@ -194,6 +198,21 @@ class PressureTable(_Source):
     def __call__(self, phi, geometry, strokes: int = 4):
         period = 2 * jnp.pi * strokes / 2
         return periodic_pchip(phi, jnp.deg2rad(self.angle_deg), self.pressure_pa, period)
+
+    def motored(self, strokes: int = 4) -> "PressureTable":
+        """The table's motored trace: its compression stroke mirrored about firing TDC.
+
+        Over the 180° after firing TDC (360° four-stroke, 0° two-stroke) the pressure is
+        the table's value as far before TDC, p(2·φ_TDC − φ): the reversible polytrope of a
+        cylinder that did not fire. The rest of the cycle is kept.
+        """
+        cycle = 360.0 * strokes / 2
+        tdc = 360.0 if strokes == 4 else 0.0
+        after = jnp.mod(self.angle_deg - tdc, cycle)
+        mirror = (after > 0) & (after <= 180.0)
+        reflected = jnp.deg2rad(jnp.mod(2 * tdc - self.angle_deg, cycle))
+        p = jnp.where(mirror, self(reflected, None, strokes), self.pressure_pa)
+        return PressureTable(self.angle_deg, p, self.crankcase_pa)
 
 
 class _SingleZone(_Source):
@@ -377,7 +396,7 @@ class WiebeCycle(_SingleZone):
         p0, p1 = self._parts(phi, geometry, burn)
         return p0 + self.heat_scale(geometry) * p1
 
-    def motored(self) -> "MotoredCycle":
+    def motored(self, strokes: int = 4) -> "MotoredCycle":
         """The same engine with the fuel cut: the trace of a misfiring cylinder."""
         return MotoredCycle(**{f: getattr(self, f) for f in _SINGLE_ZONE_FIELDS})
 

@@ -1,0 +1,323 @@
+"""The equation of motion of the crank train and its integrators.
+
+    I(θ)·θ'' + ½·I'(θ)·θ'² = M_engine(θ, ω, t) − M_loss(ω, t)
+
+M_engine is the gas torque (each cylinder's motored torque plus its combustion part,
+scaled per firing and by the governor's fuel) plus, at the ``"constant"`` fidelity only,
+the explicit reciprocating inertia torque k(θ)·ω². M_loss is friction plus the load.
+
+Formulations (``method``):
+
+- ``"closed"``: the angle domain in energy form, E = ½·I(θ)·ω², dE/dθ = F(θ) − G(θ)·E.
+  When the losses are a + c·ω² (no linear speed term, no governor, nothing changing in
+  time) this is linear in E: F = M_gas − a, G = 2(c − k)/I, and every cycle is solved on
+  the grid in closed form, E(θ) = Φ(θ)·[E₀ + ∫ F/Φ dθ], Φ = exp(−∫G dθ), with the time
+  t(θ) = ∫ dθ/ω; the integrals use the fourth-order Hermite rule on the table nodes.
+- ``"angle"``: the same energy form with time (and the governor's integral) as states,
+  integrated adaptively in θ by diffrax; any load and the governor.
+- ``"time"``: θ and ω integrated in time by diffrax: a start from rest, a stall.
+
+A run in the angle domain that slows below 2 % of its starting speed hands over to the
+time domain, which ends the run where ω reaches zero (a stall).
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+
+from .crank_train import _DM, _I, _K, _MM, CrankTrain
+from .loads import Governor, Load
+
+TRACES = {"count": 0}  # incremented each time a kernel is traced (compiled): tests check it
+
+
+def _traced():
+    TRACES["count"] += 1
+
+
+class Scene(eqx.Module):
+    """Everything numeric that the equation of motion of a run needs.
+
+    **Fields:** ``train`` (:class:`CrankTrain`); ``scales``: combustion scale per firing and
+    cylinder (cycles, n); ``friction``: (a, b, c) of M_f = a + b·ω + c·ω² [N·m]; ``load``;
+    ``governor``.
+    """
+
+    train: CrankTrain
+    scales: jnp.ndarray
+    friction: jnp.ndarray
+    load: Optional[Load] = None
+    governor: Optional[Governor] = None
+
+    def scale_at(self, theta):
+        idx = self.train.scale_index(theta, self.scales.shape[0])
+        return self.scales[idx, jnp.arange(self.train.cylinders)]
+
+    def loss(self, omega, t, signed: bool = False):
+        """Friction plus load [N·m]. ``signed``: friction as an odd function of ω (for the
+        time domain, where ω may reach zero): M_f(|ω|)·tanh(ω / 0.1 rad/s)."""
+        fa, fb, fc = self.friction
+        if signed:
+            w = jnp.abs(omega)
+            m = (fa + fb * w + fc * w**2) * jnp.tanh(omega / 0.1)
+        else:
+            m = fa + fb * omega + fc * omega**2
+        if self.load is not None:
+            m = m + self.load.torque(omega, t)
+        return m
+
+    def fuel(self, omega, z):
+        if self.governor is None:
+            return jnp.ones_like(omega)
+        return self.governor.fuel(omega, z)
+
+    def terms(self, theta):
+        """(values, slopes, scales) at angle θ (scalar or array)."""
+        val, der = self.train.at(theta)
+        return val, der, self.scale_at(theta)
+
+    def engine_torque(self, val, s, omega, z):
+        comb = jnp.sum(s * val[..., _DM:], axis=-1)
+        return val[..., _MM] + self.fuel(omega, z) * comb + val[..., _K] * omega**2
+
+    def evaluate(self, theta, omega, t, z):
+        """M_engine, M_loss, I, I' at θ [rad], ω [rad/s], t [s], governor integral z [s]."""
+        val, der, s = self.terms(theta)
+        return self.engine_torque(val, s, omega, z), self.loss(omega, t), val[..., _I], der[..., _I]
+
+
+def _omega(E, inertia):
+    return jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
+
+
+# ----------------------------------------------------------------------------- closed form
+def _cumulative(f, df, h):
+    """∫ from node 0 to each node by the Hermite rule: h/2·(f₀+f₁) + h²/12·(f₀′−f₁′)."""
+    seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
+    return jnp.concatenate([jnp.zeros(1), jnp.cumsum(seg)])
+
+
+def _wrap(x):
+    """Node values 0…N−1 → 0…N (the periodic table's node N is node 0)."""
+    return jnp.concatenate([x, x[:1]], axis=0)
+
+
+def node_offsets(train: CrankTrain):
+    """Firing-window offset of each node (0…N) and cylinder relative to the engine cycle."""
+    theta = jnp.arange(train.points + 1) * train.step_rad
+    return jnp.floor((theta[:, None] - train.firing_rad) / train.cycle_rad + 0.5).astype(jnp.int32)
+
+
+def linear_parts(train: CrankTrain, s_nodes, a, c):
+    """Pieces of the linear energy equation over one cycle on the nodes 0…N.
+
+    Returns (I, I', F, F', G, G', ΔM-sum, its slope): F = M_motored + Σ s·ΔM − a,
+    G = 2(c − k)/I.
+    """
+    v, d = _wrap(train.values), _wrap(train.slopes)
+    inertia, dinertia = v[:, _I], d[:, _I]
+    k, dk = v[:, _K], d[:, _K]
+    comb = jnp.sum(s_nodes * v[:, _DM:], axis=1)
+    dcomb = jnp.sum(s_nodes * d[:, _DM:], axis=1)
+    F = v[:, _MM] + comb - a
+    dF = d[:, _MM] + dcomb
+    G = 2 * (c - k) / inertia
+    dG = 2 * (-dk * inertia - (c - k) * dinertia) / inertia**2
+    return inertia, dinertia, F, dF, G, dG
+
+
+def linear_cycle(train: CrankTrain, parts, E0, t0):
+    """E, ω, t on the nodes 0…N of one cycle from E(0) = E0, t(0) = t0 (closed form)."""
+    inertia, dinertia, F, dF, G, dG = parts
+    h = train.step_rad
+    cumG = _cumulative(G, dG, h)
+    phi = jnp.exp(-cumG)
+    q = F / phi
+    dq = (dF + F * G) / phi
+    E = phi * (E0 + _cumulative(q, dq, h))
+    omega = _omega(E, inertia)
+    dE = F - G * E
+    domega = 0.5 * omega * (dE / jnp.maximum(E, 1e-300) - dinertia / inertia)
+    r, dr = 1.0 / omega, -domega / omega**2
+    t = t0 + _cumulative(r, dr, h)
+    return E, omega, t, dE
+
+
+@eqx.filter_jit
+def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int):
+    """``cycles`` cycles in closed form from E0, t0; the combustion scale of cycle k is
+    ``scene.scales[first_cycle + k]``. Returns per cycle the node values every ``stride``
+    nodes (E, ω, t) of shape (cycles, N/stride), the end state, and the first cycle in
+    which E reached zero (or ``cycles``)."""
+    _traced()
+    train = scene.train
+    offsets = node_offsets(train)
+    n_total = scene.scales.shape[0]
+    cyl = jnp.arange(train.cylinders)
+
+    def body(carry, k):
+        E0, t0, stalled_at = carry
+        idx = jnp.clip(first_cycle + k + offsets, 0, n_total - 1)
+        s_nodes = scene.scales[idx, cyl]
+        parts = linear_parts(train, s_nodes, a, c)
+        E, omega, t, dE = linear_cycle(train, parts, E0, t0)
+        bad = (jnp.min(E) <= 0) | ~jnp.all(jnp.isfinite(E))
+        stalled_at = jnp.where((stalled_at == cycles) & bad, k, stalled_at)
+        keep = stalled_at == cycles
+        E_end = jnp.where(keep, E[-1], E0)
+        t_end = jnp.where(keep, t[-1], t0)
+        out = (E[:-1:stride], t[:-1:stride])
+        return (E_end, t_end, stalled_at), out
+
+    (E_end, t_end, stalled_at), (E, t) = jax.lax.scan(
+        body, (E0, t0, jnp.asarray(cycles)), jnp.arange(cycles)
+    )
+    return E, t, E_end, t_end, stalled_at
+
+
+# ----------------------------------------------------------------------------- diffrax
+def _angle_field(theta, y, args):
+    scene, e_ref, w_ref = args
+    e, tau, z = y
+    E = e * e_ref
+    t = tau / w_ref
+    val, der, s = scene.terms(theta)
+    omega = _omega(E, val[_I])
+    m_eng = scene.engine_torque(val, s, omega, z)
+    m_loss = scene.loss(omega, t)
+    dz = scene.governor.error(omega) / omega if scene.governor is not None else jnp.zeros_like(omega)
+    return (m_eng - m_loss) / e_ref, w_ref / omega, dz
+
+
+def _controller(rtol):
+    return dfx.PIDController(rtol=rtol, atol=rtol, pcoeff=0.0, icoeff=1.0)
+
+
+def _solver(high_order: bool):
+    return dfx.Dopri8() if high_order else dfx.Tsit5()
+
+
+@eqx.filter_jit
+def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, high_order: bool, max_steps: int,
+              forward: bool = False):
+    """Adaptive solve in the angle domain from θ0 with y0 = (E, t, z), saving at ``theta_out``.
+
+    Ends early (a stall hand-over) where E falls to ``e_switch``. ``forward``: use
+    diffrax's forward-mode adjoint (for Jacobians by ``jax.jacfwd``). Returns the saved
+    (E, t, z), the final θ and state, and whether it ended early."""
+    _traced()
+    E0, t0, z0 = y0
+    e_ref = E0
+    w_ref = jnp.sqrt(2 * E0 / scene.train.mean_inertia)
+    y = (jnp.ones_like(E0), t0 * w_ref, z0)
+    event = dfx.Event(lambda t, y, args, **kw: y[0] - e_switch / e_ref, optx.Newton(1e-12, 1e-12), direction=False)
+    sol = dfx.diffeqsolve(
+        dfx.ODETerm(_angle_field),
+        _solver(high_order),
+        theta0,
+        theta_out[-1],
+        None,
+        y,
+        args=(scene, e_ref, w_ref),
+        saveat=dfx.SaveAt(ts=theta_out, t1=True),
+        stepsize_controller=_controller(rtol),
+        event=event,
+        max_steps=max_steps,
+        throw=False,
+        adjoint=dfx.ForwardMode() if forward else dfx.RecursiveCheckpointAdjoint(),
+    )
+    e, tau, z = sol.ys
+    n = theta_out.shape[0]
+    out = (e[:n] * e_ref, tau[:n] / w_ref, z[:n])
+    end = (sol.ts[-1], e[-1] * e_ref, tau[-1] / w_ref, z[-1])
+    stopped = sol.event_mask
+    ok = sol.result == dfx.RESULTS.successful
+    return out, end, stopped, ok, sol.stats["num_steps"]
+
+
+def _time_field(t, y, args):
+    scene, w_ref = args
+    theta, w, z = y
+    omega = w * w_ref
+    val, der, s = scene.terms(theta)
+    inertia, dinertia = val[_I], der[_I]
+    m_eng = scene.engine_torque(val, s, omega, z)
+    m_loss = scene.loss(omega, t, signed=True)
+    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    dz = scene.governor.error(omega) if scene.governor is not None else jnp.zeros_like(omega)
+    return omega, accel / w_ref, dz
+
+
+@eqx.filter_jit
+def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool, max_steps: int):
+    """Adaptive solve in time from (θ, ω, z) = y0 until θ reaches ``theta_end``, ω falls to
+    zero (if ``stop_at_stall``) or t reaches ``t_end``. Returns every accepted step."""
+    _traced()
+    conds = [lambda t, y, args, **kw: y[0] - theta_end]
+    dirs = [True]
+    if stop_at_stall:
+        # ω/ω_ref + 1e-12: a start from rest that rolls backwards is a stall too
+        conds.append(lambda t, y, args, **kw: y[1] + 1e-12)
+        dirs.append(False)
+    event = dfx.Event(conds, optx.Newton(1e-12, 1e-12), direction=dirs)
+    theta0, omega0, z0 = y0
+    sol = dfx.diffeqsolve(
+        dfx.ODETerm(_time_field),
+        _solver(False),
+        t0,
+        t_end,
+        None,
+        (theta0, omega0 / omega_ref, z0),
+        args=(scene, omega_ref),
+        saveat=dfx.SaveAt(t0=True, steps=True),
+        stepsize_controller=_controller(rtol),
+        event=event,
+        max_steps=max_steps,
+        throw=False,
+    )
+    theta, w, z = sol.ys
+    return sol.ts, (theta, w * omega_ref, z), sol.event_mask, sol.result == dfx.RESULTS.successful
+
+
+# ----------------------------------------------------------------------------- set-up helpers
+def friction_coefficients(engine, friction):
+    """(a, b, c) of the friction torque: ``friction`` if given, else the engine file's, else none.
+
+    ``friction=False`` switches off the engine file's friction.
+    """
+    fr = engine.friction if friction is None else friction
+    if fr is None or fr is False:
+        return jnp.zeros(3)
+    return jnp.stack(fr.torque_coefficients(engine))
+
+
+def _is_zero(x):
+    if x is None:
+        return True
+    if isinstance(x, jax.core.Tracer):
+        return False
+    return bool(jnp.all(x == 0))
+
+
+def linear_losses(load, friction_abc):
+    """(a, c) when friction plus load is a + c·ω² with no speed-linear term and nothing
+    changing in time (the closed form applies), else None."""
+    fa, fb, fc = friction_abc
+    if not _is_zero(fb):
+        return None
+    if load is None:
+        return fa, fc
+    if load.time_dependent:
+        return None
+    poly = load.polynomial()
+    if poly is None or not _is_zero(poly[1]):
+        return None
+    a = fa + (0.0 if poly[0] is None else poly[0])
+    c = fc + (0.0 if poly[2] is None else poly[2])
+    return a, c

@@ -1,0 +1,67 @@
+"""Friction of the engine as a friction mean effective pressure (FMEP).
+
+The usual correlation (Chen and Flynn, SAE 650733, without its peak-pressure term):
+
+    FMEP = fmep_pa + fmep_per_speed_pa_s_per_m · c_m + fmep_per_speed2_pa_s2_per_m2 · c_m²
+
+with c_m = S·ω/π the mean piston speed [m/s]. The friction torque is the FMEP's work
+over a cycle spread evenly over the cycle angle:
+
+    M_f(ω) = FMEP(c_m) · V_total / Θ,   Θ = 2π·strokes/2.
+
+It acts against the rotation; the dynamics use it for ω ≥ 0 (a run ends when the
+crankshaft stops). There is no friction unless the engine file has a ``[friction]``
+table or the call passes one.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ._checks import as_f64, check_finite, check_positive
+
+__all__ = ["Friction"]
+
+
+class Friction(eqx.Module):
+    """``[friction]``: FMEP = a + b·c_m + c·c_m² [Pa], c_m the mean piston speed [m/s].
+
+    **Fields:**
+    - ``fmep_pa``: the constant part a [Pa] (typically 0.3–1.0 bar).
+    - ``fmep_per_speed_pa_s_per_m``: b [Pa·s/m] (default 0).
+    - ``fmep_per_speed2_pa_s2_per_m2``: c [Pa·s²/m²] (default 0).
+    """
+
+    fmep_pa: jnp.ndarray = eqx.field(converter=as_f64)
+    fmep_per_speed_pa_s_per_m: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    fmep_per_speed2_pa_s2_per_m2: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    table: ClassVar[str] = "friction"
+
+    def __check_init__(self):
+        for key in ("fmep_pa", "fmep_per_speed_pa_s_per_m", "fmep_per_speed2_pa_s2_per_m2"):
+            check_finite(self.table, key, getattr(self, key))
+            check_positive(self.table, key, getattr(self, key), allow_zero=True)
+
+    def fmep(self, piston_speed_m_s):
+        """FMEP [Pa] at mean piston speed c_m [m/s]."""
+        c = piston_speed_m_s
+        return self.fmep_pa + self.fmep_per_speed_pa_s_per_m * c + self.fmep_per_speed2_pa_s2_per_m2 * c**2
+
+    def torque_coefficients(self, engine):
+        """(a, b, c) with M_f = a + b·ω + c·ω² [N·m, N·m·s, N·m·s²] for ``engine``."""
+        g = engine.geometry
+        scale = g.displacement_m3 * engine.cylinders / engine.cycle_rad
+        k = g.stroke_m / jnp.pi  # c_m = k·ω
+        return (
+            self.fmep_pa * scale,
+            self.fmep_per_speed_pa_s_per_m * k * scale,
+            self.fmep_per_speed2_pa_s2_per_m2 * k**2 * scale,
+        )
+
+    def torque(self, engine, omega):
+        """Friction torque [N·m] of ``engine`` at crank speed ``omega`` [rad/s] (ω ≥ 0)."""
+        a, b, c = self.torque_coefficients(engine)
+        return a + b * omega + c * omega**2

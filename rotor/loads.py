@@ -1,0 +1,261 @@
+"""Loads on the crankshaft and the speed governor, as equinox Modules.
+
+A load is a torque against the rotation, M_load(ω, t) [N·m], with ω the crank speed
+[rad/s] and t the time since the start of the run [s]. All fields are float64 arrays,
+so ``jax.grad`` and ``jax.vmap`` work over any of them.
+
+- :class:`ConstantLoad` — M = torque_Nm (a dynamometer holding torque; neutral in speed).
+- :class:`PolynomialLoad` — M = a + b·ω + c·ω².
+- :class:`PropellerLoad` — M = torque_Nm·(ω/ω_rated)² (propeller law, fan, vehicle drag).
+- :class:`TableLoad` — M linear in rpm between tabulated points, constant beyond them.
+- :class:`LoadStep` — one load changing to another at a time, at once or over a ramp.
+
+:class:`Governor` is not a load: it scales the fuelling (the combustion part of every
+cylinder's gas torque) by a PI law on the speed error.
+
+:func:`parse_load` turns the command line's ``--load SPEC`` into one of these.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar, Optional
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ._checks import EngineError, as_f64, check_finite, check_positive, concrete
+
+__all__ = [
+    "Load",
+    "ConstantLoad",
+    "PolynomialLoad",
+    "PropellerLoad",
+    "TableLoad",
+    "LoadStep",
+    "Governor",
+    "parse_load",
+]
+
+_RPM = 30.0 / np.pi  # rpm per rad/s
+
+
+class Load(eqx.Module):
+    """Base class: ``torque(omega, t)`` [N·m] against the rotation."""
+
+    time_dependent: ClassVar[bool] = False
+
+    def torque(self, omega, t):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def polynomial(self):
+        """(a, b, c) when the load is a + b·ω + c·ω² with constant coefficients, else None."""
+        return None
+
+
+class ConstantLoad(Load):
+    """A constant torque against the rotation.
+
+    **Fields:** ``torque_Nm`` [N·m] (negative: a torque driving the crankshaft, e.g. a starter).
+    """
+
+    torque_Nm: jnp.ndarray = eqx.field(converter=as_f64)
+
+    def __check_init__(self):
+        check_finite("load", "torque_Nm", self.torque_Nm)
+
+    def torque(self, omega, t):
+        return self.torque_Nm + 0.0 * omega
+
+    def polynomial(self):
+        return self.torque_Nm, None, None
+
+
+class PolynomialLoad(Load):
+    """M = a + b·ω + c·ω² [N·m], ω in rad/s.
+
+    **Fields:** ``a`` [N·m], ``b`` [N·m·s/rad], ``c`` [N·m·s²/rad²].
+    """
+
+    a: jnp.ndarray = eqx.field(converter=as_f64)
+    b: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    c: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+
+    def __check_init__(self):
+        for k in ("a", "b", "c"):
+            check_finite("load", k, getattr(self, k))
+
+    def torque(self, omega, t):
+        return self.a + self.b * omega + self.c * omega**2
+
+    def polynomial(self):
+        return self.a, self.b, self.c
+
+
+class PropellerLoad(Load):
+    """Propeller law M = torque_Nm·(n/rpm)².
+
+    **Fields:** ``torque_Nm``: torque at the rated speed [N·m]; ``rpm``: the rated speed [rpm].
+    """
+
+    torque_Nm: jnp.ndarray = eqx.field(converter=as_f64)
+    rpm: jnp.ndarray = eqx.field(converter=as_f64)
+
+    def __check_init__(self):
+        check_finite("load", "torque_Nm", self.torque_Nm)
+        check_positive("load", "rpm", self.rpm)
+
+    @property
+    def c(self):
+        return self.torque_Nm / (self.rpm / _RPM) ** 2
+
+    def torque(self, omega, t):
+        return self.c * omega**2
+
+    def polynomial(self):
+        return None, None, self.c
+
+
+class TableLoad(Load):
+    """Torque tabulated against speed, linear in between, constant beyond the ends.
+
+    **Fields:** ``rpm``: increasing speeds [rpm]; ``torque_Nm``: torque at each [N·m].
+    """
+
+    rpm: jnp.ndarray = eqx.field(converter=as_f64)
+    torque_Nm: jnp.ndarray = eqx.field(converter=as_f64)
+
+    def __check_init__(self):
+        r, m = concrete(self.rpm), concrete(self.torque_Nm)
+        if r is None or m is None:
+            return
+        if r.ndim != 1 or r.shape != m.shape or r.size < 2:
+            raise EngineError("a load table needs rpm and torque_Nm lists of the same length, 2 points or more")
+        check_finite("load", "rpm", r)
+        check_finite("load", "torque_Nm", m)
+        if np.any(np.diff(r) <= 0):
+            raise EngineError(f"load table: rpm must increase, got {r.tolist()}")
+
+    def torque(self, omega, t):
+        return jnp.interp(omega * _RPM, self.rpm, self.torque_Nm)
+
+
+class LoadStep(Load):
+    """``before`` until ``time_s``, then ``after`` (a linear ramp over ``ramp_s`` if > 0).
+
+    **Fields:** ``before``, ``after``: loads; ``time_s``: when the change starts [s];
+    ``ramp_s``: how long it takes [s] (0: a step).
+    """
+
+    before: Load
+    after: Load
+    time_s: jnp.ndarray = eqx.field(converter=as_f64)
+    ramp_s: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    time_dependent: ClassVar[bool] = True
+
+    def __check_init__(self):
+        check_positive("load", "time_s", self.time_s, allow_zero=True)
+        check_positive("load", "ramp_s", self.ramp_s, allow_zero=True)
+
+    def fraction(self, t):
+        """How far the change has gone at time t [s]: 0 … 1."""
+        ramp = jnp.maximum(self.ramp_s, 1e-300)
+        return jnp.where(self.ramp_s > 0, jnp.clip((t - self.time_s) / ramp, 0.0, 1.0), (t >= self.time_s) * 1.0)
+
+    def torque(self, omega, t):
+        f = self.fraction(t)
+        return (1 - f) * self.before.torque(omega, t) + f * self.after.torque(omega, t)
+
+
+class Governor(eqx.Module):
+    """PI speed governor scaling the fuelling.
+
+    fuel = clip(fuel_start + kp·e + ki·∫e dt, fuel_min, fuel_max), e = (ω_set − ω)/ω_set.
+    The fuel scale multiplies the combustion part of every cylinder's gas torque (fired
+    minus motored), so fuel = 1 is the engine file's operating point and 0 is motoring.
+
+    **Fields:** ``rpm``: set speed [rpm]; ``kp``: proportional gain [1 per unit speed
+    error]; ``ki``: integral gain [1/s per unit speed error]; ``fuel_start``,
+    ``fuel_min``, ``fuel_max``: fuel scale at the start and its limits [-].
+    """
+
+    rpm: jnp.ndarray = eqx.field(converter=as_f64)
+    kp: jnp.ndarray = eqx.field(converter=as_f64, default=5.0)
+    ki: jnp.ndarray = eqx.field(converter=as_f64, default=10.0)
+    fuel_start: jnp.ndarray = eqx.field(converter=as_f64, default=1.0)
+    fuel_min: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    fuel_max: jnp.ndarray = eqx.field(converter=as_f64, default=2.0)
+
+    def __check_init__(self):
+        check_positive("governor", "rpm", self.rpm)
+        for k in ("kp", "ki", "fuel_start", "fuel_min", "fuel_max"):
+            check_positive("governor", k, getattr(self, k), allow_zero=True)
+        lo, hi = concrete(self.fuel_min), concrete(self.fuel_max)
+        if lo is not None and hi is not None and not lo < hi:
+            raise EngineError(f"governor: fuel_min ({lo:g}) must be below fuel_max ({hi:g})")
+
+    @property
+    def omega(self):
+        return self.rpm / _RPM
+
+    def error(self, omega):
+        """Relative speed error (ω_set − ω)/ω_set [-]."""
+        return (self.omega - omega) / self.omega
+
+    def fuel(self, omega, integral):
+        """Fuel scale [-] at speed ω [rad/s] and integrated error ``integral`` [s]."""
+        u = self.fuel_start + self.kp * self.error(omega) + self.ki * integral
+        return jnp.clip(u, self.fuel_min, self.fuel_max)
+
+
+def _numbers(text, n, spec):
+    try:
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        vals = []
+    if len(vals) != n or not all(np.isfinite(vals)):
+        raise EngineError(f"--load {spec!r}: expected {n} number{'s' if n > 1 else ''} after the colon")
+    return vals
+
+
+_LOAD_HELP = (
+    "a load is one of: none; constant:TORQUE_NM (or just TORQUE_NM); poly:A,B,C (A + B·ω + C·ω², ω in rad/s); "
+    "propeller:TORQUE_NM,RPM; table:RPM=TORQUE_NM,RPM=TORQUE_NM,...; "
+    "step:TORQUE_BEFORE,TORQUE_AFTER,TIME_S[,RAMP_S]"
+)
+
+
+def parse_load(spec: str) -> Optional[Load]:
+    """A load from its command-line spec (see ``rotor simulate --help``)."""
+    s = spec.strip()
+    kind, _, rest = s.partition(":")
+    kind = kind.lower()
+    try:
+        if s.lower() == "none":
+            return None
+        if not rest:
+            try:
+                return ConstantLoad(float(s))
+            except ValueError:
+                raise EngineError(f"--load {spec!r}: not understood; {_LOAD_HELP}") from None
+        if kind == "constant":
+            return ConstantLoad(*_numbers(rest, 1, spec))
+        if kind == "poly":
+            return PolynomialLoad(*_numbers(rest, 3, spec))
+        if kind == "propeller":
+            return PropellerLoad(*_numbers(rest, 2, spec))
+        if kind == "step":
+            vals = [float(v) for v in rest.split(",")] if rest.count(",") in (2, 3) else _numbers(rest, 3, spec)
+            ramp = vals[3] if len(vals) == 4 else 0.0
+            return LoadStep(ConstantLoad(vals[0]), ConstantLoad(vals[1]), vals[2], ramp)
+        if kind == "table":
+            pairs = [p.split("=") for p in rest.split(",")]
+            if any(len(p) != 2 for p in pairs):
+                raise EngineError(f"--load {spec!r}: a table is RPM=TORQUE_NM pairs separated by commas")
+            rpm, tq = zip(*[(float(a), float(b)) for a, b in pairs])
+            return TableLoad(list(rpm), list(tq))
+    except ValueError as e:
+        if isinstance(e, EngineError):
+            raise
+        raise EngineError(f"--load {spec!r}: {e}; {_LOAD_HELP}") from None
+    raise EngineError(f"--load {spec!r}: unknown kind {kind!r}; {_LOAD_HELP}")

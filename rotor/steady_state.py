@@ -1,0 +1,307 @@
+"""The periodic steady state: one cycle of crank speed that repeats itself exactly.
+
+Found directly, never by integrating until transients die:
+
+- with losses a + c·ω² (friction without its speed-linear term; no load, a constant
+  load or a propeller law) the cycle is linear in the kinetic energy E (see
+  :mod:`rotor.dynamics`), E(θ) = α(θ)·E₀ + β(θ) once the periodicity condition has
+  fixed the balancing load or fuel; the mean-speed condition is one scalar equation in E₀,
+  solved by Newton's method (optimistix) on log(E₀ − E*), E* the smallest E₀ that keeps
+  E > 0 over the cycle (``method="closed"``);
+- otherwise the cycle map of the angle-domain ODE (diffrax) is made periodic at the
+  required mean speed by a two-dimensional Newton iteration (``method="shooting"``),
+  started from the closed-form solution of the linearised losses.
+
+Balance: with no load or a constant load, the load torque is set to the engine's cycle-mean
+torque minus friction (``info["load_torque_Nm"]``); with a load that depends on speed,
+the fuelling is scaled until the engine carries it (``info["fuel_scale"]``, 1 = the
+engine file's pressure).
+
+A periodic solution with a given mean speed always exists in theory, but when the
+kinetic energy at its minimum is below 10⁻⁴ of its mean (ω_min < 1 % of ω_mean) the
+crankshaft practically stops once a cycle: :class:`NoSteadyStateError` says so and where.
+"""
+
+from __future__ import annotations
+
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from ._checks import EngineError, concrete
+from .crank_train import _DM, crank_train
+from .dynamics import (
+    Scene,
+    _cumulative,
+    _wrap,
+    _traced,
+    angle_run,
+    friction_coefficients,
+    linear_cycle,
+    linear_losses,
+    linear_parts,
+)
+from .loads import ConstantLoad
+from .speed_result import RPM_PER_RAD_S, SpeedResult
+
+__all__ = ["steady_state", "NoSteadyStateError"]
+
+STOP_FRACTION = 1e-4  # E_min / E_mean below which the crankshaft is taken to stop
+
+
+class NoSteadyStateError(EngineError):
+    """No usable periodic solution: the kinetic energy reaches zero inside the cycle."""
+
+
+def _check_rpm(rpm, what="rpm"):
+    r = concrete(rpm)
+    if r is not None and not (r.ndim == 0 and np.isfinite(r) and r > 0):
+        raise EngineError(f"{what} = {rpm!r}: must be a positive, finite speed in rpm")
+
+
+def _closed_solution(train, s_nodes, a, c, omega_m, balance):
+    """E on the nodes 0…N, t on the nodes, x (load or fuel), Newton result."""
+    parts0 = linear_parts(train, s_nodes, a, c)
+    inertia, dinertia, F, dF, G, dG = parts0
+    v, d = _wrap(train.values), _wrap(train.slopes)
+    comb = jnp.sum(s_nodes * v[:, _DM:], axis=1)
+    dcomb = jnp.sum(s_nodes * d[:, _DM:], axis=1)
+    if balance == "load":
+        F0, dF0, F1, dF1 = F, dF, -jnp.ones_like(F), jnp.zeros_like(F)
+    else:
+        F0, dF0, F1, dF1 = F - comb, dF - dcomb, comb, dcomb
+    h = train.step_rad
+    phi = jnp.exp(-_cumulative(G, dG, h))
+    Q0 = _cumulative(F0 / phi, (dF0 + F0 * G) / phi, h)
+    Q1 = _cumulative(F1 / phi, (dF1 + F1 * G) / phi, h)
+    # periodicity: Φ_N·(E0 + Q0_N + x·Q1_N) = E0  →  x = (E0·(1/Φ_N − 1) − Q0_N)/Q1_N
+    p = 1.0 / phi[-1] - 1.0
+    alpha = phi * (1.0 + p * Q1 / Q1[-1])
+    beta = phi * (Q0 - Q0[-1] * Q1 / Q1[-1])
+    e_ref = 0.5 * train.mean_inertia * omega_m**2
+    e_star = jnp.max(jnp.where(alpha > 0, -beta / alpha, -jnp.inf))
+    e_star = jax.lax.stop_gradient(jnp.maximum(e_star, 0.0)) + 0.0 * e_star
+    period = train.cycle_rad / omega_m
+
+    def state(eta):
+        E0 = e_star + e_ref * jnp.exp(eta)
+        x = (E0 * p - Q0[-1]) / Q1[-1]
+        parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
+        return E0, x, parts
+
+    def residual(eta, _):
+        E0, x, parts = state(eta)
+        _, _, t, _ = linear_cycle(train, parts, E0, 0.0)
+        return jnp.log(t[-1] / period)
+
+    eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
+    sol = optx.root_find(residual, optx.Newton(rtol=1e-14, atol=1e-14), eta0, max_steps=200, throw=False)
+    E0, x, parts = state(sol.value)
+    E, omega, t, _ = linear_cycle(train, parts, E0, 0.0)
+    return E, t, x, sol.result == optx.RESULTS.successful, Q1[-1]
+
+
+@eqx.filter_jit
+def _closed_kernel(train, s, a, c, omega_m, balance):
+    _traced()
+    s_nodes = jnp.broadcast_to(s, (train.points + 1, train.cylinders))
+    return _closed_solution(train, s_nodes, a, c, omega_m, balance)
+
+
+def newton(residual, u0, tol=1e-13, max_iter=30):
+    """Newton's method on a small system, differentiable by the implicit function theorem.
+
+    ``residual(u, forward)`` must accept ``forward=True`` (forward-mode safe, used for the
+    Jacobian) and ``forward=False`` (reverse-mode safe). The iterations run without
+    gradients; one last Newton step from the converged point carries them, which gives
+    exactly the implicit derivative −J⁻¹·∂r/∂p at the root.
+    """
+    jac = jax.jacfwd(lambda u: residual(u, True))
+
+    def cond(c):
+        i, u, step = c
+        return (i < max_iter) & (step > tol)
+
+    def body(c):
+        i, u, _ = c
+        du = jnp.linalg.solve(jac(u), residual(u, True))
+        return i + 1, u - du, jnp.max(jnp.abs(du))
+
+    u_conv = jax.lax.stop_gradient(
+        jax.lax.while_loop(cond, body, (0, jax.lax.stop_gradient(u0), jnp.inf))[1]
+    )
+    J = jax.lax.stop_gradient(jac(u_conv))
+    r = residual(u_conv, False)
+    u = u_conv - jnp.linalg.solve(J, r)
+    ok = jnp.all(jnp.isfinite(u)) & (jnp.max(jnp.abs(jax.lax.stop_gradient(r))) < 1e-8)
+    return u, ok
+
+
+@eqx.filter_jit
+def _shooting_kernel(scene, omega_m, guess_E0, guess_x, balance, rtol):
+    """Newton on (E0, x) so that the angle-domain cycle map is periodic with mean speed ω_m."""
+    _traced()
+    train = scene.train
+    cycle = train.cycle_rad
+    period = cycle / omega_m
+    e_ref = jax.lax.stop_gradient(guess_E0)
+    x_ref = jax.lax.stop_gradient(jnp.where(jnp.abs(guess_x) > 0, jnp.abs(guess_x), 1.0))
+    out = jnp.array([cycle])
+
+    def scene_with(x):
+        if balance == "load":
+            return eqx.tree_at(lambda s: s.friction, scene, scene.friction.at[0].add(x))
+        return eqx.tree_at(lambda s: s.scales, scene, scene.scales * x)
+
+    def residual(u, forward):
+        E0 = e_ref * (1 + u[0])
+        x = x_ref * u[1]
+        (E, t, _), _, _, _, _ = angle_run(
+            scene_with(x), 0.0, (E0, 0.0, 0.0), out, rtol, 0.0, True, 100000, forward
+        )
+        return jnp.stack([(E[-1] - E0) / e_ref, jnp.log(t[-1] / period)])
+
+    u, ok = newton(residual, jnp.stack([0.0, guess_x / x_ref]))
+    E0 = e_ref * (1 + u[0])
+    x = x_ref * u[1]
+    return E0, x, scene_with(x), ok
+
+
+def steady_state(
+    engine,
+    rpm=None,
+    load=None,
+    *,
+    fidelity: str = "variable",
+    friction=None,
+    imep_scale=1.0,
+    method: str = "auto",
+    grid_deg: float = 0.25,
+    rtol: float = 1e-12,
+) -> SpeedResult:
+    """The periodic steady state over one cycle at time-mean speed ``rpm``.
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`.
+    - ``rpm``: time-mean crank speed (angle travelled / time taken) [rpm]; default the
+      engine file's ``[operating] rpm``.
+    - ``load``: None, a :class:`rotor.ConstantLoad` (both balanced: the load torque
+      becomes the engine's mean torque minus friction), or a speed-dependent load
+      (:class:`rotor.PolynomialLoad`, :class:`rotor.PropellerLoad`,
+      :class:`rotor.TableLoad`; the fuelling is scaled to carry it).
+    - ``fidelity``: ``"variable"`` (default), ``"coefficients"`` or ``"constant"``.
+    - ``friction``: a :class:`rotor.Friction`, None (the engine file's, if any) or False.
+    - ``imep_scale``: combustion scale per cylinder (a number or one per cylinder) [-].
+    - ``method``: ``"auto"`` (closed form where the losses allow, else shooting),
+      ``"closed"`` or ``"shooting"``.
+    - ``grid_deg``: node spacing of the tables and of the result [deg].
+    - ``rtol``: tolerance of the shooting method's ODE solves.
+
+    **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``);
+    ``info`` holds ``load_torque_Nm`` or ``fuel_scale``, ``period_s`` and
+    ``periodicity_error`` (|E(Θ) − E(0)|/E(0)).
+
+    **Raises:** :class:`NoSteadyStateError` where the kinetic energy would reach zero;
+    :class:`rotor.EngineError` for impossible arguments.
+    """
+    start = time.perf_counter()
+    rpm = engine.operating.rpm if rpm is None else rpm
+    _check_rpm(rpm)
+    if load is not None and load.time_dependent:
+        raise EngineError("a steady state needs a load that does not change in time; use rotor.simulate for a load step")
+    if method not in ("auto", "closed", "shooting"):
+        raise EngineError(f"method = {method!r}: a steady state is found by 'auto', 'closed' or 'shooting'")
+    train = crank_train(engine, fidelity, grid_deg)
+    n = engine.cylinders
+    s = jnp.broadcast_to(jnp.asarray(imep_scale, dtype=jnp.float64), (n,))
+    fr = friction_coefficients(engine, friction)
+    omega_m = jnp.asarray(rpm, dtype=jnp.float64) / RPM_PER_RAD_S
+    balance = "load" if load is None or isinstance(load, ConstantLoad) else "fuel"
+    lin = linear_losses(None if balance == "load" else load, fr)
+    if method == "closed" and lin is None:
+        raise EngineError(
+            "method='closed' needs losses of the form a + c·ω² (no speed-linear friction term, no table load); "
+            "use method='auto' or 'shooting'"
+        )
+    use_closed = lin is not None and method != "shooting"
+    if balance == "fuel" and concrete(jnp.sum(train.imep_combustion_pa)) is not None and not float(
+        jnp.sum(train.imep_combustion_pa)
+    ) > 0:
+        raise EngineError(
+            "a speed-dependent load needs a firing engine: the fuelling is scaled to carry it, but this engine's "
+            "pressure has no combustion; give a ConstantLoad (or none) instead"
+        )
+    if use_closed:
+        a, c = lin
+        E, t, x, ok, _ = _closed_kernel(train, s, a, c, omega_m, balance)
+        E, t = E[:-1], t[:-1]
+        E_end = None
+        scene = Scene(train, s[None, :], fr, None if balance == "load" else load)
+        if balance == "load":
+            scene = eqx.tree_at(lambda sc: sc.friction, scene, fr.at[0].add(x))
+        else:
+            scene = eqx.tree_at(lambda sc: sc.scales, scene, scene.scales * x)
+        used = "closed"
+    else:
+        a_lin, c_lin = fr[0] + fr[1] * omega_m, fr[2]
+        guess_load = None
+        if balance == "fuel":
+            # linearise the load about ω_m for the starting guess
+            w = omega_m
+            m0 = load.torque(w, 0.0)
+            dm = jax.grad(lambda ww: load.torque(ww, 0.0))(w)
+            c_l = dm / (2 * w)
+            a_lin, c_lin = a_lin + m0 - c_l * w**2, c_lin + c_l
+        E_g, _, x_g, _, _ = _closed_kernel(train, s, a_lin, c_lin, omega_m, balance)
+        if balance == "load":
+            guess_load = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
+        scene = Scene(train, s[None, :], fr, None if balance == "load" else load)
+        E0, x, scene, ok = _shooting_kernel(
+            scene, omega_m, E_g[0], x_g if guess_load is None else guess_load, balance, jnp.asarray(rtol)
+        )
+        nodes = train.nodes()
+        (E, t, _), _, _, _, _ = angle_run(scene, 0.0, (E0, 0.0, 0.0), jnp.concatenate([nodes, nodes[-1:] + train.step_rad]),
+                                          jnp.asarray(rtol), 0.0, True, 100000)
+        E_end = E[-1]
+        E, t = E[:-1], jnp.concatenate([t[:-1]])
+        period_s = None
+        used = "shooting"
+        t = jnp.concatenate([t, t[-1:]])[:-1]
+        t_end_full = None
+    return _finish(engine, train, scene, E, t, x, ok, balance, used, fidelity, omega_m, start,
+                   E_end if not use_closed else None)
+
+
+def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end):
+    theta = train.nodes()
+    val, der, sc = scene.terms(theta)
+    inertia, dinertia = val[:, 0], der[:, 0]
+    omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
+    m_eng = scene.engine_torque(val, sc, omega, 0.0)
+    m_loss = scene.loss(omega, t)
+    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    period = train.cycle_rad / omega_m
+    info = {"period_s": period, ("load_torque_Nm" if balance == "load" else "fuel_scale"): x}
+    if E_end is not None:
+        info["periodicity_error"] = jnp.abs(E_end - E[0]) / E[0]
+    imep = train.imep_motored_pa + scene.scales[0] * train.imep_combustion_pa
+    e_min, e_mean = concrete(jnp.min(E)), concrete(jnp.mean(E))
+    if e_min is not None:
+        if not bool(ok) or not np.isfinite(e_min) or e_min < STOP_FRACTION * e_mean:
+            i = int(np.argmin(np.asarray(E)))
+            raise NoSteadyStateError(
+                f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "
+                f"crank angle {float(np.rad2deg(theta[i])):.1f}° of the cycle (the crankshaft stops once a cycle). "
+                "Raise the speed or the crankshaft/flywheel inertia ([crankshaft] inertia_kgm2), or simulate the "
+                "run with rotor.simulate to see it stall"
+            )
+    return SpeedResult(
+        t=t, theta=theta, omega=omega, accel=accel, torque=m_eng, load_torque=m_loss, imep_pa=imep[None, :],
+        method=method, fidelity=fidelity, kind="steady", strokes=engine.strokes, cycle_rad=train.cycle_rad,
+        points_per_cycle=train.points, uniform_cycles=1, engine_name=engine.name,
+        wall_s=time.perf_counter() - start, info=info,
+    )

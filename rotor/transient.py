@@ -1,0 +1,350 @@
+"""Transient runs: the crank speed over many cycles from a given start.
+
+:func:`simulate` starts at crank angle 0 with speed ``rpm`` (0: from rest) and runs
+``cycles`` cycles, or until the crankshaft stops (a stall: ``result.stalled``, with the
+time and angle). See :mod:`rotor.dynamics` for the formulations ``"closed"``,
+``"angle"`` and ``"time"``; ``method="auto"`` picks the cheapest valid one.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._checks import EngineError, concrete
+from .combustion import combustion_pattern
+from .crank_train import crank_train
+from .dynamics import Scene, angle_run, closed_run, friction_coefficients, linear_losses, time_run
+from .speed_result import RPM_PER_RAD_S, SpeedResult
+
+__all__ = ["simulate", "METHODS"]
+
+METHODS = ("auto", "closed", "angle", "time")
+DEFAULT_RTOL = 1e-10
+STALL_HANDOVER = 0.02  # the angle domain hands over to the time domain below 2 % of the start speed
+TIME_DOMAIN_STEPS = 200_000
+
+
+class _Progress:
+    """A one-line progress bar on stderr, shown only after ~2 s and only on a terminal."""
+
+    def __init__(self, total: int, enabled):
+        self.total, self.start, self.shown = total, time.perf_counter(), False
+        self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
+
+    def update(self, done: int):
+        if not self.enabled:
+            return
+        elapsed = time.perf_counter() - self.start
+        if elapsed < 2.0 and done < self.total:
+            return
+        frac = done / self.total
+        bar = "#" * int(30 * frac)
+        eta = elapsed / frac - elapsed if frac > 0 else float("nan")
+        sys.stderr.write(f"\rsimulating [{bar:<30}] {done}/{self.total} cycles, {elapsed:5.1f} s, ~{eta:4.0f} s left")
+        sys.stderr.flush()
+        self.shown = True
+
+    def close(self):
+        if self.shown:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def _chunks(cycles: int, progress: bool) -> list[int]:
+    if not progress or cycles < 20:
+        return [cycles]
+    n = 20
+    size = math.ceil(cycles / n)
+    out = [size] * (cycles // size)
+    if cycles % size:
+        out.append(cycles % size)
+    return out
+
+
+def _check_scales(combustion, cycles, n):
+    if combustion is None:
+        return jnp.ones((cycles, n))
+    c = combustion
+    if not isinstance(c, jax.Array) or concrete(c) is not None:
+        c = np.asarray(c, dtype=np.float64)
+        if c.shape != (cycles, n):
+            raise EngineError(
+                f"combustion has shape {c.shape}: needs one scale per cycle and cylinder, ({cycles}, {n}); "
+                "build it with rotor.combustion_pattern"
+            )
+        if not np.all(np.isfinite(c)) or np.any(c < 0):
+            raise EngineError("combustion scales must be finite and not negative")
+    return jnp.asarray(c, dtype=jnp.float64)
+
+
+def simulate(
+    engine,
+    rpm=None,
+    cycles: int = 10,
+    load=None,
+    *,
+    method: str = "auto",
+    fidelity: str = "variable",
+    rtol=None,
+    friction=None,
+    governor=None,
+    combustion=None,
+    step_deg: float = 1.0,
+    grid_deg: float = 0.25,
+    stop_at_stall: bool = True,
+    max_time_s=None,
+    progress=None,
+) -> SpeedResult:
+    """Run the engine for ``cycles`` cycles from crank angle 0 at speed ``rpm``.
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`.
+    - ``rpm``: the starting speed [rpm] (0: from rest); default ``[operating] rpm``.
+    - ``cycles``: number of cycles to run.
+    - ``load``: a load (:mod:`rotor.loads`) or None.
+    - ``method``: ``"auto"`` (default), ``"closed"``, ``"angle"`` or ``"time"``.
+    - ``fidelity``: ``"variable"`` (default), ``"coefficients"`` or ``"constant"``.
+    - ``rtol``: relative tolerance of the adaptive methods (default 1e-10).
+    - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False (none).
+    - ``governor``: a :class:`rotor.Governor` scaling the fuelling, or None.
+    - ``combustion``: combustion scale per cycle and cylinder, (cycles, cylinders), from
+      :func:`rotor.combustion_pattern` (misfires, IMEP spread, cycle-to-cycle variation).
+    - ``step_deg``: spacing of the saved samples [deg]; must be a multiple of ``grid_deg``.
+    - ``grid_deg``: node spacing of the angle tables [deg].
+    - ``stop_at_stall``: end the run where ω reaches zero (else it runs on in the time
+      domain, friction and load acting against the motion).
+    - ``max_time_s``: longest time the time domain may run [s].
+    - ``progress``: show a progress bar on stderr (default: when stderr is a terminal and
+      the run takes longer than about two seconds).
+
+    **Returns:** a :class:`rotor.SpeedResult` (``kind="transient"``).
+    """
+    wall = time.perf_counter()
+    if method not in METHODS:
+        raise EngineError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
+    if not (isinstance(cycles, (int, np.integer)) and cycles >= 1):
+        raise EngineError(f"cycles = {cycles!r}: must be a whole number, 1 or more")
+    rpm = engine.operating.rpm if rpm is None else rpm
+    r = concrete(rpm)
+    if r is not None and not (r.ndim == 0 and np.isfinite(r) and r >= 0):
+        raise EngineError(f"rpm = {rpm!r}: the starting speed must be zero or a positive, finite speed in rpm")
+    rtol = DEFAULT_RTOL if rtol is None else rtol
+    rt = concrete(rtol)
+    if rt is not None and not (1e-14 <= rt <= 1e-2):
+        raise EngineError(f"rtol = {rtol!r}: must lie between 1e-14 and 1e-2")
+    train = crank_train(engine, fidelity, grid_deg)
+    P = int(round(train.cycle_rad / np.deg2rad(step_deg)))
+    if P < 8 or train.points % P:
+        raise EngineError(
+            f"step_deg = {step_deg!r}: must be a multiple of grid_deg ({grid_deg:g}°) that divides the cycle"
+        )
+    stride = train.points // P
+    scales = _check_scales(combustion, cycles, engine.cylinders)
+    fr = friction_coefficients(engine, friction)
+    scene = Scene(train, scales, fr, load, governor)
+    omega0 = jnp.asarray(rpm, dtype=jnp.float64) / RPM_PER_RAD_S
+    at_rest = r is not None and r == 0
+    lin = linear_losses(load, fr) if governor is None else None
+    if method == "auto":
+        method = "time" if at_rest else ("closed" if lin is not None else "angle")
+    if method == "closed" and lin is None:
+        raise EngineError(
+            "method='closed' needs losses a + c·ω² that do not change in time and no governor; "
+            "use method='angle' (or 'auto')"
+        )
+    if method in ("closed", "angle") and at_rest:
+        raise EngineError(f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
+                          "a start from rest needs method='time' (or 'auto')")
+    rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
+    high = bool(rt is not None and rt < 1e-9)
+    inertia0 = train.at(0.0)[0][0]
+    E0 = 0.5 * inertia0 * omega0**2
+    theta_step = train.cycle_rad / P
+    bar = _Progress(cycles, progress)
+    pieces = []  # (theta, t, E or None, omega or None, z)
+    done, t_now, E_now, z_now = 0, jnp.asarray(0.0), E0, jnp.asarray(0.0)
+    handover = None  # (theta, t, omega, z) where the time domain takes over
+    info = {}
+    if method == "closed":
+        a, c = lin
+        for size in _chunks(cycles, bar.enabled):
+            E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride)
+            k = int(stalled_at)
+            theta = (done + jnp.arange(size)[:, None]) * train.cycle_rad + jnp.arange(P)[None, :] * theta_step
+            pieces.append((theta[:k].reshape(-1), t[:k].reshape(-1), E[:k].reshape(-1), None, None))
+            done += k
+            E_now, t_now = E_end, t_end
+            bar.update(done)
+            if k < size:
+                handover = (done * train.cycle_rad, t_end, jnp.sqrt(2 * E_end / inertia0), 0.0)
+                break
+    elif method == "angle":
+        e_switch = 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
+        steps = 0
+        for size in _chunks(cycles, bar.enabled):
+            theta_out = done * train.cycle_rad + jnp.arange(1, size * P + 1) * theta_step
+            th0 = done * train.cycle_rad
+            (E, t, z), end, stopped, ok, n_steps = angle_run(
+                scene, th0, (E_now, t_now, z_now), theta_out, rtol_a, e_switch, high, 4000 * size + 10000
+            )
+            steps += int(n_steps)
+            if not bool(ok) and not bool(stopped):
+                raise EngineError(
+                    f"the angle-domain solver could not reach the end of cycle {done + size} "
+                    f"(stopped at crank angle {float(np.rad2deg(end[0])):.1f}°); try a looser rtol or method='time'"
+                )
+            # samples at θ_out[i] hold the state after step i; prepend the chunk's start
+            th = jnp.concatenate([jnp.reshape(th0, (1,)), theta_out[:-1]])
+            Es = jnp.concatenate([jnp.reshape(E_now, (1,)), E[:-1]])
+            ts = jnp.concatenate([jnp.reshape(t_now, (1,)), t[:-1]])
+            zs = jnp.concatenate([jnp.reshape(z_now, (1,)), z[:-1]])
+            if bool(stopped):
+                reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the hand-over
+                whole = reached // P
+                keep = whole * P
+                pieces.append((th[:keep], ts[:keep], Es[:keep], None, zs[:keep]))
+                done += whole
+                # hand over at the start of the incomplete cycle
+                if keep > 0:
+                    E_h, t_h, z_h = E[keep - 1], t[keep - 1], z[keep - 1]
+                else:
+                    E_h, t_h, z_h = E_now, t_now, z_now
+                th_h = done * train.cycle_rad
+                handover = (th_h, t_h, jnp.sqrt(2 * E_h / train.at(th_h)[0][0]), z_h)
+                break
+            pieces.append((th, ts, Es, None, zs))
+            E_now, t_now, z_now = E[-1], t[-1], z[-1]
+            done += size
+            bar.update(done)
+        info["steps"] = steps
+    else:
+        handover = (0.0, 0.0, omega0, 0.0)
+    bar.close()
+    stalled = False
+    stall_t = stall_th = None
+    time_domain = None
+    if handover is not None:
+        th_h, t_h, w_h, z_h = handover
+        theta_end = cycles * train.cycle_rad
+        w_ref = omega0 if not at_rest else engine.operating.omega
+        if governor is not None and at_rest:
+            w_ref = governor.omega
+        if max_time_s is None:
+            t_max = float(t_h) + 20.0 * (theta_end - float(th_h)) / float(w_ref) + 10.0
+        else:
+            t_max = float(t_h) + float(max_time_s)
+        ts, (th, w, z), mask, ok = time_run(
+            scene, jnp.asarray(t_h, dtype=jnp.float64),
+            (jnp.asarray(th_h, dtype=jnp.float64), jnp.asarray(w_h, dtype=jnp.float64), jnp.asarray(z_h, dtype=jnp.float64)),
+            jnp.asarray(theta_end), jnp.asarray(t_max), rtol_a, jnp.asarray(w_ref, dtype=jnp.float64), stop_at_stall,
+            TIME_DOMAIN_STEPS,
+        )
+        keep = np.isfinite(np.asarray(ts))
+        ts, th, w, z = ts[keep], th[keep], w[keep], z[keep]
+        if stop_at_stall and bool(mask[1]):
+            stalled = True
+            stall_t, stall_th = float(ts[-1]), float(th[-1])
+        elif not bool(mask[0]):
+            info["incomplete"] = (
+                f"the time-domain run ended at t = {float(ts[-1]):.3f} s, crank angle "
+                f"{float(np.rad2deg(th[-1])):.1f}°, before reaching the end of cycle {cycles}"
+                + ("" if bool(ok) else " (step limit)")
+            )
+        time_domain = (th, ts, w, z)
+        if method == "time":
+            method = "time"
+        else:
+            method = f"{method}+time"
+    return _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th,
+                     wall, info, cycles)
+
+
+def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall,
+              info, cycles):
+    thetas, ts, omegas, zs = [], [], [], []
+    uniform = 0
+    for th, t, E, w, z in pieces:
+        if th.shape[0] == 0:
+            continue
+        val = train.at(th)[0]
+        omegas.append(jnp.sqrt(2 * jnp.maximum(E, 0.0) / val[:, 0]))
+        thetas.append(th)
+        ts.append(t)
+        zs.append(jnp.zeros_like(th) if z is None else z)
+        uniform += th.shape[0] // P
+    if time_domain is not None:
+        for th, t, w, z, whole in _resample(scene, time_domain, P):
+            thetas.append(th)
+            ts.append(t)
+            omegas.append(w)
+            zs.append(z)
+            uniform += whole
+    theta = jnp.concatenate(thetas)
+    t = jnp.concatenate(ts)
+    omega = jnp.concatenate(omegas)
+    z = jnp.concatenate(zs)
+    val, der, s = scene.terms(theta)
+    inertia, dinertia = val[:, 0], der[:, 0]
+    m_eng = scene.engine_torque(val, s, omega, z)
+    m_loss = scene.loss(omega, t)
+    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    imep = train.imep_motored_pa + scene.scales * train.imep_combustion_pa
+    if scene.governor is not None:
+        info["fuel"] = scene.fuel(omega, z)
+    return SpeedResult(
+        t=t, theta=theta, omega=omega, accel=accel, torque=m_eng, load_torque=m_loss, imep_pa=imep,
+        method=method, fidelity=fidelity, kind="transient", strokes=engine.strokes, cycle_rad=train.cycle_rad,
+        points_per_cycle=P, uniform_cycles=uniform, stalled=stalled, stall_time_s=stall_t,
+        stall_angle_rad=stall_th, engine_name=engine.name, wall_s=time.perf_counter() - wall, info=info,
+    )
+
+
+def _resample(scene, time_domain, P):
+    """The time-domain steps as (uniformly sampled whole cycles, raw tail).
+
+    Between accepted steps θ is monotone (while ω > 0), so ω and t are cubic Hermite
+    interpolated in θ with their exact slopes dω/dθ = ω̇/ω and dt/dθ = 1/ω.
+    """
+    th, t, w, z = (np.asarray(a) for a in time_domain)
+    train = scene.train
+    cycle = train.cycle_rad
+    start = th[0]
+    k0 = start / cycle
+    whole = 0
+    if np.isclose(k0, round(k0)) and th.size > 2 and np.all(np.diff(th) > 0) and np.all(w[1:] > 0):
+        whole = int(np.floor((th[-1] - start) / cycle + 1e-9))
+    if whole == 0:
+        return [(jnp.asarray(th), jnp.asarray(t), jnp.asarray(w), jnp.asarray(z), 0)]
+    val, der, s = scene.terms(jnp.asarray(th))
+    m_eng = np.asarray(scene.engine_torque(val, s, jnp.asarray(w), jnp.asarray(z)))
+    m_loss = np.asarray(scene.loss(jnp.asarray(w), jnp.asarray(t), signed=True))
+    inertia, dinertia = np.asarray(val[:, 0]), np.asarray(der[:, 0])
+    accel = (m_eng - m_loss - 0.5 * dinertia * w**2) / inertia
+    safe_w = np.where(w > 0, w, np.nan)
+    tq = start + np.arange(whole * P) * (cycle / P)
+    j = np.clip(np.searchsorted(th, tq, side="right") - 1, 0, th.size - 2)
+    h = th[j + 1] - th[j]
+    u = (tq - th[j]) / h
+
+    def hermite(f, df):
+        u2, u3 = u * u, u * u * u
+        return ((2 * u3 - 3 * u2 + 1) * f[j] + (u3 - 2 * u2 + u) * h * df[j] + (3 * u2 - 2 * u3) * f[j + 1]
+                + (u3 - u2) * h * df[j + 1])
+
+    # at a start from rest the first step has ω = 0: there t(θ) is not smooth, interpolate linearly
+    w_q = hermite(w, accel / np.where(w > 0, w, 1.0))
+    dt = 1.0 / safe_w
+    t_q = np.where(w[j] > 0, hermite(t, np.nan_to_num(dt)), t[j] + u * (t[j + 1] - t[j]))
+    w_q = np.where(w[j] > 0, w_q, w[j] + u * (w[j + 1] - w[j]))
+    z_q = z[j] + u * (z[j + 1] - z[j])
+    tail = th > tq[-1] + 1e-12
+    return [
+        (jnp.asarray(tq), jnp.asarray(t_q), jnp.asarray(w_q), jnp.asarray(z_q), whole),
+        (jnp.asarray(th[tail]), jnp.asarray(t[tail]), jnp.asarray(w[tail]), jnp.asarray(z[tail]), 0),
+    ]
