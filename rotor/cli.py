@@ -36,6 +36,37 @@ def _engine_arg(p):
     p.add_argument("--rpm", type=_positive_float, help="crank speed [rev/min] (default: the file's [operating] rpm)")
 
 
+def _speed(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v >= 0 and v < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r} must be zero or a positive speed")
+    return v
+
+
+def _whole(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be 1 or more")
+    return v
+
+
+def _dynamics_args(p):
+    from .loads import _LOAD_HELP
+
+    p.add_argument("--load", default="none", metavar="SPEC", help=_LOAD_HELP + " (default none)")
+    p.add_argument("--fidelity", choices=("variable", "coefficients", "constant"), default="variable",
+                   help="inertia model: exact I(θ) (default), seed 003 coefficients, or constant + textbook torque")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="DIR", help="write plots to DIR")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
 def _build_parser():
     parser = _Parser(prog="rotor", description="Rotational dynamics of piston engines.")
     parser.add_argument("--version", action="version", version=f"rotor {_version()}")
@@ -58,9 +89,25 @@ def _build_parser():
     _engine_arg(p)
     p.add_argument("--out", default="out", metavar="DIR", help="output folder (default out/)")
 
+    p = sub.add_parser("steady", help="periodic steady state over one cycle: δ, speed and torque orders")
+    _engine_arg(p)
+    _dynamics_args(p)
+    p.add_argument("--method", choices=("auto", "closed", "shooting"), default="auto")
+
+    p = sub.add_parser("simulate", help="transient run over many cycles (load steps, misfires, stall, start)")
+    p.add_argument("engine", metavar="ENGINE", help="engine file (.toml) or preset name (see `rotor presets`)")
+    p.add_argument("--rpm", type=_speed, help="start speed [rev/min], 0 = from rest (default: [operating] rpm)")
+    p.add_argument("--cycles", type=_whole, default=10, help="number of cycles (default 10)")
+    _dynamics_args(p)
+    p.add_argument("--method", choices=("auto", "closed", "angle", "time"), default="auto")
+    p.add_argument("--rtol", type=_positive_float, help="relative tolerance of the adaptive solvers (default 1e-10)")
+    p.add_argument("--misfire", metavar="CYCLE:CYL,...", default="",
+                   help="misfiring firings, e.g. 3:1,7:2 (cycle from 0, cylinder from 1)")
+    p.add_argument("--governor", type=_positive_float, metavar="RPM", help="PI speed governor set to RPM")
+
     sub.add_parser("presets", help="list the built-in engines")
 
-    p = sub.add_parser("demo", help="summary and plots of the default preset (4chn15)")
+    p = sub.add_parser("demo", help="summary, steady state, a load step and plots of the default preset (4chn15)")
     p.add_argument("--engine", default="4chn15", metavar="ENGINE")
     p.add_argument("--out", default="out", metavar="DIR", help="output folder (default out/)")
     return parser
@@ -128,6 +175,96 @@ def _cmd_plot(args):
         print(f"wrote {path}")
 
 
+def _format_result(res) -> str:
+    s = res.summary()
+    lines = [
+        f"{s['engine']}: {s['kind']} run, method {s['method']}, {s['fidelity']} inertia",
+        f"  mean speed      {s['mean_rpm']:10.2f} rpm   (min {s['min_rpm']:.2f}, max {s['max_rpm']:.2f})",
+    ]
+    if s["delta"] is not None:
+        lines.append(f"  irregularity δ  {s['delta']:10.5f}      (1/δ = {1 / s['delta']:.1f})")
+    if "load_torque_Nm" in s:
+        lines.append(f"  load torque     {s['load_torque_Nm']:10.2f} N·m (balances the mean engine torque)")
+    if "fuel_scale" in s:
+        lines.append(f"  fuel scale      {s['fuel_scale']:10.4f}      (carries the load)")
+    if s["stalled"]:
+        lines.append(f"  STALLED at t = {s['stall_time_s']:.4f} s, crank angle {s['stall_angle_deg']:.1f}°")
+    if res.info.get("incomplete"):
+        lines.append(f"  note: {res.info['incomplete']}")
+    if s["orders"]:
+        lines.append("  order  speed amplitude [rad/s]  torque amplitude [N·m]")
+        for o in s["orders"]:
+            lines.append(f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  {o['torque_amplitude_Nm']:22.2f}")
+    lines.append(f"  wall time {s['wall_s']:.3f} s")
+    return "\n".join(lines) + "\n"
+
+
+def _plot_result(res, out, prefix):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from .plotting import save_figure
+
+    os.makedirs(out, exist_ok=True)
+    written = []
+    kinds = ("cycle", "time", "torque", "orders") if res.uniform_cycles else ("time",)
+    for kind in kinds:
+        if res.kind == "steady" and kind == "time":
+            continue
+        path = os.path.join(out, f"{prefix}_{kind}.png")
+        save_figure(res.plot(kind=kind), path)
+        written.append(path)
+    return written
+
+
+def _report(res, args, prefix):
+    if args.json:
+        print(json.dumps(res.summary(), indent=2))
+    else:
+        sys.stdout.write(_format_result(res))
+    if args.plot:
+        paths = _plot_result(res, args.plot, prefix)
+        if not args.json:
+            for p in paths:
+                print(f"wrote {p}")
+
+
+def _cmd_steady(args):
+    import rotor
+
+    engine = rotor.load_engine(args.engine)
+    res = rotor.steady_state(engine, rpm=args.rpm, load=rotor.parse_load(args.load), fidelity=args.fidelity,
+                             method=args.method)
+    _report(res, args, "steady")
+
+
+def _parse_misfires(text):
+    from ._checks import EngineError
+
+    pairs = []
+    for item in filter(None, (t.strip() for t in text.split(","))):
+        try:
+            k, c = item.split(":")
+            pairs.append((int(k), int(c)))
+        except ValueError:
+            raise EngineError(f"--misfire {text!r}: expected CYCLE:CYLINDER pairs such as 3:1,7:2") from None
+    return pairs
+
+
+def _cmd_simulate(args):
+    import rotor
+
+    engine = rotor.load_engine(args.engine)
+    pairs = _parse_misfires(args.misfire)
+    combustion = (rotor.combustion_pattern(args.cycles, engine.cylinders, misfires=pairs) if pairs else None)
+    governor = rotor.Governor(args.governor) if args.governor else None
+    progress = False if (args.json or args.quiet) else None
+    res = rotor.simulate(engine, rpm=args.rpm, cycles=args.cycles, load=rotor.parse_load(args.load),
+                         method=args.method, fidelity=args.fidelity, rtol=args.rtol, combustion=combustion,
+                         governor=governor, progress=progress)
+    _report(res, args, "simulate")
+
+
 def _cmd_presets(args):
     import rotor
 
@@ -142,11 +279,31 @@ def _cmd_demo(args):
     engine = rotor.load_engine(args.engine)
     sys.stdout.write(format_summary(rotor.engine_summary(engine)))
     print()
-    for path in _write_plots(engine, None, args.out):
+    steady = rotor.steady_state(engine)
+    sys.stdout.write(_format_result(steady))
+    print()
+    # a transient: the load steps up by 20 % half a second in, a PI governor holds the speed
+    load = float(steady.info["load_torque_Nm"])
+    step = rotor.LoadStep(rotor.ConstantLoad(load), rotor.ConstantLoad(1.2 * load), time_s=0.5)
+    rpm0 = float(steady.omega[0]) * 30 / 3.141592653589793
+    trans = rotor.simulate(engine, rpm=rpm0, cycles=40, load=step, governor=rotor.Governor(float(steady.mean_rpm)))
+    print(f"load step {load:.0f} -> {1.2 * load:.0f} N·m at t = 0.5 s, PI governor:")
+    sys.stdout.write(_format_result(trans))
+    print()
+    for path in (_write_plots(engine, None, args.out) + _plot_result(steady, args.out, "steady")
+                 + _plot_result(trans, args.out, "load_step")):
         print(f"wrote {path}")
 
 
-_COMMANDS = {"table": _cmd_table, "info": _cmd_info, "plot": _cmd_plot, "presets": _cmd_presets, "demo": _cmd_demo}
+_COMMANDS = {
+    "table": _cmd_table,
+    "info": _cmd_info,
+    "plot": _cmd_plot,
+    "steady": _cmd_steady,
+    "simulate": _cmd_simulate,
+    "presets": _cmd_presets,
+    "demo": _cmd_demo,
+}
 
 
 def main(argv=None) -> int:
