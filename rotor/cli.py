@@ -183,6 +183,9 @@ def _format_result(res) -> str:
     ]
     if s["delta"] is not None:
         lines.append(f"  irregularity δ  {s['delta']:10.5f}      (1/δ = {1 / s['delta']:.1f})")
+    if "textbook_delta" in s:
+        lines.append(f"  textbook δ      {s['textbook_delta']:10.5f}      (seed 004: L_excess / (J·ω²), "
+                     f"L_excess = {s['excess_work_J']:.1f} J)")
     if "load_torque_Nm" in s:
         lines.append(f"  load torque     {s['load_torque_Nm']:10.2f} N·m (balances the mean engine torque)")
     if "fuel_scale" in s:

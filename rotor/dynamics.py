@@ -255,7 +255,8 @@ def _time_field(t, y, args):
 
 
 @eqx.filter_jit
-def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool, max_steps: int):
+def time_run(scene: Scene, high_order: bool, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool,
+             max_steps: int):
     """Adaptive solve in time from (θ, ω, z) = y0 until θ reaches ``theta_end``, ω falls to
     zero (if ``stop_at_stall``) or t reaches ``t_end``. Returns every accepted step."""
     _traced()
@@ -269,20 +270,36 @@ def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_st
     theta0, omega0, z0 = y0
     sol = dfx.diffeqsolve(
         dfx.ODETerm(_time_field),
-        _solver(False),
+        _solver(high_order),
         t0,
         t_end,
         None,
         (theta0, omega0 / omega_ref, z0),
         args=(scene, omega_ref),
-        saveat=dfx.SaveAt(t0=True, steps=True),
+        saveat=dfx.SaveAt(t0=True, steps=True, dense=True),
         stepsize_controller=_controller(rtol),
         event=event,
         max_steps=max_steps,
         throw=False,
     )
     theta, w, z = sol.ys
-    return sol.ts, (theta, w * omega_ref, z), sol.event_mask, sol.result == dfx.RESULTS.successful
+    return sol.ts, (theta, w * omega_ref, z), sol.event_mask, sol.result == dfx.RESULTS.successful, sol
+
+
+@eqx.filter_jit
+def dense_at_angles(sol, t_guess, theta_q, omega_ref):
+    """(t, ω, z) where the time-domain solution passes the angles ``theta_q``: Newton on
+    θ(t) = θ_q with the solver's dense output, from the guesses ``t_guess``."""
+    _traced()
+
+    def one(t, th_q):
+        for _ in range(4):
+            theta, w, _ = sol.evaluate(t)
+            t = t - (theta - th_q) / (w * omega_ref)
+        theta, w, z = sol.evaluate(t)
+        return t, w * omega_ref, z
+
+    return jax.vmap(one)(t_guess, theta_q)
 
 
 # ----------------------------------------------------------------------------- set-up helpers

@@ -151,9 +151,9 @@ class SpeedResult:
             return jnp.reshape(self.mean_omega, (1,))
         n = self.uniform_cycles * P
         t_start = self.t[:n:P]
-        t_end = jnp.concatenate([t_start[1:], self.t[n : n + 1]]) if self.t.shape[0] > n else None
-        if t_end is None or t_end.shape[0] < self.uniform_cycles:
-            # the last cycle ends at the last sample + one step (extrapolated by the local speed)
+        if self.t.shape[0] > n:  # the sample that ends the last whole cycle
+            t_end = jnp.concatenate([t_start[1:], self.t[n : n + 1]])
+        else:
             last = self.t[n - 1] + (self.cycle_rad / P) / self.omega[n - 1]
             t_end = jnp.concatenate([t_start[1:], jnp.reshape(last, (1,))])
         return self.cycle_rad / (t_end - t_start)
@@ -221,7 +221,7 @@ class SpeedResult:
             "wall_s": float(self.wall_s),
         }
         out.update({k: (float(v) if np.ndim(v) == 0 else np.asarray(v).tolist()) for k, v in self.info.items()
-                    if k in ("load_torque_Nm", "fuel_scale", "periodicity_error", "friction_torque_Nm")})
+                    if k in ("load_torque_Nm", "fuel_scale", "periodicity_error", "excess_work_J", "textbook_delta")})
         if self.uniform_cycles:
             o = self.orders(max_order=max_order)
             out["orders"] = [

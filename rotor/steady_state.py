@@ -34,6 +34,7 @@ import optimistix as optx
 
 from ._checks import EngineError, concrete
 from .crank_train import _DM, crank_train
+from .forces import total_torque
 from .dynamics import (
     Scene,
     _cumulative,
@@ -289,6 +290,11 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
     if E_end is not None:
         info["periodicity_error"] = jnp.abs(E_end - E[0]) / E[0]
     imep = train.imep_motored_pa + scene.scales[0] * train.imep_combustion_pa
+    # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed
+    total = total_torque(engine, theta, omega_m)
+    work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
+    info["excess_work_J"] = jnp.max(work) - jnp.min(work)
+    info["textbook_delta"] = info["excess_work_J"] / (train.mean_inertia * omega_m**2)
     e_min, e_mean = concrete(jnp.min(E)), concrete(jnp.mean(E))
     if e_min is not None:
         if not bool(ok) or not np.isfinite(e_min) or e_min < STOP_FRACTION * e_mean:

@@ -19,7 +19,15 @@ import numpy as np
 from ._checks import EngineError, concrete
 from .combustion import combustion_pattern
 from .crank_train import crank_train
-from .dynamics import Scene, angle_run, closed_run, friction_coefficients, linear_losses, time_run
+from .dynamics import (
+    Scene,
+    angle_run,
+    closed_run,
+    dense_at_angles,
+    friction_coefficients,
+    linear_losses,
+    time_run,
+)
 from .speed_result import RPM_PER_RAD_S, SpeedResult
 
 __all__ = ["simulate", "METHODS"]
@@ -54,6 +62,12 @@ class _Progress:
         if self.shown:
             sys.stderr.write("\n")
             sys.stderr.flush()
+
+
+def _known(x, default):
+    """``x`` as a number, or ``default`` while tracing (jax.grad / jax.vmap over a run)."""
+    c = concrete(x)
+    return default if c is None else c.item()
 
 
 def _chunks(cycles: int, progress: bool) -> list[int]:
@@ -175,12 +189,15 @@ def simulate(
         a, c = lin
         for size in _chunks(cycles, bar.enabled):
             E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride)
-            k = int(stalled_at)
+            k = int(_known(stalled_at, size))
             theta = (done + jnp.arange(size)[:, None]) * train.cycle_rad + jnp.arange(P)[None, :] * theta_step
             pieces.append((theta[:k].reshape(-1), t[:k].reshape(-1), E[:k].reshape(-1), None, None))
             done += k
             E_now, t_now = E_end, t_end
             bar.update(done)
+            if k == size and done == cycles:
+                pieces.append((jnp.reshape(done * train.cycle_rad, (1,)) + 0.0, jnp.reshape(t_end, (1,)),
+                               jnp.reshape(E_end, (1,)), None, None))
             if k < size:
                 handover = (done * train.cycle_rad, t_end, jnp.sqrt(2 * E_end / inertia0), 0.0)
                 break
@@ -193,8 +210,9 @@ def simulate(
             (E, t, z), end, stopped, ok, n_steps = angle_run(
                 scene, th0, (E_now, t_now, z_now), theta_out, rtol_a, e_switch, high, 4000 * size + 10000
             )
-            steps += int(n_steps)
-            if not bool(ok) and not bool(stopped):
+            steps += int(_known(n_steps, 0))
+            stopped = bool(_known(stopped, False))
+            if not _known(ok, True) and not stopped:
                 raise EngineError(
                     f"the angle-domain solver could not reach the end of cycle {done + size} "
                     f"(stopped at crank angle {float(np.rad2deg(end[0])):.1f}°); try a looser rtol or method='time'"
@@ -204,7 +222,7 @@ def simulate(
             Es = jnp.concatenate([jnp.reshape(E_now, (1,)), E[:-1]])
             ts = jnp.concatenate([jnp.reshape(t_now, (1,)), t[:-1]])
             zs = jnp.concatenate([jnp.reshape(z_now, (1,)), z[:-1]])
-            if bool(stopped):
+            if stopped:
                 reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the hand-over
                 whole = reached // P
                 keep = whole * P
@@ -222,6 +240,8 @@ def simulate(
             E_now, t_now, z_now = E[-1], t[-1], z[-1]
             done += size
             bar.update(done)
+            if done == cycles:
+                pieces.append((theta_out[-1:], t[-1:], E[-1:], None, z[-1:]))
         info["steps"] = steps
     else:
         handover = (0.0, 0.0, omega0, 0.0)
@@ -239,8 +259,8 @@ def simulate(
             t_max = float(t_h) + 20.0 * (theta_end - float(th_h)) / float(w_ref) + 10.0
         else:
             t_max = float(t_h) + float(max_time_s)
-        ts, (th, w, z), mask, ok = time_run(
-            scene, jnp.asarray(t_h, dtype=jnp.float64),
+        ts, (th, w, z), mask, ok, sol = time_run(
+            scene, high, jnp.asarray(t_h, dtype=jnp.float64),
             (jnp.asarray(th_h, dtype=jnp.float64), jnp.asarray(w_h, dtype=jnp.float64), jnp.asarray(z_h, dtype=jnp.float64)),
             jnp.asarray(theta_end), jnp.asarray(t_max), rtol_a, jnp.asarray(w_ref, dtype=jnp.float64), stop_at_stall,
             TIME_DOMAIN_STEPS,
@@ -256,7 +276,7 @@ def simulate(
                 f"{float(np.rad2deg(th[-1])):.1f}°, before reaching the end of cycle {cycles}"
                 + ("" if bool(ok) else " (step limit)")
             )
-        time_domain = (th, ts, w, z)
+        time_domain = (th, ts, w, z, sol, w_ref)
         if method == "time":
             method = "time"
         else:
@@ -277,7 +297,7 @@ def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, st
         thetas.append(th)
         ts.append(t)
         zs.append(jnp.zeros_like(th) if z is None else z)
-        uniform += th.shape[0] // P
+        uniform += th.shape[0] // P  # (a single end sample adds no cycle)
     if time_domain is not None:
         for th, t, w, z, whole in _resample(scene, time_domain, P):
             thetas.append(th)
@@ -311,7 +331,8 @@ def _resample(scene, time_domain, P):
     Between accepted steps θ is monotone (while ω > 0), so ω and t are cubic Hermite
     interpolated in θ with their exact slopes dω/dθ = ω̇/ω and dt/dθ = 1/ω.
     """
-    th, t, w, z = (np.asarray(a) for a in time_domain)
+    th, t, w, z = (np.asarray(a) for a in time_domain[:4])
+    sol, w_ref = time_domain[4:]
     train = scene.train
     cycle = train.cycle_rad
     start = th[0]
@@ -344,6 +365,11 @@ def _resample(scene, time_domain, P):
     w_q = np.where(w[j] > 0, w_q, w[j] + u * (w[j + 1] - w[j]))
     z_q = z[j] + u * (z[j + 1] - z[j])
     tail = th > tq[-1] + 1e-12
+    # refine on the solver's own dense output (Newton on θ(t) = θ_q) where the crank turns
+    moving = w[j] > 0
+    t_n, w_n, z_n = (np.asarray(a) for a in dense_at_angles(sol, jnp.asarray(t_q), jnp.asarray(tq),
+                                                              jnp.asarray(w_ref, dtype=jnp.float64)))
+    t_q, w_q, z_q = (np.where(moving, a, b) for a, b in ((t_n, t_q), (w_n, w_q), (z_n, z_q)))
     return [
         (jnp.asarray(tq), jnp.asarray(t_q), jnp.asarray(w_q), jnp.asarray(z_q), whole),
         (jnp.asarray(th[tail]), jnp.asarray(t[tail]), jnp.asarray(w[tail]), jnp.asarray(z[tail]), 0),
