@@ -139,7 +139,8 @@ def _build(engine, fidelity, points):
     w = cycle / points  # periodic trapezoid rule: spectrally accurate
     imep_m = jnp.sum(m_mot, axis=0) * w / vh
     imep_c = jnp.sum(values[:, _DM:], axis=0) * w / vh
-    return values, slopes, imep_m, imep_c, jnp.mean(values[:, _I])
+    firing = jnp.mod(engine.firing_angles_rad, cycle)
+    return values, slopes, imep_m, imep_c, jnp.mean(values[:, _I]), firing
 
 
 def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
@@ -152,6 +153,5 @@ def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> C
     """
     check_fidelity(fidelity)
     points = grid_points(engine.strokes, grid_deg)
-    values, slopes, imep_m, imep_c, mean_i = _build(engine, fidelity, points)
-    firing = jnp.mod(engine.firing_angles_rad, engine.cycle_rad)
+    values, slopes, imep_m, imep_c, mean_i, firing = _build(engine, fidelity, points)
     return CrankTrain(values, slopes, firing, imep_m, imep_c, mean_i, engine.cycle_rad, engine.strokes, fidelity)

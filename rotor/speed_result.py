@@ -9,6 +9,9 @@ from __future__ import annotations
 import dataclasses
 from typing import Optional
 
+import functools
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -58,6 +61,7 @@ def _peak(y0, y1, y2, sign):
     return jnp.where(ok, y1 - (y0 - y2) ** 2 / (8 * safe), y1)
 
 
+@functools.partial(jax.jit, static_argnums=1)
 def _extremes(x, periodic: bool):
     """(max, min) of each row of x (rows: cycles) with parabolic refinement at the sample."""
     C, P = x.shape

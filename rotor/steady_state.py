@@ -277,7 +277,10 @@ def steady_state(
                    E_end if not use_closed else None)
 
 
-def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end):
+@eqx.filter_jit
+def _finish_arrays(engine, scene, E, t, omega_m):
+    _traced()
+    train = scene.train
     theta = train.nodes()
     val, der, sc = scene.terms(theta)
     inertia, dinertia = val[:, 0], der[:, 0]
@@ -285,16 +288,22 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
     m_eng = scene.engine_torque(val, sc, omega, 0.0)
     m_loss = scene.loss(omega, t)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed
+    total = total_torque(engine, theta, omega_m)
+    work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
+    excess = jnp.max(work) - jnp.min(work)
+    return theta, omega, m_eng, m_loss, accel, excess
+
+
+def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end):
+    theta, omega, m_eng, m_loss, accel, excess = _finish_arrays(engine, scene, E, t, omega_m)
     period = train.cycle_rad / omega_m
     info = {"period_s": period, ("load_torque_Nm" if balance == "load" else "fuel_scale"): x}
     if E_end is not None:
         info["periodicity_error"] = jnp.abs(E_end - E[0]) / E[0]
     imep = train.imep_motored_pa + scene.scales[0] * train.imep_combustion_pa
-    # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed
-    total = total_torque(engine, theta, omega_m)
-    work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
-    info["excess_work_J"] = jnp.max(work) - jnp.min(work)
-    info["textbook_delta"] = info["excess_work_J"] / (train.mean_inertia * omega_m**2)
+    info["excess_work_J"] = excess
+    info["textbook_delta"] = excess / (train.mean_inertia * omega_m**2)
     e_min, e_mean = concrete(jnp.min(E)), concrete(jnp.mean(E))
     if e_min is not None:
         if not bool(ok) or not np.isfinite(e_min) or e_min < STOP_FRACTION * e_mean:

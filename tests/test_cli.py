@@ -49,8 +49,9 @@ def test_plot_and_demo_write_pngs(tmp_path, capsys):
     out = tmp_path / "plots"
     assert main(["demo", "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "IMEP" in text
-    for name in ("kinematics.png", "forces.png", "torque.png", "inertia.png"):
+    assert "IMEP" in text and "irregularity" in text and "load step" in text
+    for name in ("kinematics.png", "forces.png", "torque.png", "inertia.png", "steady_cycle.png",
+                 "steady_orders.png", "load_step_time.png", "load_step_cycle.png"):
         p = out / name
         assert p.is_file() and p.stat().st_size > 10_000
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

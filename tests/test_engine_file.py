@@ -115,6 +115,8 @@ BAD = [
     ("bad kind", lambda d: d["pressure"].update(kind="tabel"), "did you mean 'table'"),
     ("nan", lambda d: d["operating"].update(rpm=float("nan")), "rpm"),
     ("half a full rod", lambda d: d["masses"].update(rod_kg=3.0), "rod_cg_from_big_end_m"),
+    ("negative friction", lambda d: d.update(friction={"fmep_pa": -1.0}), "fmep_pa"),
+    ("friction typo", lambda d: d.update(friction={"fmep": 1.0}), "did you mean 'fmep_pa'"),
     ("720 point that differs", lambda d: (d["pressure"]["angle_deg"].append(720),
                                           d["pressure"]["pressure_pa"].append(140000.0)), "720"),
 ]
