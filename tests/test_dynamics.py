@@ -4,15 +4,21 @@ Tolerances are the issue's: energy 1e-9, formulations 1e-6 at default settings,
 periodicity 1e-10, steady state vs a settled run 1e-6, gradients 1e-5.
 """
 
+import sys
+
 import jax
 import jax.numpy as jnp
 import equinox as eqx
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import rotor
 from rotor.dynamics import TRACES
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from reference import scipy_angle_reference  # noqa: E402
 
 RPM = 30 / np.pi
 
@@ -56,40 +62,6 @@ def test_free_coasting_adaptive_methods(single, method, rtol):
 
 
 # ----------------------------------------------------------------------------- scipy reference
-def _scipy_reference(engine, rpm, cycles, load_c, theta_out):
-    """DOP853 at rtol 1e-12 in the angle domain on rotor's exact physics functions (not the tables)."""
-
-    src, g = engine.pressure, engine.geometry
-    if isinstance(src, rotor.WiebeCycle):  # its heat scale once, not at every call
-        heat = src.heat_scale(g)
-
-        def pressure(phi):
-            p0, p1 = src._parts(phi, g, src._burn())
-            return p0 + heat * p1
-    else:
-        def pressure(phi):
-            return src(phi, g, engine.strokes)
-
-    @jax.jit
-    def physics(theta):
-        p = pressure(engine.cycle_angles(theta))
-        ds = rotor.engine_piston_motion(engine, theta).ds
-        m_gas = jnp.sum((p - src.crankcase_pa) * g.piston_area_m2 * ds, axis=-1)
-        return rotor.reduced_inertia(engine, theta), m_gas
-
-    def rhs(theta, y):
-        inertia, m_gas = (float(v) for v in physics(theta))
-        omega = np.sqrt(2 * y[0] / inertia)
-        return [m_gas - load_c * omega**2, 1 / omega]
-
-    i0 = float(physics(0.0)[0])
-    y0 = [0.5 * i0 * (rpm / RPM) ** 2, 0.0]
-    sol = solve_ivp(rhs, (0.0, cycles * engine.cycle_rad), y0, method="DOP853", rtol=1e-12, atol=1e-9,
-                    dense_output=True)
-    E, t = sol.sol(theta_out)
-    return np.sqrt(2 * E / np.asarray(physics(jnp.asarray(theta_out))[0])), t
-
-
 @pytest.mark.parametrize("preset", ["4chn15", "mwm6"])
 def test_formulations_agree_with_scipy_dop853(preset, propeller):
     engine = rotor.load_engine(preset)
@@ -101,7 +73,7 @@ def test_formulations_agree_with_scipy_dop853(preset, propeller):
     P = results["closed"].points_per_cycle
     last = slice((cycles - 1) * P, cycles * P)
     theta = np.asarray(results["closed"].theta[last])
-    w_ref, t_ref = _scipy_reference(engine, rpm, cycles, float(load.c), theta)
+    w_ref, t_ref = scipy_angle_reference(engine, rpm, cycles, float(load.c), theta)
     scale = float(np.mean(w_ref))
     for method, res in results.items():
         assert res.uniform_cycles == cycles, method

@@ -1,0 +1,107 @@
+"""Accuracy figures of the simulator that the README quotes (the tests hold the limits).
+
+    .venv/bin/python benchmarks/simulator_accuracy.py
+
+1. Free coasting (tue-single without gas pressure, 1000 rpm): largest relative change
+   of ½·I(θ)·ω² (exact I) per method at default settings.
+2. Formulations against scipy DOP853 (rtol 1e-12, exact physics, ``reference.py``):
+   largest |ω − ω_ref|/ω_mean over the last of 4 cycles and the relative error of the
+   time at its start, for 4chn15 and mwm6 under a propeller load, per method.
+3. Steady state of 4chn15: periodicity of the shooting solution, closed vs shooting,
+   δ against a run of 300 cycles that settles under a propeller load.
+4. jax.grad of the steady-state δ with respect to the crankshaft inertia against a
+   central difference.
+
+Writes ``benchmarks/results/simulator_accuracy.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import rotor
+from reference import scipy_angle_reference
+
+RPM = 30 / np.pi
+OUT = Path(__file__).parent / "results"
+
+
+def coasting():
+    engine = rotor.load_engine("tue-single").replace(pressure=rotor.NoPressure())
+    out = {}
+    for method, cycles in (("closed", 1000), ("angle", 100), ("time", 20)):
+        r = rotor.simulate(engine, rpm=1000.0, cycles=cycles, method=method)
+        ke = 0.5 * rotor.reduced_inertia(engine, r.theta) * r.omega**2
+        out[method] = {"cycles": cycles, "max_relative_energy_change": float(jnp.max(jnp.abs(ke / ke[0] - 1))),
+                       "delta": float(r.delta)}
+    return out
+
+
+def formulations():
+    out = {}
+    for preset, load in (("4chn15", rotor.PropellerLoad(1100.0, 1250.0)), ("mwm6", rotor.PropellerLoad(400.0, 2200.0))):
+        engine = rotor.load_engine(preset)
+        cycles, rpm = 4, 0.95 * float(engine.operating.rpm)
+        runs = {m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m) for m in ("closed", "angle", "time")}
+        P = runs["closed"].points_per_cycle
+        last = slice((cycles - 1) * P, cycles * P)
+        theta = np.asarray(runs["closed"].theta[last])
+        w_ref, t_ref = scipy_angle_reference(engine, rpm, cycles, float(load.c), theta)
+        out[preset] = {
+            m: {"omega_error": float(np.max(np.abs(np.asarray(r.omega[last]) - w_ref)) / np.mean(w_ref)),
+                "time_error": float(abs(float(r.t[last][0]) - t_ref[0]) / t_ref[0])}
+            for m, r in runs.items()
+        }
+    return out
+
+
+def steady():
+    engine = rotor.load_engine("4chn15")
+    closed = rotor.steady_state(engine)
+    shoot = rotor.steady_state(engine, method="shooting")
+    prop = rotor.PropellerLoad(1100.0, 1250.0)
+    ss = rotor.steady_state(engine, load=prop)
+    fuel = float(ss.info["fuel_scale"])
+    run = rotor.simulate(engine, rpm=1150.0, cycles=300, load=prop, combustion=np.full((300, 4), fuel))
+    return {
+        "shooting_periodicity_error": float(shoot.info["periodicity_error"]),
+        "closed_vs_shooting_omega": float(jnp.max(jnp.abs(shoot.omega / closed.omega - 1))),
+        "delta_vs_settled_run": float(run.delta_per_cycle[-1] / ss.delta - 1),
+        "mean_rpm_of_settled_run": float(run.cycle_mean_omega[-1] * RPM),
+    }
+
+
+def gradient():
+    engine = rotor.load_engine("4chn15")
+
+    def f(J):
+        return rotor.steady_state(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, J)).delta
+
+    g = float(jax.grad(f)(10.2))
+    fd = float((f(10.2 + 1e-3) - f(10.2 - 1e-3)) / 2e-3)
+    return {"grad": g, "central_difference": fd, "relative_difference": g / fd - 1}
+
+
+def main() -> int:
+    results = {"coasting": coasting(), "formulations": formulations(), "steady": steady(), "gradient": gradient(),
+               "versions": {"jax": jax.__version__, "rotor": rotor.__version__}}
+    OUT.mkdir(exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=OUT, suffix=".json")
+    with os.fdopen(fd, "w") as f:
+        json.dump(results, f, indent=2)
+    os.replace(tmp, OUT / "simulator_accuracy.json")
+    print(json.dumps(results, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
