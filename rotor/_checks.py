@@ -60,3 +60,17 @@ def check_positive(table: str, key: str, value, *, allow_zero: bool = False) -> 
     if bad:
         need = "zero or positive" if allow_zero else "positive"
         raise EngineError(f"{where(table, key)} = {fmt(v)}: must be {need}")
+
+
+def arrays_only(tree):
+    """``tree`` with every Python number leaf made a float64 array.
+
+    ``eqx.tree_at(..., engine, 12.0)`` puts a Python float into a module; ``eqx.filter_jit``
+    would treat it as a constant and compile again for every new value.
+    """
+    def leaf(x):
+        if isinstance(x, (float, int, np.floating, np.integer)) and not isinstance(x, (bool, np.bool_)):
+            return jnp.asarray(x, dtype=jnp.float64)
+        return x
+
+    return jax.tree_util.tree_map(leaf, tree)

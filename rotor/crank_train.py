@@ -27,9 +27,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._checks import EngineError
+from ._checks import EngineError, arrays_only
 from .forces import cylinder_gas_torques, reciprocating_inertia_torque
-from .inertia import mean_reduced_inertia, reduced_inertia
+from .inertia import _ordinary_cylinder_inertia, inertia_coefficients, mean_reduced_inertia, reduced_inertia
+from .kinematics import piston_motion
 
 __all__ = ["CrankTrain", "crank_train", "FIDELITIES"]
 
@@ -110,7 +111,7 @@ class CrankTrain(eqx.Module):
 
 
 def _columns(engine, fidelity, theta):
-    """The table columns at angles θ (shape (N,)) → (N, K)."""
+    """The table columns at engine angles θ (shape (N,)) → (N, K), every cylinder evaluated."""
     n = engine.cylinders
     if fidelity == "constant":
         inertia = jnp.broadcast_to(mean_reduced_inertia(engine), theta.shape)
@@ -124,23 +125,102 @@ def _columns(engine, fidelity, theta):
     cols = [inertia[..., None], k[..., None], jnp.sum(m_mot, axis=-1, keepdims=True), m_fired - m_mot]
     out = jnp.concatenate(cols, axis=-1)
     assert out.shape[-1] == _DM + n
-    return out
+    return out, m_mot
+
+
+def _shifted(values, slopes, offset, period):
+    """f(φ_i − offset) and its slope at every node φ_i, by periodic cubic Hermite
+    interpolation. The fractional position is the same at every node, so this is two
+    rolls of the node data and four scalar weights (no gathers)."""
+    n = values.shape[0]
+    h = period / n
+    u = offset / h
+    j = jnp.floor(u)
+    tau = 1.0 - (u - j)  # evaluation point: node (i − j − 1) plus tau
+    j = j.astype(jnp.int32)
+    f0, f1 = jnp.roll(values, j + 1, axis=0), jnp.roll(values, j, axis=0)
+    d0, d1 = jnp.roll(slopes, j + 1, axis=0) * h, jnp.roll(slopes, j, axis=0) * h
+    t2, t3 = tau * tau, tau * tau * tau
+    val = (2 * t3 - 3 * t2 + 1) * f0 + (t3 - 2 * t2 + tau) * d0 + (3 * t2 - 2 * t3) * f1 + (t3 - t2) * d1
+    der = ((6 * t2 - 6 * tau) * (f0 - f1) + (3 * t2 - 4 * tau + 1) * d0 + (3 * t2 - 2 * tau) * d1) / h
+    return val, der
+
+
+def _one_cylinder(engine, fidelity, phi):
+    """Functions of one ordinary cylinder's own angle φ (shape (N,)) → (N, 4):
+    I_cyl, k_cyl, motored torque, combustion torque. A cylinder's firing TDC is one of
+    its TDCs, so its mechanical angle equals its cycle angle modulo 2π."""
+    g = engine.geometry
+    pm = piston_motion(phi, g.crank_radius_m, g.rod_length_m, g.pin_offset_m)
+    m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
+    if fidelity == "constant":
+        inertia = jnp.zeros_like(phi)
+        k = -m_rec * pm.d2s * pm.ds
+    elif fidelity == "variable":
+        inertia = _ordinary_cylinder_inertia(phi, g, engine.masses)
+        k = jnp.zeros_like(phi)
+    else:
+        A, B, C = inertia_coefficients(engine)
+        c = jnp.cos(phi)
+        inertia = A[0] * c**2 + B[0] * c + C[0]
+        k = jnp.zeros_like(phi)
+    fired = engine.pressure(phi, g, engine.strokes)
+    mot = engine.pressure.motored(engine.strokes)(phi, g, engine.strokes)
+    area_ds = g.piston_area_m2 * pm.ds
+    m_mot = (mot - engine.pressure.crankcase_pa) * area_ds
+    return jnp.stack([inertia, k, m_mot, (fired - mot) * area_ds], axis=-1)
+
+
+def _shifted_columns(engine, fidelity, points):
+    """All columns from one cylinder's functions, shifted to each cylinder's phase."""
+    cycle = engine.cycle_rad
+    phi = jnp.arange(points) * (cycle / points)
+    v1, d1 = jax.jvp(lambda x: _one_cylinder(engine, fidelity, x), (phi,), (jnp.ones_like(phi),))
+    tdc = jnp.deg2rad(engine.tdc_angles_deg)
+    fire_phase = engine.firing_angles_rad - (2 * np.pi if engine.strokes == 4 else 0.0)
+    # each cylinder: I and k at its mechanical angle θ − tdc, torques at its cycle angle
+    per_cyl = []
+    for c in range(engine.cylinders):
+        iv, idv = _shifted(v1[:, :2], d1[:, :2], tdc[c], cycle)
+        mv, mdv = _shifted(v1[:, 2:], d1[:, 2:], fire_phase[c], cycle)
+        per_cyl.append((jnp.concatenate([iv, mv], axis=1), jnp.concatenate([idv, mdv], axis=1)))
+    vals = jnp.stack([v for v, _ in per_cyl], axis=1)  # (N, n, 4)
+    ders = jnp.stack([d for _, d in per_cyl], axis=1)
+    i_v, k_v, m_v, g_v = (vals[..., q] for q in range(4))
+    i_d, k_d, m_d, g_d = (ders[..., q] for q in range(4))
+    J = engine.crankshaft.inertia_kgm2
+    if fidelity == "constant":
+        inertia = mean_reduced_inertia(engine) + 0.0 * phi
+        d_inertia = jnp.zeros_like(phi)
+    else:
+        inertia = J + jnp.sum(i_v, axis=1)
+        d_inertia = jnp.sum(i_d, axis=1)
+    values = jnp.concatenate(
+        [inertia[:, None], jnp.sum(k_v, axis=1, keepdims=True), jnp.sum(m_v, axis=1, keepdims=True), g_v], axis=1
+    )
+    slopes = jnp.concatenate(
+        [d_inertia[:, None], jnp.sum(k_d, axis=1, keepdims=True), jnp.sum(m_d, axis=1, keepdims=True), g_d], axis=1
+    )
+    work_m = jnp.sum(v1[:, 2]) * cycle / points
+    return values, slopes, jnp.full(engine.cylinders, work_m), v1
 
 
 @eqx.filter_jit
 def _build(engine, fidelity, points):
     cycle = engine.cycle_rad
-    theta = jnp.arange(points) * (cycle / points)
-    values, slopes = jax.jvp(lambda t: _columns(engine, fidelity, t), (theta,), (jnp.ones_like(theta),))
-    # each cylinder's IMEP, motored and the combustion part, from the same tables
-    motored = engine.replace(pressure=engine.pressure.motored(engine.strokes))
-    m_mot = cylinder_gas_torques(motored, theta)
-    vh = engine.geometry.displacement_m3
     w = cycle / points  # periodic trapezoid rule: spectrally accurate
-    imep_m = jnp.sum(m_mot, axis=0) * w / vh
+    if engine.articulated is None:
+        values, slopes, work_m, _ = _shifted_columns(engine, fidelity, points)
+    else:  # slave rods move differently: every cylinder on its own
+        theta = jnp.arange(points) * w
+        (values, m_mot), (slopes, _) = jax.jvp(
+            lambda t: _columns(engine, fidelity, t), (theta,), (jnp.ones_like(theta),)
+        )
+        work_m = jnp.sum(m_mot, axis=0) * w
+    vh = engine.geometry.displacement_m3
     imep_c = jnp.sum(values[:, _DM:], axis=0) * w / vh
     firing = jnp.mod(engine.firing_angles_rad, cycle)
-    return values, slopes, imep_m, imep_c, jnp.mean(values[:, _I]), firing
+    return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, _I]), firing
 
 
 def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
@@ -152,6 +232,11 @@ def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> C
     - ``grid_deg``: node spacing [deg]; must divide the cycle (default 0.25°).
     """
     check_fidelity(fidelity)
-    points = grid_points(engine.strokes, grid_deg)
+    return train_from_engine(engine, fidelity, grid_points(engine.strokes, grid_deg))
+
+
+def train_from_engine(engine, fidelity: str, points: int) -> CrankTrain:
+    """:func:`crank_train` with the node count given (usable inside jit)."""
+    engine = arrays_only(engine)
     values, slopes, imep_m, imep_c, mean_i, firing = _build(engine, fidelity, points)
     return CrankTrain(values, slopes, firing, imep_m, imep_c, mean_i, engine.cycle_rad, engine.strokes, fidelity)

@@ -29,6 +29,7 @@ import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
 
 from .crank_train import _DM, _I, _K, _MM, CrankTrain
@@ -310,7 +311,7 @@ def friction_coefficients(engine, friction):
     """
     fr = engine.friction if friction is None else friction
     if fr is None or fr is False:
-        return jnp.zeros(3)
+        return np.zeros(3)
     return jnp.stack(fr.torque_coefficients(engine))
 
 

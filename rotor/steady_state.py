@@ -32,9 +32,9 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from ._checks import EngineError, concrete
-from .crank_train import _DM, crank_train
-from .forces import total_torque
+from ._checks import EngineError, arrays_only, concrete
+from .crank_train import _DM, _MM, check_fidelity, grid_points, train_from_engine
+from .forces import reciprocating_inertia_torque
 from .dynamics import (
     Scene,
     _cumulative,
@@ -113,6 +113,23 @@ def _closed_kernel(train, s, a, c, omega_m, balance):
     return _closed_solution(train, s_nodes, a, c, omega_m, balance)
 
 
+@eqx.filter_jit
+def _closed_steady(engine, fidelity, points, s, fr, load, a, c, omega_m, balance):
+    """The whole closed-form steady state in one compiled call: tables, solution, arrays."""
+    _traced()
+    train = train_from_engine(engine, fidelity, points)
+    E, t, x, ok, _ = _closed_kernel(train, s, a, c, omega_m, balance)
+    scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
+    return train, scene, E[:-1], t[:-1], x, ok, _finish_arrays(engine, scene, E[:-1], t[:-1], omega_m)
+
+
+def _balanced_scene(scene, x, balance):
+    """The scene with the balancing load torque (added to friction) or fuel scale applied."""
+    if balance == "load":
+        return eqx.tree_at(lambda sc: sc.friction, scene, scene.friction.at[0].add(x))
+    return eqx.tree_at(lambda sc: sc.scales, scene, scene.scales * x)
+
+
 def newton(residual, u0, tol=1e-13, max_iter=30):
     """Newton's method on a small system, differentiable by the implicit function theorem.
 
@@ -154,9 +171,7 @@ def _shooting_kernel(scene, omega_m, guess_E0, guess_x, balance, rtol):
     out = jnp.array([cycle])
 
     def scene_with(x):
-        if balance == "load":
-            return eqx.tree_at(lambda s: s.friction, scene, scene.friction.at[0].add(x))
-        return eqx.tree_at(lambda s: s.scales, scene, scene.scales * x)
+        return _balanced_scene(scene, x, balance)
 
     def residual(u, forward):
         E0 = e_ref * (1 + u[0])
@@ -216,65 +231,55 @@ def steady_state(
         raise EngineError("a steady state needs a load that does not change in time; use rotor.simulate for a load step")
     if method not in ("auto", "closed", "shooting"):
         raise EngineError(f"method = {method!r}: a steady state is found by 'auto', 'closed' or 'shooting'")
-    train = crank_train(engine, fidelity, grid_deg)
+    check_fidelity(fidelity)
+    points = grid_points(engine.strokes, grid_deg)
+    engine, load = arrays_only(engine), arrays_only(load)
     n = engine.cylinders
     s = jnp.broadcast_to(jnp.asarray(imep_scale, dtype=jnp.float64), (n,))
     fr = friction_coefficients(engine, friction)
     omega_m = jnp.asarray(rpm, dtype=jnp.float64) / RPM_PER_RAD_S
     balance = "load" if load is None or isinstance(load, ConstantLoad) else "fuel"
-    lin = linear_losses(None if balance == "load" else load, fr)
+    speed_load = None if balance == "load" else load
+    lin = linear_losses(speed_load, fr)
     if method == "closed" and lin is None:
         raise EngineError(
             "method='closed' needs losses of the form a + c·ω² (no speed-linear friction term, no table load); "
             "use method='auto' or 'shooting'"
         )
-    use_closed = lin is not None and method != "shooting"
-    if balance == "fuel" and concrete(jnp.sum(train.imep_combustion_pa)) is not None and not float(
-        jnp.sum(train.imep_combustion_pa)
-    ) > 0:
+    if lin is not None and method != "shooting":
+        train, scene, E, t, x, ok, arrays = _closed_steady(engine, fidelity, points, s, fr, speed_load, *lin,
+                                                            omega_m, balance)
+        _check_combustion(train, balance)
+        return _finish(engine, train, scene, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
+    train = train_from_engine(engine, fidelity, points)
+    _check_combustion(train, balance)
+    # start from the closed form with the losses linearised about ω_m
+    a_lin, c_lin = fr[0] + fr[1] * omega_m, fr[2]
+    if balance == "fuel":
+        m0 = load.torque(omega_m, 0.0)
+        c_l = jax.grad(lambda w: load.torque(w, 0.0))(omega_m) / (2 * omega_m)
+        a_lin, c_lin = a_lin + m0 - c_l * omega_m**2, c_lin + c_l
+    E_g, _, x_g, _, _ = _closed_kernel(train, s, a_lin, c_lin, omega_m, balance)
+    if balance == "load":
+        x_g = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
+    scene = Scene(train, s[None, :], fr, speed_load)
+    E0, x, scene, ok = _shooting_kernel(scene, omega_m, E_g[0], x_g, balance, jnp.asarray(rtol))
+    nodes = jnp.arange(train.points + 1) * train.step_rad
+    (E, t, _), _, _, _, _ = angle_run(scene, 0.0, (E0, 0.0, 0.0), nodes[1:], jnp.asarray(rtol), 0.0, True, 100000)
+    E = jnp.concatenate([jnp.reshape(E0, (1,)), E])  # nodes 0…N
+    t = jnp.concatenate([jnp.zeros(1), t])
+    arrays = _finish_arrays(engine, scene, E[:-1], t[:-1], omega_m)
+    return _finish(engine, train, scene, E[:-1], t[:-1], x, ok, balance, "shooting", fidelity, omega_m, start, E[-1],
+                   arrays)
+
+
+def _check_combustion(train, balance):
+    work = concrete(jnp.sum(train.imep_combustion_pa))
+    if balance == "fuel" and work is not None and not work > 0:
         raise EngineError(
             "a speed-dependent load needs a firing engine: the fuelling is scaled to carry it, but this engine's "
             "pressure has no combustion; give a ConstantLoad (or none) instead"
         )
-    if use_closed:
-        a, c = lin
-        E, t, x, ok, _ = _closed_kernel(train, s, a, c, omega_m, balance)
-        E, t = E[:-1], t[:-1]
-        E_end = None
-        scene = Scene(train, s[None, :], fr, None if balance == "load" else load)
-        if balance == "load":
-            scene = eqx.tree_at(lambda sc: sc.friction, scene, fr.at[0].add(x))
-        else:
-            scene = eqx.tree_at(lambda sc: sc.scales, scene, scene.scales * x)
-        used = "closed"
-    else:
-        a_lin, c_lin = fr[0] + fr[1] * omega_m, fr[2]
-        guess_load = None
-        if balance == "fuel":
-            # linearise the load about ω_m for the starting guess
-            w = omega_m
-            m0 = load.torque(w, 0.0)
-            dm = jax.grad(lambda ww: load.torque(ww, 0.0))(w)
-            c_l = dm / (2 * w)
-            a_lin, c_lin = a_lin + m0 - c_l * w**2, c_lin + c_l
-        E_g, _, x_g, _, _ = _closed_kernel(train, s, a_lin, c_lin, omega_m, balance)
-        if balance == "load":
-            guess_load = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
-        scene = Scene(train, s[None, :], fr, None if balance == "load" else load)
-        E0, x, scene, ok = _shooting_kernel(
-            scene, omega_m, E_g[0], x_g if guess_load is None else guess_load, balance, jnp.asarray(rtol)
-        )
-        nodes = train.nodes()
-        (E, t, _), _, _, _, _ = angle_run(scene, 0.0, (E0, 0.0, 0.0), jnp.concatenate([nodes, nodes[-1:] + train.step_rad]),
-                                          jnp.asarray(rtol), 0.0, True, 100000)
-        E_end = E[-1]
-        E, t = E[:-1], jnp.concatenate([t[:-1]])
-        period_s = None
-        used = "shooting"
-        t = jnp.concatenate([t, t[-1:]])[:-1]
-        t_end_full = None
-    return _finish(engine, train, scene, E, t, x, ok, balance, used, fidelity, omega_m, start,
-                   E_end if not use_closed else None)
 
 
 @eqx.filter_jit
@@ -282,21 +287,23 @@ def _finish_arrays(engine, scene, E, t, omega_m):
     _traced()
     train = scene.train
     theta = train.nodes()
-    val, der, sc = scene.terms(theta)
+    val, der, sc = train.values, train.slopes, scene.scales[0]  # the result lies on the table nodes
     inertia, dinertia = val[:, 0], der[:, 0]
     omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
     m_eng = scene.engine_torque(val, sc, omega, 0.0)
     m_loss = scene.loss(omega, t)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
-    # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed
-    total = total_torque(engine, theta, omega_m)
+    # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
+    # the gas torque (the tables, unscaled) plus the reciprocating inertia torque
+    gas = val[:, _MM] + jnp.sum(val[:, _DM:], axis=1)
+    total = gas + reciprocating_inertia_torque(engine, theta, omega_m)
     work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
     excess = jnp.max(work) - jnp.min(work)
-    return theta, omega, m_eng, m_loss, accel, excess
+    return theta, omega, m_eng, m_loss, accel, excess, jnp.min(E) / jnp.mean(E), jnp.argmin(E)
 
 
-def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end):
-    theta, omega, m_eng, m_loss, accel, excess = _finish_arrays(engine, scene, E, t, omega_m)
+def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
+    theta, omega, m_eng, m_loss, accel, excess, e_ratio, i_min = arrays
     period = train.cycle_rad / omega_m
     info = {"period_s": period, ("load_torque_Nm" if balance == "load" else "fuel_scale"): x}
     if E_end is not None:
@@ -304,10 +311,10 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
     imep = train.imep_motored_pa + scene.scales[0] * train.imep_combustion_pa
     info["excess_work_J"] = excess
     info["textbook_delta"] = excess / (train.mean_inertia * omega_m**2)
-    e_min, e_mean = concrete(jnp.min(E)), concrete(jnp.mean(E))
-    if e_min is not None:
-        if not bool(ok) or not np.isfinite(e_min) or e_min < STOP_FRACTION * e_mean:
-            i = int(np.argmin(np.asarray(E)))
+    e_ratio = concrete(e_ratio)
+    if e_ratio is not None:
+        if not bool(ok) or not np.isfinite(e_ratio) or e_ratio < STOP_FRACTION:
+            i = int(i_min)
             raise NoSteadyStateError(
                 f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "
                 f"crank angle {float(np.rad2deg(theta[i])):.1f}° of the cycle (the crankshaft stops once a cycle). "

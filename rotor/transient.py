@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._checks import EngineError, concrete
+from ._checks import EngineError, arrays_only, concrete
 from .combustion import combustion_pattern
 from .crank_train import crank_train
 from .dynamics import (
@@ -152,6 +152,7 @@ def simulate(
     rt = concrete(rtol)
     if rt is not None and not (1e-14 <= rt <= 1e-2):
         raise EngineError(f"rtol = {rtol!r}: must lie between 1e-14 and 1e-2")
+    load, governor = arrays_only(load), arrays_only(governor)
     train = crank_train(engine, fidelity, grid_deg)
     P = int(round(train.cycle_rad / np.deg2rad(step_deg)))
     if P < 8 or train.points % P:
