@@ -38,7 +38,7 @@ OUT = Path(__file__).parent / "results"
 def coasting():
     engine = rotor.load_engine("tue-single").replace(pressure=rotor.NoPressure())
     out = {}
-    for method, cycles in (("closed", 1000), ("angle", 100), ("time", 20)):
+    for method, cycles in (("closed", 1000), ("grid", 100), ("angle", 100), ("time", 20)):
         r = rotor.simulate(engine, rpm=1000.0, cycles=cycles, method=method)
         ke = 0.5 * rotor.reduced_inertia(engine, r.theta) * r.omega**2
         out[method] = {"cycles": cycles, "max_relative_energy_change": float(jnp.max(jnp.abs(ke / ke[0] - 1))),
@@ -51,7 +51,8 @@ def formulations():
     for preset, load in (("4chn15", rotor.PropellerLoad(1100.0, 1250.0)), ("mwm6", rotor.PropellerLoad(400.0, 2200.0))):
         engine = rotor.load_engine(preset)
         cycles, rpm = 4, 0.95 * float(engine.operating.rpm)
-        runs = {m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m) for m in ("closed", "angle", "time")}
+        runs = {m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m)
+                for m in ("closed", "grid", "angle", "time")}
         P = runs["closed"].points_per_cycle
         last = slice((cycles - 1) * P, cycles * P)
         theta = np.asarray(runs["closed"].theta[last])

@@ -6,8 +6,9 @@ Measures, does not assert:
    ``solve_ivp(method="RK45", rtol=1e-8)`` with a plain numpy right-hand side, started at
    rotor's steady-state speed and loaded with its balancing torque.
 2. A transient of 100 cycles under ``PropellerLoad(1100 N·m, 1250 rpm)`` from 1250 rpm:
-   ``rotor.simulate`` (method "closed", picked by "auto", and "angle" at its default
-   rtol) against ``solve_ivp(method="LSODA")`` at the rtol whose error is about rotor's.
+   ``rotor.simulate`` (method "closed", picked by "auto"; "grid", fixed-step RK4 at one
+   step per degree, what "auto" picks for loads outside the closed form; and "angle" at
+   its default rtol) against ``solve_ivp(method="LSODA")`` at the rtol whose error is about rotor's.
    Error: max |ω(θ) − ω_ref(θ)|/ω_mean over the last cycle at rotor's 1° crank angles,
    and the error of the time at the last of them.
 
@@ -193,7 +194,7 @@ def bench_transient(engine, cycles, repeats, scipy_repeats):
 
     res = {"cycles": cycles, "rpm": RPM, "load": f"PropellerLoad({PROPELLER[0]:g} N·m, {PROPELLER[1]:g} rpm)"}
     runs = {}
-    for name, kw in (("closed", {"method": "auto"}), ("angle", {"method": "angle"})):
+    for name, kw in (("closed", {"method": "auto"}), ("grid", {"method": "grid"}), ("angle", {"method": "angle"})):
         res[f"rotor_{name}"], runs[name] = timed_rotor(lambda kw=kw: sim(**kw), repeats)
         res[f"rotor_{name}"]["method"] = runs[name].method
     theta = np.asarray(runs["closed"].theta[-runs["closed"].points_per_cycle:])
@@ -262,9 +263,11 @@ def plot(res, path):
             ("scipy RK45\none cycle", s["scipy_rk45_one_cycle"], "C1"),
             (f"rotor closed\n{n} cycles", tr["rotor_closed"], "C0"),
             (f"scipy LSODA\nrtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"], "C1"),
+            (f"rotor grid\n{n} cycles", tr["rotor_grid"], "C0"),
+            (f"scipy LSODA\nrtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"], "C1"),
             (f"rotor angle\n{n} cycles", tr["rotor_angle"], "C0"),
             (f"scipy LSODA\nrtol {tr['lsoda_vs_angle']['rtol']:g}", tr["lsoda_vs_angle"], "C1")]
-    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig, ax = plt.subplots(figsize=(11, 4.5))
     x = np.arange(len(bars))
     ax.bar(x, [b[1]["median_s"] for b in bars], color=[b[2] for b in bars])
     for xi, (_, b, _) in zip(x, bars):
@@ -275,7 +278,7 @@ def plot(res, path):
     ax.set_ylim(min(times) / 3, max(times) * 3)
     ax.set_ylabel("median wall time [s]")
     ax.set_title("4chn15, 1250 rpm: rotor (after compile) vs scipy solve_ivp with a numpy RHS")
-    for xv in (1.5, 3.5):
+    for xv in (1.5, 3.5, 5.5):
         ax.axvline(xv, color="grey", lw=0.8)
     fig.tight_layout()
     with atomic_path(path) as tmp:  # a temporary file beside path, then os.replace
@@ -295,12 +298,14 @@ def report(res):
     print(f"\n2. {tr['cycles']}-cycle transient from {RPM:g} rpm, {tr['load']}; error ω: max|ω−ω_ref|/ω_mean, "
           "last cycle; t: at its end")
     print("   run                         median time   error ω   error t [s]  (rotor solver-only ω error)")
-    for name, r in (("rotor closed (auto)", tr["rotor_closed"]), ("rotor angle (rtol 1e-10)", tr["rotor_angle"]),
+    for name, r in (("rotor closed (auto)", tr["rotor_closed"]), ("rotor grid (RK4, 1°)", tr["rotor_grid"]),
+                    ("rotor angle (rtol 1e-10)", tr["rotor_angle"]),
                     (f"LSODA rtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"]),
+                    (f"LSODA rtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"]),
                     (f"LSODA rtol {tr['lsoda_vs_angle']['rtol']:g}", tr["lsoda_vs_angle"])):
         extra = f"  ({r['error_solver']['omega_rel']:.1e})" if "error_solver" in r else ""
         print(f"   {name:27s} {ms(r)}   {r['error']['omega_rel']:.1e}   {r['error']['t_end_s']:.1e}{extra}")
-    for name in ("closed", "angle"):
+    for name in ("closed", "grid", "angle"):
         pick = tr[f"lsoda_vs_{name}"]
         note = "" if pick["meets_rotor_error"] else "  (no rtol tried reaches rotor's error; the most accurate shown)"
         print(f"   ratio LSODA/rotor {name:6s}  {tr[f'ratio_lsoda_over_rotor_{name}']:10.1f} x{note}")

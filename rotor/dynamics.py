@@ -13,8 +13,11 @@ Formulations (``method``):
   time) this is linear in E: F = M_gas − a, G = 2(c − k)/I, and every cycle is solved on
   the grid in closed form, E(θ) = Φ(θ)·[E₀ + ∫ F/Φ dθ], Φ = exp(−∫G dθ), with the time
   t(θ) = ∫ dθ/ω; the integrals use the fourth-order Hermite rule on the table nodes.
-- ``"angle"``: the same energy form with time (and the governor's integral) as states,
-  integrated adaptively in θ by diffrax; any load and the governor.
+- ``"grid"``: the same energy form with time (and the governor's integral) as states,
+  classic RK4 with fixed steps (one per degree by default) in a ``lax.scan``; any load
+  and the governor.
+- ``"angle"``: that system integrated adaptively in θ by diffrax (Tsit5, Dopri8 below
+  rtol 1e-9), for a chosen tolerance.
 - ``"time"``: θ and ω integrated in time by diffrax: a start from rest, a stall.
 
 A run in the angle domain that slows below 2 % of its starting speed hands over to the
@@ -205,12 +208,10 @@ def _solver(high_order: bool):
 
 
 @eqx.filter_jit
-def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, high_order: bool, max_steps: int,
-              forward: bool = False):
+def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, high_order: bool, max_steps: int):
     """Adaptive solve in the angle domain from θ0 with y0 = (E, t, z), saving at ``theta_out``.
 
-    Ends early (a stall hand-over) where E falls to ``e_switch``. ``forward``: use
-    diffrax's forward-mode adjoint (for Jacobians by ``jax.jacfwd``). Returns the saved
+    Ends early (a stall hand-over) where E falls to ``e_switch``. Returns the saved
     (E, t, z), the final θ and state, and whether it ended early."""
     _traced()
     E0, t0, z0 = y0
@@ -231,7 +232,6 @@ def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, high_order: b
         event=event,
         max_steps=max_steps,
         throw=False,
-        adjoint=dfx.ForwardMode() if forward else dfx.RecursiveCheckpointAdjoint(),
     )
     e, tau, z = sol.ys
     n = theta_out.shape[0]
@@ -339,3 +339,47 @@ def linear_losses(load, friction_abc):
     a = fa + (0.0 if poly[0] is None else poly[0])
     c = fc + (0.0 if poly[2] is None else poly[2])
     return a, c
+
+
+# ----------------------------------------------------------------------------- fixed steps on the grid
+@eqx.filter_jit
+def grid_run(scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride: int, e_switch):
+    """Classic RK4 in the angle domain with ``steps_per_cycle`` equal steps per cycle, on the
+    table nodes when it divides their number (then the right-hand side is one smooth cubic
+    within each step). A lax.scan: no step-size control, no per-step overhead.
+
+    Returns the states (E, t, z) every ``stride`` steps (cycles, steps_per_cycle/stride),
+    the end state and the first cycle where E fell to ``e_switch`` (or ``cycles``)."""
+    _traced()
+    h = scene.train.cycle_rad / steps_per_cycle
+
+    def field(theta, y):
+        E, t, z = y
+        val, der, s = scene.terms(theta)
+        omega = _omega(E, val[_I])
+        dz = scene.governor.error(omega) / omega if scene.governor is not None else jnp.zeros_like(omega)
+        return jnp.stack([scene.engine_torque(val, s, omega, z) - scene.loss(omega, t), 1.0 / omega, dz])
+
+    def step(y, theta):
+        k1 = field(theta, y)
+        k2 = field(theta + h / 2, y + h / 2 * k1)
+        k3 = field(theta + h / 2, y + h / 2 * k2)
+        k4 = field(theta + h, y + h * k3)
+        return y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    def cycle(carry, k):
+        y, stalled_at = carry
+        thetas = theta0 + (k * steps_per_cycle + jnp.arange(steps_per_cycle)) * h
+
+        def inner(y, theta):
+            return step(y, theta), y
+
+        y_end, ys = jax.lax.scan(inner, y, thetas)
+        bad = (jnp.min(ys[:, 0]) <= e_switch) | (y_end[0] <= e_switch) | ~jnp.all(jnp.isfinite(y_end))
+        stalled_at = jnp.where((stalled_at == cycles) & bad, k, stalled_at)
+        keep = stalled_at == cycles
+        return (jnp.where(keep, y_end, y), stalled_at), ys[::stride]
+
+    y0 = jnp.stack([jnp.asarray(v, dtype=jnp.float64) for v in y0])
+    (y_end, stalled_at), ys = jax.lax.scan(cycle, (y0, jnp.asarray(cycles)), jnp.arange(cycles))
+    return (ys[..., 0], ys[..., 1], ys[..., 2]), y_end, stalled_at

@@ -40,7 +40,7 @@ from .dynamics import (
     _cumulative,
     _wrap,
     _traced,
-    angle_run,
+    grid_run,
     friction_coefficients,
     linear_cycle,
     linear_losses,
@@ -133,12 +133,11 @@ def _balanced_scene(scene, x, balance):
 def newton(residual, u0, tol=1e-13, max_iter=30):
     """Newton's method on a small system, differentiable by the implicit function theorem.
 
-    ``residual(u, forward)`` must accept ``forward=True`` (forward-mode safe, used for the
-    Jacobian) and ``forward=False`` (reverse-mode safe). The iterations run without
-    gradients; one last Newton step from the converged point carries them, which gives
+    The iterations run without gradients (Jacobian by forward mode); one last Newton
+    step from the converged point carries them, which gives
     exactly the implicit derivative −J⁻¹·∂r/∂p at the root.
     """
-    jac = jax.jacfwd(lambda u: residual(u, True))
+    jac = jax.jacfwd(residual)
 
     def cond(c):
         i, u, step = c
@@ -146,45 +145,47 @@ def newton(residual, u0, tol=1e-13, max_iter=30):
 
     def body(c):
         i, u, _ = c
-        du = jnp.linalg.solve(jac(u), residual(u, True))
+        du = jnp.linalg.solve(jac(u), residual(u))
         return i + 1, u - du, jnp.max(jnp.abs(du))
 
     u_conv = jax.lax.stop_gradient(
         jax.lax.while_loop(cond, body, (0, jax.lax.stop_gradient(u0), jnp.inf))[1]
     )
     J = jax.lax.stop_gradient(jac(u_conv))
-    r = residual(u_conv, False)
+    r = residual(u_conv)
     u = u_conv - jnp.linalg.solve(J, r)
     ok = jnp.all(jnp.isfinite(u)) & (jnp.max(jnp.abs(jax.lax.stop_gradient(r))) < 1e-8)
     return u, ok
 
 
 @eqx.filter_jit
-def _shooting_kernel(scene, omega_m, guess_E0, guess_x, balance, rtol):
-    """Newton on (E0, x) so that the angle-domain cycle map is periodic with mean speed ω_m."""
+def _shooting_kernel(engine, scene, omega_m, guess_E0, guess_x, balance):
+    """Newton on (E0, x) so that the cycle map is periodic with mean speed ω_m.
+
+    The cycle map is RK4 with one step per table node, so it is a smooth function of
+    (E0, x) (no adaptive step choices) and Newton converges to rounding. Returns the
+    arrays of the result as well."""
     _traced()
     train = scene.train
-    cycle = train.cycle_rad
-    period = cycle / omega_m
+    period = train.cycle_rad / omega_m
     e_ref = jax.lax.stop_gradient(guess_E0)
     x_ref = jax.lax.stop_gradient(jnp.where(jnp.abs(guess_x) > 0, jnp.abs(guess_x), 1.0))
-    out = jnp.array([cycle])
 
-    def scene_with(x):
-        return _balanced_scene(scene, x, balance)
-
-    def residual(u, forward):
+    def cycle(u):
         E0 = e_ref * (1 + u[0])
         x = x_ref * u[1]
-        (E, t, _), _, _, _, _ = angle_run(
-            scene_with(x), 0.0, (E0, 0.0, 0.0), out, rtol, 0.0, True, 100000, forward
-        )
-        return jnp.stack([(E[-1] - E0) / e_ref, jnp.log(t[-1] / period)])
+        (E, t, _), y_end, _ = grid_run(_balanced_scene(scene, x, balance), jnp.asarray(0.0), (E0, 0.0, 0.0), 1,
+                                       train.points, 1, jnp.asarray(0.0))
+        return E0, x, E[0], t[0], y_end
+
+    def residual(u):
+        E0, _, _, _, y_end = cycle(u)
+        return jnp.stack([(y_end[0] - E0) / e_ref, jnp.log(y_end[1] / period)])
 
     u, ok = newton(residual, jnp.stack([0.0, guess_x / x_ref]))
-    E0 = e_ref * (1 + u[0])
-    x = x_ref * u[1]
-    return E0, x, scene_with(x), ok
+    E0, x, E, t, y_end = cycle(u)
+    scene = _balanced_scene(scene, x, balance)
+    return x, scene, E, t, y_end[0], ok, _finish_arrays(engine, scene, E, t, omega_m)
 
 
 def steady_state(
@@ -197,7 +198,6 @@ def steady_state(
     imep_scale=1.0,
     method: str = "auto",
     grid_deg: float = 0.25,
-    rtol: float = 1e-12,
 ) -> SpeedResult:
     """The periodic steady state over one cycle at time-mean speed ``rpm``.
 
@@ -215,7 +215,6 @@ def steady_state(
     - ``method``: ``"auto"`` (closed form where the losses allow, else shooting),
       ``"closed"`` or ``"shooting"``.
     - ``grid_deg``: node spacing of the tables and of the result [deg].
-    - ``rtol``: tolerance of the shooting method's ODE solves.
 
     **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``);
     ``info`` holds ``load_torque_Nm`` or ``fuel_scale``, ``period_s`` and
@@ -263,14 +262,8 @@ def steady_state(
     if balance == "load":
         x_g = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
     scene = Scene(train, s[None, :], fr, speed_load)
-    E0, x, scene, ok = _shooting_kernel(scene, omega_m, E_g[0], x_g, balance, jnp.asarray(rtol))
-    nodes = jnp.arange(train.points + 1) * train.step_rad
-    (E, t, _), _, _, _, _ = angle_run(scene, 0.0, (E0, 0.0, 0.0), nodes[1:], jnp.asarray(rtol), 0.0, True, 100000)
-    E = jnp.concatenate([jnp.reshape(E0, (1,)), E])  # nodes 0…N
-    t = jnp.concatenate([jnp.zeros(1), t])
-    arrays = _finish_arrays(engine, scene, E[:-1], t[:-1], omega_m)
-    return _finish(engine, train, scene, E[:-1], t[:-1], x, ok, balance, "shooting", fidelity, omega_m, start, E[-1],
-                   arrays)
+    x, scene, E, t, E_end, ok, arrays = _shooting_kernel(engine, scene, omega_m, E_g[0], x_g, balance)
+    return _finish(engine, train, scene, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays)
 
 
 def _check_combustion(train, balance):

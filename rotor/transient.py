@@ -24,6 +24,7 @@ from .dynamics import (
     angle_run,
     closed_run,
     dense_at_angles,
+    grid_run,
     friction_coefficients,
     linear_losses,
     time_run,
@@ -32,7 +33,7 @@ from .speed_result import RPM_PER_RAD_S, SpeedResult
 
 __all__ = ["simulate", "METHODS"]
 
-METHODS = ("auto", "closed", "angle", "time")
+METHODS = ("auto", "closed", "grid", "angle", "time")
 DEFAULT_RTOL = 1e-10
 STALL_HANDOVER = 0.02  # the angle domain hands over to the time domain below 2 % of the start speed
 TIME_DOMAIN_STEPS = 200_000
@@ -111,6 +112,7 @@ def simulate(
     combustion=None,
     step_deg: float = 1.0,
     grid_deg: float = 0.25,
+    steps_per_cycle=None,
     stop_at_stall: bool = True,
     max_time_s=None,
     progress=None,
@@ -122,7 +124,7 @@ def simulate(
     - ``rpm``: the starting speed [rpm] (0: from rest); default ``[operating] rpm``.
     - ``cycles``: number of cycles to run.
     - ``load``: a load (:mod:`rotor.loads`) or None.
-    - ``method``: ``"auto"`` (default), ``"closed"``, ``"angle"`` or ``"time"``.
+    - ``method``: ``"auto"`` (default), ``"closed"``, ``"grid"``, ``"angle"`` or ``"time"``.
     - ``fidelity``: ``"variable"`` (default), ``"coefficients"`` or ``"constant"``.
     - ``rtol``: relative tolerance of the adaptive methods (default 1e-10).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False (none).
@@ -130,6 +132,8 @@ def simulate(
     - ``combustion``: combustion scale per cycle and cylinder, (cycles, cylinders), from
       :func:`rotor.combustion_pattern` (misfires, IMEP spread, cycle-to-cycle variation).
     - ``step_deg``: spacing of the saved samples [deg]; must be a multiple of ``grid_deg``.
+    - ``steps_per_cycle``: RK4 steps per cycle of ``method="grid"`` (default one per
+      degree: 720 four-stroke, 360 two-stroke).
     - ``grid_deg``: node spacing of the angle tables [deg].
     - ``stop_at_stall``: end the run where ω reaches zero (else it runs on in the time
       domain, friction and load acting against the motion).
@@ -167,13 +171,13 @@ def simulate(
     at_rest = r is not None and r == 0
     lin = linear_losses(load, fr) if governor is None else None
     if method == "auto":
-        method = "time" if at_rest else ("closed" if lin is not None else "angle")
+        method = "time" if at_rest else ("closed" if lin is not None else "grid")
     if method == "closed" and lin is None:
         raise EngineError(
             "method='closed' needs losses a + c·ω² that do not change in time and no governor; "
             "use method='angle' (or 'auto')"
         )
-    if method in ("closed", "angle") and at_rest:
+    if method in ("closed", "grid", "angle") and at_rest:
         raise EngineError(f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
                           "a start from rest needs method='time' (or 'auto')")
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
@@ -202,6 +206,32 @@ def simulate(
             if k < size:
                 handover = (done * train.cycle_rad, t_end, jnp.sqrt(2 * E_end / inertia0), 0.0)
                 break
+    elif method == "grid":
+        spc = int(round(np.rad2deg(train.cycle_rad))) if steps_per_cycle is None else int(steps_per_cycle)
+        if spc < 8 or spc % P:
+            raise EngineError(
+                f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
+                f"(step_deg = {step_deg:g}); raise step_deg or steps_per_cycle"
+            )
+        e_switch = 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
+        for size in _chunks(cycles, bar.enabled):
+            th0 = done * train.cycle_rad
+            (E, t, z), y_end, stalled_at = grid_run(scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc,
+                                                     spc // P, e_switch)
+            k = int(_known(stalled_at, size))
+            theta = th0 + jnp.arange(size)[:, None] * train.cycle_rad + jnp.arange(P)[None, :] * theta_step
+            pieces.append((theta[:k].reshape(-1), t[:k].reshape(-1), E[:k].reshape(-1), None, z[:k].reshape(-1)))
+            done += k
+            E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
+            bar.update(done)
+            if k == size and done == cycles:
+                pieces.append((jnp.reshape(done * train.cycle_rad, (1,)) + 0.0, y_end[1:2], y_end[0:1], None,
+                               y_end[2:3]))
+            if k < size:
+                th_h = done * train.cycle_rad
+                handover = (th_h, t_now, jnp.sqrt(2 * E_now / train.at(th_h)[0][0]), z_now)
+                break
+        info["steps_per_cycle"] = spc
     elif method == "angle":
         e_switch = 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
         steps = 0

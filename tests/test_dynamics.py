@@ -52,7 +52,7 @@ def test_free_coasting_keeps_kinetic_energy(single):
     assert float(res.delta) > 1e-3  # a light single: the fluctuation is real, not numerical noise
 
 
-@pytest.mark.parametrize("method, rtol", [("angle", None), ("time", 1e-12)])
+@pytest.mark.parametrize("method, rtol", [("grid", None), ("angle", None), ("time", 1e-12)])
 def test_free_coasting_adaptive_methods(single, method, rtol):
     """The time domain drifts like any non-symplectic solver: 5e-9 over 20 cycles at its
     default rtol 1e-10 (README); at rtol 1e-12 it holds 1e-9."""
@@ -69,7 +69,7 @@ def test_formulations_agree_with_scipy_dop853(preset, propeller):
     load = propeller if preset == "4chn15" else rotor.PropellerLoad(400.0, 2200.0)
     rpm = 0.95 * float(engine.operating.rpm)
     results = {m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m)
-               for m in ("closed", "angle", "time")}
+               for m in ("closed", "grid", "angle", "time")}
     P = results["closed"].points_per_cycle
     last = slice((cycles - 1) * P, cycles * P)
     theta = np.asarray(results["closed"].theta[last])
@@ -164,7 +164,8 @@ def test_steady_state_rejects_a_time_dependent_load(diesel):
 # ----------------------------------------------------------------------------- stall, start
 def test_stall_ends_cleanly_and_methods_agree(diesel):
     load = rotor.ConstantLoad(3000.0)  # far above the engine's 1132 N·m
-    runs = [rotor.simulate(diesel, rpm=1250.0, cycles=50, load=load, method=m) for m in ("closed", "angle", "time")]
+    runs = [rotor.simulate(diesel, rpm=1250.0, cycles=50, load=load, method=m)
+            for m in ("closed", "grid", "angle", "time")]
     for r in runs:
         assert r.stalled
         assert np.all(np.isfinite(np.asarray(r.omega)))
