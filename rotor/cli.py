@@ -99,8 +99,9 @@ def _build_parser():
     p.add_argument("--rpm", type=_speed, help="start speed [rev/min], 0 = from rest (default: [operating] rpm)")
     p.add_argument("--cycles", type=_whole, default=10, help="number of cycles (default 10)")
     _dynamics_args(p)
-    p.add_argument("--method", choices=("auto", "closed", "angle", "time"), default="auto")
+    p.add_argument("--method", choices=("auto", "closed", "grid", "angle", "time"), default="auto")
     p.add_argument("--rtol", type=_positive_float, help="relative tolerance of the adaptive solvers (default 1e-10)")
+    p.add_argument("--steps-per-cycle", type=_whole, help="RK4 steps per cycle of --method grid (default 1 per degree)")
     p.add_argument("--misfire", metavar="CYCLE:CYL,...", default="",
                    help="misfiring firings, e.g. 3:1,7:2 (cycle from 0, cylinder from 1)")
     p.add_argument("--governor", type=_positive_float, metavar="RPM", help="PI speed governor set to RPM")
@@ -264,6 +265,7 @@ def _cmd_simulate(args):
     progress = False if (args.json or args.quiet) else None
     res = rotor.simulate(engine, rpm=args.rpm, cycles=args.cycles, load=rotor.parse_load(args.load),
                          method=args.method, fidelity=args.fidelity, rtol=args.rtol, combustion=combustion,
+                         steps_per_cycle=args.steps_per_cycle,
                          governor=governor, progress=progress)
     _report(res, args, "simulate")
 

@@ -58,7 +58,8 @@ class CrankTrain(eqx.Module):
     ``cycle_rad``: cycle angle Θ [rad]; ``firing_rad``: each cylinder's firing TDC in
     [0, Θ) [rad]; ``imep_motored_pa``, ``imep_combustion_pa``: each cylinder's IMEP
     without firing and the part added by its combustion [Pa]; ``mean_inertia``: cycle
-    mean of I [kg·m²]; ``fidelity`` (static).
+    mean of I [kg·m²]; ``textbook_k``: the textbook reciprocating inertia torque per ω²,
+    −Σ m_rec·s″·s′, on the nodes [kg·m²]; ``fidelity`` (static).
     """
 
     values: jnp.ndarray
@@ -67,6 +68,7 @@ class CrankTrain(eqx.Module):
     imep_motored_pa: jnp.ndarray
     imep_combustion_pa: jnp.ndarray
     mean_inertia: jnp.ndarray
+    textbook_k: jnp.ndarray
     cycle_rad: float = eqx.field(static=True)
     strokes: int = eqx.field(static=True)
     fidelity: str = eqx.field(static=True)
@@ -147,8 +149,8 @@ def _shifted(values, slopes, offset, period):
 
 
 def _one_cylinder(engine, fidelity, phi):
-    """Functions of one ordinary cylinder's own angle φ (shape (N,)) → (N, 4):
-    I_cyl, k_cyl, motored torque, combustion torque. A cylinder's firing TDC is one of
+    """Functions of one ordinary cylinder's own angle φ (shape (N,)) → (N, 5):
+    I_cyl, k_cyl, motored torque, combustion torque, textbook k. A cylinder's firing TDC is one of
     its TDCs, so its mechanical angle equals its cycle angle modulo 2π."""
     g = engine.geometry
     pm = piston_motion(phi, g.crank_radius_m, g.rod_length_m, g.pin_offset_m)
@@ -168,7 +170,8 @@ def _one_cylinder(engine, fidelity, phi):
     mot = engine.pressure.motored(engine.strokes)(phi, g, engine.strokes)
     area_ds = g.piston_area_m2 * pm.ds
     m_mot = (mot - engine.pressure.crankcase_pa) * area_ds
-    return jnp.stack([inertia, k, m_mot, (fired - mot) * area_ds], axis=-1)
+    textbook_k = -m_rec * pm.d2s * pm.ds
+    return jnp.stack([inertia, k, m_mot, (fired - mot) * area_ds, textbook_k], axis=-1)
 
 
 def _shifted_columns(engine, fidelity, points):
@@ -180,10 +183,12 @@ def _shifted_columns(engine, fidelity, points):
     fire_phase = engine.firing_angles_rad - (2 * np.pi if engine.strokes == 4 else 0.0)
     # each cylinder: I and k at its mechanical angle θ − tdc, torques at its cycle angle
     per_cyl = []
+    textbook_k = jnp.zeros_like(phi)
     for c in range(engine.cylinders):
-        iv, idv = _shifted(v1[:, :2], d1[:, :2], tdc[c], cycle)
-        mv, mdv = _shifted(v1[:, 2:], d1[:, 2:], fire_phase[c], cycle)
-        per_cyl.append((jnp.concatenate([iv, mv], axis=1), jnp.concatenate([idv, mdv], axis=1)))
+        iv, idv = _shifted(v1[:, [0, 1, 4]], d1[:, [0, 1, 4]], tdc[c], cycle)
+        mv, mdv = _shifted(v1[:, 2:4], d1[:, 2:4], fire_phase[c], cycle)
+        textbook_k = textbook_k + iv[:, 2]
+        per_cyl.append((jnp.concatenate([iv[:, :2], mv], axis=1), jnp.concatenate([idv[:, :2], mdv], axis=1)))
     vals = jnp.stack([v for v, _ in per_cyl], axis=1)  # (N, n, 4)
     ders = jnp.stack([d for _, d in per_cyl], axis=1)
     i_v, k_v, m_v, g_v = (vals[..., q] for q in range(4))
@@ -202,7 +207,7 @@ def _shifted_columns(engine, fidelity, points):
         [d_inertia[:, None], jnp.sum(k_d, axis=1, keepdims=True), jnp.sum(m_d, axis=1, keepdims=True), g_d], axis=1
     )
     work_m = jnp.sum(v1[:, 2]) * cycle / points
-    return values, slopes, jnp.full(engine.cylinders, work_m), v1
+    return values, slopes, jnp.full(engine.cylinders, work_m), textbook_k
 
 
 @eqx.filter_jit
@@ -210,17 +215,18 @@ def _build(engine, fidelity, points):
     cycle = engine.cycle_rad
     w = cycle / points  # periodic trapezoid rule: spectrally accurate
     if engine.articulated is None:
-        values, slopes, work_m, _ = _shifted_columns(engine, fidelity, points)
+        values, slopes, work_m, textbook_k = _shifted_columns(engine, fidelity, points)
     else:  # slave rods move differently: every cylinder on its own
         theta = jnp.arange(points) * w
         (values, m_mot), (slopes, _) = jax.jvp(
             lambda t: _columns(engine, fidelity, t), (theta,), (jnp.ones_like(theta),)
         )
         work_m = jnp.sum(m_mot, axis=0) * w
+        textbook_k = reciprocating_inertia_torque(engine, theta, 1.0)
     vh = engine.geometry.displacement_m3
     imep_c = jnp.sum(values[:, _DM:], axis=0) * w / vh
     firing = jnp.mod(engine.firing_angles_rad, cycle)
-    return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, _I]), firing
+    return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, _I]), firing, textbook_k
 
 
 def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
@@ -238,5 +244,6 @@ def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> C
 def train_from_engine(engine, fidelity: str, points: int) -> CrankTrain:
     """:func:`crank_train` with the node count given (usable inside jit)."""
     engine = arrays_only(engine)
-    values, slopes, imep_m, imep_c, mean_i, firing = _build(engine, fidelity, points)
-    return CrankTrain(values, slopes, firing, imep_m, imep_c, mean_i, engine.cycle_rad, engine.strokes, fidelity)
+    values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)
+    return CrankTrain(values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes,
+                      fidelity)

@@ -34,7 +34,6 @@ import optimistix as optx
 
 from ._checks import EngineError, arrays_only, concrete
 from .crank_train import _DM, _MM, check_fidelity, grid_points, train_from_engine
-from .forces import reciprocating_inertia_torque
 from .dynamics import (
     Scene,
     _cumulative,
@@ -87,21 +86,27 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
     e_star = jnp.max(jnp.where(alpha > 0, -beta / alpha, -jnp.inf))
     e_star = jax.lax.stop_gradient(jnp.maximum(e_star, 0.0)) + 0.0 * e_star
     period = train.cycle_rad / omega_m
+    # E and dE/dθ = F − G·E are affine in E0 too (x is): only the time integral is nonlinear
+    x0, x1 = -Q0[-1] / Q1[-1], p / Q1[-1]  # x = x0 + x1·E0
+    dE_a = x1 * F1 - G * alpha
+    dE_b = F0 + x0 * F1 - G * beta
+    i_ratio = dinertia / inertia
 
-    def state(eta):
-        E0 = e_star + e_ref * jnp.exp(eta)
-        x = (E0 * p - Q0[-1]) / Q1[-1]
-        parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
-        return E0, x, parts
+    def period_of(E0):
+        E = alpha * E0 + beta
+        omega = jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
+        r = 1.0 / omega
+        dr = -0.5 * r * ((dE_a * E0 + dE_b) / jnp.maximum(E, 1e-300) - i_ratio)
+        return _cumulative(r, dr, h)[-1]
 
     def residual(eta, _):
-        E0, x, parts = state(eta)
-        _, _, t, _ = linear_cycle(train, parts, E0, 0.0)
-        return jnp.log(t[-1] / period)
+        return jnp.log(period_of(e_star + e_ref * jnp.exp(eta)) / period)
 
     eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
     sol = optx.root_find(residual, optx.Newton(rtol=1e-14, atol=1e-14), eta0, max_steps=200, throw=False)
-    E0, x, parts = state(sol.value)
+    E0 = e_star + e_ref * jnp.exp(sol.value)
+    x = x0 + x1 * E0
+    parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
     E, omega, t, _ = linear_cycle(train, parts, E0, 0.0)
     return E, t, x, sol.result == optx.RESULTS.successful, Q1[-1]
 
@@ -289,7 +294,7 @@ def _finish_arrays(engine, scene, E, t, omega_m):
     # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
     # the gas torque (the tables, unscaled) plus the reciprocating inertia torque
     gas = val[:, _MM] + jnp.sum(val[:, _DM:], axis=1)
-    total = gas + reciprocating_inertia_torque(engine, theta, omega_m)
+    total = gas + train.textbook_k * omega_m**2
     work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
     excess = jnp.max(work) - jnp.min(work)
     return theta, omega, m_eng, m_loss, accel, excess, jnp.min(E) / jnp.mean(E), jnp.argmin(E)

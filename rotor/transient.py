@@ -3,7 +3,9 @@
 :func:`simulate` starts at crank angle 0 with speed ``rpm`` (0: from rest) and runs
 ``cycles`` cycles, or until the crankshaft stops (a stall: ``result.stalled``, with the
 time and angle). See :mod:`rotor.dynamics` for the formulations ``"closed"``,
-``"angle"`` and ``"time"``; ``method="auto"`` picks the cheapest valid one.
+``"grid"``, ``"angle"`` and ``"time"``; ``method="auto"`` picks the cheapest valid one:
+``"time"`` from rest, ``"closed"`` where the losses are a + c·ω² and nothing changes in
+time, ``"grid"`` otherwise.
 """
 
 from __future__ import annotations

@@ -1,0 +1,82 @@
+"""The result object: δ, orders, tables, plots, progress; chunked runs equal one-shot runs."""
+
+import jax
+import jax.numpy as jnp
+import equinox as eqx
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import rotor
+from rotor import transient
+
+
+@pytest.fixture(scope="module")
+def steady(diesel):
+    return rotor.steady_state(diesel)
+
+
+def test_orders_reconstruct_the_speed(steady):
+    """mean + Σ A·cos(order·θ + φ) over all orders gives ω(θ) back."""
+    o = steady.orders(max_order=1e9)
+    theta = np.asarray(steady.theta)
+    w = float(jnp.mean(steady.omega)) + sum(
+        a * np.cos(k * theta + p) for k, a, p in zip(o.order, np.asarray(o.speed_amplitude_rad_s),
+                                                     np.asarray(o.speed_phase_rad))
+    )
+    assert np.max(np.abs(w - np.asarray(steady.omega))) < 1e-9 * float(steady.omega[0])
+    assert o.order[0] == 0.5 and np.allclose(np.diff(o.order), 0.5)
+
+
+def test_delta_matches_sample_extremes(steady):
+    w = np.asarray(steady.omega)
+    raw = (w.max() - w.min()) / float(steady.mean_omega)
+    # parabolic refinement moves δ by less than the sampling error of 0.25° steps
+    assert float(steady.delta) == pytest.approx(raw, rel=1e-5)
+    assert float(steady.delta) >= raw
+
+
+def test_to_pandas_and_plots(steady, tmp_path):
+    df = steady.to_pandas()
+    assert list(df.columns)[:4] == ["t_s", "theta_rad", "angle_deg", "cycle"]
+    assert len(df) == steady.points_per_cycle and df["rpm"].mean() == pytest.approx(1250, rel=1e-3)
+    fig, ax = plt.subplots()
+    assert steady.plot(ax=ax, kind="cycle") is ax and len(ax.lines) >= 1
+    for kind in ("torque", "orders"):
+        steady.plot(kind=kind)
+    with pytest.raises(ValueError, match="kind"):
+        steady.plot(kind="spectrum")
+    plt.close("all")
+
+
+def test_chunked_run_equals_one_shot(diesel):
+    load = rotor.PropellerLoad(1100.0, 1250.0)
+    for method in ("closed", "grid"):
+        one = rotor.simulate(diesel, rpm=1200.0, cycles=40, load=load, method=method, progress=False)
+        chunked = rotor.simulate(diesel, rpm=1200.0, cycles=40, load=load, method=method, progress=True)
+        np.testing.assert_allclose(np.asarray(chunked.omega), np.asarray(one.omega), rtol=1e-12)
+        np.testing.assert_allclose(np.asarray(chunked.t), np.asarray(one.t), rtol=1e-12)
+
+
+def test_progress_bar_draws_after_two_seconds(capsys):
+    bar = transient._Progress(10, True)
+    bar.update(1)
+    assert capsys.readouterr().err == ""  # a short run shows nothing
+    bar.start -= 3.0
+    bar.update(5)
+    bar.close()
+    err = capsys.readouterr().err
+    assert "simulating [" in err and "5/10 cycles" in err and err.endswith("\n")
+
+
+def test_vmap_over_a_transient(diesel):
+    load = rotor.PropellerLoad(1100.0, 1250.0)
+
+    def delta(J):
+        return rotor.simulate(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, J), rpm=1200.0, cycles=3,
+                              load=load).delta
+
+    Js = jnp.array([8.0, 12.0])
+    batch = jax.vmap(delta)(Js)
+    for J, d in zip(Js, batch):
+        assert float(d) == pytest.approx(float(delta(float(J))), rel=1e-10)
