@@ -239,9 +239,10 @@ def steady_state(
     points = grid_points(engine.strokes, grid_deg)
     engine, load = arrays_only(engine), arrays_only(load)
     n = engine.cylinders
-    s = jnp.broadcast_to(jnp.asarray(imep_scale, dtype=jnp.float64), (n,))
+    xp = jnp if any(isinstance(v, jax.core.Tracer) for v in (rpm, imep_scale)) else np  # numpy: no dispatch
+    s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
     fr = friction_coefficients(engine, friction)
-    omega_m = jnp.asarray(rpm, dtype=jnp.float64) / RPM_PER_RAD_S
+    omega_m = xp.asarray(rpm, dtype=xp.float64) / RPM_PER_RAD_S
     balance = "load" if load is None or isinstance(load, ConstantLoad) else "fuel"
     speed_load = None if balance == "load" else load
     lin = linear_losses(speed_load, fr)
@@ -297,31 +298,33 @@ def _finish_arrays(engine, scene, E, t, omega_m):
     total = gas + train.textbook_k * omega_m**2
     work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
     excess = jnp.max(work) - jnp.min(work)
-    return theta, omega, m_eng, m_loss, accel, excess, jnp.min(E) / jnp.mean(E), jnp.argmin(E)
+    return {
+        "theta": theta, "omega": omega, "torque": m_eng, "load_torque": m_loss, "accel": accel,
+        "imep_pa": (train.imep_motored_pa + sc * train.imep_combustion_pa)[None, :],
+        "period_s": train.cycle_rad / omega_m, "excess_work_J": excess,
+        "textbook_delta": excess / (train.mean_inertia * omega_m**2),
+        "e_ratio": jnp.min(E) / jnp.mean(E), "i_min": jnp.argmin(E),
+    }
 
 
 def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
-    theta, omega, m_eng, m_loss, accel, excess, e_ratio, i_min = arrays
-    period = train.cycle_rad / omega_m
-    info = {"period_s": period, ("load_torque_Nm" if balance == "load" else "fuel_scale"): x}
+    a = arrays
+    info = {"period_s": a["period_s"], ("load_torque_Nm" if balance == "load" else "fuel_scale"): x,
+            "excess_work_J": a["excess_work_J"], "textbook_delta": a["textbook_delta"]}
     if E_end is not None:
         info["periodicity_error"] = jnp.abs(E_end - E[0]) / E[0]
-    imep = train.imep_motored_pa + scene.scales[0] * train.imep_combustion_pa
-    info["excess_work_J"] = excess
-    info["textbook_delta"] = excess / (train.mean_inertia * omega_m**2)
-    e_ratio = concrete(e_ratio)
-    if e_ratio is not None:
-        if not bool(ok) or not np.isfinite(e_ratio) or e_ratio < STOP_FRACTION:
-            i = int(i_min)
+    if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
+        e_ratio, ok, i_min = jax.device_get((a["e_ratio"], ok, a["i_min"]))
+        if not ok or not np.isfinite(e_ratio) or e_ratio < STOP_FRACTION:
             raise NoSteadyStateError(
                 f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "
-                f"crank angle {float(np.rad2deg(theta[i])):.1f}° of the cycle (the crankshaft stops once a cycle). "
-                "Raise the speed or the crankshaft/flywheel inertia ([crankshaft] inertia_kgm2), or simulate the "
-                "run with rotor.simulate to see it stall"
+                f"crank angle {float(np.rad2deg(i_min * train.cycle_rad / train.points)):.1f}° of the cycle (the "
+                "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
+                "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
             )
     return SpeedResult(
-        t=t, theta=theta, omega=omega, accel=accel, torque=m_eng, load_torque=m_loss, imep_pa=imep[None, :],
-        method=method, fidelity=fidelity, kind="steady", strokes=engine.strokes, cycle_rad=train.cycle_rad,
+        t=t, theta=a["theta"], omega=a["omega"], accel=a["accel"], torque=a["torque"], load_torque=a["load_torque"],
+        imep_pa=a["imep_pa"], method=method, fidelity=fidelity, kind="steady", strokes=engine.strokes, cycle_rad=train.cycle_rad,
         points_per_cycle=train.points, uniform_cycles=1, engine_name=engine.name,
         wall_s=time.perf_counter() - start, info=info,
     )

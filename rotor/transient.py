@@ -19,7 +19,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._checks import EngineError, arrays_only, concrete
-from .combustion import combustion_pattern
 from .crank_train import crank_train
 from .dynamics import (
     Scene,
