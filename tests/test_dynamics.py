@@ -213,6 +213,13 @@ def test_gradients_of_delta_and_orders_match_finite_differences(diesel, propelle
         g = float(jax.grad(lambda J: steady(J, what))(10.2))
         assert g == pytest.approx(float(_fd(lambda J: steady(J, what), 10.2, 1e-3)), rel=1e-5)
 
+    # a geometry field reaches δ through I(θ), the kinematics and the gas torque at once
+    def by_rod(L):
+        return rotor.steady_state(eqx.tree_at(lambda e: e.geometry.rod_length_m, diesel, L)).delta
+
+    g = float(jax.grad(by_rod)(0.3839))
+    assert g == pytest.approx(float(_fd(by_rod, 0.3839, 1e-5)), rel=1e-5)
+
     def transient(T):
         return rotor.simulate(diesel, rpm=1200.0, cycles=3, load=rotor.PropellerLoad(T, 1250.0)).delta
 
