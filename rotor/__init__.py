@@ -46,7 +46,7 @@ from .loads import (  # noqa: E402
 from .combustion import combustion_pattern  # noqa: E402
 from .crank_train import CrankTrain, crank_train  # noqa: E402
 from .speed_result import Orders, SpeedResult  # noqa: E402
-from .steady_state import NoSteadyStateError, steady_state  # noqa: E402
+from .periodic import NoSteadyStateError, steady_state  # noqa: E402
 from .transient import simulate  # noqa: E402
 from . import summary  # noqa: E402
 from .summary import engine_summary  # noqa: E402
