@@ -6,8 +6,8 @@ Measures, does not assert:
    ``solve_ivp(method="RK45", rtol=1e-8)`` with a plain numpy right-hand side, started at
    rotor's steady-state speed and loaded with its balancing torque.
 2. A transient of 100 cycles under ``PropellerLoad(1100 N·m, 1250 rpm)`` from 1250 rpm:
-   ``rotor.simulate`` (method "closed", picked by "auto"; "grid", fixed-step RK4 at one
-   step per degree, what "auto" picks for loads outside the closed form; and "angle" at
+   ``rotor.simulate`` (method "closed", picked by "auto"; "grid", fixed-step RK4 at two
+   steps per degree, what "auto" picks for loads outside the closed form; and "angle" at
    its default rtol) against ``solve_ivp(method="LSODA")`` at the rtol whose error is about rotor's.
    Error: max |ω(θ) − ω_ref(θ)|/ω_mean over the last cycle at rotor's 1° crank angles,
    and the error of the time at the last of them.
@@ -309,7 +309,7 @@ def report(res):
     print(f"\n2. {tr['cycles']}-cycle transient from {RPM:g} rpm, {tr['load']}; error ω: max|ω−ω_ref|/ω_mean, "
           "last cycle; t: at its end")
     print("   run                         median time   error ω   error t [s]  (rotor solver-only ω error)")
-    for name, r in (("rotor closed (auto)", tr["rotor_closed"]), ("rotor grid (RK4, 1°)", tr["rotor_grid"]),
+    for name, r in (("rotor closed (auto)", tr["rotor_closed"]), ("rotor grid (RK4, 0.5°)", tr["rotor_grid"]),
                     ("rotor angle (rtol 1e-10)", tr["rotor_angle"]),
                     (f"LSODA rtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"]),
                     (f"LSODA rtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"]),
