@@ -1,48 +1,46 @@
 """Work-precision study of rotor's simulator against scipy's solve_ivp and a numba RK4.
 
-The scene, per preset (tue-single, 4chn15, mwm6, v8) and horizon (10 ... 10,000 cycles):
-start at 0.95 × the operating speed under ``PropellerLoad(T, operating rpm)``, T being the
-engine's mean gas torque, so it settles near its operating speed (a + c·ω²: the closed
-form applies). Each run's accuracy knob is swept; its error is
-ω(θ): max |ω − ω_ref|/mean(ω_ref) at the 1° crank angles of the last cycle (at the
-subset a coarse run saves), and t: |t − t_ref|/t_ref at the start of the last cycle.
+Scene, per preset (tue-single, 4chn15, mwm6, v8) and horizon (10, 100, 1000, 10,000
+cycles): start at 0.95 × the operating speed under ``PropellerLoad(T, operating rpm)``, T
+the engine's mean gas torque (a + c·ω²: the closed form applies). Error ω: max|ω − ω_ref|
+/ mean ω_ref at the 1° crank angles of the last cycle (the subset a coarse run saves);
+error t: |t − t_ref| / t_ref at the start of the last cycle. Times: medians of 3–7
+repeats (1–3 with --quick), rotor's and numba's first calls apart as compile time.
 
-Runs (medians of 3–7 repeats, 1–3 with --quick; first calls of rotor and numba apart, as
-compile time):
 - rotor ``simulate``: ``closed`` (grid_deg 1 … 0.125), ``grid`` (RK4, 90 … 2880 steps per
-  cycle; below 720 with step_deg 720/steps), ``angle`` (rtol 1e-3 … 1e-12), ``time``
-  (rtol 1e-4 … 1e-10); and ``closed`` at fidelity "constant" and "coefficients", whose
-  "error" against the variable-inertia reference is MODEL error, not solver error.
-- scipy ``solve_ivp`` RK45, DOP853, LSODA (rtol 1e-3 … 1e-12, atol 1e-10) with a plain
-  numpy right-hand side in the time domain, y = (θ, ω), as a user would write it, timed
-  without dense output (its error comes from a dense run, which takes the same steps).
-- numba: a compiled fixed-step RK4 in the angle domain (energy form, dE/dθ = M_gas − c·ω²,
-  dt/dθ = 1/ω), 90 … 2880 steps per cycle, I and M_gas evaluated twice per step.
+  cycle, step_deg 720/steps below 720), ``angle`` (rtol 1e-3 … 1e-12), ``time`` (rtol
+  1e-4 … 1e-10); and ``closed`` at fidelity "constant"/"coefficients" (shortest horizon):
+  their "error" against the variable-inertia reference is MODEL error, not solver error.
+- scipy ``solve_ivp`` RK45, DOP853, LSODA (rtol 1e-3 … 1e-12, atol 1e-10), a plain numpy
+  right-hand side in the time domain, y = (θ, ω), as a user would write it; timed without
+  dense output (the error comes from a dense run, which takes the same steps).
+- numba: fixed-step RK4 in the angle domain (energy form dE/dθ = M_gas − c·ω², dt/dθ =
+  1/ω), 90 … 2880 steps per cycle, I and M_gas evaluated twice per step.
 
-Physics. rotor: its own (exact kinematics, the engine's pressure source, Hermite tables).
-scipy and numba share one numpy physics: exact piston kinematics with pin offset, the
+Physics. scipy and numba share one numpy physics: exact kinematics with pin offset, the
 two-mass split, I(θ) = J + Σ(m_rot·R² + m_rec·s′²), and a periodic PCHIP pressure on a
-uniform grid: the engine's own table for table engines (rotor interpolates it the same
-way, so the gas torque and I(θ) are asserted to match rotor's to 1e-9), and for Wiebe
-engines ``engine.pressure`` tabulated once at 0.25° (the max difference of the gas torque
-from rotor's is reported). Each run is measured against a reference of ITS OWN physics:
-rotor against ``closed`` at grid_deg 0.0625 (confirmed by ``angle`` at rtol 1e-13 on the
-same tables, and at the shortest horizon by scipy DOP853 on rotor's exact physics,
-benchmarks/reference.py); scipy and numba against the numba RK4 at 11,520 steps per cycle,
-aligned with the pressure nodes (confirmed by 5,760 steps, and at the shortest horizon by
-DOP853 at rtol 1e-13 in the angle domain on the numpy physics).
+uniform grid: the engine's table for table engines (as rotor, so I and M_gas are asserted
+to match rotor's to 1e-9) and, for Wiebe engines, ``engine.pressure`` tabulated once at
+0.25° (the gas torque's max difference from rotor's is reported). Each run is measured
+against a reference of ITS OWN physics: rotor against ``closed`` at grid_deg 0.0625
+(checked against ``angle`` rtol 1e-13 on the same tables up to 1000 cycles, and at the
+shortest horizon against scipy DOP853 on rotor's exact physics, benchmarks/reference.py);
+scipy and numba against the numba RK4 at 11,520 steps per cycle, aligned with the pressure
+nodes (checked against 5,760 steps, and at the shortest horizon against DOP853 rtol 1e-13
+on the numpy physics; unsegmented, DOP853 is good to ~1e-9 across the PCHIP nodes). The
+two references' difference (the physics difference) is recorded; --quick skips the checks.
 
-Budget: a run is skipped, and recorded as skipped with its predicted time, when the same
-setting at a shorter horizon (scaled by the horizon) or a looser setting at this horizon
-predicts more than --cap seconds (default 60); nothing predicted is reported as measured.
+A run is skipped, recorded with its predicted time, when the same setting at a shorter
+horizon (scaled by the horizon) or a looser one at this horizon predicts more than --cap
+seconds (default 60); nothing predicted is reported as measured.
 
-    .venv/bin/python benchmarks/work_precision.py --quick        # under 2 minutes
-    .venv/bin/python benchmarks/work_precision.py                # full: about 2.5–3.5 hours
-    .venv/bin/python benchmarks/work_precision.py --presets 4chn15 --horizons 100,1000
+    .venv/bin/python benchmarks/work_precision.py --quick   # 4chn15, tue-single; 10, 100 cycles; < 2 min
+    .venv/bin/python benchmarks/work_precision.py           # everything: about 3-4 hours
+    .venv/bin/python benchmarks/work_precision.py --presets 4chn15 --horizons 100,1000 --cap 10
 
 Writes benchmarks/results/work_precision.json (work_precision_quick.json with --quick) and
-one log-log figure per preset and horizon, <stem>_<preset>_<cycles>.png; prints a summary:
-at error ω ≤ 1e-6, the fastest rotor, scipy and numba settings and their ratios.
+a log-log figure per preset and horizon, <stem>_<preset>_<cycles>.png; prints, at error
+ω ≤ 1e-6, the fastest rotor, scipy and numba settings and the ratios.
 """
 
 from __future__ import annotations
@@ -57,6 +55,7 @@ import sys
 import time
 from pathlib import Path
 
+import jax
 import numba
 import numpy as np
 import scipy
@@ -91,7 +90,8 @@ class Physics:
         self.tdc = np.deg2rad(np.asarray(engine.tdc_angles_deg, dtype=float))
         self.fire = np.asarray(engine.firing_angles_rad, dtype=float)
         self.R, self.L, self.k = float(g.crank_radius_m), float(g.rod_length_m), float(g.pin_offset_m)
-        self.A, self.J, self.p_cc = float(g.piston_area_m2), float(engine.crankshaft.inertia_kgm2), float(src.crankcase_pa)
+        self.A, self.p_cc = float(g.piston_area_m2), float(src.crankcase_pa)
+        self.J = float(engine.crankshaft.inertia_kgm2)
         self.m_rec, self.m_rot = (float(m) for m in engine.masses.two_mass_split(g.rod_length_m))
         C = np.rad2deg(self.cycle)
         if isinstance(src, rotor.PressureTable):
@@ -235,22 +235,16 @@ def repeats_for(seconds, quick):
 
 def measure(fn, quick, compiled, hint=None):
     """Median wall time of ``fn``; a first call apart (compile) when ``compiled``."""
-    out, times = {}, []
+    out = {}
 
     def call():
         start = time.perf_counter()
         out["r"] = fn()
-        times.append(time.perf_counter() - start)
+        return time.perf_counter() - start
 
-    first = None
-    if compiled:
-        call()
-        first = times.pop()
-    if hint is None:
-        call()
-        hint = times[0]
-    while len(times) < repeats_for(hint, quick):
-        call()
+    first = call() if compiled else None
+    times = [] if hint else [call()]
+    times += [call() for _ in range(repeats_for(hint or times[0], quick) - len(times))]
     med = statistics.median(times)
     res = {"median_s": med, "times_s": times, "repeats": len(times)}
     if compiled:
@@ -264,13 +258,10 @@ class Bench:
         self.name, self.quick, self.cap, self.first = name, quick, cap, first
         self.settings = QUICK if quick else FULL
         self.engine = e = rotor.load_engine(name)
-        self.rpm = float(e.operating.rpm)
-        self.torque = float(rotor.mean_gas_torque(e))
+        self.rpm, self.torque = float(e.operating.rpm), float(rotor.mean_gas_torque(e))
         self.load = rotor.PropellerLoad(self.torque, self.rpm)
-        self.c = float(self.load.c)
-        self.rpm0 = 0.95 * self.rpm
+        self.c, self.rpm0, self.ph = float(self.load.c), 0.95 * self.rpm, Physics(e)
         self.omega0 = self.rpm0 * np.pi / 30
-        self.ph = Physics(e)
         self.history = {}  # key → (cycles, median_s) of the last measured run
         start = time.perf_counter()
         self.numba(1, 720)  # compiles nb_rk4 (and nb_terms) on the first preset; later ones reuse it
@@ -366,24 +357,24 @@ class Bench:
             timing, r = measure(lambda: _block(sim(**kw)), q, compiled=True)
             return dict(timing, error=error(rotor_lc(r), ref_r), method=r.method)
 
-        st = self.settings
-        rows = self.runs("rotor closed", lambda g: f"grid {g:g}°", st["closed"], cycles,
-                         lambda g: rotor_go(method="closed", grid_deg=g))
-        rows += self.runs("rotor grid", lambda n: f"{n}/cycle", st["grid"], cycles,
-                          lambda n: rotor_go(method="grid", steps_per_cycle=n, step_deg=max(1.0, 720 / n)))
-        rows += self.runs("rotor angle", lambda r: f"rtol {r:.0e}", st["angle"], cycles,
-                          lambda r: rotor_go(method="angle", rtol=r))
-        rows += self.runs("rotor time", lambda r: f"rtol {r:.0e}", st["time"], cycles,
-                          lambda r: rotor_go(method="time", rtol=r))
-        for fid in ("constant", "coefficients") if cycles == self.first and not q else ():
-            rows += self.runs(f"model {fid}", lambda g: f"grid {g:g}°", [0.25], cycles,
-                              lambda g, fid=fid: rotor_go(method="closed", grid_deg=g, fidelity=fid))
+        grid_deg, rtol, spc = (lambda g: f"grid {g:g}°"), (lambda r: f"rtol {r:.0e}"), (lambda n: f"{n}/cycle")
+        models = ("constant", "coefficients") if cycles == self.first and not q else ()
+        rows = []
+        for family, fmt, settings, kw in (
+                [("rotor closed", grid_deg, self.settings["closed"], lambda g: dict(method="closed", grid_deg=g)),
+                 ("rotor grid", spc, self.settings["grid"],
+                  lambda n: dict(method="grid", steps_per_cycle=n, step_deg=max(1.0, 720 / n))),
+                 ("rotor angle", rtol, self.settings["angle"], lambda r: dict(method="angle", rtol=r)),
+                 ("rotor time", rtol, self.settings["time"], lambda r: dict(method="time", rtol=r))]
+                + [(f"model {f}", grid_deg, [0.25], lambda g, f=f: dict(method="closed", grid_deg=g, fidelity=f))
+                   for f in models]):
+            rows += self.runs(family, fmt, settings, cycles, lambda x, kw=kw: rotor_go(**kw(x)))
 
         def numba_go(n):
             timing, run = measure(lambda: self.numba(cycles, n), q, compiled=True)
             return dict(timing, error=error(last_cycle(*run, start), ref_n))
 
-        rows += self.runs("numba RK4", lambda n: f"{n}/cycle", st["numba"], cycles, numba_go)
+        rows += self.runs("numba RK4", spc, self.settings["numba"], cycles, numba_go)
         for method in SCIPY:
             def go(rtol, method=method):
                 t0 = time.perf_counter()
@@ -393,7 +384,7 @@ class Bench:
                                        compiled=False, hint=dense_s)
                 return dict(timing, dense_run_s=dense_s, nfev=int(sol2.nfev),
                             error=error(last_cycle(*scipy_last_cycle(sol, theta), start), ref_n))
-            rows += self.runs(f"scipy {method}", lambda r: f"rtol {r:.0e}", st["scipy"], cycles, go)
+            rows += self.runs(f"scipy {method}", rtol, self.settings["scipy"], cycles, go)
         res["runs"] = rows
         res["summary"] = summarize(rows)
         return res
@@ -406,8 +397,7 @@ class Bench:
 
 
 def _block(r):
-    r.omega.block_until_ready()
-    r.t.block_until_ready()
+    jax.block_until_ready((r.omega, r.t))
     return r
 
 
@@ -423,6 +413,10 @@ def summarize(rows):
     s, r, n = (out[g] and out[g]["median_s"] for g in ("scipy", "rotor", "numba"))
     out["ratio_scipy_over_rotor"] = s / r if s and r else None
     out["ratio_rotor_over_numba"] = r / n if r and n else None
+    out["targets (at 1000 cycles)"] = {"scipy/rotor >= 30": s and r and s / r >= 30, "rotor/numba <= 3": r and n
+                                       and r / n <= 3}
+    compile_s = [x["compile_s"] for x in rows if x["family"].startswith("rotor") and "compile_s" in x]
+    out["rotor_compile_s"] = {"min": min(compile_s), "median": statistics.median(compile_s), "max": max(compile_s)}
     return out
 
 
@@ -430,7 +424,6 @@ def summarize(rows):
 def versions():
     import diffrax
     import equinox
-    import jax
     import jaxlib
 
     mods = {m.__name__: m.__version__ for m in (rotor, jax, jaxlib, diffrax, equinox, np, scipy, numba)}
@@ -482,7 +475,9 @@ def print_summary(out):
             cell = lambda b: f"{b['family'].split()[-1]} {b['setting']} {b['median_s']:.3g}s" if b else "none"  # noqa
             ratio = lambda v: f"{v:11.1f}" if v else f"{'—':>11s}"  # noqa
             print(f"{name:11s} {n:>6s}  {cell(s['rotor']):32s} {cell(s['scipy']):32s} {cell(s['numba']):28s}"
-                  f"{ratio(s['ratio_scipy_over_rotor'])} {ratio(s['ratio_rotor_over_numba'])}")
+                  f"{ratio(s['ratio_scipy_over_rotor'])} {ratio(s['ratio_rotor_over_numba'])}   rotor compile "
+                  f"{s['rotor_compile_s']['min']:.1f}–{s['rotor_compile_s']['max']:.1f} s")
+    print(f"import rotor {out['import_rotor']['median_s']:.2f} s; numba compile {out['numba_compile_s']:.2f} s")
 
 
 def main():
@@ -497,13 +492,14 @@ def main():
     stem = "work_precision_quick" if args.quick else "work_precision"
     RESULTS.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
-    out = {"quick": args.quick, "cap_s": args.cap, "versions": versions(), "import_rotor": import_time(1 if args.quick else 3),
-           "notes": __doc__.split("\n\n", 1)[1].rsplit("\n\n", 2)[0], "presets": {}}
+    notes = __doc__.split("\n\n", 1)[1].rsplit("\n\n", 2)[0]
+    out = {"quick": args.quick, "cap_s": args.cap, "versions": versions(),
+           "import_rotor": import_time(1 if args.quick else 3), "notes": notes, "presets": {}}
     print(f"import rotor: {out['import_rotor']['median_s']:.2f} s")
     for name in presets:
         b = Bench(name, args.quick, args.cap, horizons[0])
-        p = out["presets"][name] = {"rpm_operating": b.rpm, "rpm_start": b.rpm0, "load": f"PropellerLoad("
-                                    f"{b.torque:.6g} N·m, {b.rpm:g} rpm), c = {b.c:.6g} N·m·s²", "physics": b.checks,
+        load = f"PropellerLoad({b.torque:.6g} N·m, {b.rpm:g} rpm), c = {b.c:.6g} N·m·s²"
+        p = out["presets"][name] = {"rpm_operating": b.rpm, "rpm_start": b.rpm0, "load": load, "physics": b.checks,
                                     "horizons": {}}
         out.setdefault("numba_compile_s", b.numba_first_call_s)  # nb_rk4's first call, one cycle
         p["numba_first_call_s"] = b.numba_first_call_s

@@ -208,7 +208,10 @@ def simulate(
                 handover = (done * train.cycle_rad, t_end, jnp.sqrt(2 * E_end / inertia0), 0.0)
                 break
     elif method == "grid":
-        spc = int(round(2 * np.rad2deg(train.cycle_rad))) if steps_per_cycle is None else int(steps_per_cycle)
+        if steps_per_cycle is None:  # two per degree, or one per saved sample if those are finer
+            spc = max(int(round(2 * np.rad2deg(train.cycle_rad))), P)
+        else:
+            spc = int(steps_per_cycle)
         if spc < 8 or spc % P:
             raise EngineError(
                 f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
