@@ -14,6 +14,7 @@ import math
 import sys
 import time
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -22,6 +23,7 @@ from ._checks import EngineError, arrays_only, concrete
 from .crank_train import crank_train
 from .dynamics import (
     Scene,
+    _traced,
     angle_run,
     closed_run,
     dense_at_angles,
@@ -320,38 +322,38 @@ def simulate(
                      wall, info, cycles)
 
 
+@eqx.filter_jit
+def _samples(scene, theta, t, E, omega, z):
+    """ω (from E where given), engine and load torque, dω/dt and fuel at the samples."""
+    _traced()
+    val, der, s = scene.terms(theta)
+    inertia, dinertia = val[:, 0], der[:, 0]
+    if E is not None:
+        omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
+    m_eng = scene.engine_torque(val, s, omega, z)
+    m_loss = scene.loss(omega, t)
+    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    return omega, m_eng, m_loss, accel, scene.fuel(omega, z)
+
+
 def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall,
               info, cycles):
-    thetas, ts, omegas, zs = [], [], [], []
+    parts = []  # (theta, t, omega, torque, load, accel, fuel) per piece, each from one compiled call
     uniform = 0
     for th, t, E, w, z in pieces:
         if th.shape[0] == 0:
             continue
-        val = train.at(th)[0]
-        omegas.append(jnp.sqrt(2 * jnp.maximum(E, 0.0) / val[:, 0]))
-        thetas.append(th)
-        ts.append(t)
-        zs.append(jnp.zeros_like(th) if z is None else z)
+        z = jnp.zeros_like(th) if z is None else z
+        parts.append((th, t) + _samples(scene, th, t, E, None, z))
         uniform += th.shape[0] // P  # (a single end sample adds no cycle)
     if time_domain is not None:
         for th, t, w, z, whole in _resample(scene, time_domain, P):
-            thetas.append(th)
-            ts.append(t)
-            omegas.append(w)
-            zs.append(z)
+            parts.append((th, t) + _samples(scene, th, t, None, w, z))
             uniform += whole
-    theta = jnp.concatenate(thetas)
-    t = jnp.concatenate(ts)
-    omega = jnp.concatenate(omegas)
-    z = jnp.concatenate(zs)
-    val, der, s = scene.terms(theta)
-    inertia, dinertia = val[:, 0], der[:, 0]
-    m_eng = scene.engine_torque(val, s, omega, z)
-    m_loss = scene.loss(omega, t)
-    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    theta, t, omega, m_eng, m_loss, accel, fuel = (jnp.concatenate(a) for a in zip(*parts))
     imep = train.imep_motored_pa + scene.scales * train.imep_combustion_pa
     if scene.governor is not None:
-        info["fuel"] = scene.fuel(omega, z)
+        info["fuel"] = fuel
     return SpeedResult(
         t=t, theta=theta, omega=omega, accel=accel, torque=m_eng, load_torque=m_loss, imep_pa=imep,
         method=method, fidelity=fidelity, kind="transient", strokes=engine.strokes, cycle_rad=train.cycle_rad,
