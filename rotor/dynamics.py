@@ -90,11 +90,6 @@ class Scene(eqx.Module):
         comb = jnp.sum(s * val[..., _DM:], axis=-1)
         return val[..., _MM] + self.fuel(omega, z) * comb + val[..., _K] * omega**2
 
-    def evaluate(self, theta, omega, t, z):
-        """M_engine, M_loss, I, I' at θ [rad], ω [rad/s], t [s], governor integral z [s]."""
-        val, der, s = self.terms(theta)
-        return self.engine_torque(val, s, omega, z), self.loss(omega, t), val[..., _I], der[..., _I]
-
 
 def _omega(E, inertia):
     return jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
