@@ -183,11 +183,16 @@ def test_start_from_rest_with_a_starter(diesel):
     assert float(res.omega[-1]) > 0
 
 
-def test_starter_too_weak_rolls_back_and_stalls(single):
+def test_no_or_a_weak_starter_stalls(single):
     wiebe = rotor.load_engine("tue-single")
-    res = rotor.simulate(wiebe, rpm=0.0, cycles=2, load=rotor.ConstantLoad(0.0))
-    # at θ = 0 the cylinder is at TDC before intake; nothing drives it: it stays (or rolls back)
-    assert np.all(np.isfinite(np.asarray(res.omega)))
+    # at θ = 0 the piston is at TDC and nothing drives it: it never turns
+    still = rotor.simulate(wiebe, rpm=0.0, cycles=2, load=rotor.ConstantLoad(0.0))
+    assert still.stalled and abs(still.stall_angle_rad) < 1e-6
+    # 5 N·m turns it, but not through the first compression
+    weak = rotor.simulate(wiebe, rpm=0.0, cycles=2, load=rotor.ConstantLoad(-5.0))
+    assert weak.stalled and 0.1 < weak.stall_angle_rad < wiebe.cycle_rad
+    assert weak.uniform_cycles == 0 and np.all(np.isfinite(np.asarray(weak.omega)))
+    assert float(jnp.max(weak.omega)) > 1.0
 
 
 # ----------------------------------------------------------------------------- JAX
