@@ -94,12 +94,7 @@ class CrankTrain(eqx.Module):
         tau = (u - j)[..., None]
         j0 = jnp.mod(j, self.points).astype(jnp.int32)
         j1 = jnp.mod(j0 + 1, self.points)
-        f0, f1 = self.values[j0], self.values[j1]
-        d0, d1 = self.slopes[j0] * h, self.slopes[j1] * h
-        t2, t3 = tau * tau, tau * tau * tau
-        val = (2 * t3 - 3 * t2 + 1) * f0 + (t3 - 2 * t2 + tau) * d0 + (3 * t2 - 2 * t3) * f1 + (t3 - t2) * d1
-        der = ((6 * t2 - 6 * tau) * (f0 - f1) + (3 * t2 - 4 * tau + 1) * d0 + (3 * t2 - 2 * tau) * d1) / h
-        return val, der
+        return _hermite(self.values[j0], self.values[j1], self.slopes[j0], self.slopes[j1], tau, h)
 
     def nodes(self):
         """Node angles over one cycle [rad], shape (N,)."""
@@ -130,6 +125,16 @@ def _columns(engine, fidelity, theta):
     return out, m_mot
 
 
+def _hermite(f0, f1, s0, s1, tau, h):
+    """Cubic Hermite between nodes with values f0, f1 and slopes s0, s1 a step h apart, at
+    the fraction tau of the step: (value, slope)."""
+    d0, d1 = s0 * h, s1 * h
+    t2, t3 = tau * tau, tau * tau * tau
+    val = (2 * t3 - 3 * t2 + 1) * f0 + (t3 - 2 * t2 + tau) * d0 + (3 * t2 - 2 * t3) * f1 + (t3 - t2) * d1
+    der = ((6 * t2 - 6 * tau) * (f0 - f1) + (3 * t2 - 4 * tau + 1) * d0 + (3 * t2 - 2 * tau) * d1) / h
+    return val, der
+
+
 def _shifted(values, slopes, offset, period):
     """f(φ_i − offset) and its slope at every node φ_i, by periodic cubic Hermite
     interpolation. The fractional position is the same at every node, so this is two
@@ -140,12 +145,8 @@ def _shifted(values, slopes, offset, period):
     j = jnp.floor(u)
     tau = 1.0 - (u - j)  # evaluation point: node (i − j − 1) plus tau
     j = j.astype(jnp.int32)
-    f0, f1 = jnp.roll(values, j + 1, axis=0), jnp.roll(values, j, axis=0)
-    d0, d1 = jnp.roll(slopes, j + 1, axis=0) * h, jnp.roll(slopes, j, axis=0) * h
-    t2, t3 = tau * tau, tau * tau * tau
-    val = (2 * t3 - 3 * t2 + 1) * f0 + (t3 - 2 * t2 + tau) * d0 + (3 * t2 - 2 * t3) * f1 + (t3 - t2) * d1
-    der = ((6 * t2 - 6 * tau) * (f0 - f1) + (3 * t2 - 4 * tau + 1) * d0 + (3 * t2 - 2 * tau) * d1) / h
-    return val, der
+    return _hermite(jnp.roll(values, j + 1, axis=0), jnp.roll(values, j, axis=0),
+                    jnp.roll(slopes, j + 1, axis=0), jnp.roll(slopes, j, axis=0), tau, h)
 
 
 def _one_cylinder(engine, fidelity, phi):

@@ -365,8 +365,8 @@ def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, st
 def _resample(scene, time_domain, P):
     """The time-domain steps as (uniformly sampled whole cycles, raw tail).
 
-    Between accepted steps θ is monotone (while ω > 0), so ω and t are cubic Hermite
-    interpolated in θ with their exact slopes dω/dθ = ω̇/ω and dt/dθ = 1/ω.
+    While ω > 0, θ(t) is monotone: the time of each crank angle of the uniform grid is
+    found by Newton's method on the solver's dense output, from a linear first guess.
     """
     th, t, w, z = (np.asarray(a) for a in time_domain[:4])
     sol, w_ref = time_domain[4:]
@@ -379,34 +379,17 @@ def _resample(scene, time_domain, P):
         whole = int(np.floor((th[-1] - start) / cycle + 1e-9))
     if whole == 0:
         return [(jnp.asarray(th), jnp.asarray(t), jnp.asarray(w), jnp.asarray(z), 0)]
-    val, der, s = scene.terms(jnp.asarray(th))
-    m_eng = np.asarray(scene.engine_torque(val, s, jnp.asarray(w), jnp.asarray(z)))
-    m_loss = np.asarray(scene.loss(jnp.asarray(w), jnp.asarray(t), signed=True))
-    inertia, dinertia = np.asarray(val[:, 0]), np.asarray(der[:, 0])
-    accel = (m_eng - m_loss - 0.5 * dinertia * w**2) / inertia
-    safe_w = np.where(w > 0, w, np.nan)
     tq = start + np.arange(whole * P) * (cycle / P)
     j = np.clip(np.searchsorted(th, tq, side="right") - 1, 0, th.size - 2)
-    h = th[j + 1] - th[j]
-    u = (tq - th[j]) / h
-
-    def hermite(f, df):
-        u2, u3 = u * u, u * u * u
-        return ((2 * u3 - 3 * u2 + 1) * f[j] + (u3 - 2 * u2 + u) * h * df[j] + (3 * u2 - 2 * u3) * f[j + 1]
-                + (u3 - u2) * h * df[j + 1])
-
-    # at a start from rest the first step has ω = 0: there t(θ) is not smooth, interpolate linearly
-    w_q = hermite(w, accel / np.where(w > 0, w, 1.0))
-    dt = 1.0 / safe_w
-    t_q = np.where(w[j] > 0, hermite(t, np.nan_to_num(dt)), t[j] + u * (t[j + 1] - t[j]))
-    w_q = np.where(w[j] > 0, w_q, w[j] + u * (w[j + 1] - w[j]))
-    z_q = z[j] + u * (z[j + 1] - z[j])
-    tail = th > tq[-1] + 1e-12
-    # refine on the solver's own dense output (Newton on θ(t) = θ_q) where the crank turns
+    u = (tq - th[j]) / (th[j + 1] - th[j])
+    t_q, w_q, z_q = (f[j] + u * (f[j + 1] - f[j]) for f in (t, w, z))  # linear between steps
+    # where the crank turns: Newton on θ(t) = θ_q with the solver's own dense output; at a
+    # start from rest (ω = 0 at the step's start) the linear values stay
     moving = w[j] > 0
     t_n, w_n, z_n = (np.asarray(a) for a in dense_at_angles(sol, jnp.asarray(t_q), jnp.asarray(tq),
                                                               jnp.asarray(w_ref, dtype=jnp.float64)))
     t_q, w_q, z_q = (np.where(moving, a, b) for a, b in ((t_n, t_q), (w_n, w_q), (z_n, z_q)))
+    tail = th > tq[-1] + 1e-12
     return [
         (jnp.asarray(tq), jnp.asarray(t_q), jnp.asarray(w_q), jnp.asarray(z_q), whole),
         (jnp.asarray(th[tail]), jnp.asarray(t[tail]), jnp.asarray(w[tail]), jnp.asarray(z[tail]), 0),
