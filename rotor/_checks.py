@@ -74,3 +74,7 @@ def arrays_only(tree):
         return x
 
     return jax.tree_util.tree_map(leaf, tree)
+
+
+class LogError(ValueError):
+    """A recording that cannot be analysed: names the file, row, column or time and the problem."""

@@ -1,0 +1,305 @@
+"""Reading logged crankshaft signals: CSV/TSV files, the column spec, clear errors.
+
+A log is a table of numbers, one row per sample or per tooth edge, separated by commas,
+tabs, semicolons or blanks, with an optional header line; lines starting with ``#``
+are comments. The user names its columns, in file order, from:
+
+==================  =====================================================================
+``time``            sample time [s] (with ``encoder_v``, ``pressure_v``, ``cam_v``,
+                    ``index_v`` or ``rpm``)
+``encoder_v``       the raw trigger-wheel (crank encoder) signal [V, any gain and offset]
+``pressure_v``      a cylinder-pressure sensor signal [V, any gain and offset]: only its
+                    shape is used (firing revolution and TDC), never its calibration
+``cam_v``           a cam/phase sensor signal, one pulse per engine cycle
+``index_v``         a once-per-revolution index signal (for wheels without a gap)
+``tooth_time_s``    tooth edge timestamps [s], one per row
+``rpm``             an instantaneous speed series [rev/min]
+``-``               a column to skip
+==================  =====================================================================
+
+Columns after the last named one are ignored. A file whose header line already holds
+these names needs no spec; a file with one column is read as ``tooth_time_s``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import os
+from typing import Optional
+
+import numpy as np
+
+from ._checks import LogError
+
+__all__ = ["COLUMN_NAMES", "Log", "parse_columns", "read_log"]
+
+COLUMN_NAMES = {
+    "time": "sample time [s]",
+    "encoder_v": "trigger-wheel signal [V]",
+    "pressure_v": "cylinder-pressure signal [V] (shape only)",
+    "cam_v": "cam/phase signal [V]",
+    "index_v": "once-per-revolution index signal [V]",
+    "tooth_time_s": "tooth edge time [s]",
+    "rpm": "instantaneous speed [rev/min]",
+    "-": "skipped",
+}
+
+
+def parse_columns(spec) -> tuple[str, ...]:
+    """The column names of a spec such as ``"time,encoder_v,pressure_v"`` (or a list).
+
+    Raises :class:`LogError` naming an unknown or repeated name.
+    """
+    if isinstance(spec, str):
+        names = [s.strip() for s in spec.split(",")]
+    else:
+        names = [str(s).strip() for s in spec]
+    if not names or all(n in ("", "-") for n in names):
+        raise LogError(f"columns {spec!r}: name at least one column ({', '.join(n for n in COLUMN_NAMES if n != '-')})")
+    seen = set()
+    for i, n in enumerate(names):
+        if n not in COLUMN_NAMES:
+            raise LogError(f"columns {spec!r}: column {i + 1} is named {n!r}; known names: "
+                           f"{', '.join(COLUMN_NAMES)} ('-' skips a column)")
+        if n != "-" and n in seen:
+            raise LogError(f"columns {spec!r}: {n!r} is named twice")
+        seen.add(n)
+    return tuple(names)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Log:
+    """The named columns of a recording, checked.
+
+    **Attributes:** ``columns``: name → float64 array (one entry per row; no ``-``
+    columns); ``lines``: the file line number of each row (1-based; ``None`` for arrays
+    given in Python), for messages; ``source``: the file name or ``"arrays"``.
+    """
+
+    columns: dict
+    lines: Optional[np.ndarray] = None
+    source: str = "arrays"
+
+    def __post_init__(self):
+        _check(self)
+
+    @classmethod
+    def from_arrays(cls, **columns) -> "Log":
+        """A log from arrays, e.g. ``Log.from_arrays(time=t, encoder_v=v)`` or
+        ``Log.from_arrays(tooth_time_s=edges)``; the names are those of :data:`COLUMN_NAMES`."""
+        parse_columns(list(columns))
+        cols = {}
+        for k, v in columns.items():
+            a = np.asarray(v, dtype=np.float64)
+            if a.ndim != 1:
+                raise LogError(f"column {k!r}: expected a 1-d array, got shape {a.shape}")
+            cols[k] = a
+        return cls(cols)
+
+    @property
+    def kind(self) -> str:
+        """``"teeth"`` (tooth timestamps), ``"encoder"`` (sampled wheel signal) or ``"speed"``."""
+        if "tooth_time_s" in self.columns:
+            return "teeth"
+        if "encoder_v" in self.columns:
+            return "encoder"
+        return "speed"
+
+    @property
+    def rows(self) -> int:
+        return len(next(iter(self.columns.values())))
+
+    def where(self, i: int) -> str:
+        """'line L' (file) or 'row i' (arrays) for row index ``i`` (0-based)."""
+        if self.lines is not None:
+            return f"{self.source}: line {int(self.lines[i])}"
+        return f"row {i}"
+
+    def __getitem__(self, name):
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise LogError(f"{self.source}: no column {name!r} (the log has {', '.join(self.columns)})") from None
+
+    def __contains__(self, name):
+        return name in self.columns
+
+
+def _check(log: Log) -> None:
+    cols = log.columns
+    if not cols:
+        raise LogError(f"{log.source}: no columns")
+    lengths = {k: len(v) for k, v in cols.items()}
+    if len(set(lengths.values())) != 1:
+        raise LogError(f"{log.source}: columns of different lengths {lengths}")
+    names = set(cols)
+    if "tooth_time_s" in names:
+        clash = names & {"encoder_v", "rpm"}
+        if clash:
+            raise LogError(f"{log.source}: 'tooth_time_s' and {sorted(clash)} in one log; name one kind of signal")
+    elif "encoder_v" in names or "rpm" in names:
+        if "time" not in names:
+            need = "encoder_v" if "encoder_v" in names else "rpm"
+            raise LogError(f"{log.source}: a 'time' column is needed with {need!r}")
+        if {"encoder_v", "rpm"} <= names:
+            raise LogError(f"{log.source}: 'encoder_v' and 'rpm' in one log; name one kind of signal")
+    else:
+        raise LogError(f"{log.source}: name a 'tooth_time_s', 'encoder_v' (with 'time') or 'rpm' (with 'time') "
+                       f"column; the log has {', '.join(sorted(names))}")
+    for k, v in cols.items():
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:
+            i = int(bad[0])
+            raise LogError(f"{log.where(i)}, column {k!r}: {v[i]!r} is not a finite number"
+                           + (f" ({bad.size} such rows)" if bad.size > 1 else ""))
+    for k in ("time", "tooth_time_s"):
+        if k in cols:
+            d = np.diff(cols[k])
+            bad = np.flatnonzero(d <= 0)
+            if bad.size:
+                i = int(bad[0]) + 1
+                raise LogError(f"{log.where(i)}, column {k!r}: {cols[k][i]:.9g} s is not after the previous row's "
+                               f"{cols[k][i - 1]:.9g} s (time must increase)")
+    if "rpm" in cols:
+        bad = np.flatnonzero(cols["rpm"] <= 0)
+        if bad.size:
+            i = int(bad[0])
+            raise LogError(f"{log.where(i)}, column 'rpm': {cols['rpm'][i]:g} rpm; the speed must stay positive "
+                           f"(angle is its integral)")
+    n = log.rows
+    if n < 3:
+        raise LogError(f"{log.source}: {n} rows; far too short for one revolution")
+
+
+def _delimiter(line: str) -> Optional[str]:
+    for d in ("\t", ";", ","):
+        if d in line:
+            return d
+    return None  # blanks
+
+
+def _is_number(tok: str) -> bool:
+    try:
+        float(tok)
+        return True
+    except ValueError:
+        return False
+
+
+def _data_lines(text: str):
+    """(line number, stripped line) of the non-blank, non-comment lines."""
+    for n, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s and not s.startswith("#"):
+            yield n, s
+
+
+def read_log(path, columns=None, *, delimiter: Optional[str] = None) -> Log:
+    """Read a CSV/TSV/blank-separated log.
+
+    **Arguments:**
+    - ``path``: the file.
+    - ``columns``: the column names in file order (``"time,encoder_v,pressure_v"`` or a
+      list; see :data:`COLUMN_NAMES`); ``None``: the header line's names if they are all
+      known, or ``tooth_time_s`` for a one-column file.
+    - ``delimiter``: ``","``, ``"\\t"``, ``";"`` or ``" "`` (blanks); default: found
+      from the first data line (tab, then semicolon, then comma, else blanks).
+
+    **Returns:** a :class:`Log`. Raises :class:`LogError` naming the line and column of
+    anything it cannot use: a cell that is not a number, NaN, time not increasing, a
+    column the spec names but the file lacks.
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, "r", encoding="utf-8", errors="replace") as f:
+            text = f.read()
+    except IsADirectoryError:
+        raise LogError(f"{path}: is a folder, not a log file") from None
+    lines = _data_lines(text)
+    first = next(lines, None)
+    if first is None:
+        raise LogError(f"{path}: no data (the file is empty or all comments)")
+    sep = delimiter if delimiter is not None else _delimiter(first[1])
+    if sep == " ":
+        sep = None
+    tokens = [t.strip() for t in (first[1].split(sep) if sep else first[1].split())]
+    header = not all(_is_number(t) for t in tokens if t != "")
+    ncols = len(tokens)
+    if columns is None:
+        if header and all(t in COLUMN_NAMES for t in tokens):
+            columns = tokens
+        elif ncols == 1 and not header:
+            columns = ["tooth_time_s"]
+        else:
+            raise LogError(f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v' or "
+                           f"--columns time,encoder_v,pressure_v; '-' skips one)")
+    names = parse_columns(columns)
+    if len(names) > ncols:
+        missing = [n for n in names[ncols:] if n != "-"]
+        raise LogError(f"{path}: line {first[0]} has {ncols} column{'s' if ncols != 1 else ''}, but the column spec "
+                       f"names {len(names)}; no column for {', '.join(map(repr, missing)) or 'the last names'}")
+    use = [i for i, n in enumerate(names) if n != "-"]
+    data = _parse(path, text, sep, header, ncols, use)
+    # line numbers of the data rows (only needed for messages, cheap enough)
+    nums = np.fromiter((n for n, _ in _data_lines(text)), dtype=np.int64)
+    if header:
+        nums = nums[1:]
+    cols = {names[i]: data[:, j] for j, i in enumerate(use)}
+    return Log(cols, nums[: data.shape[0]], source=os.path.basename(path))
+
+
+def _parse(path, text, sep, header, ncols, use) -> np.ndarray:
+    """The used columns as a float array; on failure, a LogError naming the first bad line."""
+    import pandas as pd
+
+    kw = dict(header=None, skiprows=1 if header else 0, comment="#", skip_blank_lines=True, usecols=use,
+              dtype=np.float64, engine="c")
+    if sep is None:
+        kw["sep"] = r"\s+"
+    else:
+        kw["sep"] = sep
+    # drop the header line ourselves: comment/blank lines before it shift skiprows
+    body = text
+    if header:
+        kept = 0
+        out = []
+        for line in text.splitlines(keepends=True):
+            s = line.strip()
+            if not kept and s and not s.startswith("#"):
+                kept = 1
+                continue
+            out.append(line)
+        body = "".join(out)
+        kw["skiprows"] = 0
+    try:
+        df = pd.read_csv(io.StringIO(body), **kw)
+        arr = df.to_numpy(dtype=np.float64)
+    except (ValueError, pd.errors.ParserError) as e:
+        _find_bad_line(path, text, sep, header, ncols, use, e)
+        raise LogError(f"{path}: cannot read the table ({e})") from None
+    # rows with fewer fields come back as NaN: find them with their line numbers
+    if arr.shape[0] == 0:
+        raise LogError(f"{path}: no data rows")
+    if np.isnan(arr).any():
+        _find_bad_line(path, text, sep, header, ncols, use, None)
+    return arr
+
+
+def _find_bad_line(path, text, sep, header, ncols, use, err):
+    first = True
+    for n, s in _data_lines(text):
+        if first and header:
+            first = False
+            continue
+        first = False
+        toks = [t.strip() for t in (s.split(sep) if sep else s.split())]
+        if len(toks) < ncols and max(use) >= len(toks):
+            raise LogError(f"{path}: line {n}: {len(toks)} column{'s' if len(toks) != 1 else ''} where the first "
+                           f"line has {ncols}")
+        for i in use:
+            try:
+                float(toks[i])
+            except ValueError:
+                raise LogError(f"{path}: line {n}, column {i + 1}: {toks[i]!r} is not a number") from None
+    return None

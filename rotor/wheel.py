@@ -1,0 +1,394 @@
+"""Trigger wheels: N−M missing-tooth wheels and wheels with an index, gap detection,
+tooth angles, and the tooth-spacing errors of a wheel estimated from the data.
+
+**Angles.** The wheel angle φ [rad] is 0 at the first tooth edge after the gap (or after
+the index) of revolution 0, the first revolution whose reference edge the log holds;
+tooth ``j`` of revolution ``r`` sits nominally at ``2π·r + j·2π/N``. Edges before the
+first reference belong to revolution −1.
+
+**Gap detection.** Each tooth period is compared with its two neighbours by the ratio
+``dt_i / √(dt_{i−1}·dt_{i+1})``: a uniform acceleration changes neighbouring periods by
+nearly the same factor, which the geometric mean cancels, so the ratio stays near 1
+on a regular tooth and near M+1 on the gap while the speed changes fast (a coast-down,
+a start). The threshold is their geometric midpoint √(M+1). The gaps must then be
+exactly N−M edges apart all through the log; anything else (a missed or doubled edge,
+the wrong wheel) is an error naming the time, never a silently wrong angle.
+
+**Tooth-spacing errors** (cf. Diamond et al. 2016, Mech. Syst. Signal Process. 81):
+each edge's angle error is read against a smooth angle-of-time curve through one
+reference edge per revolution (a cubic spline through the times of tooth 0), and
+averaged over the revolutions (an even number, so that a four-stroke engine's half
+orders cancel). If the speed changes by more than half across the log (a coast-down),
+each tooth's error is instead regressed on (ω̄/ω_rev)², which takes out the part of the
+engine's fluctuation driven by gas and friction torque (it scales with 1/ω²). What no
+data can separate: the engine's own speed fluctuation at integer orders that does not
+scale with speed (the reciprocating inertia) looks exactly like a wheel error at that
+order. So orders that stand out of the per-tooth errors (amplitude above ``4×`` the
+median of the upper half of the orders) are left to the engine and removed from the
+estimate (``engine_orders="auto"``); a calibration run with a smooth speed (a bare
+wheel, or a motored coast-down of an engine with little reciprocating mass) recovers
+all orders (``engine_orders=()``), and is saved as JSON for other recordings.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import re
+from typing import Optional
+
+import numpy as np
+
+from ._checks import LogError
+
+__all__ = ["Wheel", "parse_wheel", "ToothTrack", "locate_teeth", "ToothErrors", "estimate_tooth_errors"]
+
+TWO_PI = 2.0 * np.pi
+ENGINE_ORDER_FACTOR = 4.0  # an order is the engine's if its amplitude is this many times the floor
+
+
+@dataclasses.dataclass(frozen=True)
+class Wheel:
+    """A trigger wheel of ``teeth`` equal pitches per revolution, ``missing`` of them
+    without a tooth (the gap). ``missing = 0``: a wheel whose revolutions are marked by a
+    separate once-per-revolution index signal."""
+
+    teeth: int
+    missing: int = 0
+
+    def __post_init__(self):
+        if not (isinstance(self.teeth, (int, np.integer)) and self.teeth >= 3):
+            raise LogError(f"wheel: {self.teeth!r} teeth; need a whole number, 3 or more")
+        if not (isinstance(self.missing, (int, np.integer)) and 0 <= self.missing <= self.teeth - 2):
+            raise LogError(f"wheel: {self.missing!r} missing teeth of {self.teeth}; need 0 … {self.teeth - 2}")
+
+    @property
+    def spec(self) -> str:
+        return f"{self.teeth}-{self.missing}" if self.missing else f"{self.teeth}"
+
+    @property
+    def pitch_rad(self) -> float:
+        """Angle between neighbouring tooth positions [rad]."""
+        return TWO_PI / self.teeth
+
+    @property
+    def edges_per_rev(self) -> int:
+        return self.teeth - self.missing
+
+    @property
+    def needs_index(self) -> bool:
+        return self.missing == 0
+
+
+def parse_wheel(spec) -> Wheel:
+    """A :class:`Wheel` from ``"60-2"``, ``"36-1"``, ``"36-2"`` (N−M) or ``"60"`` (with an index)."""
+    if isinstance(spec, Wheel):
+        return spec
+    m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+))?\s*", str(spec))
+    if not m:
+        raise LogError(f"wheel {spec!r}: expected N-M teeth such as 60-2, 36-1, 36-2, or N for a wheel with an index")
+    return Wheel(int(m.group(1)), int(m.group(2) or 0))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ToothTrack:
+    """Tooth edges with their place on the wheel.
+
+    **Attributes:** ``t`` [s]: edge times; ``tooth``: position on the wheel (0 … N−M−1,
+    0 = the first edge after the gap); ``rev``: revolution (0 = the first with a
+    reference edge in the log, −1 before it); ``wheel``; ``gap_ratio``: the median
+    period ratio found on the gap (M+1 expected) and ``tooth_ratio_max``: the largest
+    ratio on a regular tooth (1 expected).
+    """
+
+    t: np.ndarray
+    tooth: np.ndarray
+    rev: np.ndarray
+    wheel: Wheel
+    gap_ratio: float = float("nan")
+    tooth_ratio_max: float = float("nan")
+
+    @property
+    def nominal_angle(self) -> np.ndarray:
+        """Nominal wheel angle of each edge [rad]."""
+        return TWO_PI * self.rev + self.wheel.pitch_rad * self.tooth
+
+    @property
+    def revolutions(self) -> int:
+        """Complete revolutions (from one reference edge to the next) in the log."""
+        return int(np.count_nonzero(self.tooth == 0)) - 1
+
+    def to_json_dict(self) -> dict:
+        return {
+            "spec": self.wheel.spec,
+            "teeth_per_rev": self.wheel.teeth,
+            "missing_teeth": self.wheel.missing,
+            "edges_per_rev": self.wheel.edges_per_rev,
+            "edges": int(self.t.size),
+            "complete_revolutions": self.revolutions,
+            "gap_position": "after tooth position {} (edges 0 … {} per revolution; gap spans {} pitches)".format(
+                self.wheel.edges_per_rev - 1, self.wheel.edges_per_rev - 1, self.wheel.missing + 1)
+            if self.wheel.missing else "index signal",
+            "first_reference_time_s": float(self.t[np.argmax(self.tooth == 0)]),
+            "gap_period_ratio": float(self.gap_ratio),
+            "max_tooth_period_ratio": float(self.tooth_ratio_max),
+        }
+
+
+def _ratios(dt):
+    r = np.full(dt.size, np.nan)
+    r[1:-1] = dt[1:-1] / np.sqrt(dt[:-2] * dt[2:])
+    return r
+
+
+def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
+    """Place each tooth edge on the wheel: find the gaps (or use the index) and count.
+
+    **Arguments:** ``times``: tooth edge times [s], increasing; ``wheel``: a
+    :class:`Wheel` or a spec such as ``"60-2"``; ``index_times``: once-per-revolution
+    index edge times [s], needed for a wheel without a gap.
+
+    **Returns:** :class:`ToothTrack`. Raises :class:`LogError` if the log is shorter
+    than a revolution, no gap is found, or the edges between two gaps are not N−M.
+    """
+    wheel = parse_wheel(wheel)
+    t = np.asarray(times, dtype=np.float64)
+    E = wheel.edges_per_rev
+    n = t.size
+    if n < E + 3:
+        raise LogError(f"{n} tooth edges: a {wheel.spec} wheel gives {E} per revolution; the log must hold more than "
+                       f"one revolution ({E + 3} edges or more) to find its reference")
+    if np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        raise LogError(f"tooth edge {i}: time {t[i]:.9g} s is not after the previous edge's {t[i - 1]:.9g} s")
+    dt = np.diff(t)
+    r = _ratios(dt)
+    if wheel.needs_index:
+        if index_times is None:
+            raise LogError(f"wheel {wheel.spec} has no gap: give a once-per-revolution index signal "
+                           f"(column 'index_v'), or the missing teeth (e.g. {wheel.teeth}-2)")
+        idx = np.asarray(index_times, dtype=np.float64)
+        ref = np.unique(np.searchsorted(t, idx, side="left"))
+        ref = ref[ref < n]
+        if ref.size < 2:
+            raise LogError(f"{ref.size} index pulse(s) within the tooth edges: need two or more (a whole revolution)")
+        sp = np.diff(ref)
+        bad = np.flatnonzero(sp != E)
+        if bad.size:
+            b = int(bad[0])
+            raise LogError(f"between the index pulses at t = {t[ref[b]]:.6f} s and {t[ref[b + 1]]:.6f} s: "
+                           f"{sp[b]} tooth edges where a {wheel.spec} wheel gives {E} (a missed or extra edge?)")
+        first = int(ref[0])
+        gap_ratio, tooth_max = float("nan"), float(np.nanmax(r))
+    else:
+        thr = math.sqrt(wheel.missing + 1)
+        cand = np.flatnonzero(r > thr)
+        if cand.size == 0:
+            raise LogError(f"no gap of a {wheel.spec} wheel found in {n} tooth edges (t = {t[0]:.6f} … {t[-1]:.6f} s): "
+                           f"the largest tooth period is {np.nanmax(r):.2f}× its neighbours', a gap gives "
+                           f"{wheel.missing + 1}× (is the wheel right?)")
+        sp = np.diff(cand)
+        bad = np.flatnonzero(sp != E)
+        if bad.size:
+            b = int(bad[0])
+            raise LogError(f"between the gaps at t = {t[cand[b]]:.6f} s and {t[cand[b + 1]]:.6f} s: {sp[b]} tooth edges "
+                           f"where a {wheel.spec} wheel gives {E} (a missed or extra edge, or another wheel)")
+        g0, g1 = int(cand[0]), int(cand[-1])
+        if g0 - E >= 1:
+            i = g0 - E
+            raise LogError(f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
+                           f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)")
+        if g1 + E <= dt.size - 2:
+            i = g1 + E
+            raise LogError(f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
+                           f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)")
+        first = g0 + 1
+        gap_ratio = float(np.median(r[cand]))
+        regular = np.ones(dt.size, bool)
+        regular[cand] = False
+        regular[(np.arange(dt.size) - first) % E == E - 1] = False  # the unclassified end gaps
+        tooth_max = float(np.nanmax(r[regular])) if np.any(regular & np.isfinite(r)) else float("nan")
+    k = np.arange(n) - first
+    return ToothTrack(t, np.mod(k, E), np.floor_divide(k, E), wheel, gap_ratio, tooth_max)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ToothErrors:
+    """Angle errors of a wheel's teeth: tooth ``j`` sits at ``j·pitch + errors_rad[j]``.
+
+    The errors have zero mean (the angle origin is the best-fit tooth grid).
+    **Attributes:** ``wheel`` (spec string), ``errors_rad`` (N−M,) [rad], ``method``,
+    ``revolutions`` (how many were averaged), ``engine_orders``: the orders left to the
+    engine (removed from the estimate), ``standard_error_rad``: each tooth's standard
+    error of the mean [rad], ``source``: where it was estimated.
+    """
+
+    wheel: str
+    errors_rad: np.ndarray
+    method: str = "given"
+    revolutions: int = 0
+    engine_orders: tuple = ()
+    standard_error_rad: Optional[np.ndarray] = None
+    source: str = ""
+
+    def __post_init__(self):
+        w = parse_wheel(self.wheel)
+        e = np.asarray(self.errors_rad, dtype=np.float64)
+        if e.shape != (w.edges_per_rev,):
+            raise LogError(f"tooth errors: {e.size} values for a {w.spec} wheel, which has {w.edges_per_rev} edges")
+        if not np.all(np.isfinite(e)):
+            raise LogError("tooth errors: not all finite")
+        if np.max(np.abs(e)) >= 0.5 * w.pitch_rad:
+            raise LogError(f"tooth errors up to {np.rad2deg(np.max(np.abs(e))):.3f}°: half a pitch or more; "
+                           f"not the errors of a {w.spec} wheel")
+        object.__setattr__(self, "wheel", w.spec)
+        object.__setattr__(self, "errors_rad", e - e.mean())
+
+    @property
+    def errors_deg(self) -> np.ndarray:
+        return np.rad2deg(self.errors_rad)
+
+    @property
+    def rms_rad(self) -> float:
+        return float(np.sqrt(np.mean(self.errors_rad**2)))
+
+    def angles(self, track: ToothTrack) -> np.ndarray:
+        """Corrected wheel angle of each edge of ``track`` [rad]."""
+        if parse_wheel(self.wheel) != track.wheel:
+            raise LogError(f"tooth errors of a {self.wheel} wheel applied to a {track.wheel.spec} wheel")
+        return track.nominal_angle + self.errors_rad[track.tooth]
+
+    def to_json_dict(self) -> dict:
+        d = {
+            "wheel": self.wheel,
+            "method": self.method,
+            "revolutions": int(self.revolutions),
+            "engine_orders": [float(k) for k in self.engine_orders],
+            "rms_deg": float(np.rad2deg(self.rms_rad)),
+            "max_abs_deg": float(np.max(np.abs(self.errors_deg))),
+            "errors_rad": [float(x) for x in self.errors_rad],
+            "source": self.source,
+        }
+        if self.standard_error_rad is not None:
+            d["standard_error_rad"] = [float(x) for x in self.standard_error_rad]
+        return d
+
+    def save(self, path) -> None:
+        """Write as JSON (whole or not at all), to reuse on other recordings of the same wheel."""
+        from ._io import write_text_atomic
+
+        write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1) + "\n")
+
+    @classmethod
+    def load(cls, path) -> "ToothErrors":
+        """Read a file written by :meth:`save`."""
+        path = os.fspath(path)
+        try:
+            with open(path, encoding="utf-8") as f:
+                d = json.load(f)
+        except json.JSONDecodeError as e:
+            raise LogError(f"{path}: not a tooth-error file (JSON: {e})") from None
+        if not isinstance(d, dict) or "wheel" not in d or "errors_rad" not in d:
+            raise LogError(f"{path}: not a tooth-error file (needs 'wheel' and 'errors_rad')")
+        se = d.get("standard_error_rad")
+        return cls(d["wheel"], np.asarray(d["errors_rad"], dtype=np.float64), d.get("method", "given"),
+                   int(d.get("revolutions", 0)), tuple(d.get("engine_orders", ())),
+                   None if se is None else np.asarray(se, dtype=np.float64), d.get("source", path))
+
+
+def _order_fit_matrix(phi, orders):
+    cols = [np.ones_like(phi)]
+    for k in orders:
+        cols += [np.cos(k * phi), np.sin(k * phi)]
+    return np.stack(cols, axis=1)
+
+
+def _order_amplitudes(phi, values, kmax):
+    """(orders 1 … kmax, amplitude of each) of values at angles phi, single-order least squares."""
+    orders = np.arange(1, kmax + 1)
+    x = values - values.mean()
+    amp = np.empty(orders.size)
+    for i, k in enumerate(orders):
+        A = np.stack([np.cos(k * phi), np.sin(k * phi)], axis=1)
+        c, *_ = np.linalg.lstsq(A, x, rcond=None)
+        amp[i] = np.hypot(*c)
+    return orders, amp
+
+
+def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: int = 4,
+                          coastdown_ratio: float = 1.5, source: str = "") -> ToothErrors:
+    """Tooth-spacing errors of the wheel, from the log itself.
+
+    **Arguments:**
+    - ``track``: the edges on the wheel (:func:`locate_teeth`).
+    - ``engine_orders``: the integer orders of the per-revolution pattern to leave to the
+      engine (removed from the estimate): ``"auto"`` (those that stand out, see the
+      module notes), a list of orders, or ``()`` (none: a calibration run whose speed
+      has no fluctuation locked to the crank).
+    - ``strokes``: 4 averages an even number of revolutions, so the half orders cancel.
+    - ``coastdown_ratio``: if the fastest revolution is this much faster than the
+      slowest, each tooth's error is regressed on (ω̄/ω)² (the gas and friction torque
+      part of the fluctuation scales so) instead of averaged.
+
+    **Returns:** :class:`ToothErrors`.
+    """
+    from scipy.interpolate import CubicSpline
+
+    w = track.wheel
+    E = w.edges_per_rev
+    ref = np.flatnonzero(track.tooth == 0)
+    R = ref.size - 1
+    if strokes == 4 and R % 2:
+        R -= 1
+    if R < 2:
+        raise LogError(f"tooth errors: {max(R, 0)} complete revolutions; need 2 or more to estimate them")
+    ref = ref[: R + 1]
+    t0 = track.t[ref]
+    theta = CubicSpline(t0, TWO_PI * track.rev[ref], bc_type="not-a-knot")
+    sel = slice(ref[0], ref[-1])  # all edges of revolutions 0 … R−1
+    tt, tooth, rev = track.t[sel], track.tooth[sel], track.rev[sel]
+    if tt.size != R * E:
+        raise LogError("tooth errors: the revolutions are not complete")  # locate_teeth guarantees it
+    d = (theta(tt) - TWO_PI * rev - w.pitch_rad * tooth).reshape(R, E)
+    omega = TWO_PI / np.diff(t0)
+    method = "revolution average"
+    if omega.max() > coastdown_ratio * omega.min() and R >= 8:
+        x = (np.mean(omega) / omega) ** 2
+        X = np.stack([np.ones(R), x], axis=1)
+        coef, *_ = np.linalg.lstsq(X, d, rcond=None)
+        a = coef[0]  # the speed-independent part: (ω̄/ω)² → 0 leaves no torque-driven fluctuation
+        resid = d - X @ coef
+        se = np.sqrt(np.sum(resid**2, axis=0) / max(R - 2, 1) / R)
+        method = f"coast-down regression on (ω̄/ω)², {omega.min() * 30 / np.pi:.0f}–{omega.max() * 30 / np.pi:.0f} rpm"
+    else:
+        a = d.mean(axis=0)
+        se = d.std(axis=0, ddof=1) / np.sqrt(R) if R > 1 else np.zeros(E)
+    a = a - a.mean()
+    # single teeth far off the rest (e.g. the edges that border the gap) are the wheel's;
+    # they are left out of the order analysis, so their broad spectrum does not mask the engine's
+    # (against a running median over 7 teeth around the wheel, which the engine's smooth part passes)
+    local = np.median(np.stack([np.roll(a, s) for s in range(-3, 4)]), axis=0)
+    dev = a - local
+    mad = 1.4826 * np.median(np.abs(dev))
+    worst = np.argsort(-np.abs(dev))[: max(2, E // 20)]  # at most 5 % of the teeth
+    clean = np.ones(E, bool)
+    clean[worst[np.abs(dev[worst]) > 6 * mad]] = False
+    phi = w.pitch_rad * np.arange(E)
+    if isinstance(engine_orders, str):
+        if engine_orders != "auto":
+            raise LogError(f"engine_orders = {engine_orders!r}: 'auto', a list of orders, or ()")
+        orders, amp = _order_amplitudes(phi[clean], a[clean], w.teeth // 2 - 1)
+        upper = amp[orders > orders.max() / 2]
+        floor = float(np.median(upper))
+        loud = orders[(orders <= orders.max() / 2) & (amp > ENGINE_ORDER_FACTOR * floor)]
+        keep = tuple(range(1, int(loud.max()) + 1)) if loud.size else ()  # the engine's band, 1 … highest loud order
+    else:
+        keep = tuple(int(k) for k in engine_orders)
+        if any(k < 1 or k >= w.teeth // 2 for k in keep):
+            raise LogError(f"engine_orders = {engine_orders!r}: whole orders from 1 to {w.teeth // 2 - 1}")
+    X = _order_fit_matrix(phi, keep)
+    beta, *_ = np.linalg.lstsq(X[clean], a[clean], rcond=None)
+    e = a - X @ beta
+    return ToothErrors(w.spec, e, method, R, keep, se, source)
