@@ -8,7 +8,7 @@ import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
 
-from ._checks import EngineError  # noqa: E402
+from ._checks import EngineError, LogError  # noqa: E402
 from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
 from .engine_file import engine_from_dict, load_engine, preset_names  # noqa: E402
 from .forces import (  # noqa: E402
@@ -51,6 +51,10 @@ from .transient import simulate  # noqa: E402
 from . import summary  # noqa: E402
 from .summary import engine_summary  # noqa: E402
 from .table import CrankTable, crank_table  # noqa: E402
+from .logs import Log, read_log  # noqa: E402
+from .encoder import Edges, find_edges  # noqa: E402
+from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, locate_teeth, parse_wheel  # noqa: E402
+from .logged_speed import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -111,4 +115,18 @@ __all__ = [
     "steady_state",
     "simulate",
     "NoSteadyStateError",
+    "LogError",
+    "Log",
+    "read_log",
+    "Edges",
+    "find_edges",
+    "Wheel",
+    "parse_wheel",
+    "ToothTrack",
+    "locate_teeth",
+    "ToothErrors",
+    "estimate_tooth_errors",
+    "LogAnalysis",
+    "analyze_log",
+    "tdc_from_pressure",
 ]

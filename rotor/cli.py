@@ -106,6 +106,30 @@ def _build_parser():
                    help="misfiring firings, e.g. 3:1,7:2 (cycle from 0, cylinder from 1)")
     p.add_argument("--governor", type=_positive_float, metavar="RPM", help="PI speed governor set to RPM")
 
+    p = sub.add_parser("analyze", help="logged crank speed: per-cycle mean speed, δ and orders from a wheel signal")
+    p.add_argument("log", metavar="LOG", help="CSV/TSV log: tooth times, a sampled wheel signal, or time and rpm")
+    p.add_argument("--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2, 36-1, 36-2 (N alone: with an index_v column)")
+    p.add_argument("--columns", metavar="NAMES",
+                   help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, tooth_time_s, rpm, "
+                        "- (skip), e.g. time,pressure_v,encoder_v")
+    p.add_argument("--strokes", type=int, choices=(2, 4), default=4)
+    p.add_argument("--tdc-deg", type=float, metavar="DEG", help="angle from the gap to TDC of cylinder 1 [deg] "
+                   "(default: from the pressure channel, else 0)")
+    p.add_argument("--firing", default="auto", choices=("auto", "pressure", "cam", "speed", "0", "1"),
+                   help="which revolution fires (4-stroke; default auto: pressure, cam, else speed)")
+    p.add_argument("--compression-ratio", type=_positive_float, metavar="R",
+                   help="for TDC from the pressure by a polytropic fit (with --rod-ratio)")
+    p.add_argument("--rod-ratio", type=_positive_float, metavar="LAMBDA", help="crank radius / rod length")
+    p.add_argument("--tooth-errors", default="estimate", metavar="estimate|none|FILE",
+                   help="tooth-spacing correction: estimate from this log (default), none, or a JSON file")
+    p.add_argument("--engine-orders", default="auto", metavar="auto|none|K,K",
+                   help="orders of the per-revolution pattern left to the engine when estimating (default auto)")
+    p.add_argument("--save-tooth-errors", metavar="FILE", help="write the tooth errors applied as JSON")
+    p.add_argument("--max-order", type=_positive_float, help="highest order reported and used for δ")
+    p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="DIR", help="write the combined plot to DIR")
+
     sub.add_parser("presets", help="list the built-in engines")
 
     p = sub.add_parser("demo", help="summary, steady state, a load step and plots of the default preset (4chn15)")
@@ -270,6 +294,51 @@ def _cmd_simulate(args):
     _report(res, args, "simulate")
 
 
+def _cmd_analyze(args):
+    from ._checks import LogError
+    from .logged_speed import analyze_log
+
+    if args.engine_orders == "auto":
+        eo = "auto"
+    elif args.engine_orders == "none":
+        eo = ()
+    else:
+        try:
+            eo = tuple(int(k) for k in args.engine_orders.split(","))
+        except ValueError:
+            raise LogError(f"--engine-orders {args.engine_orders!r}: auto, none, or whole orders such as 1,2,3") from None
+    te = {"estimate": "estimate", "none": None}.get(args.tooth_errors, args.tooth_errors)
+    firing = int(args.firing) if args.firing in ("0", "1") else args.firing
+    if (args.compression_ratio is None) != (args.rod_ratio is None):
+        raise LogError("--compression-ratio and --rod-ratio go together")
+    res = analyze_log(args.log, args.wheel, columns=args.columns, strokes=args.strokes, tdc_deg=args.tdc_deg,
+                      firing=firing, tooth_errors=te, engine_orders=eo, max_order=args.max_order, edge=args.edge,
+                      compression_ratio=args.compression_ratio, rod_ratio=args.rod_ratio)
+    written = []
+    if args.save_tooth_errors:
+        if res.tooth_errors is None:
+            raise LogError("--save-tooth-errors: no tooth errors were applied (--tooth-errors none, or a speed log)")
+        res.tooth_errors.save(args.save_tooth_errors)
+        written.append(args.save_tooth_errors)
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        from .plotting import save_figure
+
+        os.makedirs(args.plot, exist_ok=True)
+        stem = os.path.splitext(os.path.basename(args.log))[0]
+        path = os.path.join(args.plot, f"{stem}_analysis.png")
+        save_figure(res.plot(), path)
+        written.append(path)
+    if args.json:
+        print(json.dumps(res.to_json_dict(), indent=1))
+    else:
+        sys.stdout.write(res.summary())
+        for p in written:
+            print(f"wrote {p}")
+
+
 def _cmd_presets(args):
     import rotor
 
@@ -306,6 +375,7 @@ _COMMANDS = {
     "plot": _cmd_plot,
     "steady": _cmd_steady,
     "simulate": _cmd_simulate,
+    "analyze": _cmd_analyze,
     "presets": _cmd_presets,
     "demo": _cmd_demo,
 }

@@ -1,0 +1,519 @@
+"""Crank-angle-resolved speed, δ and order spectra from a logged wheel signal.
+
+The pipeline of :func:`analyze_log`:
+
+1. tooth edges: the ``tooth_time_s`` column, or found in ``encoder_v``
+   (:func:`rotor.encoder.find_edges`);
+2. each edge placed on the wheel (:func:`rotor.wheel.locate_teeth`), its angle corrected
+   by the wheel's tooth-spacing errors (estimated from the log, given, or none);
+3. time as a function of angle, t(φ), a cubic spline through the edges; the speed is
+   ω(φ) = 1/t'(φ) [rad/s], sampled on a uniform grid of each engine cycle;
+4. the cycles: 0 = TDC of cylinder 1 at the start of intake, 360° = firing TDC (rotor's
+   convention; a two-stroke cycle is one revolution from TDC). The angle from the gap
+   to TDC is given or found from a pressure channel (:func:`tdc_from_pressure`); the
+   firing revolution of a four-stroke comes from the pressure (the revolution with the
+   compression peak), a cam signal, or the speed itself (the revolution in which the
+   crank speeds up after TDC);
+5. per cycle: the time-mean speed, the harmonics of ω by engine order (0.5, 1, 1.5, …
+   for a four-stroke) with amplitude [rad/s] and phase [rad] in the convention of
+   :class:`rotor.Orders` (ω = mean + Σ A·cos(order·ψ + phase), ψ the cycle angle), and
+   δ = (ω_max − ω_min)/ω_mean of the speed rebuilt from its orders up to ``max_order``
+   (the tooth-resolved speed carries the timer's jitter, which max − min would pick up).
+   A cycle's linear trend (from the mean speeds of its neighbours) is taken out before
+   the transform and put back for δ, so a run-up or a coast-down does not leak into
+   every order.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from typing import Optional
+
+import numpy as np
+
+from ._checks import LogError
+from .encoder import Edges, find_edges
+from .logs import Log, read_log
+from .wheel import ToothErrors, ToothTrack, estimate_tooth_errors, locate_teeth, parse_wheel
+
+__all__ = ["LogAnalysis", "analyze_log", "tdc_from_pressure"]
+
+TWO_PI = 2.0 * np.pi
+RPM_PER_RAD_S = 30.0 / np.pi
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class LogAnalysis:
+    """Per-cycle speed, δ and orders of a logged recording (see :func:`analyze_log`).
+
+    **Per cycle** (arrays with one row per complete cycle): ``t_start_s`` [s],
+    ``mean_omega`` (time mean) [rad/s], ``delta`` [-], ``amplitude_rad_s`` and
+    ``phase_rad`` (cycles × orders), ``omega`` (cycles × ``points_per_cycle``, the speed
+    on the uniform cycle-angle grid) [rad/s]. ``order``: the engine orders [-].
+
+    **Alignment:** ``cycle_rad``, ``strokes``, ``tdc_rad`` (angle from the gap, i.e. the
+    first tooth edge after it, to TDC of cylinder 1) and ``tdc_method``;
+    ``firing_parity`` (which revolutions, counted from the first gap, hold firing TDC:
+    0 or 1) and ``firing_method``; ``cycle_start_rad`` (wheel angle of each cycle's start).
+
+    **Wheel:** ``track`` (:class:`rotor.wheel.ToothTrack`, ``None`` for a speed log),
+    ``tooth_errors`` (:class:`rotor.wheel.ToothErrors` applied, or ``None``),
+    ``edges`` (:class:`rotor.encoder.Edges` of an analog signal, or ``None``).
+    ``pressure``: (cycle angle [rad], pressure signal) of the complete cycles when a
+    pressure channel was given, for the plot.
+    """
+
+    source: str
+    kind: str
+    strokes: int
+    cycle_rad: float
+    order: np.ndarray
+    t_start_s: np.ndarray
+    mean_omega: np.ndarray
+    delta: np.ndarray
+    amplitude_rad_s: np.ndarray
+    phase_rad: np.ndarray
+    omega: np.ndarray
+    cycle_start_rad: np.ndarray
+    tdc_rad: float
+    tdc_method: str
+    firing_parity: Optional[int]
+    firing_method: str
+    max_order: float
+    track: Optional[ToothTrack] = None
+    tooth_errors: Optional[ToothErrors] = None
+    edges: Optional[Edges] = None
+    pressure: Optional[tuple] = None
+    notes: tuple = ()
+
+    # ------------------------------------------------------------------ numbers
+    @property
+    def cycles(self) -> int:
+        return int(self.mean_omega.size)
+
+    @property
+    def mean_rpm(self) -> np.ndarray:
+        """Time-mean speed of each cycle [rpm]."""
+        return self.mean_omega * RPM_PER_RAD_S
+
+    @property
+    def points_per_cycle(self) -> int:
+        return int(self.omega.shape[1])
+
+    @property
+    def cycle_angle_rad(self) -> np.ndarray:
+        """The uniform grid of cycle angles the speed is sampled on [rad]."""
+        return np.arange(self.points_per_cycle) * self.cycle_rad / self.points_per_cycle
+
+    def amplitude_of(self, order: float) -> np.ndarray:
+        """The speed amplitude of ``order`` in each cycle [rad/s]."""
+        i = np.flatnonzero(np.isclose(self.order, order))
+        if i.size == 0:
+            raise LogError(f"order {order:g} not analysed (orders {self.order[0]:g} … {self.order[-1]:g})")
+        return self.amplitude_rad_s[:, i[0]]
+
+    def statistics(self) -> dict:
+        """Cycle-to-cycle statistics: mean, standard deviation and coefficient of variation
+        of the mean speed [rpm] and δ, and the mean and standard deviation of each order's
+        amplitude [rad/s]."""
+        def stats(x):
+            x = np.asarray(x, dtype=np.float64)
+            m = float(np.mean(x))
+            s = float(np.std(x, ddof=1)) if x.size > 1 else 0.0
+            return {"mean": m, "std": s, "cov": s / m if m else float("nan"), "min": float(x.min()),
+                    "max": float(x.max())}
+
+        return {
+            "cycles": self.cycles,
+            "mean_rpm": stats(self.mean_rpm),
+            "delta": stats(self.delta),
+            "orders": [
+                {"order": float(o), "amplitude_rad_s_mean": float(np.mean(a)),
+                 "amplitude_rad_s_std": float(np.std(a, ddof=1)) if a.size > 1 else 0.0}
+                for o, a in zip(self.order, self.amplitude_rad_s.T)
+            ],
+        }
+
+    # ------------------------------------------------------------------ people
+    def to_json_dict(self, max_order: Optional[float] = None) -> dict:
+        """Plain numbers for JSON: the cycles, the wheel as found, the correction applied."""
+        keep = self.order <= (self.max_order if max_order is None else max_order) + 1e-9
+        cycles = [
+            {
+                "t_start_s": float(t0),
+                "mean_rpm": float(w * RPM_PER_RAD_S),
+                "delta": float(d),
+                "orders": [{"order": float(o), "amplitude_rad_s": float(a), "phase_rad": float(p)}
+                           for o, a, p in zip(self.order[keep], amp[keep], ph[keep])],
+            }
+            for t0, w, d, amp, ph in zip(self.t_start_s, self.mean_omega, self.delta, self.amplitude_rad_s,
+                                         self.phase_rad)
+        ]
+        wheel = self.track.to_json_dict() if self.track is not None else None
+        if wheel is not None and self.edges is not None:
+            wheel["encoder"] = self.edges.to_json_dict()
+        return {
+            "source": self.source,
+            "kind": self.kind,
+            "strokes": self.strokes,
+            "wheel": wheel,
+            "tooth_error_correction": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
+            "tdc_after_gap_deg": float(np.rad2deg(self.tdc_rad)),
+            "tdc_method": self.tdc_method,
+            "firing_revolution_parity": self.firing_parity,
+            "firing_method": self.firing_method,
+            "max_order": float(self.max_order),
+            "cycles": cycles,
+            "statistics": self.statistics(),
+            "notes": list(self.notes),
+        }
+
+    def summary(self) -> str:
+        """A few lines for a terminal."""
+        s = self.statistics()
+        lines = [f"{self.source}: {self.cycles} complete {self.strokes}-stroke cycles ({self.kind} log)"]
+        if self.track is not None:
+            w = self.track.to_json_dict()
+            lines.append(f"  wheel {w['spec']}: {w['edges']} edges, {w['complete_revolutions']} complete revolutions, "
+                         f"{w['edges_per_rev']} per revolution, gap period ratio {w['gap_period_ratio']:.2f}")
+        if self.tooth_errors is not None:
+            te = self.tooth_errors
+            lines.append(f"  tooth errors: {te.method}, rms {np.rad2deg(te.rms_rad):.3f}°, "
+                         f"max {np.max(np.abs(te.errors_deg)):.3f}°"
+                         + (f" (orders {', '.join(map(str, te.engine_orders))} left to the engine)"
+                            if te.engine_orders else ""))
+        else:
+            lines.append("  tooth errors: not corrected")
+        lines.append(f"  TDC {np.rad2deg(self.tdc_rad):.2f}° after the gap ({self.tdc_method}); "
+                     f"firing revolution parity {self.firing_parity} ({self.firing_method})")
+        m, d = s["mean_rpm"], s["delta"]
+        lines.append(f"  mean speed {m['mean']:10.2f} rpm  (cycles {m['min']:.2f} … {m['max']:.2f}, CoV {m['cov']:.2%})")
+        lines.append(f"  δ          {d['mean']:10.5f}      (cycles {d['min']:.5f} … {d['max']:.5f}, CoV {d['cov']:.1%})")
+        lines.append("  order  amplitude [rad/s] mean ± std")
+        for o in s["orders"]:
+            if o["order"] <= min(self.max_order, 6.0) + 1e-9:
+                lines.append(f"  {o['order']:5.1f}  {o['amplitude_rad_s_mean']:10.4f} ± {o['amplitude_rad_s_std']:.4f}")
+        for n in self.notes:
+            lines.append(f"  note: {n}")
+        return "\n".join(lines) + "\n"
+
+    def plot(self, axes=None):
+        """The combined plot (speed over the cycle, per-cycle mean speed and δ, order
+        spectrum, pressure if logged); see :func:`rotor.plotting.plot_log_analysis`."""
+        from .plotting import plot_log_analysis
+
+        return plot_log_analysis(self, axes=axes)
+
+
+# ---------------------------------------------------------------------- alignment
+def _volume_ratio(x, compression_ratio, rod_ratio):
+    """V(x)/V_c of a central crank mechanism, x the angle from TDC [rad]."""
+    lam = rod_ratio
+    s = (1 - np.cos(x)) + (1 - np.sqrt(1 - (lam * np.sin(x)) ** 2)) / lam
+    return 1 + 0.5 * (compression_ratio - 1) * s
+
+
+def tdc_from_pressure(phi, p, *, compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None,
+                      window_deg=(-90.0, -10.0)) -> tuple[float, int, str]:
+    """TDC of the compression from a pressure signal sampled at wheel angles.
+
+    **Arguments:** ``phi``: wheel angle of each sample [rad]; ``p``: the pressure signal
+    (any unit, gain or offset: only its shape is used); ``compression_ratio`` and
+    ``rod_ratio`` (crank radius / rod length): the engine's, for the polytropic fit;
+    ``window_deg``: the compression window of the fit, from TDC [deg].
+
+    The compression peaks once every second revolution: the revolutions (windows of one
+    revolution centred on the peak's angle) with the higher peaks are the firing ones,
+    and their traces are averaged on a 0.25° grid. With the compression ratio and rod
+    ratio, TDC comes from a polytropic fit of the compression before ignition,
+    log(p + p₀) = c − n·log V(φ − φ_TDC), with φ_TDC, n, c and the signal's offset p₀
+    free (the sensor's gain and offset need not be known). Without them, TDC is the
+    averaged trace's peak, which combustion puts some degrees late (a motored cycle's
+    peak is within a degree of TDC).
+
+    **Returns:** (TDC wheel angle modulo 2π [rad], firing parity 0 or 1 of the
+    revolutions counted from wheel angle 0 that hold it, the method in words).
+    """
+    from scipy.optimize import least_squares
+
+    phi = np.asarray(phi, dtype=np.float64)
+    p = np.asarray(p, dtype=np.float64)
+    if phi.size < 100:
+        raise LogError("pressure channel: too few samples within the tooth edges to find TDC")
+    i_pk = int(np.argmax(p))
+    centre = float(np.mod(phi[i_pk], TWO_PI))
+    win = np.floor((phi - centre + np.pi) / TWO_PI).astype(int)  # window k: centre + 2πk ± π
+    ks = np.unique(win)
+    peaks = np.array([p[win == k].max() for k in ks])
+    full = np.array([(phi[win == k].min() <= centre + TWO_PI * k - 0.9 * np.pi)
+                     and (phi[win == k].max() >= centre + TWO_PI * k + 0.9 * np.pi) for k in ks])
+    ks, peaks = ks[full], peaks[full]
+    even, odd = peaks[ks % 2 == 0], peaks[ks % 2 == 1]
+    if even.size == 0 or odd.size == 0:
+        raise LogError("pressure channel: need at least one whole even and one whole odd revolution")
+    parity_win = int(np.mean(odd) > np.mean(even))
+    fire = ks[ks % 2 == parity_win]
+    step = np.deg2rad(0.25)
+    grid = np.arange(-np.pi, np.pi, step)
+    sel = np.isin(win, fire)
+    x = phi[sel] - centre - TWO_PI * win[sel]
+    b = np.clip(np.floor((x + np.pi) / step).astype(int), 0, grid.size - 1)
+    sums = np.bincount(b, weights=p[sel], minlength=grid.size)
+    cnt = np.bincount(b, minlength=grid.size)
+    ok = cnt > 0
+    if ok.sum() < grid.size // 4:
+        raise LogError("pressure channel: too few samples in the firing revolutions")
+    x = grid + step / 2
+    avg = np.interp(x, x[ok], sums[ok] / cnt[ok])
+    j = int(np.argmax(avg))
+    jj = int(np.clip(j, 1, avg.size - 2))
+    y0, y1, y2 = avg[jj - 1 : jj + 2]
+    curv = y0 - 2 * y1 + y2
+    peak = x[jj] + (0.5 * (y0 - y2) / curv * step if curv < 0 else 0.0)
+    if compression_ratio is None:
+        tdc_rel, method = peak, "pressure: the averaged firing cycle's peak (late by the combustion)"
+    else:
+        if not (compression_ratio > 1 and rod_ratio is not None and 0 < rod_ratio < 1):
+            raise LogError(f"compression_ratio = {compression_ratio!r}, rod_ratio = {rod_ratio!r}: need a "
+                           f"compression ratio > 1 and a rod ratio (crank radius / rod length) between 0 and 1")
+        lo_w, hi_w = np.deg2rad(window_deg)
+        tdc_rel = peak - np.deg2rad(10.0)
+        for _ in range(10):
+            m = (x - tdc_rel >= lo_w) & (x - tdc_rel <= hi_w)
+            floor = avg[m].min()
+            span = avg.max() - floor
+
+            def res(q):
+                t0, n, c, off = q
+                return np.log(avg[m] - floor + off * span) - (c - n * np.log(
+                    _volume_ratio(x[m] - t0, compression_ratio, rod_ratio)))
+
+            q0 = [tdc_rel, 1.3, np.log(span), 0.1]
+            sol = least_squares(res, q0, bounds=([tdc_rel - 0.35, 1.0, -50, 1e-4], [tdc_rel + 0.35, 1.7, 50, 10.0]))
+            moved = abs(sol.x[0] - tdc_rel)
+            tdc_rel = float(sol.x[0])
+            if moved < np.deg2rad(0.01):
+                break
+        method = (f"pressure: polytropic fit of the compression ({window_deg[0]:g}…{window_deg[1]:g}° from TDC, "
+                  f"compression ratio {compression_ratio:g}, rod ratio {rod_ratio:.4g}, exponent {sol.x[1]:.3f})")
+    tdc_abs = centre + TWO_PI * int(fire[0]) + tdc_rel
+    parity = int(np.floor(tdc_abs / TWO_PI)) % 2
+    return float(np.mod(tdc_abs, TWO_PI)), parity, method
+
+
+def _speed_parity(omega_of, phi0, phi1, tdc):
+    """Firing parity from the speed: the revolution after whose TDC the crank speeds up more."""
+    r0 = int(np.ceil((phi0 - tdc) / TWO_PI))
+    r1 = int(np.floor((phi1 - tdc - np.pi) / TWO_PI))
+    if r1 - r0 < 1:
+        return 0, 0.0
+    revs = np.arange(r0, r1 + 1)
+    x = tdc + TWO_PI * revs[:, None] + np.linspace(0, np.pi, 61)[None, :]
+    w = omega_of(x)
+    rise = w.max(axis=1) - w[:, 0]
+    even, odd = rise[revs % 2 == 0], rise[revs % 2 == 1]
+    if even.size == 0 or odd.size == 0:
+        return 0, 0.0
+    parity = int(np.mean(odd) > np.mean(even))
+    sep = abs(np.mean(odd) - np.mean(even)) / (np.std(rise) + 1e-300)
+    return parity, float(sep)
+
+
+# ---------------------------------------------------------------------- analysis
+def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: Optional[float] = None,
+                firing="auto", tooth_errors="estimate", engine_orders="auto", max_order: Optional[float] = None,
+                points_per_cycle: Optional[int] = None, edge: str = "rising",
+                compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None) -> LogAnalysis:
+    """Per-cycle mean speed, δ and order spectrum of a logged recording.
+
+    **Arguments:**
+    - ``source``: a file (read by :func:`rotor.logs.read_log` with ``columns``) or a
+      :class:`rotor.logs.Log` (e.g. ``Log.from_arrays(tooth_time_s=edges)``).
+    - ``wheel``: ``"60-2"``, ``"36-1"``, … or a :class:`rotor.wheel.Wheel`; needed
+      unless the log is a speed series (``rpm``).
+    - ``strokes``: 4 (default) or 2.
+    - ``tdc_deg``: angle from the gap (the first tooth edge after it) to TDC of
+      cylinder 1 [deg]; default: from the pressure channel if there is one, else 0
+      (the cycles then start at the gap). For a speed log: the angle from the first
+      sample to TDC.
+    - ``firing``: which revolutions hold firing TDC (four-stroke): ``"auto"`` (pressure,
+      else cam, else speed), ``"pressure"``, ``"cam"``, ``"speed"``, or 0/1 (the parity
+      of the revolutions counted from the first gap).
+    - ``tooth_errors``: ``"estimate"`` (from this log, :func:`rotor.wheel.estimate_tooth_errors`),
+      ``None`` (no correction), a :class:`rotor.wheel.ToothErrors` or the path of one
+      saved as JSON.
+    - ``engine_orders``: passed to the estimate (``"auto"``, a list, or ``()``).
+    - ``max_order``: highest order reported and used for δ (default: a quarter of the
+      teeth per revolution, 15 for a 60-tooth wheel; 12 for a speed log).
+    - ``points_per_cycle``: samples of the uniform angle grid per cycle (default two per
+      tooth pitch).
+    - ``edge``: ``"rising"`` or ``"falling"`` edges of an analog signal.
+    - ``compression_ratio``, ``rod_ratio`` (crank radius / rod length): the engine's,
+      for TDC from the pressure by a polytropic fit (:func:`tdc_from_pressure`);
+      without them TDC is the pressure peak, some degrees late when the engine fires.
+
+    **Returns:** :class:`LogAnalysis`. Raises :class:`rotor.logs.LogError` with the row,
+    column or time of anything that cannot be analysed.
+    """
+    from scipy.interpolate import CubicSpline, PchipInterpolator
+
+    if strokes not in (2, 4):
+        raise LogError(f"strokes = {strokes!r}: 2 or 4")
+    log = source if isinstance(source, Log) else read_log(source, columns)
+    name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
+    revs = strokes // 2
+    cycle = TWO_PI * revs
+    notes = []
+    track = te = edges = None
+    if log.kind == "speed":
+        t = log["time"]
+        omega_s = log["rpm"] / RPM_PER_RAD_S
+        phi_s = np.concatenate([[0.0], np.cumsum(0.5 * (omega_s[1:] + omega_s[:-1]) * np.diff(t))])
+        t_of = CubicSpline(phi_s, t)
+        w_spline = CubicSpline(phi_s, omega_s)
+        omega_of = w_spline
+        phi_of = PchipInterpolator(t, phi_s)
+        phi_lo, phi_hi = float(phi_s[0]), float(phi_s[-1])
+        if max_order is None:
+            max_order = 12.0
+        pitch_pts = 2 * 60  # grid default as for a 60-tooth wheel
+        if phi_hi - phi_lo < TWO_PI:
+            raise LogError(f"{name}: the speed log covers {np.rad2deg(phi_hi - phi_lo) / 360:.2f} revolutions; "
+                           f"a cycle needs {revs}")
+        tooth_errors = None
+    else:
+        if wheel is None:
+            raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2', --wheel 60-2)")
+        w = parse_wheel(wheel)
+        if log.kind == "teeth":
+            times = log["tooth_time_s"]
+        else:
+            edges = find_edges(log["time"], log["encoder_v"], edge=edge)
+            times = edges.times
+        index_times = None
+        if "index_v" in log:
+            index_times = find_edges(log["time"], log["index_v"], name="index_v").times
+        track = locate_teeth(times, w, index_times=index_times)
+        if isinstance(tooth_errors, str) and tooth_errors == "estimate":
+            te = estimate_tooth_errors(track, engine_orders=engine_orders, strokes=strokes, source=name)
+        elif tooth_errors is None or (isinstance(tooth_errors, str) and tooth_errors == "none"):
+            te = None
+        elif isinstance(tooth_errors, ToothErrors):
+            te = tooth_errors
+        else:
+            te = ToothErrors.load(tooth_errors)
+        phi_e = te.angles(track) if te is not None else track.nominal_angle
+        t_of = CubicSpline(phi_e, track.t)
+        dt_dphi = t_of.derivative()
+
+        def omega_of(x):
+            return 1.0 / dt_dphi(x)
+
+        phi_of = PchipInterpolator(track.t, phi_e)
+        phi_lo, phi_hi = float(phi_e[0]), float(phi_e[-1])
+        if max_order is None:
+            max_order = w.teeth / 4
+        pitch_pts = 2 * w.teeth
+    P = int(points_per_cycle) if points_per_cycle else pitch_pts * revs
+    if P < 8 * max_order * revs:
+        raise LogError(f"points_per_cycle = {P}: need at least {int(np.ceil(8 * max_order * revs))} for orders up to "
+                       f"{max_order:g}")
+
+    # --- TDC and the firing revolution
+    pressure = None
+    if "pressure_v" in log and log.kind != "teeth":
+        t_s, p_s = log["time"], log["pressure_v"]
+        inside = (t_s >= t_of(phi_lo)) & (t_s <= t_of(phi_hi))
+        pressure = (phi_of(t_s[inside]), p_s[inside])
+    parity_method = "two-stroke: every revolution"
+    parity = None
+    if tdc_deg is not None:
+        tdc = float(np.deg2rad(tdc_deg))
+        tdc_method = "given"
+    elif pressure is not None:
+        tdc, p_parity, tdc_method = tdc_from_pressure(*pressure, compression_ratio=compression_ratio,
+                                                      rod_ratio=rod_ratio)
+    else:
+        tdc = 0.0
+        tdc_method = "unknown: cycles start at the gap" if log.kind != "speed" else "unknown: cycles start at the first sample"
+        notes.append("TDC not known: the orders' phases are relative to the gap, not to TDC (give tdc_deg or a "
+                     "pressure channel)")
+    if strokes == 4:
+        if firing in (0, 1):
+            parity, parity_method = int(firing), "given"
+        elif firing in ("auto", "pressure") and pressure is not None:
+            if tdc_deg is not None:
+                _, p_parity, _ = tdc_from_pressure(*pressure)
+            # p_parity: the revolutions holding the TDC found from the pressure (a given TDC lies in the same
+            # compression)
+            parity, parity_method = p_parity, "pressure: revolutions with the compression peak"
+        elif firing in ("auto", "cam") and "cam_v" in log:
+            cam = find_edges(log["time"], log["cam_v"], name="cam_v").times
+            cam_phi = phi_of(cam[(cam >= t_of(phi_lo)) & (cam <= t_of(phi_hi))])
+            if cam_phi.size == 0:
+                raise LogError(f"{name}: no cam edge within the tooth edges")
+            # the firing TDC is the first TDC after each cam edge
+            r = np.ceil((cam_phi - tdc) / TWO_PI)
+            parities = np.mod(r, 2).astype(int)
+            if np.any(parities != parities[0]):
+                raise LogError(f"{name}: the cam edges do not fall once per cycle (their revolutions alternate "
+                               f"irregularly)")
+            parity, parity_method = int(parities[0]), "cam: the first TDC after each cam edge"
+        elif firing in ("auto", "speed"):
+            parity, sep = _speed_parity(omega_of, phi_lo, phi_hi, tdc)
+            parity_method = f"speed: the revolution that speeds up more after TDC (separation {sep:.1f} σ)"
+            if sep < 1.0:
+                notes.append("the firing revolution is uncertain from the speed alone: the half orders' phases may "
+                             "be off by π")
+        else:
+            raise LogError(f"firing = {firing!r}: 'auto', 'pressure', 'cam', 'speed', 0 or 1"
+                           + (" (no such channel in the log)" if firing in ("pressure", "cam") else ""))
+        # firing TDC at 2π·r + tdc for r of this parity; the cycle starts 2π before
+        base = tdc + TWO_PI * parity - TWO_PI
+    else:
+        base = tdc
+    k0 = int(np.ceil((phi_lo - base) / cycle - 1e-12))
+    k1 = int(np.floor((phi_hi - base) / cycle + 1e-12)) - 1
+    if k1 < k0:
+        span = (phi_hi - phi_lo) / TWO_PI
+        raise LogError(f"{name}: no complete {strokes}-stroke cycle: the edges span {span:.2f} revolutions and a "
+                       f"cycle ({revs} revolution{'s' if revs > 1 else ''}) starting at TDC must lie inside")
+    starts = base + cycle * np.arange(k0, k1 + 1)
+    C = starts.size
+
+    # --- the speed on the uniform grid of each cycle
+    psi = np.arange(P) * cycle / P
+    grid = starts[:, None] + psi[None, :]
+    omega = np.asarray(omega_of(grid))
+    ends_t = t_of(np.concatenate([starts, [starts[-1] + cycle]]))
+    t_start = ends_t[:-1]
+    mean_omega = cycle / np.diff(ends_t)
+    # linear trend of each cycle from its neighbours' mean speeds (none for a single cycle)
+    slope = np.gradient(mean_omega) / cycle if C > 1 else np.zeros(1)
+    ramp = slope[:, None] * (psi[None, :] - cycle / 2)
+    X = np.fft.rfft(omega - ramp, axis=1) * (2.0 / P)
+    kmax = int(np.floor(max_order * revs + 1e-9))
+    k = np.arange(1, kmax + 1)
+    orders = k / revs
+    amp, phase = np.abs(X[:, 1 : kmax + 1]), np.angle(X[:, 1 : kmax + 1])
+    # δ of the speed rebuilt from its orders up to max_order, on an 8× finer grid
+    fine = max(16 * kmax, P)
+    Xf = np.zeros((C, fine // 2 + 1), complex)
+    Xf[:, : kmax + 1] = X[:, : kmax + 1] * (fine / 2.0)
+    Xf[:, 0] = np.real(X[:, 0]) / 2.0 * fine
+    smooth = np.fft.irfft(Xf, n=fine, axis=1) + slope[:, None] * (np.arange(fine)[None, :] * cycle / fine - cycle / 2)
+    delta = (smooth.max(axis=1) - smooth.min(axis=1)) / mean_omega
+    press = None
+    if pressure is not None:
+        ph, pv = pressure
+        rel = ph - starts[0]
+        inside = (rel >= 0) & (rel < cycle * C)
+        press = (np.mod(rel[inside], cycle), pv[inside], np.floor(rel[inside] / cycle).astype(int))
+    return LogAnalysis(
+        source=name, kind=log.kind, strokes=strokes, cycle_rad=cycle, order=orders, t_start_s=t_start,
+        mean_omega=mean_omega, delta=delta, amplitude_rad_s=amp, phase_rad=phase, omega=omega,
+        cycle_start_rad=starts, tdc_rad=float(tdc), tdc_method=tdc_method, firing_parity=parity,
+        firing_method=parity_method, max_order=float(max_order), track=track, tooth_errors=te, edges=edges,
+        pressure=press, notes=tuple(notes),
+    )
