@@ -4,14 +4,15 @@ The signal's two levels come from its own statistics, not from constants: the sa
 between the 1st and 99th percentiles are split at their midpoint, and the median of
 each half is that level (robust to the duty cycle, to spikes, to any gain or offset).
 A Schmitt trigger with thresholds at ``band`` (fractions of the way from the low to the
-high level, default 25 % and 55 %) turns the signal into one state per sample; runs of a
+high level, default 20 % and 45 %) turns the signal into one state per sample; runs of a
 state much shorter than that state's typical run (``glitch`` × its median run length)
 are noise and are removed, so a noisy pulse counts once and a narrow pulse next to the
 gap still counts (it is short, but not that short). Each remaining low→high transition
 is placed, to a fraction of a sample, at the last crossing of the ``level`` (default
-40 %) before it, by linear interpolation between the two samples around the crossing.
-A pulse that is low (reaches only part of the high level) still crosses 55 %, and the
-40 % crossing sits on its rising flank like that of a full pulse.
+32 %) before it, by linear interpolation between the two samples around the crossing.
+A pulse that is low (reaches only half of the high level) still crosses 45 %, and the
+32 % crossing sits on its rising flank like that of a full pulse. Levels, not
+constants: the same defaults serve a 0.05 V and a 5 V signal, offset or inverted.
 """
 
 from __future__ import annotations
@@ -70,9 +71,11 @@ def signal_levels(v, name: str = "encoder_v") -> tuple[float, float]:
         raise LogError(f"column {name!r}: no pulses found (the signal sits at one level, "
                        f"{p1:.4g} … {p99:.4g} between its 1st and 99th percentiles)")
     low, high = float(np.median(lo_part)), float(np.median(hi_part))
-    spread = max(float(np.std(lo_part)), float(np.std(hi_part)))
-    if not high - low > 2 * spread:
-        raise LogError(f"column {name!r}: no clear pulses (levels {low:.4g} and {high:.4g} V, noise {spread:.3g} V)")
+    # a pulse train spends most of its time near its two levels; noise or a ramp does not
+    near = np.mean((np.abs(v - low) < 0.15 * (high - low)) | (np.abs(v - high) < 0.15 * (high - low)))
+    if not (high > low and near >= 0.6):
+        raise LogError(f"column {name!r}: no clear pulses (levels {low:.4g} and {high:.4g} V, but only "
+                       f"{near:.0%} of the samples lie near them)")
     return low, high
 
 
@@ -84,7 +87,7 @@ def _runs(s):
     return starts, lengths, s[starts]
 
 
-def find_edges(t, v, *, edge: str = "rising", band=(0.25, 0.55), level: float = 0.40, glitch: float = 0.2,
+def find_edges(t, v, *, edge: str = "rising", band=(0.2, 0.45), level: float = 0.32, glitch: float = 0.2,
                name: str = "encoder_v") -> Edges:
     """Times [s] of the tooth edges of a sampled wheel signal.
 
@@ -119,21 +122,22 @@ def find_edges(t, v, *, edge: str = "rising", band=(0.25, 0.55), level: float = 
     first = int(np.argmax(decisive))
     idx[idx < 0] = first
     s = (v[idx] > on).astype(np.int8)
-    # remove glitches: runs much shorter than the typical run of their state
-    starts, lengths, vals = _runs(s)
+    # remove glitches: runs much shorter than the typical run of their state, the shortest first
     glitches = 0
-    if starts.size > 4:
-        inner = slice(1, -1)  # the first and last runs are cut by the record
+    for frac in (glitch / 4, glitch / 2, glitch):
+        starts, lengths, vals = _runs(s)
+        if starts.size <= 4:
+            break
         short = np.zeros(starts.size, bool)
+        inner = np.zeros(starts.size, bool)
+        inner[1:-1] = True  # the first and last runs are cut by the record
         for state in (0, 1):
-            m = vals[inner] == state
+            m = inner & (vals == state)
             if np.any(m):
-                typical = np.median(lengths[inner][m])
-                short[inner] |= (vals[inner] == state) & (lengths[inner] < glitch * typical)
+                short |= m & (lengths < frac * np.median(lengths[m]))
         if np.any(short):
-            glitches = int(short.sum())
-            flip = np.repeat(short, lengths)
-            s = np.where(flip, 1 - s, s).astype(np.int8)
+            glitches += int(short.sum())
+            s = np.where(np.repeat(short, lengths), 1 - s, s).astype(np.int8)
     rise = np.flatnonzero(np.diff(s) == 1) + 1  # first sample of each high state
     # the last crossing of `lev` at or before each rise: v[j] < lev <= v[j + 1]
     up = np.flatnonzero((v[:-1] < lev) & (v[1:] >= lev))
