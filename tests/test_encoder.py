@@ -82,7 +82,7 @@ def test_noisy_pulses_no_double_or_missed_counts():
     truth, found = interior(edges_true(t_of_phi, phi[-1]), t), interior(e.times, t)
     assert found.size == truth.size
     err = np.abs(found - truth)
-    assert np.median(err) < 0.1 / FS  # noise σ = 8 % of the pulse: a tenth of a sample
+    assert np.median(err) < 0.3 / FS  # noise σ = 8 % of the pulse on a 2.8-sample flank: σ_t ≈ 0.2 sample
     assert np.max(err) < 5 / FS  # a 60 % spike right on a flank moves that edge a few samples
     rotor.locate_teeth(e.times, "60-2")  # every revolution consistent
 
