@@ -151,7 +151,7 @@ def _check(log: Log) -> None:
         bad = np.flatnonzero(~np.isfinite(v))
         if bad.size:
             i = int(bad[0])
-            raise LogError(f"{log.where(i)}, column {k!r}: {v[i]!r} is not a finite number"
+            raise LogError(f"{log.where(i)}, column {k!r}: {float(v[i])} is not a finite number"
                            + (f" ({bad.size} such rows)" if bad.size > 1 else ""))
     for k in ("time", "tooth_time_s"):
         if k in cols:
