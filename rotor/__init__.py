@@ -8,6 +8,10 @@ import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
 
+from ._cache import enable_compilation_cache  # noqa: E402
+
+enable_compilation_cache()
+
 from ._checks import EngineError, LogError  # noqa: E402
 from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
 from .engine_file import engine_from_dict, load_engine, preset_names  # noqa: E402
@@ -59,6 +63,7 @@ from .logged_speed import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E
 __version__ = "0.1.0"
 
 __all__ = [
+    "enable_compilation_cache",
     "EngineError",
     "Engine",
     "Geometry",

@@ -60,7 +60,7 @@ def _dynamics_args(p):
     from .loads import _LOAD_HELP
 
     p.add_argument("--load", default="none", metavar="SPEC", help=_LOAD_HELP + " (default none)")
-    p.add_argument("--fidelity", choices=("variable", "coefficients", "constant"), default="variable",
+    p.add_argument("--fidelity", choices=("variable", "series", "coefficients", "constant"), default="variable",
                    help="inertia model: exact I(θ) (default), seed 003 coefficients, or constant + textbook torque")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write plots to DIR")

@@ -15,6 +15,10 @@ Fidelity (``fidelity=``):
 
 - ``"variable"``: exact I(θ) (:func:`rotor.reduced_inertia`); the reciprocating inertia
   torque −½·I′(θ)·ω² comes out of I(θ) and k = 0. The default.
+- ``"series"``: as ``"variable"`` but with the textbook λ-series piston kinematics
+  (seeds 000 and 004: s′ = R(sin θ + (λ/2)·sin 2θ − λ·z·cos θ)) in I(θ) = J + Σ(m_rot·R² +
+  m_rec·s′²) (two-mass split) and in the gas torque's lever arm p·A·s′; ordinary crank
+  trains only.
 - ``"coefficients"``: I(θ) in the seed 003 form A·cos²θ + B·cosθ + C per cylinder, k = 0.
 - ``"constant"``: I = the cycle mean of the exact I(θ) and k(θ) = −Σ m_rec·s″·s′ (the
   textbook inertia torque, seed 004); the reciprocating masses are never counted twice.
@@ -34,13 +38,18 @@ from .kinematics import piston_motion
 
 __all__ = ["CrankTrain", "crank_train", "FIDELITIES"]
 
-FIDELITIES = ("variable", "coefficients", "constant")
+FIDELITIES = ("variable", "series", "coefficients", "constant")
 _I, _K, _MM, _DM = 0, 1, 2, 3
 
 
-def check_fidelity(fidelity):
+def check_fidelity(fidelity, engine=None):
     if fidelity not in FIDELITIES:
         raise EngineError(f"fidelity = {fidelity!r}: must be one of {', '.join(map(repr, FIDELITIES))}")
+    if fidelity == "series" and engine is not None and engine.articulated is not None:
+        raise EngineError(
+            "fidelity='series' (λ-series kinematics) is for ordinary crank trains; an articulated engine's slave "
+            "rods need fidelity='variable', 'coefficients' or 'constant'"
+        )
 
 
 def grid_points(strokes: int, grid_deg: float) -> int:
@@ -155,8 +164,13 @@ def _one_cylinder(engine, fidelity, phi):
     its TDCs, so its mechanical angle equals its cycle angle modulo 2π."""
     g = engine.geometry
     pm = piston_motion(phi, g.crank_radius_m, g.rod_length_m, g.pin_offset_m)
-    m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
-    if fidelity == "constant":
+    m_rec, m_rot = engine.masses.two_mass_split(g.rod_length_m)
+    lever = pm.ds
+    if fidelity == "series":
+        lever = piston_motion(phi, g.crank_radius_m, g.rod_length_m, g.pin_offset_m, model="series").ds
+        inertia = m_rot * g.crank_radius_m**2 + m_rec * lever**2
+        k = jnp.zeros_like(phi)
+    elif fidelity == "constant":
         inertia = jnp.zeros_like(phi)
         k = -m_rec * pm.d2s * pm.ds
     elif fidelity == "variable":
@@ -169,7 +183,7 @@ def _one_cylinder(engine, fidelity, phi):
         k = jnp.zeros_like(phi)
     fired = engine.pressure(phi, g, engine.strokes)
     mot = engine.pressure.motored(engine.strokes)(phi, g, engine.strokes)
-    area_ds = g.piston_area_m2 * pm.ds
+    area_ds = g.piston_area_m2 * lever
     m_mot = (mot - engine.pressure.crankcase_pa) * area_ds
     textbook_k = -m_rec * pm.d2s * pm.ds
     return jnp.stack([inertia, k, m_mot, (fired - mot) * area_ds, textbook_k], axis=-1)
@@ -183,30 +197,20 @@ def _shifted_columns(engine, fidelity, points):
     tdc = jnp.deg2rad(engine.tdc_angles_deg)
     fire_phase = engine.firing_angles_rad - (2 * np.pi if engine.strokes == 4 else 0.0)
     # each cylinder: I and k at its mechanical angle θ − tdc, torques at its cycle angle
-    per_cyl = []
-    textbook_k = jnp.zeros_like(phi)
-    for c in range(engine.cylinders):
-        iv, idv = _shifted(v1[:, [0, 1, 4]], d1[:, [0, 1, 4]], tdc[c], cycle)
-        mv, mdv = _shifted(v1[:, 2:4], d1[:, 2:4], fire_phase[c], cycle)
-        textbook_k = textbook_k + iv[:, 2]
-        per_cyl.append((jnp.concatenate([iv[:, :2], mv], axis=1), jnp.concatenate([idv[:, :2], mdv], axis=1)))
-    vals = jnp.stack([v for v, _ in per_cyl], axis=1)  # (N, n, 4)
-    ders = jnp.stack([d for _, d in per_cyl], axis=1)
-    i_v, k_v, m_v, g_v = (vals[..., q] for q in range(4))
-    i_d, k_d, m_d, g_d = (ders[..., q] for q in range(4))
+    mech = jax.vmap(lambda o: _shifted(v1[:, [0, 1, 4]], d1[:, [0, 1, 4]], o, cycle))(tdc)  # (n, N, 3) twice
+    fired = jax.vmap(lambda o: _shifted(v1[:, 2:4], d1[:, 2:4], o, cycle))(fire_phase)  # (n, N, 2) twice
+    (i_v, k_v, tb_v), (i_d, k_d, _) = (jnp.moveaxis(a, -1, 0) for a in mech)  # each (n, N)
+    (m_v, g_v), (m_d, g_d) = (jnp.moveaxis(a, -1, 0) for a in fired)
+    textbook_k = jnp.sum(tb_v, axis=0)
     J = engine.crankshaft.inertia_kgm2
     if fidelity == "constant":
         inertia = mean_reduced_inertia(engine) + 0.0 * phi
         d_inertia = jnp.zeros_like(phi)
     else:
-        inertia = J + jnp.sum(i_v, axis=1)
-        d_inertia = jnp.sum(i_d, axis=1)
-    values = jnp.concatenate(
-        [inertia[:, None], jnp.sum(k_v, axis=1, keepdims=True), jnp.sum(m_v, axis=1, keepdims=True), g_v], axis=1
-    )
-    slopes = jnp.concatenate(
-        [d_inertia[:, None], jnp.sum(k_d, axis=1, keepdims=True), jnp.sum(m_d, axis=1, keepdims=True), g_d], axis=1
-    )
+        inertia = J + jnp.sum(i_v, axis=0)
+        d_inertia = jnp.sum(i_d, axis=0)
+    values = jnp.concatenate([jnp.stack([inertia, jnp.sum(k_v, axis=0), jnp.sum(m_v, axis=0)]), g_v]).T
+    slopes = jnp.concatenate([jnp.stack([d_inertia, jnp.sum(k_d, axis=0), jnp.sum(m_d, axis=0)]), g_d]).T
     work_m = jnp.sum(v1[:, 2]) * cycle / points
     return values, slopes, jnp.full(engine.cylinders, work_m), textbook_k
 
@@ -235,10 +239,10 @@ def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> C
 
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`.
-    - ``fidelity``: ``"variable"`` (default), ``"coefficients"`` or ``"constant"``.
+    - ``fidelity``: ``"variable"`` (default), ``"series"``, ``"coefficients"`` or ``"constant"``.
     - ``grid_deg``: node spacing [deg]; must divide the cycle (default 0.25°).
     """
-    check_fidelity(fidelity)
+    check_fidelity(fidelity, engine)
     return train_from_engine(engine, fidelity, grid_points(engine.strokes, grid_deg))
 
 

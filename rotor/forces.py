@@ -18,8 +18,9 @@ the textbook inertia torque.
 
 from __future__ import annotations
 
-import numpy as np
+import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
@@ -142,6 +143,7 @@ def _cycle_grid(engine, points_per_rev: int = 1440):
     return jnp.linspace(0.0, engine.cycle_rad, n, endpoint=False)
 
 
+@eqx.filter_jit  # one compiled call instead of dozens of eagerly compiled operations
 def imep_pa(engine):
     """Indicated mean effective pressure of one cylinder, ∮p·dV / V_h [Pa].
 
@@ -157,6 +159,7 @@ def imep_pa(engine):
     return work / g.displacement_m3
 
 
+@eqx.filter_jit
 def mean_gas_torque(engine):
     """Cycle mean of the engine's gas torque [N·m] = n·IMEP·V_h / (cycle angle)."""
     theta = _cycle_grid(engine)

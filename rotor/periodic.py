@@ -214,7 +214,8 @@ def steady_state(
       becomes the engine's mean torque minus friction), or a speed-dependent load
       (:class:`rotor.PolynomialLoad`, :class:`rotor.PropellerLoad`,
       :class:`rotor.TableLoad`; the fuelling is scaled to carry it).
-    - ``fidelity``: ``"variable"`` (default), ``"coefficients"`` or ``"constant"``.
+    - ``fidelity``: ``"variable"`` (default), ``"series"`` (λ-series kinematics),
+      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.crank_train`).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's, if any) or False.
     - ``imep_scale``: combustion scale per cylinder (a number or one per cylinder) [-].
     - ``method``: ``"auto"`` (closed form where the losses allow, else shooting),
@@ -235,7 +236,7 @@ def steady_state(
         raise EngineError("a steady state needs a load that does not change in time; use rotor.simulate for a load step")
     if method not in ("auto", "closed", "shooting"):
         raise EngineError(f"method = {method!r}: a steady state is found by 'auto', 'closed' or 'shooting'")
-    check_fidelity(fidelity)
+    check_fidelity(fidelity, engine)
     points = grid_points(engine.strokes, grid_deg)
     engine, load = arrays_only(engine), arrays_only(load)
     n = engine.cylinders

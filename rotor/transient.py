@@ -87,7 +87,7 @@ def _chunks(cycles: int, progress: bool) -> list[int]:
 
 def _check_scales(combustion, cycles, n):
     if combustion is None:
-        return jnp.ones((cycles, n))
+        return np.ones((cycles, n))
     c = combustion
     if not isinstance(c, jax.Array) or concrete(c) is not None:
         c = np.asarray(c, dtype=np.float64)
@@ -128,7 +128,8 @@ def simulate(
     - ``cycles``: number of cycles to run.
     - ``load``: a load (:mod:`rotor.loads`) or None.
     - ``method``: ``"auto"`` (default), ``"closed"``, ``"grid"``, ``"angle"`` or ``"time"``.
-    - ``fidelity``: ``"variable"`` (default), ``"coefficients"`` or ``"constant"``.
+    - ``fidelity``: ``"variable"`` (default), ``"series"`` (λ-series kinematics),
+      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.crank_train`).
     - ``rtol``: relative tolerance of the adaptive methods (default 1e-10).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False (none).
     - ``governor``: a :class:`rotor.Governor` scaling the fuelling, or None.
@@ -171,7 +172,6 @@ def simulate(
     scales = _check_scales(combustion, cycles, engine.cylinders)
     fr = friction_coefficients(engine, friction)
     scene = Scene(train, scales, fr, load, governor)
-    omega0 = jnp.asarray(rpm, dtype=jnp.float64) / RPM_PER_RAD_S
     at_rest = r is not None and r == 0
     lin = linear_losses(load, fr) if governor is None else None
     if method == "auto":
@@ -185,8 +185,7 @@ def simulate(
         raise EngineError(f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
                           "a start from rest needs method='time' (or 'auto')")
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
-    inertia0 = train.at(0.0)[0][0]
-    E0 = 0.5 * inertia0 * omega0**2
+    omega0, E0, e_switch = _start(train, rpm)
     theta_step = train.cycle_rad / P
     bar = _Progress(cycles, progress)
     pieces = []  # (theta, t, E or None, omega or None, z)
@@ -198,16 +197,14 @@ def simulate(
         for size in _chunks(cycles, bar.enabled):
             E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride)
             k = int(_known(stalled_at, size))
-            theta = (done + jnp.arange(size)[:, None]) * train.cycle_rad + jnp.arange(P)[None, :] * theta_step
-            pieces.append((theta[:k].reshape(-1), t[:k].reshape(-1), E[:k].reshape(-1), None, None))
+            pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, None, k))
             done += k
             E_now, t_now = E_end, t_end
             bar.update(done)
             if k == size and done == cycles:
-                pieces.append((jnp.reshape(done * train.cycle_rad, (1,)) + 0.0, jnp.reshape(t_end, (1,)),
-                               jnp.reshape(E_end, (1,)), None, None))
+                pieces.append((np.array([done * train.cycle_rad]), t_end, E_end, None, None, None))
             if k < size:
-                handover = (done * train.cycle_rad, t_end, jnp.sqrt(2 * E_end / inertia0), 0.0)
+                handover = (done * train.cycle_rad, t_end, _omega_at(train, done * train.cycle_rad, E_end), 0.0)
                 break
     elif method == "grid":
         if steps_per_cycle is None:  # two per degree, or one per saved sample if those are finer
@@ -219,30 +216,26 @@ def simulate(
                 f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
                 f"(step_deg = {step_deg:g}); raise step_deg or steps_per_cycle"
             )
-        e_switch = 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
         for size in _chunks(cycles, bar.enabled):
             th0 = done * train.cycle_rad
             (E, t, z), y_end, stalled_at = grid_run(scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc,
                                                      spc // P, e_switch)
             k = int(_known(stalled_at, size))
-            theta = th0 + jnp.arange(size)[:, None] * train.cycle_rad + jnp.arange(P)[None, :] * theta_step
-            pieces.append((theta[:k].reshape(-1), t[:k].reshape(-1), E[:k].reshape(-1), None, z[:k].reshape(-1)))
+            pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, z, k))
             done += k
-            E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
+            E_now, t_now, z_now = y_end
             bar.update(done)
             if k == size and done == cycles:
-                pieces.append((jnp.reshape(done * train.cycle_rad, (1,)) + 0.0, y_end[1:2], y_end[0:1], None,
-                               y_end[2:3]))
+                pieces.append((np.array([done * train.cycle_rad]), t_now, E_now, None, z_now, None))
             if k < size:
                 th_h = done * train.cycle_rad
-                handover = (th_h, t_now, jnp.sqrt(2 * E_now / train.at(th_h)[0][0]), z_now)
+                handover = (th_h, t_now, _omega_at(train, th_h, E_now), z_now)
                 break
         info["steps_per_cycle"] = spc
     elif method == "angle":
-        e_switch = 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
         steps = 0
         for size in _chunks(cycles, bar.enabled):
-            theta_out = done * train.cycle_rad + jnp.arange(1, size * P + 1) * theta_step
+            theta_out = done * train.cycle_rad + np.arange(1, size * P + 1) * theta_step
             th0 = done * train.cycle_rad
             (E, t, z), end, stopped, ok, n_steps = angle_run(
                 scene, th0, (E_now, t_now, z_now), theta_out, rtol_a, e_switch, 4000 * size + 10000
@@ -255,15 +248,13 @@ def simulate(
                     f"(stopped at crank angle {float(np.rad2deg(end[0])):.1f}°); try a looser rtol or method='time'"
                 )
             # samples at θ_out[i] hold the state after step i; prepend the chunk's start
-            th = jnp.concatenate([jnp.reshape(th0, (1,)), theta_out[:-1]])
-            Es = jnp.concatenate([jnp.reshape(E_now, (1,)), E[:-1]])
-            ts = jnp.concatenate([jnp.reshape(t_now, (1,)), t[:-1]])
-            zs = jnp.concatenate([jnp.reshape(z_now, (1,)), z[:-1]])
+            th = np.concatenate([[th0], theta_out[:-1]])
+            Es, ts, zs = _prepend((E_now, t_now, z_now), (E, t, z))
             if stopped:
                 reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the hand-over
                 whole = reached // P
                 keep = whole * P
-                pieces.append((th[:keep], ts[:keep], Es[:keep], None, zs[:keep]))
+                pieces.append((th, ts, Es, None, zs, keep))
                 done += whole
                 # hand over at the start of the incomplete cycle
                 if keep > 0:
@@ -271,18 +262,19 @@ def simulate(
                 else:
                     E_h, t_h, z_h = E_now, t_now, z_now
                 th_h = done * train.cycle_rad
-                handover = (th_h, t_h, jnp.sqrt(2 * E_h / train.at(th_h)[0][0]), z_h)
+                handover = (th_h, t_h, _omega_at(train, th_h, E_h), z_h)
                 break
-            pieces.append((th, ts, Es, None, zs))
-            E_now, t_now, z_now = E[-1], t[-1], z[-1]
+            pieces.append((th, ts, Es, None, zs, None))
+            E_now, t_now, z_now = _last((E, t, z))
             done += size
             bar.update(done)
             if done == cycles:
-                pieces.append((theta_out[-1:], t[-1:], E[-1:], None, z[-1:]))
+                pieces.append((theta_out[-1:], t_now, E_now, None, z_now, None))
         info["steps"] = steps
     else:
         handover = (0.0, 0.0, omega0, 0.0)
     bar.close()
+
     stalled = False
     stall_t = stall_th = None
     time_domain = None
@@ -336,22 +328,67 @@ def _samples(scene, theta, t, E, omega, z):
     return omega, m_eng, m_loss, accel, scene.fuel(omega, z)
 
 
+def _theta_grid(first_cycle, cycles, P, cycle_rad):
+    """Crank angles [rad] of the saved samples of ``cycles`` whole cycles, shape (cycles, P)."""
+    k = np.arange(first_cycle, first_cycle + cycles)[:, None]
+    return k * cycle_rad + np.arange(P)[None, :] * (cycle_rad / P)
+
+
+@eqx.filter_jit
+def _start(train, rpm):
+    """ω0 [rad/s] and kinetic energy [J] at the start, θ = 0, and the energy [J] below
+    which the angle domain hands over to the time domain."""
+    omega0 = jnp.asarray(rpm, dtype=jnp.float64) / RPM_PER_RAD_S
+    inertia0 = train.at(0.0)[0][0]
+    return omega0, 0.5 * inertia0 * omega0**2, 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
+
+
+@jax.jit
+def _prepend(first, rest):
+    """Each array of ``rest`` shifted one place on, its first place taken by ``first``."""
+    return tuple(jnp.concatenate([jnp.reshape(a, (1,)), b[:-1]]) for a, b in zip(first, rest))
+
+
+@jax.jit
+def _last(arrays):
+    return tuple(a[-1] for a in arrays)
+
+
+@eqx.filter_jit
+def _omega_at(train, theta, E):
+    return jnp.sqrt(2 * jnp.maximum(E, 0.0) / train.at(theta)[0][0])
+
+
+@eqx.filter_jit
+def _gather(scene, pieces):
+    """All pieces (θ, t, E or None, ω or None, z or None, rows kept or None) as the flat
+    sample arrays (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled call."""
+    def flat(a, keep):
+        a = jnp.asarray(a, dtype=jnp.float64)
+        return jnp.reshape(a if keep is None else a[:keep], (-1,))
+
+    parts = []
+    for th, t, E, w, z, keep in pieces:
+        th, t = flat(th, keep), flat(t, keep)
+        E, w = (None if a is None else flat(a, keep) for a in (E, w))
+        z = jnp.zeros_like(th) if z is None else flat(z, keep)
+        parts.append((th, t) + _samples(scene, th, t, E, w, z))
+    return tuple(jnp.concatenate(a) for a in zip(*parts))
+
+
 def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall,
               info, cycles):
-    parts = []  # (theta, t, omega, torque, load, accel, fuel) per piece, each from one compiled call
-    uniform = 0
-    for th, t, E, w, z in pieces:
-        if th.shape[0] == 0:
-            continue
-        z = jnp.zeros_like(th) if z is None else z
-        parts.append((th, t) + _samples(scene, th, t, E, None, z))
-        uniform += th.shape[0] // P  # (a single end sample adds no cycle)
+    pieces = [p for p in pieces if np.shape(p[0])[0] > 0 and p[5] != 0]
+    # the whole cycles of P samples (a single end sample adds none); ``keep`` counts the
+    # rows kept of a (cycles, P) piece or the samples kept of a flat one
+    uniform = sum((np.shape(p[0])[0] if p[5] is None else p[5]) * (P if np.ndim(p[0]) == 2 else 1) // P
+                  for p in pieces)
     if time_domain is not None:
         for th, t, w, z, whole in _resample(scene, time_domain, P):
-            parts.append((th, t) + _samples(scene, th, t, None, w, z))
+            pieces.append((th, t, None, w, z, None))
             uniform += whole
-    theta, t, omega, m_eng, m_loss, accel, fuel = (jnp.concatenate(a) for a in zip(*parts))
-    imep = train.imep_motored_pa + scene.scales * train.imep_combustion_pa
+    theta, t, omega, m_eng, m_loss, accel, fuel = _gather(scene, tuple(pieces))
+    imep = _imep(train, scene.scales)
     if scene.governor is not None:
         info["fuel"] = fuel
     return SpeedResult(
@@ -360,6 +397,12 @@ def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, st
         points_per_cycle=P, uniform_cycles=uniform, stalled=stalled, stall_time_s=stall_t,
         stall_angle_rad=stall_th, engine_name=engine.name, wall_s=time.perf_counter() - wall, info=info,
     )
+
+
+@eqx.filter_jit
+def _imep(train, scales):
+    """IMEP [Pa] per cycle and cylinder."""
+    return train.imep_motored_pa + scales * train.imep_combustion_pa
 
 
 def _resample(scene, time_domain, P):

@@ -118,3 +118,8 @@ def test_slave_must_share_the_master_throw():
 def test_slave_table_is_refused():
     with pytest.raises(ValueError, match="slave"):
         rotor.crank_table(v2(), cylinder=2)
+
+
+def test_series_fidelity_is_refused_for_slave_rods():
+    with pytest.raises(rotor.EngineError, match="ordinary crank trains"):
+        rotor.steady_state(v2(), fidelity="series")

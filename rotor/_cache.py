@@ -1,0 +1,47 @@
+"""JAX's persistent compilation cache, switched on for rotor's users.
+
+Compiling rotor's kernels takes 1–3 s per method in a fresh process; with the cache the
+compiled code of an earlier process is reused and a first call costs mainly tracing
+(``benchmarks/compile_time.py`` measures both). The cache lives in
+``$ROTOR_COMPILATION_CACHE`` if set (``0``, ``off`` or ``no`` switches it off), else in
+``$XDG_CACHE_HOME/rotor/jax`` (``~/.cache/rotor/jax``), is capped at 1 GB and is left
+alone if the user has configured a JAX cache directory already.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import jax
+
+_OFF = ("0", "off", "no", "false", "")
+MAX_BYTES = 1 << 30
+
+
+def enable_compilation_cache(path=None):
+    """Use JAX's persistent compilation cache at ``path`` (see the module doc for the default).
+
+    Returns the directory in use, or None when the cache is off. Called once when rotor is
+    imported; call it again with another ``path`` to move the cache.
+    """
+    env = os.environ.get("ROTOR_COMPILATION_CACHE")
+    if path is None:
+        if env is not None and env.strip().lower() in _OFF:
+            return None
+        if jax.config.jax_compilation_cache_dir:  # the user's own choice wins
+            return jax.config.jax_compilation_cache_dir
+        if env:
+            path = env
+        else:
+            base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+            path = Path(base) / "rotor" / "jax"
+    path = Path(path).expanduser()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError:  # a read-only home: run without the cache rather than fail
+        return None
+    jax.config.update("jax_compilation_cache_dir", str(path))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.1)
+    jax.config.update("jax_compilation_cache_max_size", MAX_BYTES)
+    return str(path)
