@@ -5,11 +5,13 @@ cycles): start at 0.95 × the operating speed under ``PropellerLoad(T, operating
 the engine's mean gas torque (a + c·ω²: the closed form applies). Error ω: max|ω − ω_ref|
 / mean ω_ref at the 1° crank angles of the last cycle (the subset a coarse run saves);
 error t: |t − t_ref| / t_ref at the start of the last cycle. Times: medians of 3–7
-repeats (1–3 with --quick), rotor's and numba's first calls apart as compile time.
+repeats (one for runs over 10 s; 1–3 with --quick), rotor's and numba's first calls apart
+as compile time. Run with ROTOR_COMPILATION_CACHE=off for cold compile times (the
+script sets it unless given).
 
 - rotor ``simulate``: ``closed`` (grid_deg 1 … 0.125), ``grid`` (RK4, 90 … 2880 steps per
   cycle, step_deg 720/steps below 720), ``angle`` (rtol 1e-3 … 1e-12), ``time`` (rtol
-  1e-4 … 1e-10); and ``closed`` at fidelity "constant"/"coefficients" (shortest horizon):
+  1e-4 … 1e-10); and ``closed`` at fidelity "series"/"coefficients"/"constant" (shortest horizon):
   their "error" against the variable-inertia reference is MODEL error, not solver error.
 - scipy ``solve_ivp`` RK45, DOP853, LSODA (rtol 1e-3 … 1e-12, atol 1e-10), a plain numpy
   right-hand side in the time domain, y = (θ, ω), as a user would write it; timed without
@@ -35,7 +37,8 @@ horizon (scaled by the horizon) or a looser one at this horizon predicts more th
 seconds (default 60); nothing predicted is reported as measured.
 
     .venv/bin/python benchmarks/work_precision.py --quick   # 4chn15, tue-single; 10, 100 cycles; < 2 min
-    .venv/bin/python benchmarks/work_precision.py           # everything: about 3-4 hours
+    .venv/bin/python benchmarks/work_precision.py           # everything, --cap 60: about 3 hours
+    .venv/bin/python benchmarks/work_precision.py --cap 20  # what benchmarks/README.md quotes: about 1.5 h
     .venv/bin/python benchmarks/work_precision.py --presets 4chn15 --horizons 100,1000 --cap 10
 
 Writes benchmarks/results/work_precision.json (work_precision_quick.json with --quick) and
@@ -63,6 +66,7 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 
 sys.path.insert(0, str(Path(__file__).parent))
+os.environ.setdefault("ROTOR_COMPILATION_CACHE", "off")  # compile times as in a first run
 import rotor  # noqa: E402
 from reference import scipy_angle_reference  # noqa: E402
 from rotor._io import atomic_path, write_text_atomic  # noqa: E402
@@ -230,7 +234,7 @@ def error(run, ref):
 def repeats_for(seconds, quick):
     if quick:
         return 3 if seconds < 1 else 1
-    return 7 if seconds < 0.2 else 5 if seconds < 1 else 3
+    return 7 if seconds < 0.2 else 5 if seconds < 1 else 3 if seconds < 10 else 1
 
 
 def measure(fn, quick, compiled, hint=None):
@@ -358,7 +362,7 @@ class Bench:
             return dict(timing, error=error(rotor_lc(r), ref_r), method=r.method)
 
         grid_deg, rtol, spc = (lambda g: f"grid {g:g}°"), (lambda r: f"rtol {r:.0e}"), (lambda n: f"{n}/cycle")
-        models = ("constant", "coefficients") if cycles == self.first and not q else ()
+        models = ("series", "coefficients", "constant") if cycles == self.first and not q else ()
         rows = []
         for family, fmt, settings, kw in (
                 [("rotor closed", grid_deg, self.settings["closed"], lambda g: dict(method="closed", grid_deg=g)),
