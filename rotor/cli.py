@@ -113,6 +113,9 @@ def _build_parser():
                    help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, tooth_time_s, rpm, "
                         "- (skip), e.g. time,pressure_v,encoder_v")
     p.add_argument("--strokes", type=int, choices=(2, 4), default=4)
+    p.add_argument("--cylinders", type=_whole, default=1, metavar="N",
+                   help="cylinders of the (evenly firing) engine, default 1: a tooth-error estimate from the log "
+                        "leaves the multiples of the firing order to the engine")
     p.add_argument("--tdc-deg", type=float, metavar="DEG", help="angle from the gap to TDC of cylinder 1 [deg] "
                    "(default: from the pressure channel, else 0)")
     p.add_argument("--firing", default="auto", choices=("auto", "pressure", "cam", "speed", "0", "1"),
@@ -125,7 +128,13 @@ def _build_parser():
     p.add_argument("--engine-orders", default="auto", metavar="auto|none|K,K",
                    help="orders of the per-revolution pattern left to the engine when estimating (default auto)")
     p.add_argument("--save-tooth-errors", metavar="FILE", help="write the tooth errors applied as JSON")
-    p.add_argument("--max-order", type=_positive_float, help="highest order reported and used for δ")
+    p.add_argument("--max-order", type=_positive_float, help="highest order reported and used for δ "
+                   "(default teeth/4)")
+    p.add_argument("--points-per-cycle", type=_whole, metavar="P",
+                   help="points of the uniform angle grid per cycle (default 2 per tooth pitch, more if --max-order "
+                        "needs them)")
+    p.add_argument("--no-denoise", action="store_true",
+                   help="δ from all orders up to --max-order, not weighted by their signal-to-noise ratio")
     p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write the combined plot to DIR")
@@ -311,9 +320,11 @@ def _cmd_analyze(args):
     firing = int(args.firing) if args.firing in ("0", "1") else args.firing
     if (args.compression_ratio is None) != (args.rod_ratio is None):
         raise LogError("--compression-ratio and --rod-ratio go together")
-    res = analyze_log(args.log, args.wheel, columns=args.columns, strokes=args.strokes, tdc_deg=args.tdc_deg,
-                      firing=firing, tooth_errors=te, engine_orders=eo, max_order=args.max_order, edge=args.edge,
-                      compression_ratio=args.compression_ratio, rod_ratio=args.rod_ratio)
+    res = analyze_log(args.log, args.wheel, columns=args.columns, strokes=args.strokes, cylinders=args.cylinders,
+                      tdc_deg=args.tdc_deg, firing=firing, tooth_errors=te, engine_orders=eo,
+                      max_order=args.max_order, points_per_cycle=args.points_per_cycle, edge=args.edge,
+                      compression_ratio=args.compression_ratio, rod_ratio=args.rod_ratio,
+                      denoise=not args.no_denoise)
     written = []
     if args.save_tooth_errors:
         if res.tooth_errors is None:
@@ -332,7 +343,7 @@ def _cmd_analyze(args):
         save_figure(res.plot(), path)
         written.append(path)
     if args.json:
-        print(json.dumps(res.to_json_dict(), indent=1))
+        print(json.dumps(res.to_json_dict(), indent=1, allow_nan=False))  # never NaN: not JSON
     else:
         sys.stdout.write(res.summary())
         for p in written:
@@ -381,10 +392,22 @@ _COMMANDS = {
 }
 
 
+def _analyze_argv(argv):
+    """``analyze --columns -,encoder_v,time``: argparse takes a value that starts with '-'
+    for an option; joined as ``--columns=-,encoder_v,time`` it is a value."""
+    if "analyze" not in argv:
+        return argv
+    out = list(argv)
+    for i in range(len(out) - 1):
+        if out[i] == "--columns" and out[i + 1].startswith("-") and out[i + 1] not in ("-h", "--help"):
+            out[i : i + 2] = [f"--columns={out[i + 1]}", None]
+    return [a for a in out if a is not None]
+
+
 def main(argv=None) -> int:
     """Entry point of the ``rotor`` command."""
     parser = _build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_analyze_argv(sys.argv[1:] if argv is None else list(argv)))
     try:
         _COMMANDS[args.command](args)
     except BrokenPipeError:  # e.g. `rotor table ... | head`

@@ -61,7 +61,9 @@ class LogAnalysis:
     ``tooth_errors`` (:class:`rotor.wheel.ToothErrors` applied, or ``None``),
     ``edges`` (:class:`rotor.encoder.Edges` of an analog signal, or ``None``).
     ``pressure``: (cycle angle [rad], pressure signal) of the complete cycles when a
-    pressure channel was given, for the plot.
+    pressure channel was given, for the plot. ``cylinders``: as given; ``delta_weight``:
+    the weight of each order in the speed whose max − min is δ (1: taken whole; see
+    ``denoise`` of :func:`analyze_log`).
     """
 
     source: str
@@ -86,6 +88,8 @@ class LogAnalysis:
     edges: Optional[Edges] = None
     pressure: Optional[tuple] = None
     notes: tuple = ()
+    cylinders: int = 1
+    delta_weight: Optional[np.ndarray] = None
 
     # ------------------------------------------------------------------ numbers
     @property
@@ -153,10 +157,11 @@ class LogAnalysis:
         wheel = self.track.to_json_dict() if self.track is not None else None
         if wheel is not None and self.edges is not None:
             wheel["encoder"] = self.edges.to_json_dict()
-        return {
+        return _finite_json({
             "source": self.source,
             "kind": self.kind,
             "strokes": self.strokes,
+            "cylinders": self.cylinders,
             "wheel": wheel,
             "tooth_error_correction": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
             "tdc_after_gap_deg": float(np.rad2deg(self.tdc_rad)),
@@ -167,7 +172,7 @@ class LogAnalysis:
             "cycles": cycles,
             "statistics": self.statistics(),
             "notes": list(self.notes),
-        }
+        })
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -204,6 +209,17 @@ class LogAnalysis:
         from .plotting import plot_log_analysis
 
         return plot_log_analysis(self, axes=axes)
+
+
+def _finite_json(x):
+    """``x`` with every float that is not finite (NaN, ±inf) replaced by None (JSON null)."""
+    if isinstance(x, dict):
+        return {k: _finite_json(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite_json(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else None
+    return x
 
 
 # ---------------------------------------------------------------------- alignment
@@ -320,11 +336,54 @@ def _speed_parity(omega_of, phi0, phi1, tdc):
     return parity, float(sep)
 
 
+def _wiener_gain(X, revs, teeth, kmax):
+    """Weights of the harmonics 1 … kmax of the cycles' speed X (cycles × harmonics) by their
+    signal-to-noise ratio, S/(S + N). Timer jitter and edge noise are white in the time of
+    each edge, so the speed's noise grows in proportion to the order: N_m = c²·m², c² the
+    median of |X_m|²/m² over the orders teeth/6 … teeth/3 (which an engine hardly reaches);
+    S_m = max(mean |X_m|² − N_m, 0) over the cycles."""
+    m_lo, m_hi = int(np.ceil(teeth / 6 * revs)), int(np.floor(teeth / 3 * revs))
+    m_hi = min(m_hi, X.shape[1] - 1)
+    power = np.mean(np.abs(X) ** 2, axis=0)
+    m = np.arange(X.shape[1])
+    if m_hi <= m_lo:
+        return np.ones(kmax), 0.0
+    c2 = float(np.median(power[m_lo : m_hi + 1] / m[m_lo : m_hi + 1] ** 2))
+    noise = c2 * m[1 : kmax + 1] ** 2
+    signal = np.maximum(power[1 : kmax + 1] - noise, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = np.where(signal > 0, signal / (signal + noise), 0.0)
+    return g, c2
+
+
+def _firing_run_note(te, cylinders, strokes, max_order, teeth):
+    """What a tooth-error estimate from a firing run leaves out, and what it may cost δ."""
+    ks = [k for k in te.engine_orders]
+    if ks:
+        shown = ", ".join(map(str, ks)) if len(ks) <= 6 else f"{ks[0]}, {ks[1]}, … {ks[-1]}"
+        s = (f"tooth errors estimated from this firing run: the wheel's errors at orders {shown} were left to the "
+             f"engine (a firing run cannot tell them from the engine's fluctuation) and stay in the speed")
+        if te.order_rms_rad is not None:
+            kk = np.array([k for k in ks if k <= max_order + 1e-9], dtype=float)
+            u = 2.0 * te.order_rms_rad * float(np.sqrt(np.sum(kk**2)))
+            s += (f"; at the other orders the wheel's errors are {np.rad2deg(te.order_rms_rad):.3f}° rms per order, "
+                  f"which at these would change δ by about ±{u:.2g}")
+    else:
+        s = "tooth errors estimated from this firing run: no order stood out as the engine's, so none was left to it"
+    s += ("; a calibration saved from a coast-down or motored run (tooth_errors=FILE, --tooth-errors FILE) gives the "
+          "full wheel pattern")
+    if cylinders == 1 and not (strokes == 4 and len(ks) > 0):
+        s += ("; for an engine of several cylinders give cylinders (--cylinders N), or its fluctuation at the firing "
+              "orders may be taken for the wheel's errors")
+    return s
+
+
 # ---------------------------------------------------------------------- analysis
-def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: Optional[float] = None,
-                firing="auto", tooth_errors="estimate", engine_orders="auto", max_order: Optional[float] = None,
-                points_per_cycle: Optional[int] = None, edge: str = "rising",
-                compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None) -> LogAnalysis:
+def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders: int = 1,
+                tdc_deg: Optional[float] = None, firing="auto", tooth_errors="estimate", engine_orders="auto",
+                max_order: Optional[float] = None, points_per_cycle: Optional[int] = None, edge: str = "rising",
+                compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None,
+                denoise: bool = True) -> LogAnalysis:
     """Per-cycle mean speed, δ and order spectrum of a logged recording.
 
     **Arguments:**
@@ -333,6 +392,10 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
     - ``wheel``: ``"60-2"``, ``"36-1"``, … or a :class:`rotor.wheel.Wheel`; needed
       unless the log is a speed series (``rpm``).
     - ``strokes``: 4 (default) or 2.
+    - ``cylinders``: of the engine, evenly firing (default 1). With more than one, the
+      tooth-error estimate from this log leaves every whole multiple of the firing order
+      to the engine (:func:`rotor.wheel.firing_orders`): a firing run cannot tell the
+      wheel's errors at those orders from the engine's fluctuation.
     - ``tdc_deg``: angle from the gap (the first tooth edge after it) to TDC of
       cylinder 1 [deg]; default: from the pressure channel if there is one, else 0
       (the cycles then start at the gap). For a speed log: the angle from the first
@@ -345,9 +408,14 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
       saved as JSON.
     - ``engine_orders``: passed to the estimate (``"auto"``, a list, or ``()``).
     - ``max_order``: highest order reported and used for δ (default: a quarter of the
-      teeth per revolution, 15 for a 60-tooth wheel; 12 for a speed log).
+      teeth per revolution, 15 for a 60-tooth wheel; 12 for a speed log); below half the
+      teeth per revolution.
     - ``points_per_cycle``: samples of the uniform angle grid per cycle (default two per
-      tooth pitch).
+      tooth pitch, or 8 per period of ``max_order`` if that is more).
+    - ``denoise``: δ from the orders weighted by their signal-to-noise ratio (a Wiener
+      weight; the noise of each order, which timer jitter makes grow in proportion to
+      the order, is measured on the orders from teeth/6 to teeth/3); ``False``: δ from
+      all orders up to ``max_order`` unweighted. The orders reported are never weighted.
     - ``edge``: ``"rising"`` or ``"falling"`` edges of an analog signal.
     - ``compression_ratio``, ``rod_ratio`` (crank radius / rod length): the engine's,
       for TDC from the pressure by a polytropic fit (:func:`tdc_from_pressure`);
@@ -360,6 +428,12 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
 
     if strokes not in (2, 4):
         raise LogError(f"strokes = {strokes!r}: 2 or 4")
+    if not (isinstance(cylinders, (int, np.integer)) and not isinstance(cylinders, bool) and cylinders >= 1):
+        raise LogError(f"cylinders = {cylinders!r}: a whole number, 1 or more")
+    if tdc_deg is not None and not np.isfinite(float(tdc_deg)):
+        raise LogError(f"tdc_deg = {tdc_deg!r}: need a finite angle from the gap to TDC [deg]")
+    if max_order is not None and not (np.isfinite(float(max_order)) and max_order > 0):
+        raise LogError(f"max_order = {max_order!r}: need a positive order")
     log = source if isinstance(source, Log) else read_log(source, columns)
     name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
     revs = strokes // 2
@@ -395,8 +469,13 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
         if "index_v" in log:
             index_times = find_edges(log["time"], log["index_v"], name="index_v").times
         track = locate_teeth(times, w, index_times=index_times)
+        span_rev = float((track.t.size - 1) / w.edges_per_rev)
+        if span_rev < revs:
+            raise LogError(f"{name}: the {track.t.size} tooth edges span about {span_rev:.2f} revolutions; a "
+                           f"{strokes}-stroke cycle needs {revs} (a longer log)")
         if isinstance(tooth_errors, str) and tooth_errors == "estimate":
-            te = estimate_tooth_errors(track, engine_orders=engine_orders, strokes=strokes, source=name)
+            te = estimate_tooth_errors(track, engine_orders=engine_orders, strokes=strokes, cylinders=cylinders,
+                                       source=name)
         elif tooth_errors is None or (isinstance(tooth_errors, str) and tooth_errors == "none"):
             te = None
         elif isinstance(tooth_errors, ToothErrors):
@@ -414,11 +493,18 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
         phi_lo, phi_hi = float(phi_e[0]), float(phi_e[-1])
         if max_order is None:
             max_order = w.teeth / 4
+        elif max_order >= w.teeth / 2:
+            raise LogError(f"max_order = {max_order:g}: a {w.spec} wheel resolves orders below {w.teeth / 2:g} "
+                           f"(half its teeth per revolution)")
         pitch_pts = 2 * w.teeth
-    P = int(points_per_cycle) if points_per_cycle else pitch_pts * revs
-    if P < 8 * max_order * revs:
-        raise LogError(f"points_per_cycle = {P}: need at least {int(np.ceil(8 * max_order * revs))} for orders up to "
-                       f"{max_order:g}")
+    need = int(np.ceil(8 * max_order * revs))
+    if points_per_cycle:
+        P = int(points_per_cycle)
+        if P < need:
+            raise LogError(f"points_per_cycle = {P}: orders up to {max_order:g} need at least {need} "
+                           f"(--points-per-cycle), or a lower max_order (--max-order)")
+    else:
+        P = max(pitch_pts * revs, need + need % 2)
 
     # --- TDC and the firing revolution
     pressure = None
@@ -434,6 +520,11 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
     elif pressure is not None:
         tdc, p_parity, tdc_method = tdc_from_pressure(*pressure, compression_ratio=compression_ratio,
                                                       rod_ratio=rod_ratio)
+        if compression_ratio is None:
+            notes.append("TDC is the pressure peak, which combustion puts late (13–27° on the tue-4gb10 "
+                         "recordings): the orders' phases and the cycle start are late by as much; give the "
+                         "compression ratio and rod ratio (--compression-ratio, --rod-ratio) for a fit of the "
+                         "compression, or tdc_deg")
     else:
         tdc = 0.0
         tdc_method = "unknown: cycles start at the gap" if log.kind != "speed" else "unknown: cycles start at the first sample"
@@ -497,13 +588,19 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
     k = np.arange(1, kmax + 1)
     orders = k / revs
     amp, phase = np.abs(X[:, 1 : kmax + 1]), np.angle(X[:, 1 : kmax + 1])
-    # δ of the speed rebuilt from its orders up to max_order, on an 8× finer grid
+    # δ of the speed rebuilt from its orders up to max_order, each weighted by its signal-to-noise ratio, on
+    # an 8× finer grid
+    gain = np.ones(kmax + 1)
+    if denoise and track is not None:
+        gain[1:], _ = _wiener_gain(X, revs, track.wheel.teeth, kmax)
     fine = max(16 * kmax, P)
     Xf = np.zeros((C, fine // 2 + 1), complex)
-    Xf[:, : kmax + 1] = X[:, : kmax + 1] * (fine / 2.0)
+    Xf[:, : kmax + 1] = X[:, : kmax + 1] * gain[None, :] * (fine / 2.0)
     Xf[:, 0] = np.real(X[:, 0]) / 2.0 * fine
     smooth = np.fft.irfft(Xf, n=fine, axis=1) + slope[:, None] * (np.arange(fine)[None, :] * cycle / fine - cycle / 2)
     delta = (smooth.max(axis=1) - smooth.min(axis=1)) / mean_omega
+    if te is not None and isinstance(tooth_errors, str) and not te.method.startswith("coast-down"):
+        notes.append(_firing_run_note(te, cylinders, strokes, max_order, w.teeth))
     press = None
     if pressure is not None:
         ph, pv = pressure
@@ -515,5 +612,5 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, tdc_deg: 
         mean_omega=mean_omega, delta=delta, amplitude_rad_s=amp, phase_rad=phase, omega=omega,
         cycle_start_rad=starts, tdc_rad=float(tdc), tdc_method=tdc_method, firing_parity=parity,
         firing_method=parity_method, max_order=float(max_order), track=track, tooth_errors=te, edges=edges,
-        pressure=press, notes=tuple(notes),
+        pressure=press, notes=tuple(notes), cylinders=int(cylinders), delta_weight=gain[1:],
     )

@@ -43,7 +43,7 @@ import numpy as np
 
 from ._checks import LogError
 
-__all__ = ["Wheel", "parse_wheel", "ToothTrack", "locate_teeth", "ToothErrors", "estimate_tooth_errors"]
+__all__ = ["Wheel", "parse_wheel", "ToothTrack", "locate_teeth", "ToothErrors", "estimate_tooth_errors", "firing_orders"]
 
 TWO_PI = 2.0 * np.pi
 ENGINE_ORDER_FACTOR = 4.0  # an order is the engine's if its amplitude is this many times the floor
@@ -132,9 +132,14 @@ class ToothTrack:
                 self.wheel.edges_per_rev - 1, self.wheel.edges_per_rev - 1, self.wheel.missing + 1)
             if self.wheel.missing else "index signal",
             "first_reference_time_s": float(self.t[np.argmax(self.tooth == 0)]),
-            "gap_period_ratio": float(self.gap_ratio),
-            "max_tooth_period_ratio": float(self.tooth_ratio_max),
+            "gap_period_ratio": _finite_or_none(self.gap_ratio),  # none for an index wheel
+            "max_tooth_period_ratio": _finite_or_none(self.tooth_ratio_max),
         }
+
+
+def _finite_or_none(x):
+    x = float(x)
+    return x if math.isfinite(x) else None
 
 
 def _ratios(dt):
@@ -204,7 +209,9 @@ def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
             i = g1 + E
             raise LogError(f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
                            f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)")
-        first = g0 + 1
+        # the first edge after the first gap found; an earlier edge at the same position (the log starts right
+        # at a gap, whose long period is then before the first edge) is the first reference
+        first = (g0 + 1) % E
         gap_ratio = float(np.median(r[cand]))
         regular = np.ones(dt.size, bool)
         regular[cand] = False
@@ -222,7 +229,10 @@ class ToothErrors:
     **Attributes:** ``wheel`` (spec string), ``errors_rad`` (N−M,) [rad], ``method``,
     ``revolutions`` (how many were averaged), ``engine_orders``: the orders left to the
     engine (removed from the estimate), ``standard_error_rad``: each tooth's standard
-    error of the mean [rad], ``source``: where it was estimated.
+    error of the mean [rad], ``source``: where it was estimated, ``order_rms_rad``: the
+    RMS amplitude of one order of the errors at the orders not left to the engine
+    (single teeth far off the rest set aside) [rad]: what the wheel's uncorrected errors at
+    the engine's orders are likely to be.
     """
 
     wheel: str
@@ -232,6 +242,7 @@ class ToothErrors:
     engine_orders: tuple = ()
     standard_error_rad: Optional[np.ndarray] = None
     source: str = ""
+    order_rms_rad: Optional[float] = None
 
     def __post_init__(self):
         w = parse_wheel(self.wheel)
@@ -273,13 +284,22 @@ class ToothErrors:
         }
         if self.standard_error_rad is not None:
             d["standard_error_rad"] = [float(x) for x in self.standard_error_rad]
+        if self.order_rms_rad is not None:
+            d["order_rms_rad"] = float(self.order_rms_rad)
         return d
 
     def save(self, path) -> None:
         """Write as JSON (whole or not at all), to reuse on other recordings of the same wheel."""
         from ._io import write_text_atomic
 
-        write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1) + "\n")
+        path = os.fspath(path)
+        folder = os.path.dirname(os.path.abspath(path))
+        if not os.path.isdir(folder):
+            raise LogError(f"{path}: cannot write the tooth errors: no folder {folder}")
+        try:
+            write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1, allow_nan=False) + "\n")
+        except OSError as e:
+            raise LogError(f"{path}: cannot write the tooth errors: {e.strerror or e}") from None
 
     @classmethod
     def load(cls, path) -> "ToothErrors":
@@ -292,10 +312,43 @@ class ToothErrors:
             raise LogError(f"{path}: not a tooth-error file (JSON: {e})") from None
         if not isinstance(d, dict) or "wheel" not in d or "errors_rad" not in d:
             raise LogError(f"{path}: not a tooth-error file (needs 'wheel' and 'errors_rad')")
-        se = d.get("standard_error_rad")
-        return cls(d["wheel"], np.asarray(d["errors_rad"], dtype=np.float64), d.get("method", "given"),
-                   int(d.get("revolutions", 0)), tuple(d.get("engine_orders", ())),
-                   None if se is None else np.asarray(se, dtype=np.float64), d.get("source", path))
+
+        def numbers(key, shape=None):
+            v = d.get(key)
+            try:
+                a = np.asarray(v, dtype=np.float64)
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 1 or not np.all(np.isfinite(a)):
+                raise LogError(f"{path}: '{key}' must be a list of finite numbers, not {str(v)[:40]!r}")
+            if shape is not None and a.shape != shape:
+                raise LogError(f"{path}: '{key}' has {a.size} values, 'errors_rad' {shape[0]}")
+            return a
+
+        try:
+            wheel = parse_wheel(d["wheel"])
+        except LogError as e:
+            raise LogError(f"{path}: 'wheel': {e}") from None
+        errors = numbers("errors_rad")
+        if errors.size != wheel.edges_per_rev:
+            raise LogError(f"{path}: 'errors_rad' has {errors.size} values; a {wheel.spec} wheel has "
+                           f"{wheel.edges_per_rev} edges")
+        se = None if d.get("standard_error_rad") is None else numbers("standard_error_rad", errors.shape)
+        orders = numbers("engine_orders") if d.get("engine_orders") else np.zeros(0)
+        if np.any(orders != np.round(orders)):
+            raise LogError(f"{path}: 'engine_orders' must be whole orders")
+        rv = d.get("revolutions", 0)
+        if not isinstance(rv, (int, float)) or isinstance(rv, bool) or rv < 0 or rv != int(rv):
+            raise LogError(f"{path}: 'revolutions' must be a whole number, not {rv!r}")
+        orms = d.get("order_rms_rad")
+        if orms is not None and not (isinstance(orms, (int, float)) and math.isfinite(orms) and orms >= 0):
+            raise LogError(f"{path}: 'order_rms_rad' must be a number ≥ 0, not {orms!r}")
+        try:
+            return cls(wheel.spec, errors, str(d.get("method", "given")), int(rv),
+                       tuple(int(k) for k in orders), se, str(d.get("source", path)),
+                       None if orms is None else float(orms))
+        except LogError as e:
+            raise LogError(f"{path}: {e}") from None
 
 
 def _order_fit_matrix(phi, orders):
@@ -317,7 +370,22 @@ def _order_amplitudes(phi, values, kmax):
     return orders, amp
 
 
-def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: int = 4,
+def firing_orders(cylinders: int, strokes: int, teeth: int) -> tuple:
+    """The whole orders of the per-revolution pattern below ``teeth/2`` that an evenly
+    firing engine of ``cylinders`` cylinders excites: the multiples of its firing order
+    (cylinders/2 per revolution for a four-stroke, ``cylinders`` for a two-stroke) that
+    are whole. Empty where every whole order is one (a single-cylinder four-stroke, a
+    twin four-stroke, a single-cylinder two-stroke): the engine's band is then found from
+    the data (``engine_orders="auto"``)."""
+    if not (isinstance(cylinders, (int, np.integer)) and not isinstance(cylinders, bool) and cylinders >= 1):
+        raise LogError(f"cylinders = {cylinders!r}: a whole number, 1 or more")
+    step = int(cylinders) if strokes == 2 else (int(cylinders) // 2 if cylinders % 2 == 0 else int(cylinders))
+    if step <= 1:
+        return ()
+    return tuple(range(step, (teeth + 1) // 2, step))
+
+
+def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: int = 4, cylinders: int = 1,
                           coastdown_ratio: float = 1.5, source: str = "") -> ToothErrors:
     """Tooth-spacing errors of the wheel, from the log itself.
 
@@ -325,8 +393,10 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
     - ``track``: the edges on the wheel (:func:`locate_teeth`).
     - ``engine_orders``: the integer orders of the per-revolution pattern to leave to the
       engine (removed from the estimate): ``"auto"`` (those that stand out, see the
-      module notes), a list of orders, or ``()`` (none: a calibration run whose speed
-      has no fluctuation locked to the crank).
+      module notes; with ``cylinders`` > 1, every whole multiple of the firing order as
+      well, see :func:`firing_orders`), a list of orders, or ``()`` (none: a calibration
+      run whose speed has no fluctuation locked to the crank).
+    - ``cylinders``: of an evenly firing engine; 1 (default) for a single cylinder.
     - ``strokes``: 4 averages an even number of revolutions, so the half orders cancel.
     - ``coastdown_ratio``: if the fastest revolution is this much faster than the
       slowest, each tooth's error is regressed on (ω̄/ω)² (the gas and friction torque
@@ -384,6 +454,12 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
         floor = float(np.median(upper))
         loud = orders[(orders <= orders.max() / 2) & (amp > ENGINE_ORDER_FACTOR * floor)]
         keep = tuple(range(1, int(loud.max()) + 1)) if loud.size else ()  # the engine's band, 1 … highest loud order
+        # an evenly firing multi-cylinder engine: its fluctuation at the multiples of the firing order can
+        # be as small as the wheel's errors there, so the detection above cannot be trusted to see it
+        keep = tuple(sorted(set(keep) | set(firing_orders(cylinders, strokes, w.teeth))))
+        if len(keep) > (int(np.count_nonzero(clean)) - 1) // 2 - 2:
+            raise LogError(f"tooth errors: the engine's orders {keep[0]} … {keep[-1]} leave too few to estimate "
+                           f"from {E} teeth; give a calibration (tooth_errors=FILE) or engine_orders")
     else:
         keep = tuple(int(k) for k in engine_orders)
         if any(k < 1 or k >= w.teeth // 2 for k in keep):
@@ -391,4 +467,8 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
     X = _order_fit_matrix(phi, keep)
     beta, *_ = np.linalg.lstsq(X[clean], a[clean], rcond=None)
     e = a - X @ beta
-    return ToothErrors(w.spec, e, method, R, keep, se, source)
+    # the wheel's errors per order at the orders estimated (flat for independent tooth errors): what the
+    # orders left to the engine probably hold of the wheel's
+    free = max((int(np.count_nonzero(clean)) - X.shape[1]) / 2, 1.0)
+    order_rms = float(np.sqrt(2 * np.mean(e[clean] ** 2) / free))
+    return ToothErrors(w.spec, e, method, R, keep, se, source, order_rms)

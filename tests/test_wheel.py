@@ -131,3 +131,56 @@ def test_steady_estimate_keeps_the_engine_orders_out():
     assert np.rad2deg(np.max(np.abs(te.errors_rad - identifiable))) < 0.02
     naive = rotor.estimate_tooth_errors(track, engine_orders=())
     assert np.rad2deg(np.max(np.abs(naive.errors_rad - (err - err.mean())))) > 0.2  # the engine taken for the wheel
+
+
+def test_log_starting_right_at_the_gap():
+    """The first edge is the first after a gap (its long period lies before the log): it
+    is tooth 0 of revolution 0, the first reference, and revolutions count from it as
+    for a log that starts a few teeth earlier."""
+    t_of, end = coastdown_t_of_theta(revs=12, w1=2500 / 30 * np.pi)
+    t, true_tooth = teeth("60-2", t_of, end)
+    k = int(np.flatnonzero(true_tooth == 0)[1])  # the first edge after the second gap
+    at_gap = rotor.locate_teeth(t[k:], "60-2")
+    assert at_gap.tooth[0] == 0 and at_gap.rev[0] == 0
+    assert at_gap.to_json_dict()["first_reference_time_s"] == t[k]
+    earlier = rotor.locate_teeth(t[k - 5 :], "60-2")
+    np.testing.assert_array_equal(earlier.rev[5:], at_gap.rev)
+    np.testing.assert_array_equal(earlier.tooth[5:], at_gap.tooth)
+    a = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=t[k:]), "60-2", tdc_deg=10, firing=0, tooth_errors=None)
+    b = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=t[k - 5 :]), "60-2", tdc_deg=10, firing=0,
+                          tooth_errors=None)
+    np.testing.assert_allclose(a.t_start_s, b.t_start_s[: a.cycles], rtol=0, atol=1e-6)  # --firing 0 means one thing
+
+
+def test_firing_orders():
+    from rotor.wheel import firing_orders
+
+    assert firing_orders(4, 4, 60) == tuple(range(2, 30, 2))
+    assert firing_orders(6, 4, 60) == tuple(range(3, 30, 3))
+    assert firing_orders(3, 4, 60) == tuple(range(3, 30, 3))  # firing order 1.5: its whole multiples
+    assert firing_orders(1, 4, 60) == firing_orders(2, 4, 60) == firing_orders(1, 2, 60) == ()
+    assert firing_orders(2, 2, 36) == tuple(range(2, 18, 2))
+    with pytest.raises(LogError, match="cylinders"):
+        firing_orders(0, 4, 60)
+
+
+@pytest.mark.parametrize("content,match", [
+    ('{"wheel": "60-2", "errors_rad": "x"}', r"t\.json: 'errors_rad' must be a list of finite numbers"),
+    ('{"wheel": "60-2", "errors_rad": [0.0, 0.1]}', r"t\.json: 'errors_rad' has 2 values; a 60-2 wheel has 58"),
+    ('{"wheel": "sixty", "errors_rad": []}', r"t\.json: 'wheel'"),
+    ('{"wheel": "60-2", "errors_rad": [' + ",".join(["0"] * 57) + ', NaN]}', r"t\.json: 'errors_rad'"),
+    ('{"wheel": "60-2", "errors_rad": [' + ",".join(["0"] * 58) + '], "revolutions": "many"}',
+     r"t\.json: 'revolutions'"),
+])
+def test_tooth_error_file_errors_name_file_and_key(tmp_path, content, match):
+    (tmp_path / "t.json").write_text(content)
+    with pytest.raises(LogError, match=match):
+        rotor.ToothErrors.load(tmp_path / "t.json")
+
+
+def test_tooth_errors_save_names_the_target(tmp_path):
+    te = rotor.ToothErrors("60-2", np.zeros(58))
+    target = tmp_path / "no" / "such" / "t.json"
+    with pytest.raises(LogError, match=rf"^{target}: cannot write the tooth errors: no folder"):
+        te.save(target)
+    assert not (tmp_path / "no").exists()
