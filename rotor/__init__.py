@@ -57,7 +57,15 @@ from .summary import engine_summary  # noqa: E402
 from .table import CrankTable, crank_table  # noqa: E402
 from .logs import Log, read_log  # noqa: E402
 from .encoder import Edges, find_edges  # noqa: E402
-from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, locate_teeth, parse_wheel  # noqa: E402
+from .wheel import (  # noqa: E402
+    ToothErrors,
+    ToothTrack,
+    Wheel,
+    estimate_tooth_errors,
+    firing_orders,
+    locate_teeth,
+    parse_wheel,
+)
 from .logged_speed import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
 
 __version__ = "0.1.0"
@@ -127,6 +135,7 @@ __all__ = [
     "find_edges",
     "Wheel",
     "parse_wheel",
+    "firing_orders",
     "ToothTrack",
     "locate_teeth",
     "ToothErrors",

@@ -422,7 +422,10 @@ def _resample(scene, time_domain, P):
         whole = int(np.floor((th[-1] - start) / cycle + 1e-9))
     if whole == 0:
         return [(jnp.asarray(th), jnp.asarray(t), jnp.asarray(w), jnp.asarray(z), 0)]
-    tq = start + np.arange(whole * P) * (cycle / P)
+    # a run that ends on a cycle boundary (it reached the end) gets that boundary as its
+    # last sample, like the angle-domain methods, and no raw tail
+    ends_whole = abs(th[-1] - start - whole * cycle) <= 1e-9 * max(1.0, abs(th[-1]))
+    tq = start + np.arange(whole * P + int(ends_whole)) * (cycle / P)
     j = np.clip(np.searchsorted(th, tq, side="right") - 1, 0, th.size - 2)
     u = (tq - th[j]) / (th[j + 1] - th[j])
     t_q, w_q, z_q = (f[j] + u * (f[j + 1] - f[j]) for f in (t, w, z))  # linear between steps
@@ -432,7 +435,7 @@ def _resample(scene, time_domain, P):
     t_n, w_n, z_n = (np.asarray(a) for a in dense_at_angles(sol, jnp.asarray(t_q), jnp.asarray(tq),
                                                               jnp.asarray(w_ref, dtype=jnp.float64)))
     t_q, w_q, z_q = (np.where(moving, a, b) for a, b in ((t_n, t_q), (w_n, w_q), (z_n, z_q)))
-    tail = th > tq[-1] + 1e-12
+    tail = (th > tq[-1] + 1e-12) & (not ends_whole)
     return [
         (jnp.asarray(tq), jnp.asarray(t_q), jnp.asarray(w_q), jnp.asarray(z_q), whole),
         (jnp.asarray(th[tail]), jnp.asarray(t[tail]), jnp.asarray(w[tail]), jnp.asarray(z[tail]), 0),

@@ -77,6 +77,9 @@ def test_formulations_agree_with_scipy_dop853(preset, propeller):
     scale = float(np.mean(w_ref))
     for method, res in results.items():
         assert res.uniform_cycles == cycles, method
+        # every method: the uniform grid and then the end of the run, nothing else
+        assert res.theta.shape == (cycles * P + 1,), method
+        assert float(res.theta[-1]) == pytest.approx(cycles * res.cycle_rad, rel=1e-12), method
         np.testing.assert_allclose(np.asarray(res.theta[last]), theta, rtol=0, atol=1e-9)
         err = np.max(np.abs(np.asarray(res.omega[last]) - w_ref)) / scale
         assert err < 1e-6, (method, err)
