@@ -100,7 +100,7 @@ def _build_parser():
     p.add_argument("--cycles", type=_whole, default=10, help="number of cycles (default 10)")
     _dynamics_args(p)
     p.add_argument("--method", choices=("auto", "closed", "grid", "angle", "time"), default="auto")
-    p.add_argument("--rtol", type=_positive_float, help="relative tolerance of the adaptive solvers (default 1e-10)")
+    p.add_argument("--rtol", type=_positive_float, help="relative tolerance of the adaptive solvers (default 1e-9)")
     p.add_argument("--steps-per-cycle", type=_whole, help="RK4 steps per cycle of --method grid (default 2 per degree)")
     p.add_argument("--misfire", metavar="CYCLE:CYL,...", default="",
                    help="misfiring firings, e.g. 3:1,7:2 (cycle from 0, cylinder from 1)")

@@ -54,8 +54,8 @@ def test_free_coasting_keeps_kinetic_energy(single):
 
 @pytest.mark.parametrize("method, rtol", [("grid", None), ("angle", None), ("time", 1e-12)])
 def test_free_coasting_adaptive_methods(single, method, rtol):
-    """The time domain drifts like any non-symplectic solver: 5e-9 over 20 cycles at its
-    default rtol 1e-10 (README); at rtol 1e-12 it holds 1e-9."""
+    """The time domain drifts like any non-symplectic solver (its drift at the default rtol:
+    benchmarks/simulator_accuracy.py, part 1); at rtol 1e-12 it holds 1e-9."""
     res = rotor.simulate(single, rpm=1000.0, cycles=20, method=method, rtol=rtol)
     ke = 0.5 * rotor.reduced_inertia(single, res.theta) * res.omega**2
     assert float(jnp.max(jnp.abs(ke / ke[0] - 1))) < 1e-9
