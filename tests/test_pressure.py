@@ -170,3 +170,33 @@ def test_wiebe_gradients_are_finite_and_match_finite_differences(diesel, field):
     fd = (f(x0 + h) - f(x0 - h)) / (2 * h)
     assert np.allclose(jac, fd, rtol=1e-4, atol=1e-6 * float(jnp.max(jnp.abs(f(x0)))) / float(x0))
     assert np.allclose(fwd, jac, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("preset", ["tue-single", "mwm6"])  # form factors m = 2.375 and 0.366
+def test_wiebe_heat_integral_against_adaptive_quadrature(preset):
+    """The composite rule of the Wiebe heat integral ∫ V^(n−1) dx against scipy's adaptive
+    quad in u = (ψ − φ_s)/Δφ: from the start of the burn (its singular end for a fractional
+    m) and from firing TDC, before, in and long after the burn."""
+    from scipy.integrate import quad
+
+    from rotor.pressure import cylinder_volume_m3
+
+    src = rotor.load_engine(preset).pressure
+    g = rotor.load_engine(preset).geometry
+    burn = src._burn()
+    s0, d, m = float(burn.start), float(burn.duration), float(burn.m)
+    volume = lambda x: cylinder_volume_m3(x, g, src.compression_ratio)  # noqa: E731
+    n = float(src.compression_exponent)
+    a = 6.908
+
+    def exact(phi, lower):
+        lo = max(s0, lower)
+        f = lambda u: a * (m + 1) * u**m * np.exp(-a * u ** (m + 1)) * float(volume(s0 + d * u)) ** (n - 1)  # noqa
+        return quad(f, (lo - s0) / d, (phi - s0) / d, epsabs=0, epsrel=1e-13, limit=500)[0] if phi > lo else 0.0
+
+    total = exact(4 * np.pi, s0)
+    for lower in (s0, 2 * np.pi):
+        for phi_deg in (340.0, 355.0, 359.9, 360.0, 372.0, 400.0, 540.0, 700.0):
+            phi = max(np.deg2rad(phi_deg), lower)
+            got = float(burn.integral(jnp.asarray(phi), volume, n, None if lower == s0 else lower))
+            assert abs(got - exact(phi, lower)) < 1e-9 * total, (lower, phi_deg)
