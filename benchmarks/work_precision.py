@@ -4,7 +4,7 @@ Scene, per preset (tue-single, 4chn15, mwm6, v8) and horizon (10, 100, 1000, 10,
 cycles): start at 0.95 × the operating speed under ``PropellerLoad(T, operating rpm)``, T
 the engine's mean gas torque (a + c·ω²: the closed form applies). Error ω: max|ω − ω_ref|
 / mean ω_ref at the 1° crank angles of the last cycle (the subset a coarse run saves);
-error t: |t − t_ref| / t_ref at the start of the last cycle. Times: medians of 3–7
+error t: |t − t_ref| / t_ref at the start of the last cycle. Times: medians of 2–7
 repeats (one for runs over 10 s; 1–3 with --quick), rotor's and numba's first calls apart
 as compile time. Run with ROTOR_COMPILATION_CACHE=off for cold compile times (the
 script sets it unless given).
@@ -34,7 +34,8 @@ two references' difference (the physics difference) is recorded; --quick skips t
 
 A run is skipped, recorded with its predicted time, when the same setting at a shorter
 horizon (scaled by the horizon) or a looser one at this horizon predicts more than --cap
-seconds (default 60); nothing predicted is reported as measured.
+seconds (default 60); nothing predicted is reported as measured. scipy runs up to
+--scipy-max-cycles (default 1000).
 
     .venv/bin/python benchmarks/work_precision.py --quick   # 4chn15, tue-single; 10, 100 cycles; < 2 min
     .venv/bin/python benchmarks/work_precision.py           # everything, --cap 60: about 3 hours
@@ -234,7 +235,7 @@ def error(run, ref):
 def repeats_for(seconds, quick):
     if quick:
         return 3 if seconds < 1 else 1
-    return 7 if seconds < 0.2 else 5 if seconds < 1 else 3 if seconds < 10 else 1
+    return 7 if seconds < 0.2 else 5 if seconds < 1 else 2 if seconds < 10 else 1
 
 
 def measure(fn, quick, compiled, hint=None):
@@ -258,8 +259,8 @@ def measure(fn, quick, compiled, hint=None):
 
 # --------------------------------------------------------------------------- one preset, one horizon
 class Bench:
-    def __init__(self, name, quick, cap, first):
-        self.name, self.quick, self.cap, self.first = name, quick, cap, first
+    def __init__(self, name, quick, cap, first, scipy_max=1000):
+        self.name, self.quick, self.cap, self.first, self.scipy_max = name, quick, cap, first, scipy_max
         self.settings = QUICK if quick else FULL
         self.engine = e = rotor.load_engine(name)
         self.rpm, self.torque = float(e.operating.rpm), float(rotor.mean_gas_torque(e))
@@ -379,7 +380,7 @@ class Bench:
             return dict(timing, error=error(last_cycle(*run, start), ref_n))
 
         rows += self.runs("numba RK4", spc, self.settings["numba"], cycles, numba_go)
-        for method in SCIPY:
+        for method in SCIPY if cycles <= self.scipy_max else ():
             def go(rtol, method=method):
                 t0 = time.perf_counter()
                 sol = scipy_time(ph, self.omega0, self.c, cycles, method, rtol, dense=True)
@@ -490,6 +491,8 @@ def main():
     ap.add_argument("--presets", help="comma-separated presets (default: all four)")
     ap.add_argument("--horizons", help="comma-separated cycle counts (default 10,100,1000,10000)")
     ap.add_argument("--cap", type=float, default=60.0, help="skip runs predicted to take longer [s]")
+    ap.add_argument("--scipy-max-cycles", type=int, default=1000,
+                    help="longest horizon scipy runs at (default 1000: beyond, its runs are minutes long)")
     args = ap.parse_args()
     presets = (args.presets or ("4chn15,tue-single" if args.quick else "tue-single,4chn15,mwm6,v8")).split(",")
     horizons = sorted(int(h) for h in (args.horizons or ("10,100" if args.quick else "10,100,1000,10000")).split(","))
@@ -497,11 +500,11 @@ def main():
     RESULTS.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
     notes = __doc__.split("\n\n", 1)[1].rsplit("\n\n", 2)[0]
-    out = {"quick": args.quick, "cap_s": args.cap, "versions": versions(),
+    out = {"quick": args.quick, "cap_s": args.cap, "scipy_max_cycles": args.scipy_max_cycles, "versions": versions(),
            "import_rotor": import_time(1 if args.quick else 3), "notes": notes, "presets": {}}
     print(f"import rotor: {out['import_rotor']['median_s']:.2f} s")
     for name in presets:
-        b = Bench(name, args.quick, args.cap, horizons[0])
+        b = Bench(name, args.quick, args.cap, horizons[0], args.scipy_max_cycles)
         load = f"PropellerLoad({b.torque:.6g} N·m, {b.rpm:g} rpm), c = {b.c:.6g} N·m·s²"
         p = out["presets"][name] = {"rpm_operating": b.rpm, "rpm_start": b.rpm0, "load": load, "physics": b.checks,
                                     "horizons": {}}
