@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo test clean
+.PHONY: install demo test bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "rotor needs Python >= 3.11 (set PYTHON=...)")'
@@ -20,6 +20,25 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+# every figure in benchmarks/README.md (about 1.5 h on 2 CPUs; numba for the baseline)
+bench: $(STAMP)
+	$(PY) -m pip install --quiet -e '.[test,bench]'
+	$(PY) benchmarks/defaults.py
+	$(PY) benchmarks/fidelity_differences.py
+	$(PY) benchmarks/compile_time.py
+	$(PY) benchmarks/work_precision.py --cap 20
+	$(PY) benchmarks/simulator_accuracy.py
+	$(PY) benchmarks/simulator_speed.py
+	$(PY) benchmarks/logged_speed.py
+	$(PY) benchmarks/seed004_accuracy.py
+
+# the quick forms (a few minutes)
+bench-quick: $(STAMP)
+	$(PY) -m pip install --quiet -e '.[test,bench]'
+	$(PY) benchmarks/work_precision.py --quick
+	$(PY) benchmarks/compile_time.py --quick
+	$(PY) benchmarks/simulator_speed.py --quick
 
 clean:
 	rm -rf $(VENV) out .pytest_cache build *.egg-info

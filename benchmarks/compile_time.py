@@ -58,8 +58,9 @@ print(json.dumps({"import_s": t_import, "first_call_s": times[0], "run_s": run, 
 
 def child(name, entry, cache_dir):
     env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache_dir)
-    out = subprocess.run([sys.executable, "-c", CHILD, name, entry], env=env, check=True, capture_output=True,
-                         text=True)
+    out = subprocess.run([sys.executable, "-c", CHILD, name, entry], env=env, capture_output=True, text=True)
+    if out.returncode:
+        raise RuntimeError(f"{name} {entry}: {out.stderr.strip().splitlines()[-1]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 

@@ -9,7 +9,8 @@ repeats (one for runs over 10 s; 1–3 with --quick), rotor's and numba's first 
 as compile time. Run with ROTOR_COMPILATION_CACHE=off for cold compile times (the
 script sets it unless given).
 
-- rotor ``simulate``: ``closed`` (grid_deg 1 … 0.125), ``grid`` (RK4, 90 … 2880 steps per
+- rotor ``simulate``: ``closed`` (grid_deg 1 … 0.125; also saving every 4° as "rotor closed
+  4°", the output density of the numba run at 180 steps per cycle), ``grid`` (RK4, 90 … 2880 steps per
   cycle, step_deg 720/steps below 720), ``angle`` (rtol 1e-3 … 1e-12), ``time`` (rtol
   1e-4 … 1e-10); and ``closed`` at fidelity "series"/"coefficients"/"constant" (shortest horizon):
   their "error" against the variable-inertia reference is MODEL error, not solver error.
@@ -259,8 +260,9 @@ def measure(fn, quick, compiled, hint=None):
 
 # --------------------------------------------------------------------------- one preset, one horizon
 class Bench:
-    def __init__(self, name, quick, cap, first, scipy_max=1000):
+    def __init__(self, name, quick, cap, first, scipy_max=1000, families=None):
         self.name, self.quick, self.cap, self.first, self.scipy_max = name, quick, cap, first, scipy_max
+        self.families = families
         self.settings = QUICK if quick else FULL
         self.engine = e = rotor.load_engine(name)
         self.rpm, self.torque = float(e.operating.rpm), float(rotor.mean_gas_torque(e))
@@ -288,6 +290,9 @@ class Bench:
             assert d_gas < 1e-9, d_gas
         return {"pressure": ph.pressure_note, "inertia_vs_rotor_max_rel": float(d_inertia),
                 "gas_torque_vs_rotor_max_rel_to_peak": float(d_gas), "numba_vs_numpy_max_rel": float(d_numba)}
+
+    def wanted(self, family):
+        return self.families is None or any(family.startswith(f) for f in self.families)
 
     def predict(self, key, cycles, looser):
         """A predicted time over the cap → the reason to skip, else None."""
@@ -367,20 +372,24 @@ class Bench:
         rows = []
         for family, fmt, settings, kw in (
                 [("rotor closed", grid_deg, self.settings["closed"], lambda g: dict(method="closed", grid_deg=g)),
+                 ("rotor closed 4°", grid_deg, self.settings["closed"],
+                  lambda g: dict(method="closed", grid_deg=g, step_deg=4.0)),
                  ("rotor grid", spc, self.settings["grid"],
                   lambda n: dict(method="grid", steps_per_cycle=n, step_deg=max(1.0, 720 / n))),
                  ("rotor angle", rtol, self.settings["angle"], lambda r: dict(method="angle", rtol=r)),
                  ("rotor time", rtol, self.settings["time"], lambda r: dict(method="time", rtol=r))]
                 + [(f"model {f}", grid_deg, [0.25], lambda g, f=f: dict(method="closed", grid_deg=g, fidelity=f))
                    for f in models]):
-            rows += self.runs(family, fmt, settings, cycles, lambda x, kw=kw: rotor_go(**kw(x)))
+            if self.wanted(family):
+                rows += self.runs(family, fmt, settings, cycles, lambda x, kw=kw: rotor_go(**kw(x)))
 
         def numba_go(n):
             timing, run = measure(lambda: self.numba(cycles, n), q, compiled=True)
             return dict(timing, error=error(last_cycle(*run, start), ref_n))
 
-        rows += self.runs("numba RK4", spc, self.settings["numba"], cycles, numba_go)
-        for method in SCIPY if cycles <= self.scipy_max else ():
+        if self.wanted("numba RK4"):
+            rows += self.runs("numba RK4", spc, self.settings["numba"], cycles, numba_go)
+        for method in SCIPY if cycles <= self.scipy_max and self.wanted("scipy") else ():
             def go(rtol, method=method):
                 t0 = time.perf_counter()
                 sol = scipy_time(ph, self.omega0, self.c, cycles, method, rtol, dense=True)
@@ -409,6 +418,7 @@ def _block(r):
 def summarize(rows):
     """Fastest measured setting per group at error ω ≤ TARGET, and the ratios."""
     groups = {"rotor": ("rotor closed", "rotor grid", "rotor angle", "rotor time"),
+              "rotor_4deg_samples": ("rotor closed 4°",),
               "scipy": tuple(f"scipy {m}" for m in SCIPY), "numba": ("numba RK4",)}
     out = {"target_omega_rel": TARGET}
     for g, fams in groups.items():
@@ -416,11 +426,13 @@ def summarize(rows):
         best = min(ok, key=lambda r: r["median_s"]) if ok else None
         out[g] = None if best is None else {k: best[k] for k in ("family", "setting", "median_s", "error")}
     s, r, n = (out[g] and out[g]["median_s"] for g in ("scipy", "rotor", "numba"))
+    r4 = out["rotor_4deg_samples"] and out["rotor_4deg_samples"]["median_s"]
+    out["ratio_rotor_4deg_over_numba"] = r4 / n if r4 and n else None
     out["ratio_scipy_over_rotor"] = s / r if s and r else None
     out["ratio_rotor_over_numba"] = r / n if r and n else None
     out["targets (at 1000 cycles)"] = {"scipy/rotor >= 30": s and r and s / r >= 30, "rotor/numba <= 3": r and n
                                        and r / n <= 3}
-    compile_s = [x["compile_s"] for x in rows if x["family"].startswith("rotor") and "compile_s" in x]
+    compile_s = [x["compile_s"] for x in rows if x["family"].startswith("rotor") and "compile_s" in x] or [0.0]
     out["rotor_compile_s"] = {"min": min(compile_s), "median": statistics.median(compile_s), "max": max(compile_s)}
     return out
 
@@ -480,7 +492,8 @@ def print_summary(out):
             cell = lambda b: f"{b['family'].split()[-1]} {b['setting']} {b['median_s']:.3g}s" if b else "none"  # noqa
             ratio = lambda v: f"{v:11.1f}" if v else f"{'—':>11s}"  # noqa
             print(f"{name:11s} {n:>6s}  {cell(s['rotor']):32s} {cell(s['scipy']):32s} {cell(s['numba']):28s}"
-                  f"{ratio(s['ratio_scipy_over_rotor'])} {ratio(s['ratio_rotor_over_numba'])}   rotor compile "
+                  f"{ratio(s['ratio_scipy_over_rotor'])} {ratio(s['ratio_rotor_over_numba'])} "
+                  f"{ratio(s.get('ratio_rotor_4deg_over_numba'))} (4° samples)   rotor compile "
                   f"{s['rotor_compile_s']['min']:.1f}–{s['rotor_compile_s']['max']:.1f} s")
     print(f"import rotor {out['import_rotor']['median_s']:.2f} s; numba compile {out['numba_compile_s']:.2f} s")
 
@@ -491,12 +504,15 @@ def main():
     ap.add_argument("--presets", help="comma-separated presets (default: all four)")
     ap.add_argument("--horizons", help="comma-separated cycle counts (default 10,100,1000,10000)")
     ap.add_argument("--cap", type=float, default=60.0, help="skip runs predicted to take longer [s]")
+    ap.add_argument("--families", help="comma-separated family prefixes to run (default all), e.g. "
+                    "'rotor closed,numba'")
+    ap.add_argument("--stem", help="output name in benchmarks/results (default work_precision[_quick])")
     ap.add_argument("--scipy-max-cycles", type=int, default=1000,
                     help="longest horizon scipy runs at (default 1000: beyond, its runs are minutes long)")
     args = ap.parse_args()
     presets = (args.presets or ("4chn15,tue-single" if args.quick else "tue-single,4chn15,mwm6,v8")).split(",")
     horizons = sorted(int(h) for h in (args.horizons or ("10,100" if args.quick else "10,100,1000,10000")).split(","))
-    stem = "work_precision_quick" if args.quick else "work_precision"
+    stem = args.stem or ("work_precision_quick" if args.quick else "work_precision")
     RESULTS.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
     notes = __doc__.split("\n\n", 1)[1].rsplit("\n\n", 2)[0]
@@ -504,7 +520,8 @@ def main():
            "import_rotor": import_time(1 if args.quick else 3), "notes": notes, "presets": {}}
     print(f"import rotor: {out['import_rotor']['median_s']:.2f} s")
     for name in presets:
-        b = Bench(name, args.quick, args.cap, horizons[0], args.scipy_max_cycles)
+        b = Bench(name, args.quick, args.cap, horizons[0], args.scipy_max_cycles,
+                  args.families.split(",") if args.families else None)
         load = f"PropellerLoad({b.torque:.6g} N·m, {b.rpm:g} rpm), c = {b.c:.6g} N·m·s²"
         p = out["presets"][name] = {"rpm_operating": b.rpm, "rpm_start": b.rpm0, "load": load, "physics": b.checks,
                                     "horizons": {}}
