@@ -67,6 +67,14 @@ from .wheel import (  # noqa: E402
     parse_wheel,
 )
 from .logged_speed import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
+from .inverse import (  # noqa: E402
+    HarmonicTorque,
+    IndicatedTorque,
+    TorqueOrders,
+    harmonic_response,
+    harmonic_torque,
+    indicated_torque,
+)
 
 __version__ = "0.1.0"
 
@@ -143,4 +151,10 @@ __all__ = [
     "LogAnalysis",
     "analyze_log",
     "tdc_from_pressure",
+    "indicated_torque",
+    "IndicatedTorque",
+    "harmonic_torque",
+    "harmonic_response",
+    "HarmonicTorque",
+    "TorqueOrders",
 ]
