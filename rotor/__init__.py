@@ -75,6 +75,8 @@ from .inverse import (  # noqa: E402
     harmonic_torque,
     indicated_torque,
 )
+from .identification import Identification, identify  # noqa: E402
+from .misfire import contribution_index  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -157,4 +159,7 @@ __all__ = [
     "harmonic_response",
     "HarmonicTorque",
     "TorqueOrders",
+    "identify",
+    "Identification",
+    "contribution_index",
 ]

@@ -1,0 +1,597 @@
+"""Model-based identification: each firing's combustion scale (IMEP) from the crank speed.
+
+:func:`identify` fits the engine model to a measured (or simulated) speed ω(θ) on the
+uniform cycle-angle grid of consecutive cycles, by least squares through the closed-form
+energy cycle of :mod:`rotor.dynamics`:
+
+    dE/dθ = M_motored(θ) + Σ_c s[k, c]·ΔM_c(θ) − a_k − 2(c − k(θ))/I(θ)·E,   E = ½·I(θ)·ω²,
+
+with the losses a_k + c·ω² (friction and load: c known from the friction and the load
+model, a_k an unknown constant torque per cycle). Firing k of cylinder c (TDC at
+θ_fire,c + k·Θ) owns the half cycle either side of its TDC, as in the simulator.
+
+**Parameters** (per block of cycles, see below): the kinetic energy at the block's start,
+the load torque a_k of every cycle, and the combustion scale s of every firing.
+E(θ) is *affine* in all of them (the factor Φ(θ) = exp(−∫2(c − k)/I) does not depend on
+them), so every basis function ∫ΔM_c/Φ is computed once on the table nodes with the
+simulator's fourth-order Hermite rule and only combined per fit. The start is the exact
+weighted linear least-squares solution in E (weights 1/(I·ω), so that an error in E counts
+as the speed error it makes); then :class:`optimistix.LevenbergMarquardt` minimises the
+residual ω_model − ω_measured itself (JAX Jacobian), in one or two steps.
+
+**Blocks.** A long record is cut into blocks of ``block_cycles`` cycles that overlap by
+``overlap`` cycles on each side; each block is fitted on its own (all blocks at once,
+``jax.vmap``) and gives the results of its core cycles. The fits stay small (a 12-cycle
+block of a six: 86 parameters, 2880 residuals), well conditioned and fast: 100 cycles in
+milliseconds after compile. The overlap keeps the block-edge effects (the energy at the
+block start, the firings cut by the block edge) out of the results.
+
+**Firings cut by the record's ends.** A firing whose combustion torque lies less than half
+inside the block is not fitted: it shares the scale of the nearest firing of the same
+cylinder (as the simulator's combustion pattern does at the ends of a run), and
+``identified`` is False for it; the firings before the first and after the last cycle
+share the first's and last's.
+
+**Uncertainty and fit.** The covariance of each block is σ²·(JᵀJ)⁻¹ with σ² = RSS/(m − p),
+the residual variance, multiplied by the residual's correlation length (1 + 2·Σ ρ_lag over
+the lags where the residual's autocorrelation is positive): a speed from tooth times is
+smooth between samples, and its errors are correlated over neighbouring samples. Per
+cycle: the covariance of the cycle's scales and load (``covariance``, (cycles, n+1, n+1));
+``scale_std``; ``rms_residual_rad_s``; ``r2``: 1 − Σ residual² / Σ (ω − cycle mean)²,
+the share of the speed fluctuation that the model explains.
+
+**Misfires** (:mod:`rotor.misfire`): the contribution index s / s_ref and the misfire
+flag index < 0.5 (see there for the reference, the floor that makes a coast-down all
+misfires, and the rates measured by ``benchmarks/identification.py``).
+
+**Four-stroke phase.** Where the engine is symmetric under a shift of 360° (an inline
+four: cylinders 1 and 4, 2 and 3 share a throw and fire 360° apart; an inline six:
+1–6, 2–5, 3–4), the crank speed alone cannot tell which revolution holds cylinder 1's
+firing: with the wrong one the same fit comes out with the pairs swapped. Unless the
+phase is known (``phase_reference=True``, or a :class:`rotor.LogAnalysis` whose firing
+revolution came from a pressure or cam channel or was given), the result names the
+pairs as ambiguous (``ambiguous_pairs``, a note).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Optional
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg
+import lineax as lx
+import numpy as np
+import optimistix as optx
+
+from ._checks import EngineError
+from .crank_train import _DM, _I, _K, _MM, train_from_engine, check_fidelity, grid_points
+from .dynamics import _cumulative, _wrap, friction_coefficients, node_offsets
+from .loads import ConstantLoad, Load
+from .misfire import FLOOR_SCALE, MISFIRE_THRESHOLD, contribution_index
+
+__all__ = ["Identification", "identify", "PARAMETERS"]
+
+PARAMETERS = ("imep_scale",)
+TIED_BELOW = 0.5  # a firing with less than this share of its combustion torque inside the block is tied
+DEFAULT_BLOCK = 8
+DEFAULT_OVERLAP = 2
+RPM_PER_RAD_S = 30.0 / np.pi
+
+
+# ----------------------------------------------------------------------------- result
+@dataclasses.dataclass(frozen=True, eq=False)
+class Identification:
+    """Per-firing combustion scales, IMEP, loads and misfires identified from ω(θ).
+
+    **Per cycle and cylinder** (cycles, cylinders): ``scale`` [-] (the firing's combustion
+    scale: 1 = the engine file's cycle, 0 = none), ``scale_std`` [-], ``imep_pa`` and
+    ``imep_std_pa`` [Pa], ``identified`` (False: a firing cut by the record's end, tied to
+    its neighbour), ``contribution`` (index, 1 = a normal firing) [-], ``misfire`` (bool).
+    Firing k of cylinder c has its TDC at cycle angle θ_fire,c in cycle k.
+
+    **Per cycle:** ``load_torque_Nm`` (the mean load torque: the fitted constant torque
+    less the friction's, plus the load model's c·ω²) and ``load_std_Nm`` [N·m];
+    ``loss_torque_Nm`` (all losses, friction included) [N·m]; ``mean_omega`` [rad/s];
+    ``t_start_s`` [s] (or None); ``covariance`` (cycles, n+1, n+1): of the cycle's scales
+    and its constant loss torque [-, N·m]; ``reference_scale`` (the misfire reference);
+    ``rms_residual_rad_s``, ``r2`` (per cycle).
+
+    **Record:** ``omega``, ``omega_model`` (cycles, P) [rad/s]; ``rms_residual`` [rad/s],
+    ``fit_r2`` and ``relative_residual`` (rms residual / rms speed fluctuation) of the
+    whole record; ``ambiguous_pairs`` (cylinder pairs, numbered from 1, that the crank
+    speed cannot tell apart, or ()); ``threshold``; ``notes``; ``wall_s``; ``info``
+    (blocks, iterations, the residual's correlation length).
+    """
+
+    scale: np.ndarray
+    scale_std: np.ndarray
+    imep_pa: np.ndarray
+    imep_std_pa: np.ndarray
+    identified: np.ndarray
+    contribution: np.ndarray
+    misfire: np.ndarray
+    reference_scale: np.ndarray
+    load_torque_Nm: np.ndarray
+    load_std_Nm: np.ndarray
+    loss_torque_Nm: np.ndarray
+    mean_omega: np.ndarray
+    covariance: np.ndarray
+    rms_residual_rad_s: np.ndarray
+    r2: np.ndarray
+    omega: np.ndarray
+    omega_model: np.ndarray
+    rms_residual: float
+    fit_r2: float
+    relative_residual: float
+    imep_nominal_pa: np.ndarray
+    threshold: float
+    ambiguous_pairs: tuple = ()
+    t_start_s: Optional[np.ndarray] = None
+    notes: tuple = ()
+    engine_name: str = ""
+    wall_s: float = float("nan")
+    info: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def cycles(self) -> int:
+        return int(self.scale.shape[0])
+
+    @property
+    def cylinders(self) -> int:
+        return int(self.scale.shape[1])
+
+    def misfires(self) -> list:
+        """The misfires as (cycle from 0, cylinder from 1) pairs."""
+        return [(int(k), int(c) + 1) for k, c in np.argwhere(self.misfire)]
+
+    def summary(self) -> str:
+        """A few lines for a terminal."""
+        lines = [f"{self.engine_name}: {self.cycles} cycles identified, rms residual {self.rms_residual:.3g} rad/s "
+                 f"({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})"]
+        lines.append("  cylinder  IMEP mean [bar]  ± std   scale mean   misfires")
+        for c in range(self.cylinders):
+            ok = self.identified[:, c] & ~self.misfire[:, c]
+            imep = self.imep_pa[ok, c] / 1e5 if ok.any() else np.array([np.nan])
+            lines.append(f"  {c + 1:8d}  {np.mean(imep):15.3f}  {np.median(self.imep_std_pa[:, c]) / 1e5:6.3f}"
+                         f"   {np.mean(self.scale[ok, c]) if ok.any() else float('nan'):10.4f}   "
+                         f"{int(np.sum(self.misfire[:, c]))}")
+        lines.append(f"  load torque {np.mean(self.load_torque_Nm):.2f} N·m (cycles {np.min(self.load_torque_Nm):.2f} … "
+                     f"{np.max(self.load_torque_Nm):.2f})")
+        m = self.misfires()
+        lines.append(f"  misfires (cycle, cylinder): {m if m else 'none'}")
+        for n in self.notes:
+            lines.append(f"  note: {n}")
+        return "\n".join(lines) + "\n"
+
+    def to_json_dict(self) -> dict:
+        """Plain numbers for JSON."""
+        def f(x):
+            return np.where(np.isfinite(x), x, np.nan).tolist()
+
+        return {
+            "engine": self.engine_name,
+            "cycles": self.cycles,
+            "cylinders": self.cylinders,
+            "scale": f(self.scale),
+            "scale_std": f(self.scale_std),
+            "imep_pa": f(self.imep_pa),
+            "imep_std_pa": f(self.imep_std_pa),
+            "identified": self.identified.tolist(),
+            "contribution": f(self.contribution),
+            "misfire": self.misfire.tolist(),
+            "misfires": self.misfires(),
+            "threshold": self.threshold,
+            "load_torque_Nm": f(self.load_torque_Nm),
+            "load_std_Nm": f(self.load_std_Nm),
+            "rms_residual_rad_s": float(self.rms_residual),
+            "r2": float(self.fit_r2),
+            "relative_residual": float(self.relative_residual),
+            "ambiguous_pairs": [list(p) for p in self.ambiguous_pairs],
+            "notes": list(self.notes),
+        }
+
+
+# ----------------------------------------------------------------------------- the model
+class _Bases(eqx.Module):
+    """Per-cycle pieces of the affine energy model, sampled at the P + 1 measurement angles.
+
+    E_k(ψ_j) = φ_j·[E_k(0) + m_j − a_k·b_j + Σ_c (s_L,c·BL_jc + s_R,c·BR_jc)]."""
+
+    phi: jnp.ndarray  # (P+1,)
+    m: jnp.ndarray  # (P+1,)
+    b: jnp.ndarray  # (P+1,)
+    BL: jnp.ndarray  # (P+1, n)
+    BR: jnp.ndarray  # (P+1, n)
+    inertia: jnp.ndarray  # (P,)
+    work_L: jnp.ndarray  # (n,) ∫|ΔM_c| over the nodes of the left / right part of the cycle
+    work_R: jnp.ndarray
+    offset_L: jnp.ndarray  # (n,) int: window offset of the cycle's left part
+
+
+@eqx.filter_jit
+def _make_bases(train, c_loss, stride: int):
+    v, d = _wrap(train.values), _wrap(train.slopes)
+    h = train.step_rad
+    inertia, dinertia, k, dk = v[:, _I], d[:, _I], v[:, _K], d[:, _K]
+    G = 2 * (c_loss - k) / inertia
+    dG = 2 * (-dk * inertia - (c_loss - k) * dinertia) / inertia**2
+    phi = jnp.exp(-_cumulative(G, dG, h))
+
+    def basis(f, df):
+        return _cumulative(f / phi, (df + f * G) / phi, h)
+
+    off = node_offsets(train)  # (N+1, n)
+    left = off == off[0][None, :]
+    dm, ddm = v[:, _DM:], d[:, _DM:]
+    cols = jax.vmap(basis, in_axes=(1, 1), out_axes=1)
+    BL = cols(jnp.where(left, dm, 0.0), jnp.where(left, ddm, 0.0))
+    BR = cols(jnp.where(left, 0.0, dm), jnp.where(left, 0.0, ddm))
+    absw = jnp.abs(dm[:-1]) * h
+    s = slice(None, None, stride)
+    return _Bases(phi[s], basis(v[:, _MM], d[:, _MM])[s], basis(jnp.ones_like(G), jnp.zeros_like(G))[s], BL[s],
+                  BR[s], inertia[:-1][s], jnp.sum(jnp.where(left[:-1], absw, 0.0), axis=0),
+                  jnp.sum(jnp.where(left[:-1], 0.0, absw), axis=0), off[0])
+
+
+def _layout(work_L, work_R, offset_L, L: int):
+    """Static parameter layout of a block of L cycles: the position in the scale vector of
+    firing f = −1 … L of each cylinder ((L+2, n) ints), which firings 0 … L−1 are fitted
+    ((L, n) bool), and the number of scale parameters."""
+    n = work_L.size
+    total = work_L + work_R
+    own = np.zeros((L, n), bool)
+    frac = np.zeros((L + 2, n))
+    for c in range(n):
+        for k in range(L):
+            frac[k + offset_L[c] + 1, c] += work_L[c] / total[c]
+            frac[k + offset_L[c] + 2, c] += work_R[c] / total[c]
+    own = frac[1 : L + 1] >= TIED_BELOW
+    for c in range(n):
+        if not own[:, c].any():
+            own[int(np.argmax(frac[1 : L + 1, c])), c] = True
+    pos = np.zeros((L + 2, n), np.int32)
+    count = 0
+    index = -np.ones((L, n), np.int64)
+    for k in range(L):
+        for c in range(n):
+            if own[k, c]:
+                index[k, c] = count
+                count += 1
+    for c in range(n):
+        owned = np.flatnonzero(own[:, c])
+        for f in range(-1, L + 1):
+            kk = owned[np.argmin(np.abs(owned - np.clip(f, 0, L - 1)))]
+            pos[f + 1, c] = index[kk, c]
+    return pos, own, count
+
+
+def _energy(p, bases, pos, offset_L, e_ref, a_ref, L: int):
+    """E on the P + 1 samples of each of the block's L cycles, (L, P+1)."""
+    n = pos.shape[1]
+    s_full = p[1 + L :][pos]  # (L+2, n)
+    cyl = jnp.arange(n)
+
+    def cycle(E0, k):
+        sL = s_full[k + offset_L + 1, cyl]
+        sR = s_full[k + offset_L + 2, cyl]
+        inner = E0 + bases.m - a_ref * p[1 + k] * bases.b + bases.BL @ sL + bases.BR @ sR
+        E = bases.phi * inner
+        return E[-1], E
+
+    _, E = jax.lax.scan(cycle, e_ref * p[0], jnp.arange(L))
+    return E
+
+
+def _omega_model(p, bases, pos, offset_L, e_ref, a_ref, L):
+    E = _energy(p, bases, pos, offset_L, e_ref, a_ref, L)[:, :-1]
+    return jnp.sqrt(2 * jnp.maximum(E, 1e-300) / bases.inertia)
+
+
+def _corr_length(r):
+    """1 + 2·Σ ρ_lag over the first lags with ρ > 0 (at most 20): the variance inflation of
+    a mean of correlated residuals."""
+    r = r - jnp.mean(r)
+    var = jnp.sum(r * r)
+    rho = jnp.stack([jnp.sum(r[lag:] * r[:-lag]) / var for lag in range(1, 21)])
+    positive = jnp.cumprod(rho > 0)
+    return 1.0 + 2.0 * jnp.sum(rho * positive)
+
+
+def _normal_solve(A, y):
+    """Least squares min ‖A·x − y‖ by the column-scaled normal equations (Cholesky)."""
+    d = jnp.sqrt(jnp.sum(A * A, axis=0))
+    d = jnp.where(d > 0, d, 1.0)
+    As = A / d
+    chol = jax.scipy.linalg.cho_factor(As.T @ As)
+    return jax.scipy.linalg.cho_solve(chol, As.T @ y) / d
+
+
+@eqx.filter_jit
+def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, max_steps: int):
+    """Fit every block of omega (B, L, P): returns the parameters, covariances, residuals."""
+    L, P = omega.shape[1], omega.shape[2]
+
+    def one(w):
+        e_meas = 0.5 * bases.inertia * w**2
+        e_ref = e_meas[0, 0]
+        npar = 1 + L + nscale
+
+        def E_flat(p):
+            return _energy(p, bases, pos, offset_L, e_ref, a_ref, L)[:, :-1].reshape(-1)
+
+        # exact linear least squares in E, each sample weighted by 1/(I·ω): the speed error it makes
+        zero = jnp.zeros(npar)
+        X = jax.jacfwd(E_flat)(zero)
+        wt = (1.0 / (bases.inertia[None, :] * w)).reshape(-1)
+        p0 = _normal_solve(X * wt[:, None], (e_meas.reshape(-1) - E_flat(zero)) * wt)
+
+        def resid(p, args):
+            return (_omega_model(p, bases, pos, offset_L, e_ref, a_ref, L) - w).reshape(-1)
+
+        # normal equations (Cholesky): the parameters are scaled to O(1), JᵀJ is small and well conditioned,
+        # and a QR of the tall Jacobian costs ~1 s on CPU
+        solver = optx.LevenbergMarquardt(rtol=rtol, atol=rtol, linear_solver=lx.Normal(lx.Cholesky()))
+        sol = optx.least_squares(resid, solver, p0, max_steps=max_steps, throw=False)
+        p = sol.value
+        r = resid(p, None)
+        J = jax.jacfwd(resid)(p, None)
+        m = r.size
+        rss = jnp.sum(r * r)
+        corr = _corr_length(r)
+        sigma2 = rss / (m - npar) * corr
+        JtJ = J.T @ J
+        d = jnp.sqrt(jnp.diag(JtJ))
+        cov = jnp.linalg.inv(JtJ / jnp.outer(d, d)) / jnp.outer(d, d) * sigma2
+        return p, cov, r.reshape(L, P), sol.stats["num_steps"], e_ref, corr, sol.result == optx.RESULTS.successful
+
+    return jax.vmap(one)(omega)
+
+
+# ----------------------------------------------------------------------------- inputs
+def _speed(engine, speed, cycle_rad):
+    from .logged_speed import LogAnalysis
+    from .speed_result import SpeedResult
+
+    t_start = None
+    phase = None
+    if isinstance(speed, SpeedResult):
+        if not math.isclose(float(speed.cycle_rad), float(engine.cycle_rad), rel_tol=1e-9):
+            raise EngineError(f"speed (a SpeedResult): its {math.degrees(speed.cycle_rad):g}° cycle does not fit the "
+                              f"{engine.strokes}-stroke engine {engine.name!r}")
+        C, P = speed.uniform_cycles, speed.points_per_cycle
+        if C < 1:
+            raise EngineError("speed (a SpeedResult) holds no complete cycle sampled in the angle domain")
+        omega = np.asarray(speed.omega)[: C * P].reshape(C, P)
+        t_start = np.asarray(speed.t)[: C * P : P]
+        phase = True
+    elif isinstance(speed, LogAnalysis):
+        if not math.isclose(float(speed.cycle_rad), float(engine.cycle_rad), rel_tol=1e-9):
+            raise EngineError(f"speed (a LogAnalysis): its {math.degrees(speed.cycle_rad):g}° cycle does not fit the "
+                              f"{engine.strokes}-stroke engine {engine.name!r}")
+        starts = np.asarray(speed.cycle_start_rad)
+        if starts.size > 1 and not np.allclose(np.diff(starts), speed.cycle_rad, rtol=0, atol=1e-9):
+            raise EngineError("speed (a LogAnalysis): its cycles are not consecutive")
+        omega = np.asarray(speed.omega, dtype=np.float64)
+        t_start = np.asarray(speed.t_start_s)
+        phase = not str(speed.firing_method).startswith("speed")
+    else:
+        if isinstance(speed, jax.core.Tracer):
+            raise EngineError("speed: identify works on concrete arrays (it is not traceable)")
+        if cycle_rad is not None and not math.isclose(float(cycle_rad), float(engine.cycle_rad), rel_tol=1e-9):
+            raise EngineError(f"cycle_rad = {cycle_rad!r} does not fit the {engine.strokes}-stroke engine")
+        try:
+            omega = np.asarray(speed, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise EngineError(f"speed: a LogAnalysis, a SpeedResult or an array (cycles, points), not "
+                              f"{type(speed).__name__}") from None
+        if omega.ndim == 1:
+            omega = omega[None, :]
+        if omega.ndim != 2:
+            raise EngineError(f"speed has shape {np.shape(speed)}: needs (cycles, points) on the uniform cycle-angle "
+                              f"grid of consecutive cycles (0 = TDC of cylinder 1 before intake)")
+    if omega.shape[0] < 1 or omega.shape[1] < 16:
+        raise EngineError(f"speed has shape {omega.shape}: needs at least one cycle of 16 or more points")
+    if not np.all(np.isfinite(omega)):
+        bad = np.argwhere(~np.isfinite(omega))[0]
+        raise EngineError(f"speed is not finite (NaN or inf) at cycle {bad[0]}, point {bad[1]}")
+    if np.any(omega <= 0):
+        raise EngineError(f"speed must be positive everywhere (the crankshaft turning forwards); its minimum is "
+                          f"{omega.min():g} rad/s")
+    return omega, t_start, phase
+
+
+def _losses(engine, friction, load):
+    fa, fb, fc = (float(x) for x in np.asarray(friction_coefficients(engine, friction)))
+    if fb != 0:
+        raise EngineError("identify needs friction of the form a + c·ω² (its closed form); this friction has a "
+                          "speed-linear term: give friction=rotor.Friction(...) without fmep_per_speed, or False")
+    c_load = 0.0
+    if load is not None:
+        if not isinstance(load, Load):
+            try:
+                load = ConstantLoad(float(load))
+            except (TypeError, ValueError):
+                raise EngineError(f"load = {load!r}: None (an unknown constant per cycle) or a rotor load model "
+                                  f"(ConstantLoad, PolynomialLoad, PropellerLoad)") from None
+        poly = None if load.time_dependent else load.polynomial()
+        if poly is None or (poly[1] is not None and float(poly[1]) != 0):
+            raise EngineError(f"load = {type(load).__name__}: identify takes a load of the form a + c·ω² (ConstantLoad, "
+                              f"PolynomialLoad with b = 0, PropellerLoad); its constant part is fitted per cycle")
+        c_load = 0.0 if poly[2] is None else float(poly[2])
+    return fa, fc, c_load
+
+
+def symmetric_pairs(engine):
+    """Cylinder pairs (numbered from 1) that a shift of 360° maps onto each other in a
+    four-stroke engine: same TDC crank angle, firing 360° apart. () if not every
+    cylinder has such a partner (then the crank speed carries the phase)."""
+    if engine.strokes != 4:
+        return ()
+    tdc = np.mod(np.asarray(engine.tdc_angles_deg, dtype=np.float64), 360.0)
+    fire = np.mod(np.rad2deg(np.asarray(engine.firing_angles_rad)), 720.0)
+    n = tdc.size
+    partner = []
+    for c in range(n):
+        m = [j for j in range(n) if j != c and abs((np.mod(tdc[j] - tdc[c] + 180, 360)) - 180) < 1e-6
+             and abs(np.mod(fire[j] - fire[c], 720) - 360) < 1e-6]
+        if not m:
+            return ()
+        partner.append(m[0])
+    return tuple(sorted({tuple(sorted((c + 1, p + 1))) for c, p in enumerate(partner)}))
+
+
+# ----------------------------------------------------------------------------- entry point
+def identify(
+    engine,
+    speed,
+    *,
+    load=None,
+    friction=None,
+    parameters: str = "imep_scale",
+    fidelity: str = "variable",
+    grid_deg: float = 0.25,
+    block_cycles: int = DEFAULT_BLOCK,
+    overlap: int = DEFAULT_OVERLAP,
+    threshold: float = MISFIRE_THRESHOLD,
+    misfire_floor: float = FLOOR_SCALE,
+    phase_reference: Optional[bool] = None,
+    cycle_rad: Optional[float] = None,
+    rtol: float = 1e-10,
+    max_steps: int = 50,
+) -> Identification:
+    """Identify each firing's combustion scale (and IMEP), the load and the misfires from ω(θ).
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine` (its tables: inertia, motored and combustion torque).
+    - ``speed``: the crank speed on the uniform cycle-angle grid of consecutive cycles
+      (0 = TDC of cylinder 1 before intake): a :class:`rotor.LogAnalysis`, a
+      :class:`rotor.SpeedResult` (its uniformly sampled cycles) or an array (cycles, P)
+      [rad/s].
+    - ``load``: None (default: an unknown constant torque per cycle) or a load model
+      a + c·ω² (:class:`rotor.PropellerLoad`, :class:`rotor.PolynomialLoad` with b = 0,
+      :class:`rotor.ConstantLoad`): its c·ω² shape is used, its constant part is fitted per
+      cycle.
+    - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False; a + c·ω².
+    - ``parameters``: ``"imep_scale"`` (one combustion scale per firing).
+    - ``fidelity``, ``grid_deg``: of the tables (:func:`rotor.crank_train`); the tables'
+      nodes are refined so that the P samples of a cycle fall on nodes.
+    - ``block_cycles``, ``overlap``: cycles per block core, and the cycles added on each
+      side (see the module doc).
+    - ``threshold``, ``misfire_floor``: of the misfire index (:mod:`rotor.misfire`).
+    - ``phase_reference``: whether the grid's cycle is known to start at cylinder 1's
+      intake TDC (not 360° off); default: True for a SpeedResult or an array, from the
+      firing revolution's method for a LogAnalysis (found from the speed: False).
+    - ``cycle_rad``: the cycle of an array ``speed`` [rad] (checked against the engine).
+    - ``rtol``, ``max_steps``: of the Levenberg–Marquardt iteration.
+
+    **Returns:** :class:`Identification`. Raises :class:`rotor.EngineError` for input that
+    cannot be identified.
+    """
+    wall = time.perf_counter()
+    if parameters not in PARAMETERS:
+        raise EngineError(f"parameters = {parameters!r}: one of {', '.join(map(repr, PARAMETERS))} "
+                          f"(Wiebe start and duration, pressure scale: not yet)")
+    check_fidelity(fidelity, engine)
+    for name, v, lo in (("block_cycles", block_cycles, 1), ("overlap", overlap, 0), ("max_steps", max_steps, 1)):
+        if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= lo):
+            raise EngineError(f"{name} = {v!r}: must be a whole number, {lo} or more")
+    if not (np.isfinite(rtol) and 0 < rtol < 1e-2):
+        raise EngineError(f"rtol = {rtol!r}: must lie between 0 and 1e-2")
+    omega, t_start, phase_known = _speed(engine, speed, cycle_rad)
+    C, P = omega.shape
+    fa, fc, c_load = _losses(engine, friction, load)
+    base_n = grid_points(engine.strokes, grid_deg)
+    N = P * max(1, int(math.ceil(base_n / P)))
+    train = train_from_engine(engine, fidelity, N)
+    n = train.cylinders
+    comb = np.asarray(train.imep_combustion_pa)
+    if not np.all(comb > 0):
+        raise EngineError(f"engine {engine.name!r}: cylinder(s) {list(np.flatnonzero(~(comb > 0)) + 1)} have no "
+                          f"combustion in the engine's pressure (fired = motored): nothing to identify")
+    bases = _make_bases(train, jnp.asarray(fc + c_load), N // P)
+    work_L, work_R, offset_L = (np.asarray(x) for x in (bases.work_L, bases.work_R, bases.offset_L))
+
+    # blocks: cores of block_cycles, overlap on each side, clamped to the record
+    L = min(C, block_cycles + 2 * overlap)
+    nb = int(math.ceil(C / block_cycles)) if C > L else 1
+    if nb == 1:
+        starts = np.array([0])
+        cores = [(0, C)]
+    else:
+        cores = [(b * block_cycles, min((b + 1) * block_cycles, C)) for b in range(nb)]
+        starts = np.array([int(np.clip(c0 - overlap, 0, C - L)) for c0, _ in cores])
+    pos, own, nscale = _layout(work_L, work_R, offset_L, L)
+    blocks = np.stack([omega[s0 : s0 + L] for s0 in starts])
+    vh = float(engine.geometry.displacement_m3)
+    a_ref = float(np.sum(comb)) * vh / float(engine.cycle_rad)  # the engine file's mean combustion torque
+    p, cov, res, steps, e_ref, corr, ok = jax.device_get(
+        _fit_blocks(bases, jnp.asarray(blocks), jnp.asarray(pos), jnp.asarray(offset_L), a_ref, rtol, nscale, max_steps))
+
+    scale = np.zeros((C, n))
+    scale_std = np.zeros((C, n))
+    load_a = np.zeros(C)
+    load_sd = np.zeros(C)
+    covs = np.zeros((C, n + 1, n + 1))
+    ident = np.zeros((C, n), bool)
+    resid = np.zeros((C, P))
+    for b, ((c0, c1), s0) in enumerate(zip(cores, starts)):
+        for k in range(c0, c1):
+            j = k - s0
+            idx = np.concatenate([1 + L + pos[j + 1], [1 + j]])
+            sub = cov[b][np.ix_(idx, idx)]
+            unit = np.concatenate([np.ones(n), [a_ref]])
+            covs[k] = sub * np.outer(unit, unit)
+            scale[k] = p[b][1 + L + pos[j + 1]]
+            scale_std[k] = np.sqrt(np.diag(covs[k])[:n])
+            load_a[k] = p[b][1 + j] * a_ref
+            load_sd[k] = math.sqrt(covs[k][n, n])
+            ident[k] = own[j]
+            resid[k] = res[b][j]
+    imep_m = np.asarray(train.imep_motored_pa)
+    imep = imep_m[None, :] + scale * comb[None, :]
+    model = omega + resid
+    mean_w2 = np.mean(omega**2, axis=1)
+    loss = load_a + fc * mean_w2 + c_load * mean_w2
+    load_t = load_a - fa + c_load * mean_w2
+    fluct = omega - omega.mean(axis=1, keepdims=True)
+    ss_res, ss_tot = np.sum(resid**2, axis=1), np.sum(fluct**2, axis=1)
+    index, misfire, ref = contribution_index(scale, scale_std, threshold=threshold, floor=misfire_floor,
+                                             valid=ident)
+    notes = []
+    if not ident.all():
+        cut = [(int(k), int(c) + 1) for k, c in np.argwhere(~ident)]
+        notes.append(f"firings {cut} (cycle, cylinder) lie mostly outside the record: each shares the scale of the "
+                     f"nearest firing of its cylinder (not identified on its own)")
+    if not np.all(ok):
+        notes.append("the Levenberg–Marquardt iteration did not converge in every block (max_steps); the linear "
+                     "start stands there")
+    if phase_reference is None:
+        phase_reference = True if phase_known is None else phase_known
+    pairs = () if phase_reference else symmetric_pairs(engine)
+    if pairs:
+        names = ", ".join(f"{a} and {b}" for a, b in pairs)
+        notes.append(f"the firing revolution is not known from a phase reference (pressure, cam or given), and this "
+                     f"engine is symmetric under 360°: cylinders {names} cannot be told apart from the crank speed "
+                     f"alone; a result for one of a pair may belong to the other (give a cam or pressure channel, "
+                     f"firing=0/1 to analyze_log, or phase_reference=True)")
+    if np.all(misfire[ident]) and ident.any():
+        notes.append("no firing found: the engine does not fire in this record (a coast-down or motored run)")
+    return Identification(
+        scale=scale, scale_std=scale_std, imep_pa=imep, imep_std_pa=scale_std * comb[None, :], identified=ident,
+        contribution=index, misfire=misfire, reference_scale=ref, load_torque_Nm=load_t, load_std_Nm=load_sd,
+        loss_torque_Nm=loss, mean_omega=omega.mean(axis=1), covariance=covs,
+        rms_residual_rad_s=np.sqrt(np.mean(resid**2, axis=1)), r2=1 - ss_res / ss_tot, omega=omega,
+        omega_model=model, rms_residual=float(np.sqrt(np.mean(resid**2))),
+        fit_r2=float(1 - ss_res.sum() / ss_tot.sum()),
+        relative_residual=float(np.sqrt(ss_res.sum() / ss_tot.sum())), imep_nominal_pa=imep_m + comb,
+        threshold=float(threshold), ambiguous_pairs=pairs, t_start_s=t_start, notes=tuple(notes),
+        engine_name=engine.name, wall_s=time.perf_counter() - wall,
+        info={"blocks": int(nb), "block_cycles": int(L), "block_starts": starts.tolist(),
+              "iterations": np.asarray(steps).tolist(), "correlation_length": np.asarray(corr).tolist(),
+              "table_points": int(N), "tied": int((~own).sum())},
+    )
