@@ -1,0 +1,265 @@
+"""Model-based identification of each firing's IMEP and the misfires from the crank speed.
+
+Simulated runs (rotor.simulate) of the 4-cylinder 4chn15 and the 6-cylinder mwm6 with a
+±10 % IMEP spread between cylinders and misfires, turned into the tooth timestamps of a
+60-2 wheel with ±0.2° tooth-spacing errors and 20 ns of timer jitter, analysed back
+(rotor.analyze_log with the wheel's errors from a coast-down calibration, as in
+test_analyze_roundtrip.py) and identified (rotor.identify). IMEP errors are per cylinder
+and firing, relative to the cylinder's nominal (the engine file's full-load) IMEP.
+Loads: 100 % and 20 % (the combustion scaled to 0.2 of the engine file's, the load torque
+balancing it at the steady speed).
+"""
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
+
+import rotor
+from rotor.identification import symmetric_pairs
+from rotor.wheel import TWO_PI
+
+WHEEL = rotor.Wheel(60, 2)
+PITCH = WHEEL.pitch_rad
+JITTER_S = 20e-9
+GAP_DEG = -60.0  # TDC of cylinder 1 lies 60° after the gap
+ERRORS = np.deg2rad(np.random.default_rng(7).uniform(-0.2, 0.2, WHEEL.edges_per_rev))
+ERRORS -= ERRORS.mean()
+CYCLES = 12  # simulated; the analysis keeps the 10 complete cycles inside the tooth record
+SPREAD = {"4chn15": [1.0, 1.1, 0.9, 1.05], "mwm6": [1.0, 1.1, 0.9, 1.05, 0.95, 0.92]}
+MISFIRES = {"4chn15": [(3, 2), (5, 4), (8, 1)], "mwm6": [(3, 2), (4, 6), (8, 3)]}
+
+
+def tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s=JITTER_S):
+    """Edge times of the wheel's teeth (with ERRORS) between two crank angles, plus jitter."""
+    r0, r1 = int(np.floor((lo - gap) / TWO_PI)) - 1, int(np.ceil((hi - gap) / TWO_PI)) + 1
+    revs = np.arange(r0, r1)
+    ang = (gap + TWO_PI * revs[:, None] + PITCH * np.arange(WHEEL.edges_per_rev)[None, :] + ERRORS[None, :]).ravel()
+    ang = ang[(ang >= lo) & (ang <= hi)]
+    return t_of_theta(ang) + rng.normal(0.0, jitter_s, ang.size)
+
+
+@pytest.fixture(scope="module")
+def tooth_errors():
+    """The wheel's errors from a coast-down 3000 → 500 rpm of the bare wheel (test_analyze_roundtrip)."""
+    w0, w1, revs = 3000 / 30 * np.pi, 500 / 30 * np.pi, 300
+    theta = np.linspace(0.0, TWO_PI * revs, revs * 720 + 1)
+    a = (w0**2 - w1**2) / 2 / theta[-1]
+    G = 60.0 * (np.cos(theta) - 1) + 25.0 * (np.cos(2 * theta) - 1)
+    inv = 1 / np.sqrt(w0**2 - 2 * a * theta + 2 * G)
+    t = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * np.diff(theta))])
+    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], 0.3, np.random.default_rng(1))
+    return rotor.estimate_tooth_errors(rotor.locate_teeth(edges, WHEEL), engine_orders=())
+
+
+def simulate(name, load_frac, cycles=CYCLES, misfires=None, rpm=None, step_deg=0.25, **kw):
+    e = rotor.load_engine(name)
+    s = load_frac * np.asarray(SPREAD[name])
+    st = rotor.steady_state(e, rpm=rpm, imep_scale=s)
+    comb = rotor.combustion_pattern(cycles, e.cylinders, imep_scale=s,
+                                    misfires=MISFIRES[name] if misfires is None else misfires)
+    res = rotor.simulate(e, rpm=float(st.omega[0]) * 30 / np.pi, cycles=cycles,
+                         load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])), step_deg=step_deg,
+                         combustion=comb, progress=False, **kw)
+    return e, res, comb
+
+
+def analyse(res, tooth_errors, firing=None, seed=2, jitter_s=JITTER_S):
+    """The run as 60-2 tooth times, analysed; returns the analysis and the simulator cycle of each cycle."""
+    theta, t = np.asarray(res.theta), np.asarray(res.t)
+    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(seed),
+                        jitter_s)
+    first_ref = np.deg2rad(GAP_DEG) + TWO_PI * np.ceil((theta[0] - np.deg2rad(GAP_DEG)) / TWO_PI)
+    parity = int(np.floor((TWO_PI - first_ref) / TWO_PI)) % 2
+    an = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=edges), WHEEL, tdc_deg=-GAP_DEG,
+                           firing=parity if firing is None else firing, tooth_errors=tooth_errors)
+    P = res.points_per_cycle
+    off = 0 if firing is None else P // 2  # a parity given 360° off: the cycles start half a cycle later
+    t_sim = np.asarray(res.t)[off : res.uniform_cycles * P : P]
+    k = np.array([int(np.argmin(np.abs(t_sim - t0))) for t0 in an.t_start_s])
+    assert np.max(np.abs(t_sim[k] - an.t_start_s)) < 2e-5
+    return an, k
+
+
+def imep_error(engine, idf, scale_true):
+    """IMEP error of every firing relative to the cylinder's nominal IMEP [-]."""
+    tr = rotor.crank_train(engine)
+    truth = np.asarray(tr.imep_motored_pa) + scale_true * np.asarray(tr.imep_combustion_pa)
+    return (idf.imep_pa - truth) / idf.imep_nominal_pa
+
+
+def true_misfires(scale_true):
+    return [(int(k), int(c) + 1) for k, c in np.argwhere(scale_true == 0)]
+
+
+# ----------------------------------------------------------------------------- direct (no wheel)
+def test_direct_speed_exact():
+    """The simulator's own ω (RK4 on the grid, 3° samples, not the closed form the fit uses):
+    every scale within 1e-5 (measured 2e-7: RK4's error), the load within 0.01 N·m, misfires
+    exact, R² = 1 to 1e-9."""
+    e, res, comb = simulate("4chn15", 1.0, cycles=10, step_deg=3.0, method="grid")
+    idf = rotor.identify(e, res)
+    err = np.abs(idf.scale - comb)
+    print("direct: max scale error", err.max(), "rms residual", idf.rms_residual)
+    assert err.max() < 1e-5
+    load = float(res.load_torque[0])
+    assert np.allclose(idf.load_torque_Nm, load, atol=0.01)
+    assert idf.misfires() == true_misfires(comb)
+    assert idf.fit_r2 > 1 - 1e-9
+    assert idf.identified.all() and idf.ambiguous_pairs == ()
+    np.testing.assert_allclose(idf.imep_pa, np.asarray(res.imep_pa), rtol=0, atol=1e-5 * idf.imep_nominal_pa.max())
+    assert idf.covariance.shape == (10, 5, 5)
+    assert "misfires (cycle, cylinder): [(3, 2), (5, 4), (8, 1)]" in idf.summary()
+    assert idf.to_json_dict()["misfires"] == [[3, 2], [5, 4], [8, 1]] or idf.to_json_dict()["misfires"] == [
+        (3, 2), (5, 4), (8, 1)]
+
+
+def test_speed_dependent_load_and_friction():
+    """A propeller load and friction a + c·ω², their c·ω² given: scales within 1e-6, and the
+    load torque reported is the load's mean (not the friction's)."""
+    e = rotor.load_engine("4chn15")
+    fr = rotor.Friction(fmep_pa=1.0e5, fmep_per_speed2_pa_s2_per_m2=800.0)
+    prop = rotor.PropellerLoad(900.0, 1250.0)
+    comb = rotor.combustion_pattern(10, 4, imep_scale=SPREAD["4chn15"], misfires=[(4, 3)])
+    res = rotor.simulate(e, rpm=1250, cycles=10, load=prop, friction=fr, combustion=comb, step_deg=3.0,
+                         progress=False)
+    idf = rotor.identify(e, res, load=prop, friction=fr)
+    assert np.abs(idf.scale - comb).max() < 1e-6
+    w2 = np.mean(idf.omega**2, axis=1)
+    np.testing.assert_allclose(idf.load_torque_Nm, prop.c * w2, rtol=1e-6)
+    # the same run fitted without its friction: the constant losses absorb it, the scales stay
+    bare = rotor.identify(e, res, load=prop, friction=False)
+    assert np.abs(bare.scale - comb).max() < 1e-3
+
+
+# ----------------------------------------------------------------------------- 60-2 wheel
+@pytest.mark.parametrize("name", ["4chn15", "mwm6"])
+@pytest.mark.parametrize("load", [1.0, 0.2])
+def test_wheel_imep_and_misfires(name, load, tooth_errors):
+    """IMEP per cylinder and firing within 1.5 % of nominal (the aim is 2 %; measured at most
+    0.17 % for 4chn15 and 0.8 % for mwm6, where the calibration's residual tooth errors at
+    the firing orders 3, 6 weigh more against a six's smaller fluctuation); every misfire
+    found, no false alarm; the normal firings' index above 0.8, the misfires' below 0.1."""
+    e, res, comb = simulate(name, load)
+    an, k = analyse(res, tooth_errors)
+    idf = rotor.identify(e, an)
+    truth = comb[k]
+    err = imep_error(e, idf, truth)
+    print(f"{name} load {load:.0%}: IMEP error max {np.abs(err).max():.3%}, rms {np.sqrt(np.mean(err**2)):.3%}; "
+          f"index normal ≥ {idf.contribution[truth > 0].min():.3f}, misfire ≤ {idf.contribution[truth == 0].max():.3f}")
+    assert idf.identified.all()
+    assert np.abs(err).max() < 0.015
+    assert idf.misfires() == true_misfires(truth)
+    assert idf.contribution[truth > 0].min() > 0.8 and idf.contribution[truth == 0].max() < 0.1
+    assert idf.fit_r2 > 0.99
+    np.testing.assert_allclose(idf.t_start_s, an.t_start_s)
+
+
+def test_coast_down_every_firing_a_misfire(tooth_errors):
+    """No combustion at all (fuel cut, 1250 rpm coasting down to ~700 against 450 N·m): every
+    firing a misfire, every scale within ±0.01 of 0 (measured 0.001), and the load found."""
+    e = rotor.load_engine("4chn15")
+    comb = np.zeros((CYCLES, 4))
+    res = rotor.simulate(e, rpm=1250, cycles=CYCLES, load=rotor.ConstantLoad(450.0), step_deg=0.25,
+                         combustion=comb, progress=False)
+    an, k = analyse(res, tooth_errors)
+    assert an.mean_rpm[-1] < 0.7 * an.mean_rpm[0]
+    idf = rotor.identify(e, an)
+    print("coast-down scales", np.abs(idf.scale).max(), "index", np.abs(idf.contribution).max())
+    assert idf.misfire.all()
+    assert np.abs(idf.scale).max() < 0.01
+    assert np.abs(idf.contribution).max() < 0.2  # no structure: nothing near a firing's 1
+    np.testing.assert_allclose(idf.load_torque_Nm, 450.0, rtol=0.01)
+    assert any("does not fire" in n for n in idf.notes)
+
+
+def _stated_vs_actual(runs, truth):
+    """Median stated scale std over the median rms error of the estimates (over seeds)."""
+    est = np.array([r.scale for r in runs])
+    std = np.array([r.scale_std for r in runs])
+    actual = np.sqrt(np.mean((est - truth[None]) ** 2, axis=0))
+    return float(np.median(std) / np.median(actual)), float(np.median(actual))
+
+
+def test_covariance_matches_the_errors_over_noise_seeds():
+    """White noise of 0.02 rad/s on the simulated speed, 8 seeds: the stated scale std is within
+    a factor 2 of the estimates' rms error (measured ratio 1.1)."""
+    e, res, comb = simulate("4chn15", 1.0, cycles=10, step_deg=3.0)
+    C, P = res.uniform_cycles, res.points_per_cycle
+    w = np.asarray(res.omega)[: C * P].reshape(C, P)
+    runs = [rotor.identify(e, w + np.random.default_rng(seed).normal(0, 0.02, w.shape)) for seed in range(8)]
+    ratio, actual = _stated_vs_actual(runs, comb)
+    print("white noise: stated std / rms error", ratio, actual)
+    assert 0.5 < ratio < 2.0
+
+
+def test_wheel_covariance_with_jitter(tooth_errors):
+    """Timer jitter of 200 ns through the wheel: the tooth-resolved speed's noise grows with the
+    order, which the spectral sandwich covariance follows: the stated std is within a factor 2
+    of the rms error over 6 jitter seeds (it was 7.5× with σ²·(JᵀJ)⁻¹)."""
+    e, res, comb = simulate("4chn15", 1.0)
+    runs, k = [], None
+    for seed in range(6):
+        an, k = analyse(res, tooth_errors, seed=10 + seed, jitter_s=200e-9)
+        runs.append(rotor.identify(e, an))
+    ratio, actual = _stated_vs_actual(runs, comb[k])
+    print("wheel, 200 ns: stated std / rms error", ratio, actual)
+    assert 0.5 < ratio < 2.0
+
+
+# ----------------------------------------------------------------------------- phase
+def test_symmetric_pairs():
+    assert symmetric_pairs(rotor.load_engine("4chn15")) == ((1, 4), (2, 3))
+    assert symmetric_pairs(rotor.load_engine("mwm6")) == ((1, 6), (2, 5), (3, 4))
+    assert symmetric_pairs(rotor.load_engine("v8")) == () or len(symmetric_pairs(rotor.load_engine("v8"))) == 4
+
+
+def test_phase_ambiguity(tooth_errors):
+    """The firing revolution 360° off: the same fit with cylinders 1↔4 and 2↔3 swapped (so the
+    crank signal cannot tell them apart); found from the speed, the pairs are reported as
+    ambiguous; given, they are not."""
+    e, res, comb = simulate("4chn15", 1.0)
+    an, k = analyse(res, tooth_errors)
+    good = rotor.identify(e, an)
+    assert good.ambiguous_pairs == ()
+    wrong, kw = analyse(res, tooth_errors, firing=1 - an.firing_parity)
+    swapped = rotor.identify(e, wrong)
+    # the shifted record starts 360° later: its cycle i holds firings of cylinders 1, 3 of
+    # cycle kw[i] and 4, 2 of the next; swap the labels back and compare
+    perm = [3, 2, 1, 0]
+    truth_shift = np.where(np.array([True, False, True, False])[None, :], comb[kw], comb[np.minimum(kw + 1, CYCLES - 1)])
+    err = np.abs(swapped.scale[:, perm] - truth_shift)
+    print("360° off, labels swapped: scale error", err.max())
+    assert err.max() < 0.02
+    auto = rotor.identify(e, wrong, phase_reference=False)
+    assert auto.ambiguous_pairs == ((1, 4), (2, 3))
+    assert any("cannot be told apart" in n for n in auto.notes)
+
+
+# ----------------------------------------------------------------------------- errors
+@pytest.mark.parametrize(
+    "kwargs, speed, match",
+    [
+        ({}, np.full((2, 8), 100.0), "16 or more points"),
+        ({}, np.full((2, 3, 40), 100.0), "needs \\(cycles, points\\)"),
+        ({}, np.array([[100.0] * 39 + [np.nan]]), "not finite"),
+        ({}, np.array([[100.0] * 39 + [-1.0]]), "positive"),
+        ({}, "fast", "LogAnalysis, a SpeedResult or an array"),
+        ({"parameters": "wiebe"}, np.full((2, 240), 100.0), "parameters"),
+        ({"block_cycles": 0}, np.full((2, 240), 100.0), "block_cycles"),
+        ({"threshold": 1.5}, np.full((2, 240), 100.0), "threshold"),
+        ({"cycle_rad": 2 * np.pi}, np.full((2, 240), 100.0), "does not fit"),
+        ({"friction": rotor.Friction(1e5, 100.0)}, np.full((2, 240), 100.0), "speed-linear"),
+        ({"load": rotor.LoadStep(rotor.ConstantLoad(100.0), rotor.ConstantLoad(200.0), 0.1)}, np.full((2, 240), 100.0), "a \\+ c·ω²"),
+        ({"load": "heavy"}, np.full((2, 240), 100.0), "load = 'heavy'"),
+    ],
+)
+def test_bad_input_one_line_errors(diesel, kwargs, speed, match):
+    with pytest.raises(rotor.EngineError, match=match) as info:
+        rotor.identify(diesel, speed, **kwargs)
+    assert "\n" not in str(info.value)
+
+
+def test_engine_without_combustion_is_an_error(diesel):
+    bare = diesel.replace(pressure=diesel.pressure.motored(4))
+    with pytest.raises(rotor.EngineError, match="no combustion"):
+        rotor.identify(bare, np.full((2, 240), 130.0))
