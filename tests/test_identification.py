@@ -113,6 +113,33 @@ def test_direct_speed_exact():
         (3, 2), (5, 4), (8, 1)]
 
 
+def test_blocks_match_one_fit():
+    """26 cycles in blocks of 8 (+2 overlap each side, 4 blocks) with misfires at the block
+    edges: as exact as one fit over the whole record (scales within 1e-5 of the truth)."""
+    e = rotor.load_engine("4chn15")
+    comb = rotor.combustion_pattern(26, 4, imep_scale=SPREAD["4chn15"], misfires=[(7, 1), (8, 3), (15, 4), (16, 2)])
+    res = rotor.simulate(e, rpm=1250, cycles=26, load=rotor.ConstantLoad(1000.0), combustion=comb, step_deg=3.0,
+                         progress=False)
+    blocked = rotor.identify(e, res, block_cycles=8, overlap=2)
+    assert blocked.info["blocks"] == 4
+    assert np.abs(blocked.scale - comb).max() < 1e-5
+    assert blocked.misfires() == true_misfires(comb)
+    assert blocked.scale_std.shape == (26, 4) and np.all(np.isfinite(blocked.covariance))
+
+
+def test_firings_cut_by_the_record():
+    """A firing with 10 % of its combustion torque inside the record is fitted but not
+    identified; one with 0.5 % inside is not fitted (shares its neighbour's scale)."""
+    from rotor.identification import _layout
+
+    pos, own, count = _layout(np.array([0.1]), np.array([0.9]), np.array([0]), 3)
+    assert own[:, 0].tolist() == [False, True, True] and count == 4  # firings 0 … 3 fitted, −1 outside
+    assert pos[:, 0].tolist() == [0, 0, 1, 2, 3]
+    pos, own, count = _layout(np.array([0.005]), np.array([0.995]), np.array([0]), 3)
+    assert own[:, 0].tolist() == [False, True, True] and count == 3
+    assert pos[:, 0].tolist() == [0, 0, 0, 1, 2]
+
+
 def test_speed_dependent_load_and_friction():
     """A propeller load and friction a + c·ω², their c·ω² given: scales within 1e-6, and the
     load torque reported is the load's mean (not the friction's)."""
@@ -257,6 +284,15 @@ def test_bad_input_one_line_errors(diesel, kwargs, speed, match):
     with pytest.raises(rotor.EngineError, match=match) as info:
         rotor.identify(diesel, speed, **kwargs)
     assert "\n" not in str(info.value)
+
+
+def test_log_without_tdc_is_an_error(diesel, tooth_errors):
+    e, res, comb = simulate("4chn15", 1.0)
+    theta, t = np.asarray(res.theta), np.asarray(res.t)
+    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(0))
+    an = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=edges), WHEEL, firing=0, tooth_errors=tooth_errors)
+    with pytest.raises(rotor.EngineError, match="do not start at TDC"):
+        rotor.identify(diesel, an)
 
 
 def test_engine_without_combustion_is_an_error(diesel):
