@@ -276,16 +276,17 @@ def _layout(work_L, work_R, offset_L, L: int):
     return pos, own, count
 
 
-def _energy(p, bases, pos, offset_L, e_ref, a_ref, L: int):
-    """E on the P + 1 samples of each of the block's L cycles, (L, P+1)."""
+def _energy(p, bases, pos, offset_L, e_ref, a_ref, L: int, na: int):
+    """E on the P + 1 samples of each of the block's L cycles, (L, P+1); ``na`` load
+    parameters: one per cycle (L) or one for the block (1)."""
     n = pos.shape[1]
-    s_full = p[1 + L :][pos]  # (L+2, n)
+    s_full = p[1 + na :][pos]  # (L+2, n)
     cyl = jnp.arange(n)
 
     def cycle(E0, k):
         sL = s_full[k + offset_L + 1, cyl]
         sR = s_full[k + offset_L + 2, cyl]
-        inner = E0 + bases.m - a_ref * p[1 + k] * bases.b + bases.BL @ sL + bases.BR @ sR
+        inner = E0 + bases.m - a_ref * p[1 + jnp.minimum(k, na - 1)] * bases.b + bases.BL @ sL + bases.BR @ sR
         E = bases.phi * inner
         return E[-1], E
 
@@ -293,8 +294,8 @@ def _energy(p, bases, pos, offset_L, e_ref, a_ref, L: int):
     return E
 
 
-def _omega_model(p, bases, pos, offset_L, e_ref, a_ref, L):
-    E = _energy(p, bases, pos, offset_L, e_ref, a_ref, L)[:, :-1]
+def _omega_model(p, bases, pos, offset_L, e_ref, a_ref, L, na):
+    E = _energy(p, bases, pos, offset_L, e_ref, a_ref, L, na)[:, :-1]
     return jnp.sqrt(2 * jnp.maximum(E, 1e-300) / bases.inertia)
 
 
@@ -333,17 +334,17 @@ def _normal_solve(A, y):
 
 
 @eqx.filter_jit
-def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, max_steps: int):
+def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, na: int, max_steps: int):
     """Fit every block of omega (B, L, P): returns the parameters, covariances, residuals."""
     L, P = omega.shape[1], omega.shape[2]
 
     def one(w):
         e_meas = 0.5 * bases.inertia * w**2
         e_ref = e_meas[0, 0]
-        npar = 1 + L + nscale
+        npar = 1 + na + nscale
 
         def E_flat(p):
-            return _energy(p, bases, pos, offset_L, e_ref, a_ref, L)[:, :-1].reshape(-1)
+            return _energy(p, bases, pos, offset_L, e_ref, a_ref, L, na)[:, :-1].reshape(-1)
 
         # exact linear least squares in E, each sample weighted by 1/(I·ω): the speed error it makes
         zero = jnp.zeros(npar)
@@ -352,7 +353,7 @@ def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, max_steps
         p0 = _normal_solve(X * wt[:, None], (e_meas.reshape(-1) - E_flat(zero)) * wt)
 
         def resid(p, args):
-            return (_omega_model(p, bases, pos, offset_L, e_ref, a_ref, L) - w).reshape(-1)
+            return (_omega_model(p, bases, pos, offset_L, e_ref, a_ref, L, na) - w).reshape(-1)
 
         # normal equations (Cholesky): the parameters are scaled to O(1), JᵀJ is small and well conditioned,
         # and a QR of the tall Jacobian costs ~1 s on CPU
@@ -475,6 +476,7 @@ def identify(
     grid_deg: float = 0.25,
     block_cycles: int = DEFAULT_BLOCK,
     overlap: int = DEFAULT_OVERLAP,
+    load_per: str = "cycle",
     threshold: float = MISFIRE_THRESHOLD,
     misfire_floor: float = FLOOR_SCALE,
     phase_reference: Optional[bool] = None,
@@ -494,6 +496,10 @@ def identify(
       a + c·ω² (:class:`rotor.PropellerLoad`, :class:`rotor.PolynomialLoad` with b = 0,
       :class:`rotor.ConstantLoad`): its c·ω² shape is used, its constant part is fitted per
       cycle.
+    - ``load_per``: ``"cycle"`` (default): the load's constant part is unknown in every
+      cycle; ``"block"``: one unknown constant per block of cycles, for a steady load (the
+      cycles' mean speeds then pin each cycle's mean combustion, which the per-cycle load
+      leaves to the firing-order fluctuation alone).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False; a + c·ω².
     - ``parameters``: ``"imep_scale"`` (one combustion scale per firing).
     - ``fidelity``, ``grid_deg``: of the tables (:func:`rotor.crank_train`); the tables'
@@ -524,6 +530,8 @@ def identify(
         raise EngineError(f"threshold = {threshold!r}: must lie between 0 and 1 (a fraction of a normal firing)")
     if not (isinstance(misfire_floor, (int, float, np.floating)) and 0 < misfire_floor < 1):
         raise EngineError(f"misfire_floor = {misfire_floor!r}: must lie between 0 and 1 (a combustion scale)")
+    if load_per not in ("cycle", "block"):
+        raise EngineError(f"load_per = {load_per!r}: 'cycle' (an unknown load torque in every cycle) or 'block'")
     if not (np.isfinite(rtol) and 0 < rtol < 1e-2):
         raise EngineError(f"rtol = {rtol!r}: must lie between 0 and 1e-2")
     omega, t_start, phase_known = _speed(engine, speed, cycle_rad)
@@ -550,11 +558,12 @@ def identify(
         cores = [(b * block_cycles, min((b + 1) * block_cycles, C)) for b in range(nb)]
         starts = np.array([int(np.clip(c0 - overlap, 0, C - L)) for c0, _ in cores])
     pos, own, nscale = _layout(work_L, work_R, offset_L, L)
+    na = L if load_per == "cycle" else 1
     blocks = np.stack([omega[s0 : s0 + L] for s0 in starts])
     vh = float(engine.geometry.displacement_m3)
     a_ref = float(np.sum(comb)) * vh / float(engine.cycle_rad)  # the engine file's mean combustion torque
     p, cov, res, steps, e_ref, ok = jax.device_get(
-        _fit_blocks(bases, jnp.asarray(blocks), jnp.asarray(pos), jnp.asarray(offset_L), a_ref, rtol, nscale, max_steps))
+        _fit_blocks(bases, jnp.asarray(blocks), jnp.asarray(pos), jnp.asarray(offset_L), a_ref, rtol, nscale, na, max_steps))
 
     scale = np.zeros((C, n))
     scale_std = np.zeros((C, n))
@@ -566,13 +575,14 @@ def identify(
     for b, ((c0, c1), s0) in enumerate(zip(cores, starts)):
         for k in range(c0, c1):
             j = k - s0
-            idx = np.concatenate([1 + L + pos[j + 1], [1 + j]])
+            ja = 1 + min(j, na - 1)
+            idx = np.concatenate([1 + na + pos[j + 1], [ja]])
             sub = cov[b][np.ix_(idx, idx)]
             unit = np.concatenate([np.ones(n), [a_ref]])
             covs[k] = sub * np.outer(unit, unit)
-            scale[k] = p[b][1 + L + pos[j + 1]]
+            scale[k] = p[b][1 + na + pos[j + 1]]
             scale_std[k] = np.sqrt(np.diag(covs[k])[:n])
-            load_a[k] = p[b][1 + j] * a_ref
+            load_a[k] = p[b][ja] * a_ref
             load_sd[k] = math.sqrt(covs[k][n, n])
             ident[k] = own[j]
             resid[k] = res[b][j]
@@ -617,5 +627,5 @@ def identify(
         engine_name=engine.name, wall_s=time.perf_counter() - wall,
         info={"blocks": int(nb), "block_cycles": int(L), "block_starts": starts.tolist(),
               "iterations": np.asarray(steps).tolist(),
-              "table_points": int(N), "tied": int((~own).sum())},
+              "table_points": int(N), "load_per": load_per},
     )

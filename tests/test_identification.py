@@ -125,6 +125,9 @@ def test_blocks_match_one_fit():
     assert np.abs(blocked.scale - comb).max() < 1e-5
     assert blocked.misfires() == true_misfires(comb)
     assert blocked.scale_std.shape == (26, 4) and np.all(np.isfinite(blocked.covariance))
+    steady = rotor.identify(e, res, block_cycles=8, overlap=2, load_per="block")  # one load per block
+    assert np.abs(steady.scale - comb).max() < 1e-5
+    np.testing.assert_allclose(steady.load_torque_Nm, 1000.0, atol=0.01)
 
 
 def test_firings_cut_by_the_record():
@@ -274,6 +277,7 @@ def test_phase_ambiguity(tooth_errors):
         ({"parameters": "wiebe"}, np.full((2, 240), 100.0), "parameters"),
         ({"block_cycles": 0}, np.full((2, 240), 100.0), "block_cycles"),
         ({"threshold": 1.5}, np.full((2, 240), 100.0), "threshold"),
+        ({"load_per": "second"}, np.full((2, 240), 100.0), "load_per"),
         ({"cycle_rad": 2 * np.pi}, np.full((2, 240), 100.0), "does not fit"),
         ({"friction": rotor.Friction(1e5, 100.0)}, np.full((2, 240), 100.0), "speed-linear"),
         ({"load": rotor.LoadStep(rotor.ConstantLoad(100.0), rotor.ConstantLoad(200.0), 0.1)}, np.full((2, 240), 100.0), "a \\+ c·ω²"),
