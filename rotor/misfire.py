@@ -19,10 +19,21 @@ errors of the identified scales where those are larger), so a record that does n
 has every index near 0 and every firing a misfire, without false structure.
 
 The default threshold (:data:`MISFIRE_THRESHOLD`) lies halfway between a misfire (0)
-and the weakest normal cylinder of a ±10 % spread (0.9); its miss and false-alarm rates,
-measured on simulations over speed and load (``benchmarks/identification.py``, results
-in ``benchmarks/results/identification.json``), are stated in ``rotor.identification``'s
-module doc.
+and the weakest normal cylinder of a ±10 % spread (0.9). Miss and false-alarm rates
+measured on simulations (``benchmarks/identification.py``, results in
+``benchmarks/results/identification.json``: 4chn15 and mwm6, three speeds each, ±10 %
+spread, 2 % cycle-to-cycle variation, 3 % random misfires, through a 60-2 wheel with
+tooth errors and 20 ns jitter):
+
+- loads of 20 % and up (199 misfires, 6641 normal firings): no miss and no false alarm
+  at any threshold from 0.1 to 0.8; the misfires' index at most 0.007, the normal
+  firings' at least 0.83;
+- 10 % load (66 misfires, 2214 normal firings): none missed at any threshold, false
+  alarms only at 0.8 (0.05 %); normal firings' index at least 0.80;
+- coast-downs of both presets (no firing): every firing flagged, |index| at most 0.17.
+
+Below about 5 % load a normal firing's scale approaches the floor and the index loses
+its meaning: the engine is then close to motoring.
 """
 
 from __future__ import annotations
