@@ -51,12 +51,14 @@ def tooth_errors():
     return rotor.estimate_tooth_errors(rotor.locate_teeth(edges, WHEEL), engine_orders=())
 
 
-def simulate(name, load_frac, cycles=CYCLES, misfires=None, rpm=None, step_deg=0.25, **kw):
+def simulate(name, load_frac, cycles=CYCLES, misfires=None, rpm=None, step_deg=0.25, misfire_rate=0.0, seed=0,
+             **kw):
     e = rotor.load_engine(name)
     s = load_frac * np.asarray(SPREAD[name])
     st = rotor.steady_state(e, rpm=rpm, imep_scale=s)
     comb = rotor.combustion_pattern(cycles, e.cylinders, imep_scale=s,
-                                    misfires=MISFIRES[name] if misfires is None else misfires)
+                                    misfires=MISFIRES[name] if misfires is None else misfires,
+                                    misfire_rate=misfire_rate, seed=seed)
     res = rotor.simulate(e, rpm=float(st.omega[0]) * 30 / np.pi, cycles=cycles,
                          load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])), step_deg=step_deg,
                          combustion=comb, progress=False, **kw)
@@ -165,14 +167,15 @@ def test_speed_dependent_load_and_friction():
 @pytest.mark.parametrize("name", ["4chn15", "mwm6"])
 @pytest.mark.parametrize("load", [1.0, 0.2])
 def test_wheel_imep_and_misfires(name, load, tooth_errors):
-    """IMEP per cylinder and firing within 1.5 % of nominal (the aim is 2 %; measured at most
+    """Fixed and random misfires. IMEP per cylinder and firing within 1.5 % of nominal (the aim is 2 %; measured at most
     0.17 % for 4chn15 and 0.8 % for mwm6, where the calibration's residual tooth errors at
     the firing orders 3, 6 weigh more against a six's smaller fluctuation); every misfire
     found, no false alarm; the normal firings' index above 0.8, the misfires' below 0.1."""
-    e, res, comb = simulate(name, load)
+    e, res, comb = simulate(name, load, misfire_rate=0.04, seed=11)  # the fixed misfires and 4 % at random
     an, k = analyse(res, tooth_errors)
     idf = rotor.identify(e, an)
     truth = comb[k]
+    print(f"{name}: {int(np.sum(truth == 0))} misfires in the {an.cycles} cycles analysed")
     err = imep_error(e, idf, truth)
     print(f"{name} load {load:.0%}: IMEP error max {np.abs(err).max():.3%}, rms {np.sqrt(np.mean(err**2)):.3%}; "
           f"index normal ≥ {idf.contribution[truth > 0].min():.3f}, misfire ≤ {idf.contribution[truth == 0].max():.3f}")
@@ -240,7 +243,8 @@ def test_wheel_covariance_with_jitter(tooth_errors):
 def test_symmetric_pairs():
     assert symmetric_pairs(rotor.load_engine("4chn15")) == ((1, 4), (2, 3))
     assert symmetric_pairs(rotor.load_engine("mwm6")) == ((1, 6), (2, 5), (3, 4))
-    assert symmetric_pairs(rotor.load_engine("v8")) == () or len(symmetric_pairs(rotor.load_engine("v8"))) == 4
+    assert symmetric_pairs(rotor.load_engine("v8")) == ((1, 6), (2, 8), (3, 5), (4, 7))  # same TDC, 360° apart
+    assert symmetric_pairs(rotor.load_engine("tue-single")) == ()  # one cylinder: the speed carries the phase
 
 
 def test_phase_ambiguity(tooth_errors):
