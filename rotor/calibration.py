@@ -1,0 +1,578 @@
+"""Calibration of what users rarely know, from a recording with a cylinder-pressure channel.
+
+A diagnosis from crank speed alone (:func:`rotor.identify`) needs the inertia of
+everything that turns with the crankshaft, the angle from the wheel's gap to TDC and the
+wheel's tooth errors; a bench engine's file rarely has them right. :func:`calibrate`
+takes them from one recording that has a pressure channel, :class:`Calibration` keeps
+them (JSON, :meth:`Calibration.save` / :meth:`Calibration.load`), and :func:`diagnose`
+reuses them on speed-only recordings of the same engine.
+
+**What is calibrated, and how** (single-cylinder engines; the pressure channel is
+cylinder 1's):
+
+1. *TDC*: the angle from the gap to firing TDC by the polytropic fit of the compression
+   (:func:`rotor.tdc_from_pressure`, with the engine's compression ratio and rod ratio);
+   the firing revolution from the pressure peaks. *Tooth errors*: estimated on the same
+   recording (:func:`rotor.estimate_tooth_errors`).
+2. *Pressure scale*: the sensor's gain cannot come from the speed: a gain g and an
+   inertia J that are both too large by the same factor explain the same speed (only
+   g/J is seen), and the pressure trace's shape (the polytropic compression) fixes its
+   offset but not its gain. So the gain is an input (``pressure_gain``, the sensor's data
+   sheet or bench calibration) or, by default, the one that gives the recording's mean
+   IMEP the engine file's IMEP. The offset is fitted (step 3); it does not enter the
+   IMEP (∮p·dV of a constant is 0).
+3. *Inertia, pressure offset, losses* from the energy balance over the record
+   (variable inertia, angle domain):
+   ½·(J + I_m(θ))·ω² = E₀ + ∫M_gas dθ − ∫a_k dθ, with M_gas = (g·u(θ) + b − p_cc)·A·s′(θ)
+   from the cycle's own pressure signal u, I_m the crank mechanism's inertia from the
+   engine file, a_k one constant loss torque (friction + load) per cycle. Divided by J
+   it is linear in 1/J, b/J, E₀/J and a_k/J: least squares. Both sides are low-passed
+   (zero-phase Butterworth, ``max_order`` per revolution, default 4) before the fit: a
+   bench's crank speed carries a torsional resonance of the coupling and the brake (on
+   the tue-4gb10 recordings orders 4.5–5, which no rigid-body model explains); without
+   the low-pass the fitted inertia depends on the angle step (regressor noise).
+   Friction and load are one constant torque at one speed: a recording at one operating
+   point cannot separate them (the result reports their sum, ``loss_torque_Nm``).
+4. *Identification inertia*: :func:`rotor.identify` explains the speed with the engine
+   file's pressure shape (fired and motored traces), not the measured one; with the
+   energy-balance inertia it read the calibration recording's IMEP 8 % high on
+   tue-4gb10 (the Wiebe cycle and the estimated piston and rod masses are not the
+   engine's exactly). ``inertia_kgm2`` is therefore the inertia with which
+   :func:`diagnose` reproduces the recording's measured mean IMEP (a secant iteration on
+   the identification from the speed alone); the energy-balance value stays in
+   ``fit['energy_balance_inertia_kgm2']``. Their ratio is a figure of the model's error.
+
+**Charge scaling** (``scaling="charge"``, the default): a throttled spark-ignition engine
+changes its load by the intake pressure, and the whole cylinder pressure (compression
+and combustion) scales with the trapped charge; :func:`rotor.identify` scales only the
+combustion part of the engine file's cycle (a diesel's way). :func:`diagnose` therefore
+scales the file's Wiebe cycle as a whole (intake pressure and IMEP by one factor σ) and
+iterates σ until the firings' mean combustion scale is 1. On tue-4gb10 (no load to full
+load, intake 0.3 to 0.64 bar) it cut the speed-only IMEP error at no load from −0.48 to
+−0.19 bar. ``scaling="none"`` keeps the file's cycle (diesels, or a table pressure).
+
+Measured figures: ``benchmarks/diagnose_real.py`` (``benchmarks/results/diagnose_real.json``)
+and ``docs/diagnostics.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from typing import Optional
+
+import equinox as eqx
+import numpy as np
+
+from ._checks import EngineError
+
+__all__ = ["Calibration", "calibrate", "diagnose", "measured_imep", "cylinder_torques", "CALIBRATION_FORMAT"]
+
+CALIBRATION_FORMAT = "rotor-calibration"
+CALIBRATION_VERSION = 1
+BIN_DEG = 0.5  # the pressure signal is averaged in bins of this width per cycle
+DEFAULT_MAX_ORDER = 4.0
+SCALINGS = ("charge", "none")
+
+
+# ----------------------------------------------------------------------------- the record
+@dataclasses.dataclass(frozen=True, eq=False)
+class Calibration:
+    """What :func:`calibrate` found, to reuse on speed-only recordings of the same engine.
+
+    **Fields:** ``engine`` (the engine's name); ``inertia_kgm2``: crankshaft, flywheel and
+    all that turns rigidly with them [kg·m²] (the identification inertia, see the module
+    doc); ``tdc_after_gap_deg``: from the first tooth edge after the gap to cylinder 1's
+    TDC [deg]; ``pressure_gain_pa``: pascal per unit of the pressure signal;
+    ``pressure_offset_pa``: absolute pressure = gain·signal + offset [Pa];
+    ``loss_torque_Nm``: the mean of friction plus load over the recording [N·m];
+    ``scaling``: ``"charge"`` or ``"none"`` (see the module doc); ``charge_scale``: σ of the
+    calibration recording (its IMEP over the engine file's) [-]; ``wheel`` (spec);
+    ``tooth_errors``: a :class:`rotor.ToothErrors` or None; ``source``: the recording;
+    ``fit``: figures of the fit (energy-balance inertia, residuals, IMEP measured).
+    """
+
+    engine: str
+    inertia_kgm2: float
+    tdc_after_gap_deg: float
+    pressure_gain_pa: float
+    pressure_offset_pa: float
+    loss_torque_Nm: float
+    scaling: str = "charge"
+    charge_scale: float = 1.0
+    wheel: str = ""
+    tooth_errors: object = None
+    source: str = ""
+    fit: dict = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        for key in ("inertia_kgm2", "pressure_gain_pa", "charge_scale"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
+                raise EngineError(f"calibration {key} = {v!r}: must be a positive number")
+        for key in ("tdc_after_gap_deg", "pressure_offset_pa", "loss_torque_Nm"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v)):
+                raise EngineError(f"calibration {key} = {v!r}: must be a finite number")
+        if self.scaling not in SCALINGS:
+            raise EngineError(f"calibration scaling = {self.scaling!r}: one of {', '.join(SCALINGS)}")
+
+    def apply(self, engine):
+        """The engine with the calibrated crankshaft inertia."""
+        return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, float(self.inertia_kgm2))
+
+    def to_json_dict(self) -> dict:
+        return {
+            "format": CALIBRATION_FORMAT,
+            "version": CALIBRATION_VERSION,
+            "engine": self.engine,
+            "inertia_kgm2": float(self.inertia_kgm2),
+            "tdc_after_gap_deg": float(self.tdc_after_gap_deg),
+            "pressure_gain_pa": float(self.pressure_gain_pa),
+            "pressure_offset_pa": float(self.pressure_offset_pa),
+            "loss_torque_Nm": float(self.loss_torque_Nm),
+            "scaling": self.scaling,
+            "charge_scale": float(self.charge_scale),
+            "wheel": self.wheel,
+            "tooth_errors": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
+            "source": self.source,
+            "fit": _plain(self.fit),
+        }
+
+    @classmethod
+    def from_json_dict(cls, d, where: str = "calibration") -> "Calibration":
+        """Build from :meth:`to_json_dict`'s dict; errors name ``where`` and the key."""
+        from .wheel import ToothErrors
+
+        if not isinstance(d, dict):
+            raise EngineError(f"{where}: not a calibration (a JSON object is needed)")
+        if d.get("format") != CALIBRATION_FORMAT:
+            raise EngineError(f"{where}: key 'format' must be {CALIBRATION_FORMAT!r} (not a rotor calibration file)")
+        if d.get("version") != CALIBRATION_VERSION:
+            raise EngineError(f"{where}: key 'version' = {d.get('version')!r}: this rotor reads version "
+                              f"{CALIBRATION_VERSION}")
+
+        def num(key, positive=False):
+            if key not in d:
+                raise EngineError(f"{where}: missing key {key!r}")
+            v = d[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
+                raise EngineError(f"{where}: key {key!r} = {v!r}: must be a {'positive' if positive else 'finite'} "
+                                  f"number")
+            return float(v)
+
+        def text(key):
+            v = d.get(key, "")
+            if not isinstance(v, str):
+                raise EngineError(f"{where}: key {key!r} = {v!r}: must be a string")
+            return v
+
+        scaling = text("scaling") or "charge"
+        if scaling not in SCALINGS:
+            raise EngineError(f"{where}: key 'scaling' = {scaling!r}: one of {', '.join(SCALINGS)}")
+        te = d.get("tooth_errors")
+        if te is not None:
+            if not isinstance(te, dict) or "wheel" not in te or "errors_rad" not in te:
+                raise EngineError(f"{where}: key 'tooth_errors' must be null or an object with 'wheel' and "
+                                  f"'errors_rad'")
+            try:
+                te = ToothErrors(wheel=te["wheel"], errors_rad=np.asarray(te["errors_rad"], dtype=np.float64),
+                                 method=str(te.get("method", "given")), revolutions=int(te.get("revolutions", 0)),
+                                 engine_orders=tuple(float(k) for k in te.get("engine_orders", ())),
+                                 source=str(te.get("source", "")))
+            except (TypeError, ValueError) as e:
+                raise EngineError(f"{where}: key 'tooth_errors': {e}") from None
+        fit = d.get("fit", {})
+        if not isinstance(fit, dict):
+            raise EngineError(f"{where}: key 'fit' must be an object")
+        return cls(engine=text("engine"), inertia_kgm2=num("inertia_kgm2", True),
+                   tdc_after_gap_deg=num("tdc_after_gap_deg"), pressure_gain_pa=num("pressure_gain_pa", True),
+                   pressure_offset_pa=num("pressure_offset_pa"), loss_torque_Nm=num("loss_torque_Nm"),
+                   scaling=scaling, charge_scale=num("charge_scale", True) if "charge_scale" in d else 1.0,
+                   wheel=text("wheel"), tooth_errors=te, source=text("source"), fit=fit)
+
+    def save(self, path) -> None:
+        """Write as JSON, whole or not at all."""
+        from ._io import write_text_atomic
+
+        path = os.fspath(path)
+        folder = os.path.dirname(os.path.abspath(path))
+        if not os.path.isdir(folder):
+            raise EngineError(f"{path}: cannot write the calibration: no folder {folder}")
+        write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1, allow_nan=False) + "\n")
+
+    @classmethod
+    def load(cls, path) -> "Calibration":
+        """Read a file written by :meth:`save`; a malformed file raises
+        :class:`rotor.EngineError` naming the file and the key."""
+        path = os.fspath(path)
+        try:
+            with open(path, encoding="utf-8") as f:
+                d = json.load(f)
+        except json.JSONDecodeError as e:
+            raise EngineError(f"{path}: not a calibration file (JSON: {e})") from None
+        return cls.from_json_dict(d, where=path)
+
+    def summary(self) -> str:
+        f = self.fit
+        lines = [f"calibration of {self.engine} from {self.source or 'a recording'}:",
+                 f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {f.get('energy_balance_inertia_kgm2', float('nan')):.5f})",
+                 f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = {self.pressure_gain_pa / 1e5:.4g} bar × "
+                 f"signal {'+' if self.pressure_offset_pa >= 0 else '−'} {abs(self.pressure_offset_pa) / 1e5:.4g} bar",
+                 f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {f.get('imep_measured_pa', float('nan')) / 1e5:.3f} bar; "
+                 f"scaling {self.scaling} (σ {self.charge_scale:.4f})"]
+        return "\n".join(lines) + "\n"
+
+
+def _plain(x):
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in np.asarray(x, dtype=object).tolist()] if isinstance(x, np.ndarray) else [_plain(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x) if math.isfinite(float(x)) else None
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    return x
+
+
+# ----------------------------------------------------------------------------- pieces
+def _check_single(engine, what):
+    if engine.cylinders != 1:
+        raise EngineError(f"{what}: engine {engine.name!r} has {engine.cylinders} cylinders; a calibration from a "
+                          f"pressure channel needs every cylinder's pressure, which a log of one channel has only "
+                          f"for a single-cylinder engine (not yet: several cylinders)")
+
+
+def _binned_pressure(analysis, step_deg=BIN_DEG):
+    """Each complete cycle's pressure signal averaged in bins of ``step_deg``: (bin centres
+    [rad], (cycles, bins)). Empty bins are interpolated within the cycle."""
+    if analysis.pressure is None:
+        raise EngineError(f"{analysis.source}: no pressure channel in the recording (a column pressure_v)")
+    ph, pv, cyc = analysis.pressure
+    step = np.deg2rad(step_deg)
+    nb = int(round(analysis.cycle_rad / step))
+    centres = (np.arange(nb) + 0.5) * analysis.cycle_rad / nb
+    out = np.empty((analysis.cycles, nb))
+    b_all = np.clip((ph / analysis.cycle_rad * nb).astype(int), 0, nb - 1)
+    for k in range(analysis.cycles):
+        m = cyc == k
+        n = np.bincount(b_all[m], minlength=nb)
+        if np.count_nonzero(n) < nb // 2:
+            raise EngineError(f"{analysis.source}: cycle {k} has pressure samples in only {np.count_nonzero(n)} of "
+                              f"{nb} bins of {step_deg:g}°: sample the pressure faster")
+        s = np.bincount(b_all[m], weights=pv[m], minlength=nb)
+        ok = n > 0
+        out[k] = np.interp(centres, centres[ok], s[ok] / n[ok], period=analysis.cycle_rad)
+    return centres, out
+
+
+def _displacement(engine, theta):
+    from .mechanism import engine_piston_motion
+
+    pm = engine_piston_motion(engine, np.asarray(theta))
+    return np.asarray(pm.s)[..., 0], np.asarray(pm.ds)[..., 0]
+
+
+def _signal_work(engine, analysis):
+    """∫ u·A·s′ dθ per cycle from the cycle start, at the speed's grid angles ((cycles, P+1),
+    the last column the whole cycle), u the pressure signal."""
+    centres, sig = _binned_pressure(analysis)
+    h = analysis.cycle_rad / centres.size
+    _, ds = _displacement(engine, centres)
+    area = float(engine.geometry.piston_area_m2)
+    edges = np.arange(centres.size + 1) * h
+    cum = np.concatenate([np.zeros((sig.shape[0], 1)), np.cumsum(sig * ds * area * h, axis=1)], axis=1)
+    P = analysis.points_per_cycle
+    psi = np.arange(P + 1) * analysis.cycle_rad / P
+    return np.stack([np.interp(psi, edges, row) for row in cum])
+
+
+def measured_imep(engine, analysis, pressure_gain: float) -> np.ndarray:
+    """IMEP of each complete cycle from the recording's pressure channel, ∮p·dV / V_h [Pa].
+
+    **Arguments:** ``engine`` (its geometry: the swept volume and the crank mechanism);
+    ``analysis``: a :class:`rotor.LogAnalysis` with a pressure channel and TDC;
+    ``pressure_gain``: pascal per unit of the signal (the offset drops out of ∮p·dV).
+
+    **Returns:** (cycles,) [Pa].
+    """
+    _check_single(engine, "measured_imep")
+    w = _signal_work(engine, analysis)[:, -1]
+    return float(pressure_gain) * w / float(engine.geometry.displacement_m3)
+
+
+def _lowpass(x, max_order, P, revs):
+    from scipy.signal import butter, filtfilt
+
+    nyq = P / (2.0 * revs)  # orders per revolution
+    wn = max_order / nyq
+    if not 0 < wn < 1:
+        raise EngineError(f"max_order = {max_order!r}: must lie between 0 and {nyq:g} (half the points per revolution)")
+    b, a = butter(4, wn)
+    return filtfilt(b, a, x, axis=0)
+
+
+def _energy_balance(engine, analysis, gain, max_order):
+    """Least squares of ½(J + I_m)ω² = E₀ + g·W_u + b·A·s − Σ a_k·ramp_k (low-passed):
+    returns J, b (offset less crankcase) [Pa], a_k [N·m] and fit figures."""
+    from .inertia import reduced_inertia
+
+    C, P = analysis.omega.shape
+    if C < 2:
+        raise EngineError(f"{analysis.source}: {C} complete cycle; the calibration needs at least 2")
+    cyc = float(analysis.cycle_rad)
+    revs = engine.strokes // 2
+    psi = np.arange(P) * cyc / P
+    Wu = _signal_work(engine, analysis)
+    Wc = np.empty(C * P)
+    acc = 0.0
+    for k in range(C):
+        Wc[k * P:(k + 1) * P] = acc + Wu[k, :P]
+        acc += Wu[k, -1]
+    Wc *= gain
+    w2 = analysis.omega.reshape(-1) ** 2
+    s, _ = _displacement(engine, psi)
+    s = np.tile(s, C)
+    Im = np.tile(np.asarray(reduced_inertia(engine, psi)) - float(engine.crankshaft.inertia_kgm2), C)
+    theta = np.arange(C * P) * cyc / P
+    area = float(engine.geometry.piston_area_m2)
+    cols = [Wc - 0.5 * Im * w2, area * s, np.ones(C * P)] + [np.clip(theta - k * cyc, 0.0, cyc) for k in range(C)]
+    X = _lowpass(np.array(cols).T, max_order, P, revs)
+    y = _lowpass(0.5 * w2, max_order, P, revs)
+    keep = slice(P // 2, C * P - P // 2)  # the filter's edge effects
+    Xk, yk = X[keep], y[keep]
+    scale = np.sqrt(np.sum(Xk**2, axis=0))
+    sol = np.linalg.lstsq(Xk / scale, yk, rcond=None)[0] / scale
+    r = yk - Xk @ sol
+    u = sol[0]
+    if not u > 0:
+        raise EngineError(f"{analysis.source}: the energy balance gives no positive inertia (the speed does not follow "
+                          f"the pressure's torque: check the columns and TDC)")
+    J = 1.0 / u
+    b_rel = sol[1] / u
+    a_k = -sol[3:] / u
+    fluct = yk - Xk[:, 2:] @ sol[2:]
+    w_mean = float(np.mean(analysis.omega))
+    return J, b_rel, a_k, {
+        "energy_balance_r2": float(1 - np.sum(r**2) / np.sum((fluct - fluct.mean()) ** 2)),
+        "energy_balance_rms_rad_s": float(np.sqrt(np.mean(r**2)) / w_mean),
+    }
+
+
+def _scaled(engine, sigma):
+    """The engine's Wiebe cycle scaled as a whole: intake pressure and IMEP × σ."""
+    p = engine.pressure
+    return eqx.tree_at(lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), engine,
+                       (p.intake_pa * sigma, p.imep_pa * sigma))
+
+
+def _can_scale(engine):
+    return all(hasattr(engine.pressure, k) for k in ("intake_pa", "imep_pa"))
+
+
+def _mean_scale(ident):
+    ok = ident.identified & ~ident.misfire
+    if not ok.any():
+        ok = ident.identified
+    return float(np.mean(ident.scale[ok]))
+
+
+# ----------------------------------------------------------------------------- calibrate
+def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[float] = None,
+              max_order: float = DEFAULT_MAX_ORDER, scaling: str = "charge", refine: bool = True,
+              tooth_errors="estimate", load_per: str = "block") -> Calibration:
+    """Calibrate inertia, losses, TDC, tooth errors and the pressure offset from a recording
+    with a cylinder-pressure channel (see the module doc).
+
+    **Arguments:**
+    - ``engine``: a single-cylinder :class:`rotor.Engine` (geometry, masses; its pressure's
+      compression ratio for the TDC fit).
+    - ``log``: a file (read with ``wheel`` and ``columns``, e.g. ``"time,pressure_v,encoder_v"``)
+      or a :class:`rotor.LogAnalysis` with a pressure channel and TDC from it.
+    - ``pressure_gain``: pascal per unit of the pressure signal; default: the gain that
+      gives the recording's mean IMEP the engine file's IMEP.
+    - ``max_order``: the energy balance's low-pass [orders per revolution].
+    - ``scaling``: ``"charge"`` (default) or ``"none"`` (see the module doc).
+    - ``refine``: find the identification inertia (default) or keep the energy balance's.
+    - ``tooth_errors``, ``load_per``: passed to :func:`rotor.analyze_log` and :func:`diagnose`.
+
+    **Returns:** :class:`Calibration`. Raises :class:`rotor.EngineError` /
+    :class:`rotor.LogError` for what cannot be calibrated.
+    """
+    from .logged_speed import LogAnalysis, analyze_log
+
+    _check_single(engine, "calibrate")
+    if scaling not in SCALINGS:
+        raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
+    if scaling == "charge" and not _can_scale(engine):
+        raise EngineError(f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
+                          f"{type(engine.pressure).__name__}: use scaling='none'")
+    if pressure_gain is not None and not (np.isfinite(pressure_gain) and pressure_gain > 0):
+        raise EngineError(f"pressure_gain = {pressure_gain!r}: must be a positive number [Pa per signal unit]")
+    rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
+    if isinstance(log, LogAnalysis):
+        a = log
+    else:
+        cr = getattr(engine.pressure, "compression_ratio", None)
+        a = analyze_log(log, wheel, columns=columns, strokes=engine.strokes, cylinders=engine.cylinders,
+                        tooth_errors=tooth_errors, compression_ratio=None if cr is None else float(cr),
+                        rod_ratio=None if cr is None else rod_ratio)
+    if a.pressure is None:
+        raise EngineError(f"{a.source}: no pressure channel (a column pressure_v): a speed-only recording cannot be "
+                          f"calibrated; diagnose it with a saved calibration")
+    if not str(a.tdc_method).startswith(("pressure", "given")):
+        raise EngineError(f"{a.source}: TDC is not known ({a.tdc_method})")
+    vh = float(engine.geometry.displacement_m3)
+    from .identification import identify  # noqa: F401  (import cost up front)
+    from .forces import imep_pa as _imep
+
+    w_cycle = _signal_work(engine, a)[:, -1]
+    nominal = float(_imep(engine))
+    if pressure_gain is None:
+        gain = nominal * vh / float(np.mean(w_cycle))
+        gain_from = "engine file's IMEP"
+    else:
+        gain = float(pressure_gain)
+        gain_from = "given"
+    imep_cycles = gain * w_cycle / vh
+    J_e, b_rel, a_k, figs = _energy_balance(engine, a, gain, max_order)
+    offset = b_rel + float(engine.pressure.crankcase_pa)
+    imep_mean = float(np.mean(imep_cycles))
+    sigma = imep_mean / nominal if scaling == "charge" else 1.0
+    fit = {"energy_balance_inertia_kgm2": J_e, "max_order": float(max_order), "cycles": int(a.cycles),
+           "imep_measured_pa": imep_mean, "imep_measured_cycles_pa": imep_cycles.tolist(),
+           "loss_torque_cycles_Nm": a_k.tolist(), "pressure_gain_from": gain_from, "mean_rpm": float(np.mean(a.mean_rpm)),
+           **figs}
+    J = J_e
+    if refine:
+        eng_s = _scaled(engine, sigma) if scaling == "charge" else engine
+        from .identification import identify
+
+        def g(logJ):
+            ident = identify(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, eng_s, float(np.exp(logJ))), a,
+                             load_per=load_per)
+            ident_mean = float(np.mean(ident.imep_pa[:, 0]))
+            return math.log(max(ident_mean, 1.0)) - math.log(max(imep_mean, 1.0)), ident_mean
+
+        x0 = math.log(J_e)
+        g0, first = g(x0)
+        fit["identified_imep_with_energy_balance_inertia_pa"] = first
+        x1 = x0 - g0
+        g1, _ = g(x1)
+        steps = 2
+        while abs(g1) > 1e-4 and steps < 8 and g1 != g0:
+            x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
+            g1, _ = g(x1)
+            steps += 1
+        J = float(np.exp(x1))
+        fit["refine_steps"] = steps
+        fit["identified_imep_mismatch"] = float(math.expm1(g1))
+    return Calibration(engine=engine.name, inertia_kgm2=float(J), tdc_after_gap_deg=float(np.rad2deg(a.tdc_rad)),
+                       pressure_gain_pa=float(gain), pressure_offset_pa=float(offset),
+                       loss_torque_Nm=float(np.mean(a_k)), scaling=scaling, charge_scale=float(sigma),
+                       wheel=a.track.wheel.spec if a.track is not None else "", tooth_errors=a.tooth_errors,
+                       source=a.source, fit=fit)
+
+
+# ----------------------------------------------------------------------------- diagnose
+def diagnose(engine, log, calibration: Optional[Calibration] = None, *, wheel=None, columns=None,
+             tdc_deg: Optional[float] = None, firing="auto", load_per: str = "block", scaling: Optional[str] = None,
+             max_iterations: int = 8, **identify_kwargs):
+    """Per-firing IMEP, load and misfires of a recording from its crank speed alone, with a
+    calibration (see the module doc).
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`; its crankshaft inertia is replaced by the
+      calibration's.
+    - ``log``: a file (read with ``wheel`` (default the calibration's), ``columns``; TDC
+      ``tdc_deg`` or the calibration's, tooth errors the calibration's), a
+      :class:`rotor.LogAnalysis`, or anything :func:`rotor.identify` takes.
+    - ``calibration``: a :class:`Calibration`, the path of a saved one, or None (the
+      engine as it is).
+    - ``load_per``: of :func:`rotor.identify` (default ``"block"``: a steady load).
+    - ``scaling``: ``"charge"`` or ``"none"`` (default: the calibration's, else ``"none"``).
+    - ``max_iterations``: of the charge-scale iteration; other keywords go to
+      :func:`rotor.identify`.
+
+    **Returns:** :class:`rotor.Identification`; ``info["charge_scale"]``,
+    ``info["calibration"]`` (the calibration's dict or None), ``info["analysis"]`` (the
+    :class:`rotor.LogAnalysis` when the log was read here).
+    """
+    from .identification import identify
+    from .logged_speed import analyze_log
+
+    if calibration is not None and not isinstance(calibration, Calibration):
+        calibration = Calibration.load(calibration)
+    if scaling is None:
+        scaling = calibration.scaling if calibration is not None else "none"
+    if scaling not in SCALINGS:
+        raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
+    if scaling == "charge" and not _can_scale(engine):
+        raise EngineError(f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
+                          f"{type(engine.pressure).__name__}")
+    analysis = None
+    if isinstance(log, (str, os.PathLike)):
+        if tdc_deg is None and calibration is not None:
+            tdc_deg = calibration.tdc_after_gap_deg
+        w = wheel or (calibration.wheel if calibration is not None and calibration.wheel else None)
+        te = calibration.tooth_errors if calibration is not None and calibration.tooth_errors is not None else "estimate"
+        rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
+        cr = getattr(engine.pressure, "compression_ratio", None)
+        analysis = analyze_log(log, w, columns=columns, strokes=engine.strokes, cylinders=engine.cylinders,
+                               tdc_deg=tdc_deg, firing=firing, tooth_errors=te,
+                               compression_ratio=None if cr is None else float(cr),
+                               rod_ratio=None if cr is None else rod_ratio)
+        if str(analysis.tdc_method).startswith("unknown"):
+            raise EngineError(f"{analysis.source}: TDC is not known: give a calibration (--calibration), tdc_deg "
+                              f"(--tdc-deg) or a pressure channel")
+        speed = analysis
+    else:
+        speed = log
+    eng = calibration.apply(engine) if calibration is not None else engine
+    sigma = calibration.charge_scale if (calibration is not None and scaling == "charge") else 1.0
+    iters = 0
+    if scaling == "charge":
+        x0 = math.log(sigma)
+        ident = identify(_scaled(eng, sigma), speed, load_per=load_per, **identify_kwargs)
+        g0 = math.log(max(_mean_scale(ident), 1e-3))
+        x1 = x0 + g0
+        iters = 1
+        while abs(g0) > 1e-3 and iters < max_iterations:
+            ident = identify(_scaled(eng, math.exp(x1)), speed, load_per=load_per, **identify_kwargs)
+            g1 = math.log(max(_mean_scale(ident), 1e-3))
+            iters += 1
+            if abs(g1) <= 1e-3 or g1 == g0:
+                x0, g0 = x1, g1
+                break
+            x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
+        sigma = math.exp(x0)
+    else:
+        ident = identify(eng, speed, load_per=load_per, **identify_kwargs)
+    info = dict(ident.info)
+    info.update(charge_scale=float(sigma), charge_iterations=iters, scaling=scaling,
+                calibration=None if calibration is None else calibration.to_json_dict(), analysis=analysis,
+                engine=_scaled(eng, sigma) if scaling == "charge" else eng)
+    notes = ident.notes
+    if scaling == "charge" and abs(g0) > 1e-3:
+        notes = notes + (f"the charge scale did not settle in {max_iterations} identifications (mean combustion scale "
+                         f"{math.exp(g0):.3f})",)
+    return dataclasses.replace(ident, info=info, notes=notes)
+
+
+def cylinder_torques(engine, ident) -> np.ndarray:
+    """The identified gas torque of each cylinder on each cycle's grid: the motored torque
+    plus the firing's scale times its combustion torque, (cycles, P, cylinders) [N·m]
+    (firing k of a cylinder owns the half cycle either side of its TDC; here each cycle's
+    grid takes the scale of that cycle's firing). ``engine``: the one identified
+    (``ident.info["engine"]`` after :func:`diagnose`)."""
+    from .forces import cylinder_gas_torques
+
+    C, P = ident.omega.shape
+    theta = np.arange(P) * float(engine.cycle_rad) / P
+    fired = np.asarray(cylinder_gas_torques(engine, theta))
+    motored = np.asarray(cylinder_gas_torques(engine.replace(pressure=engine.pressure.motored(engine.strokes)), theta))
+    comb = fired - motored
+    return motored[None, :, :] + ident.scale[:, None, :] * comb[None, :, :]
