@@ -77,6 +77,7 @@ from .inverse import (  # noqa: E402
 )
 from .identification import Identification, identify  # noqa: E402
 from .misfire import contribution_index  # noqa: E402
+from .calibration import Calibration, calibrate, cylinder_torques, diagnose, measured_imep  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -162,4 +163,9 @@ __all__ = [
     "identify",
     "Identification",
     "contribution_index",
+    "Calibration",
+    "calibrate",
+    "diagnose",
+    "measured_imep",
+    "cylinder_torques",
 ]

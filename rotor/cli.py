@@ -139,6 +139,32 @@ def _build_parser():
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write the combined plot to DIR")
 
+    p = sub.add_parser("diagnose", help="per-cylinder IMEP, load and misfires of a recording from its crank speed")
+    p.add_argument("log", metavar="LOG", help="CSV/TSV log: a sampled wheel signal or tooth times (a pressure channel "
+                   "is optional: used for --save-calibration and compared with when a calibration is given)")
+    p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
+    p.add_argument("--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2 (default: the calibration's)")
+    p.add_argument("--columns", metavar="NAMES",
+                   help="column names in file order, as for analyze; - skips a column (time,-,encoder_v: speed only)")
+    p.add_argument("--calibration", metavar="FILE", help="a saved calibration (inertia, TDC, tooth errors, pressure "
+                   "scale) to use")
+    p.add_argument("--save-calibration", metavar="FILE", help="calibrate from this log's pressure channel, write the "
+                   "calibration as JSON and use it (unless --calibration is given)")
+    p.add_argument("--pressure-gain", type=_positive_float, metavar="PA_PER_UNIT",
+                   help="pressure sensor gain for --save-calibration [Pa per signal unit] (default: the gain that gives "
+                        "the log's mean IMEP the engine file's)")
+    p.add_argument("--tdc-deg", type=float, metavar="DEG", help="angle from the gap to TDC of cylinder 1 [deg] "
+                   "(default: the calibration's, else from the pressure channel)")
+    p.add_argument("--load-per", choices=("block", "cycle"), default="block",
+                   help="an unknown load torque per block of cycles (default: a steady load) or per cycle")
+    p.add_argument("--scaling", choices=("charge", "none"),
+                   help="scale the engine file's whole cycle with the load (charge: SI) or only its combustion (none); "
+                        "default: the calibration's, else none")
+    p.add_argument("--threshold", type=_positive_float, default=0.5,
+                   help="misfire threshold of the contribution index (default 0.5)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="DIR", help="write the diagnosis plot to DIR")
+
     sub.add_parser("presets", help="list the built-in engines")
 
     p = sub.add_parser("demo", help="summary, steady state, a load step and plots of the default preset (4chn15)")
@@ -350,6 +376,82 @@ def _cmd_analyze(args):
             print(f"wrote {p}")
 
 
+def _cmd_diagnose(args):
+    import numpy as np
+
+    import rotor
+    from .calibration import Calibration, calibrate, diagnose, measured_imep
+
+    engine = rotor.load_engine(args.engine)
+    cal = Calibration.load(args.calibration) if args.calibration else None
+    written = []
+    if args.save_calibration:
+        folder = os.path.dirname(os.path.abspath(args.save_calibration))
+        if not os.path.isdir(folder):
+            raise rotor.EngineError(f"--save-calibration {args.save_calibration}: no folder {folder}")
+        new = calibrate(engine, args.log, wheel=args.wheel, columns=args.columns, pressure_gain=args.pressure_gain)
+        new.save(args.save_calibration)
+        written.append(args.save_calibration)
+        if cal is None:
+            cal = new
+    ident = diagnose(engine, args.log, cal, wheel=args.wheel, columns=args.columns, tdc_deg=args.tdc_deg,
+                     load_per=args.load_per, scaling=args.scaling, threshold=args.threshold)
+    analysis = ident.info.get("analysis")
+    measured = None
+    if cal is not None and analysis is not None and analysis.pressure is not None and engine.cylinders == 1:
+        measured = measured_imep(engine, analysis, cal.pressure_gain_pa)
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        from .plotting import save_figure
+
+        os.makedirs(args.plot, exist_ok=True)
+        stem = os.path.splitext(os.path.basename(args.log))[0]
+        path = os.path.join(args.plot, f"{stem}_diagnosis.png")
+        save_figure(ident.plot(), path)
+        written.append(path)
+    if args.json:
+        def num(x):
+            x = float(x)
+            return x if np.isfinite(x) else None
+
+        t0 = ident.t_start_s
+        cycles = []
+        for k in range(ident.cycles):
+            row = {"t_start_s": None if t0 is None else num(t0[k]),
+                   "mean_rpm": num(ident.mean_omega[k] * 30 / np.pi),
+                   "imep_pa": [num(v) for v in ident.imep_pa[k]],
+                   "imep_std_pa": [num(v) for v in ident.imep_std_pa[k]],
+                   "misfire": [bool(v) for v in ident.misfire[k]],
+                   "contribution": [num(v) for v in ident.contribution[k]],
+                   "load_torque_Nm": num(ident.load_torque_Nm[k])}
+            if measured is not None:
+                row["measured_imep_pa"] = [num(measured[k])]
+            cycles.append(row)
+        out = {"engine": ident.engine_name, "source": analysis.source if analysis is not None else args.log,
+               "cylinders": ident.cylinders, "cycles": cycles, "misfires": ident.misfires(),
+               "calibration": None if cal is None else cal.to_json_dict(),
+               "scaling": ident.info.get("scaling"), "charge_scale": num(ident.info.get("charge_scale", 1.0)),
+               "tdc_after_gap_deg": None if analysis is None else num(np.rad2deg(analysis.tdc_rad)),
+               "tdc_method": None if analysis is None else analysis.tdc_method,
+               "firing_method": None if analysis is None else analysis.firing_method,
+               "rms_residual_rad_s": num(ident.rms_residual), "r2": num(ident.fit_r2),
+               "threshold": ident.threshold, "notes": list(ident.notes) + (list(analysis.notes) if analysis else []),
+               "written": written}
+        print(json.dumps(out, indent=1, allow_nan=False))
+    else:
+        if cal is not None:
+            sys.stdout.write(cal.summary())
+        sys.stdout.write(ident.summary())
+        if measured is not None:
+            err = ident.imep_pa[:, 0] - measured
+            print(f"  IMEP from the pressure channel {np.mean(measured) / 1e5:.3f} bar; identified − measured: mean "
+                  f"{np.mean(err) / 1e5:+.3f} bar, rms {np.sqrt(np.mean(err**2)) / 1e5:.3f} bar")
+        for p in written:
+            print(f"wrote {p}")
+
+
 def _cmd_presets(args):
     import rotor
 
@@ -387,15 +489,16 @@ _COMMANDS = {
     "steady": _cmd_steady,
     "simulate": _cmd_simulate,
     "analyze": _cmd_analyze,
+    "diagnose": _cmd_diagnose,
     "presets": _cmd_presets,
     "demo": _cmd_demo,
 }
 
 
 def _analyze_argv(argv):
-    """``analyze --columns -,encoder_v,time``: argparse takes a value that starts with '-'
+    """``analyze`` / ``diagnose --columns -,encoder_v,time``: argparse takes a value that starts with '-'
     for an option; joined as ``--columns=-,encoder_v,time`` it is a value."""
-    if "analyze" not in argv:
+    if "analyze" not in argv and "diagnose" not in argv:
         return argv
     out = list(argv)
     for i in range(len(out) - 1):

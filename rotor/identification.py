@@ -185,6 +185,13 @@ class Identification:
             lines.append(f"  note: {n}")
         return "\n".join(lines) + "\n"
 
+    def plot(self, engine=None, axes=None):
+        """Speed, identified torque per cylinder, IMEP per cycle with misfires marked
+        (:func:`rotor.plotting.plot_identification`)."""
+        from .plotting import plot_identification
+
+        return plot_identification(self, engine=engine, axes=axes)
+
     def to_json_dict(self) -> dict:
         """Plain numbers for JSON."""
         def f(x):
