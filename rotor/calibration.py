@@ -36,7 +36,7 @@ cylinder 1's):
 4. *Identification inertia*: :func:`rotor.identify` explains the speed with the engine
    file's pressure shape (fired and motored traces), not the measured one; with the
    energy-balance inertia it read the calibration recording's IMEP 8 % high on
-   tue-4gb10 (the Wiebe cycle and the estimated piston and rod masses are not the
+   tue-4gb10 (7.8 %: the Wiebe cycle and the estimated piston and rod masses are not the
    engine's exactly). ``inertia_kgm2`` is therefore the inertia with which
    :func:`diagnose` reproduces the recording's measured mean IMEP (a secant iteration on
    the identification from the speed alone); the energy-balance value stays in
@@ -48,8 +48,9 @@ and combustion) scales with the trapped charge; :func:`rotor.identify` scales on
 combustion part of the engine file's cycle (a diesel's way). :func:`diagnose` therefore
 scales the file's Wiebe cycle as a whole (intake pressure and IMEP by one factor σ) and
 iterates σ until the firings' mean combustion scale is 1. On tue-4gb10 (no load to full
-load, intake 0.3 to 0.64 bar) it cut the speed-only IMEP error at no load from −0.48 to
-−0.19 bar. ``scaling="none"`` keeps the file's cycle (diesels, or a table pressure).
+load, compression pressure 60° before TDC 1.15 to 2.89 bar) it cut the speed-only IMEP
+error at half load from −0.28 to −0.06 bar and at no load from −0.60 to −0.19 bar.
+``scaling="none"`` keeps the file's cycle (diesels, or a table pressure).
 
 Measured figures: ``benchmarks/diagnose_real.py`` (``benchmarks/results/diagnose_real.json``)
 and ``docs/diagnostics.md``.
@@ -216,12 +217,14 @@ class Calibration:
         return cls.from_json_dict(d, where=path)
 
     def summary(self) -> str:
-        f = self.fit
+        j_e = self.fit.get("energy_balance_inertia_kgm2", float("nan"))
+        imep = self.fit.get("imep_measured_pa", float("nan"))
+        sign = "+" if self.pressure_offset_pa >= 0 else "−"
         lines = [f"calibration of {self.engine} from {self.source or 'a recording'}:",
-                 f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {f.get('energy_balance_inertia_kgm2', float('nan')):.5f})",
-                 f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = {self.pressure_gain_pa / 1e5:.4g} bar × "
-                 f"signal {'+' if self.pressure_offset_pa >= 0 else '−'} {abs(self.pressure_offset_pa) / 1e5:.4g} bar",
-                 f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {f.get('imep_measured_pa', float('nan')) / 1e5:.3f} bar; "
+                 f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {j_e:.5f})",
+                 f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = "
+                 f"{self.pressure_gain_pa / 1e5:.4g} bar × signal {sign} {abs(self.pressure_offset_pa) / 1e5:.4g} bar",
+                 f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / 1e5:.3f} bar; "
                  f"scaling {self.scaling} (σ {self.charge_scale:.4f})"]
         return "\n".join(lines) + "\n"
 
@@ -229,8 +232,10 @@ class Calibration:
 def _plain(x):
     if isinstance(x, dict):
         return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return [_plain(v) for v in np.asarray(x, dtype=object).tolist()] if isinstance(x, np.ndarray) else [_plain(v) for v in x]
+    if isinstance(x, np.ndarray):
+        x = x.tolist()
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
     if isinstance(x, (np.floating, float)):
         return float(x) if math.isfinite(float(x)) else None
     if isinstance(x, (np.integer,)):
@@ -426,7 +431,6 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     if not str(a.tdc_method).startswith(("pressure", "given")):
         raise EngineError(f"{a.source}: TDC is not known ({a.tdc_method})")
     vh = float(engine.geometry.displacement_m3)
-    from .identification import identify  # noqa: F401  (import cost up front)
     from .forces import imep_pa as _imep
 
     w_cycle = _signal_work(engine, a)[:, -1]
@@ -444,8 +448,8 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     sigma = imep_mean / nominal if scaling == "charge" else 1.0
     fit = {"energy_balance_inertia_kgm2": J_e, "max_order": float(max_order), "cycles": int(a.cycles),
            "imep_measured_pa": imep_mean, "imep_measured_cycles_pa": imep_cycles.tolist(),
-           "loss_torque_cycles_Nm": a_k.tolist(), "pressure_gain_from": gain_from, "mean_rpm": float(np.mean(a.mean_rpm)),
-           **figs}
+           "loss_torque_cycles_Nm": a_k.tolist(), "pressure_gain_from": gain_from,
+           "mean_rpm": float(np.mean(a.mean_rpm)), **figs}
     J = J_e
     if refine:
         eng_s = _scaled(engine, sigma) if scaling == "charge" else engine
@@ -518,7 +522,7 @@ def diagnose(engine, log, calibration: Optional[Calibration] = None, *, wheel=No
         if tdc_deg is None and calibration is not None:
             tdc_deg = calibration.tdc_after_gap_deg
         w = wheel or (calibration.wheel if calibration is not None and calibration.wheel else None)
-        te = calibration.tooth_errors if calibration is not None and calibration.tooth_errors is not None else "estimate"
+        te = "estimate" if calibration is None or calibration.tooth_errors is None else calibration.tooth_errors
         rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
         cr = getattr(engine.pressure, "compression_ratio", None)
         analysis = analyze_log(log, w, columns=columns, strokes=engine.strokes, cylinders=engine.cylinders,

@@ -151,8 +151,8 @@ def _build_parser():
     p.add_argument("--save-calibration", metavar="FILE", help="calibrate from this log's pressure channel, write the "
                    "calibration as JSON and use it (unless --calibration is given)")
     p.add_argument("--pressure-gain", type=_positive_float, metavar="PA_PER_UNIT",
-                   help="pressure sensor gain for --save-calibration [Pa per signal unit] (default: the gain that gives "
-                        "the log's mean IMEP the engine file's)")
+                   help="pressure sensor gain for --save-calibration [Pa per signal unit] (default: the gain "
+                        "that gives the log's mean IMEP the engine file's)")
     p.add_argument("--tdc-deg", type=float, metavar="DEG", help="angle from the gap to TDC of cylinder 1 [deg] "
                    "(default: the calibration's, else from the pressure channel)")
     p.add_argument("--load-per", choices=("block", "cycle"), default="block",
