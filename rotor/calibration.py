@@ -449,7 +449,9 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     fit = {"energy_balance_inertia_kgm2": J_e, "max_order": float(max_order), "cycles": int(a.cycles),
            "imep_measured_pa": imep_mean, "imep_measured_cycles_pa": imep_cycles.tolist(),
            "loss_torque_cycles_Nm": a_k.tolist(), "pressure_gain_from": gain_from,
-           "mean_rpm": float(np.mean(a.mean_rpm)), **figs}
+           "mean_rpm": float(np.mean(a.mean_rpm)),
+           "loss_mep_pa": float(np.mean(a_k)) * float(engine.cycle_rad) / vh,  # friction + load as a mean pressure
+           **figs}
     J = J_e
     if refine:
         eng_s = _scaled(engine, sigma) if scaling == "charge" else engine

@@ -158,6 +158,8 @@ def test_real_calibration_is_physical(real_calibration):
     assert cal.fit["energy_balance_r2"] > 0.99
     assert cal.loss_torque_Nm == pytest.approx(cal.fit["imep_measured_pa"] * 1.98e-4 / (4 * np.pi), rel=0.05)
     assert abs(cal.fit["identified_imep_mismatch"]) < 1e-3
+    # the losses carry the indicated work at a steady speed: their mean pressure is the IMEP (within 1 %)
+    assert cal.fit["loss_mep_pa"] == pytest.approx(cal.fit["imep_measured_pa"], rel=0.01)
 
 
 @needs_data
