@@ -1,7 +1,7 @@
 """IMEP from crank speed alone on the real tue-4gb10 recordings, against their own pressure.
 
     nice -n 19 .venv/bin/python benchmarks/diagnose_real.py [--data ../shared/data] \
-        [--out benchmarks/results/diagnose_real.json]
+        [--out benchmarks/results/diagnose_real.json] [--calibration-only]
 
 For each recording as the calibration one (``full_load`` first: the one whose numbers the
 ``tue-single`` preset carries), :func:`rotor.calibrate` on it (pressure channel, the data
@@ -15,8 +15,10 @@ and the energy-balance inertia without the identification refinement.
 
 Writes ``benchmarks/results/diagnose_real.json`` (per calibration recording and variant:
 per recording the mean, rms and max of identified − measured IMEP [bar] and [% of the
-measured mean]; the calibrations) and ``benchmarks/results/tue-single.calibration.json``
-(the full-load calibration, for ``rotor diagnose --calibration``).
+measured mean]; the calibrations) and ``rotor/presets/tue-single.calibration.json`` (the
+full-load calibration that the ``tue-single`` preset ships: ``rotor diagnose --engine
+tue-single`` uses it when no ``--calibration`` is given). ``--calibration-only`` writes
+just that file.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ import rotor
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = ROOT / ".." / "shared" / "data"
 OUT = ROOT / "benchmarks" / "results" / "diagnose_real.json"
-CAL_OUT = ROOT / "benchmarks" / "results" / "tue-single.calibration.json"
+CAL_OUT = ROOT / "rotor" / "presets" / "tue-single.calibration.json"
 GAIN = 1e5 / (5 * 0.00385)  # Pa per volt, the data README (the bench's own scripts)
 RECORDINGS = ("full_load", "half_load", "No_load")
 
@@ -74,6 +76,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=DEFAULT_DATA)
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--calibration-only", action="store_true", help=f"write {CAL_OUT.name} only")
     args = ap.parse_args(argv)
     folder = args.data / "tue-4gb10"
     if not folder.is_dir():
@@ -86,7 +89,13 @@ def main(argv=None):
                               pressure_gain=GAIN)
         cal_wall = time.perf_counter() - t0
         if cal_name == "full_load":
-            cal.save(CAL_OUT)
+            here = "tue-4gb10/full_load.txt"  # not this machine's path
+            te = None if cal.tooth_errors is None else dataclasses.replace(cal.tooth_errors, source=here)
+            shipped = dataclasses.replace(cal, source=here, tooth_errors=te)
+            shipped.save(CAL_OUT)
+            print(f"wrote {CAL_OUT}", flush=True)
+            if args.calibration_only:
+                return
         d = cal.to_json_dict()
         d.pop("tooth_errors")
         d["wall_s"] = cal_wall

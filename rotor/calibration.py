@@ -52,6 +52,13 @@ load, compression pressure 60° before TDC 1.15 to 2.89 bar) it cut the speed-on
 error at half load from −0.28 to −0.06 bar and at no load from −0.60 to −0.19 bar.
 ``scaling="none"`` keeps the file's cycle (diesels, or a table pressure).
 
+**A preset's own calibration**: a preset may ship one beside its TOML
+(``rotor/presets/<name>.calibration.json``; ``tue-single``'s from tue-4gb10's full_load.txt,
+written by ``benchmarks/diagnose_real.py``). :func:`diagnose` uses it when no calibration
+is given (``calibration="preset"``, the default; ``None``: the engine file as it is). A
+calibration stores its engine's name, cylinders, strokes and geometry, and one of another
+engine is refused.
+
 Measured figures: ``benchmarks/diagnose_real.py`` (``benchmarks/results/diagnose_real.json``)
 and ``docs/diagnostics.md``.
 """
@@ -69,13 +76,16 @@ import numpy as np
 
 from ._checks import EngineError
 
-__all__ = ["Calibration", "calibrate", "diagnose", "measured_imep", "cylinder_torques", "CALIBRATION_FORMAT"]
+__all__ = ["Calibration", "calibrate", "diagnose", "measured_imep", "cylinder_torques", "preset_calibration",
+           "CALIBRATION_FORMAT"]
 
 CALIBRATION_FORMAT = "rotor-calibration"
 CALIBRATION_VERSION = 1
 BIN_DEG = 0.5  # the pressure signal is averaged in bins of this width per cycle
 DEFAULT_MAX_ORDER = 4.0
 SCALINGS = ("charge", "none")
+SIGMA_RANGE = (0.05, 5.0)  # the charge scale's physical range: intake pressure × σ (a deep throttle … a big boost)
+PRESETS_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "presets")
 
 
 # ----------------------------------------------------------------------------- the record
@@ -107,6 +117,9 @@ class Calibration:
     tooth_errors: object = None
     source: str = ""
     fit: dict = dataclasses.field(default_factory=dict)
+    cylinders: int = 0  # of the calibrated engine (0: not stored, an older file)
+    strokes: int = 0
+    geometry: dict = dataclasses.field(default_factory=dict)  # bore_m, stroke_m, rod_length_m (empty: not stored)
 
     def __post_init__(self):
         for key in ("inertia_kgm2", "pressure_gain_pa", "charge_scale"):
@@ -119,6 +132,24 @@ class Calibration:
                 raise EngineError(f"calibration {key} = {v!r}: must be a finite number")
         if self.scaling not in SCALINGS:
             raise EngineError(f"calibration scaling = {self.scaling!r}: one of {', '.join(SCALINGS)}")
+
+    def check_engine(self, engine, where: str = "calibration") -> None:
+        """Raise :class:`rotor.EngineError` unless ``engine`` is the calibrated one: the same
+        name, cylinder count, strokes and geometry (those the calibration stores)."""
+        diffs = []
+        if self.engine and self.engine != engine.name:
+            diffs.append(f"engine {self.engine!r}, not {engine.name!r}")
+        if self.cylinders and self.cylinders != engine.cylinders:
+            diffs.append(f"{self.cylinders} cylinder(s), not {engine.cylinders}")
+        if self.strokes and self.strokes != engine.strokes:
+            diffs.append(f"{self.strokes} strokes, not {engine.strokes}")
+        for key, v in self.geometry.items():
+            have = float(getattr(engine.geometry, key))
+            if not math.isclose(float(v), have, rel_tol=1e-6, abs_tol=1e-12):
+                diffs.append(f"{key} {float(v):g}, not {have:g}")
+        if diffs:
+            raise EngineError(f"{where}: calibrated on another engine ({'; '.join(diffs)}): its inertia and TDC do "
+                              f"not apply; calibrate this engine (rotor diagnose --save-calibration)")
 
     def apply(self, engine):
         """The engine with the calibrated crankshaft inertia."""
@@ -140,6 +171,9 @@ class Calibration:
             "tooth_errors": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
             "source": self.source,
             "fit": _plain(self.fit),
+            "cylinders": int(self.cylinders),
+            "strokes": int(self.strokes),
+            "geometry": _plain(self.geometry),
         }
 
     @classmethod
@@ -188,11 +222,24 @@ class Calibration:
         fit = d.get("fit", {})
         if not isinstance(fit, dict):
             raise EngineError(f"{where}: key 'fit' must be an object")
+
+        def whole(key):
+            v = d.get(key, 0)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise EngineError(f"{where}: key {key!r} = {v!r}: must be a whole number")
+            return v
+
+        geo = d.get("geometry", {})
+        if not isinstance(geo, dict) or not all(
+                k in _GEOMETRY_KEYS and isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                and v >= 0 for k, v in geo.items()):
+            raise EngineError(f"{where}: key 'geometry' must be an object of numbers ({', '.join(_GEOMETRY_KEYS)})")
         return cls(engine=text("engine"), inertia_kgm2=num("inertia_kgm2", True),
                    tdc_after_gap_deg=num("tdc_after_gap_deg"), pressure_gain_pa=num("pressure_gain_pa", True),
                    pressure_offset_pa=num("pressure_offset_pa"), loss_torque_Nm=num("loss_torque_Nm"),
                    scaling=scaling, charge_scale=num("charge_scale", True) if "charge_scale" in d else 1.0,
-                   wheel=text("wheel"), tooth_errors=te, source=text("source"), fit=fit)
+                   wheel=text("wheel"), tooth_errors=te, source=text("source"), fit=fit,
+                   cylinders=whole("cylinders"), strokes=whole("strokes"), geometry=dict(geo))
 
     def save(self, path) -> None:
         """Write as JSON, whole or not at all."""
@@ -227,6 +274,29 @@ class Calibration:
                  f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / 1e5:.3f} bar; "
                  f"scaling {self.scaling} (σ {self.charge_scale:.4f})"]
         return "\n".join(lines) + "\n"
+
+
+_GEOMETRY_KEYS = ("bore_m", "stroke_m", "rod_length_m")
+
+
+def _engine_geometry(engine) -> dict:
+    return {k: float(getattr(engine.geometry, k)) for k in _GEOMETRY_KEYS}
+
+
+def preset_calibration(engine):
+    """The calibration shipped with the preset of ``engine`` (``rotor/presets/<name>.calibration.json``
+    whose stored engine is this one), as (Calibration, path), or None."""
+    import glob
+
+    for path in sorted(glob.glob(os.path.join(PRESETS_DIR, "*.calibration.json"))):
+        cal = Calibration.load(path)
+        if cal.engine == engine.name:
+            try:
+                cal.check_engine(engine)
+            except EngineError:
+                continue  # the preset's name on another geometry: not its calibration
+            return cal, path
+    return None
 
 
 def _plain(x):
@@ -480,11 +550,12 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
                        pressure_gain_pa=float(gain), pressure_offset_pa=float(offset),
                        loss_torque_Nm=float(np.mean(a_k)), scaling=scaling, charge_scale=float(sigma),
                        wheel=a.track.wheel.spec if a.track is not None else "", tooth_errors=a.tooth_errors,
-                       source=a.source, fit=fit)
+                       source=a.source, fit=fit, cylinders=int(engine.cylinders), strokes=int(engine.strokes),
+                       geometry=_engine_geometry(engine))
 
 
 # ----------------------------------------------------------------------------- diagnose
-def diagnose(engine, log, calibration: Optional[Calibration] = None, *, wheel=None, columns=None,
+def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
              tdc_deg: Optional[float] = None, firing="auto", load_per: str = "block", scaling: Optional[str] = None,
              max_iterations: int = 8, **identify_kwargs):
     """Per-firing IMEP, load and misfires of a recording from its crank speed alone, with a
@@ -496,22 +567,41 @@ def diagnose(engine, log, calibration: Optional[Calibration] = None, *, wheel=No
     - ``log``: a file (read with ``wheel`` (default the calibration's), ``columns``; TDC
       ``tdc_deg`` or the calibration's, tooth errors the calibration's), a
       :class:`rotor.LogAnalysis`, or anything :func:`rotor.identify` takes.
-    - ``calibration``: a :class:`Calibration`, the path of a saved one, or None (the
-      engine as it is).
+    - ``calibration``: a :class:`Calibration`, the path of a saved one, ``"preset"``
+      (default: the one shipped with the engine's preset, e.g. ``tue-single``, else none)
+      or None (the engine as it is). A calibration of another engine (name, cylinders,
+      strokes, geometry) is refused.
     - ``load_per``: of :func:`rotor.identify` (default ``"block"``: a steady load).
     - ``scaling``: ``"charge"`` or ``"none"`` (default: the calibration's, else ``"none"``).
     - ``max_iterations``: of the charge-scale iteration; other keywords go to
       :func:`rotor.identify`.
 
     **Returns:** :class:`rotor.Identification`; ``info["charge_scale"]``,
-    ``info["calibration"]`` (the calibration's dict or None), ``info["analysis"]`` (the
+    ``info["calibration"]`` (the calibration's dict or None), ``info["calibration_source"]``
+    (``"preset <path>"``, ``"file <path>"``, ``"given"`` or None), ``info["analysis"]`` (the
     :class:`rotor.LogAnalysis` when the log was read here).
+
+    **No firing** (a coast-down, fuel cut): where the firings' mean combustion scale lies
+    below the misfire floor (:data:`rotor.misfire.FLOOR_SCALE`) the charge iteration stops
+    (σ stays the calibration's), every firing is a misfire, and a note says so. σ is kept
+    within :data:`SIGMA_RANGE`.
     """
     from .identification import identify
     from .logged_speed import analyze_log
 
-    if calibration is not None and not isinstance(calibration, Calibration):
+    from .misfire import FLOOR_SCALE
+
+    cal_source = None
+    if isinstance(calibration, str) and calibration == "preset":
+        found = preset_calibration(engine)
+        calibration, cal_source = (None, None) if found is None else (found[0], f"preset {found[1]}")
+    elif calibration is not None and not isinstance(calibration, Calibration):
+        cal_source = f"file {os.fspath(calibration)}"
         calibration = Calibration.load(calibration)
+    elif calibration is not None:
+        cal_source = "given"
+    if calibration is not None:
+        calibration.check_engine(engine, where=cal_source if cal_source != "given" else "calibration")
     if scaling is None:
         scaling = calibration.scaling if calibration is not None else "none"
     if scaling not in SCALINGS:
@@ -539,32 +629,60 @@ def diagnose(engine, log, calibration: Optional[Calibration] = None, *, wheel=No
         speed = log
     eng = calibration.apply(engine) if calibration is not None else engine
     sigma = calibration.charge_scale if (calibration is not None and scaling == "charge") else 1.0
+    lo, hi = (math.log(v) for v in SIGMA_RANGE)
     iters = 0
+    extra = []
+    no_firing = False
+    settled = True
     if scaling == "charge":
-        x0 = math.log(sigma)
-        ident = identify(_scaled(eng, sigma), speed, load_per=load_per, **identify_kwargs)
-        g0 = math.log(max(_mean_scale(ident), 1e-3))
-        x1 = x0 + g0
-        iters = 1
-        while abs(g0) > 1e-3 and iters < max_iterations:
-            ident = identify(_scaled(eng, math.exp(x1)), speed, load_per=load_per, **identify_kwargs)
-            g1 = math.log(max(_mean_scale(ident), 1e-3))
-            iters += 1
-            if abs(g1) <= 1e-3 or g1 == g0:
-                x0, g0 = x1, g1
-                break
-            x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
-        sigma = math.exp(x0)
+        sigma = min(max(sigma, SIGMA_RANGE[0]), SIGMA_RANGE[1])
+        try:
+            xa = math.log(sigma)
+            ident = identify(_scaled(eng, sigma), speed, load_per=load_per, **identify_kwargs)
+            iters = 1
+            ma = _mean_scale(ident)
+            if not (math.isfinite(ma) and ma > FLOOR_SCALE):
+                no_firing = True
+                extra.append(f"charge scaling stopped: no firing (mean combustion scale {ma:.3f}, below the misfire "
+                             f"floor {FLOOR_SCALE:g}): every firing a misfire, σ kept at {sigma:.4g}")
+            else:
+                ga = math.log(ma)
+                xb = min(max(xa + ga, lo), hi)
+                while abs(ga) > 1e-3 and iters < max_iterations and xb != xa:
+                    idb = identify(_scaled(eng, math.exp(xb)), speed, load_per=load_per, **identify_kwargs)
+                    iters += 1
+                    mb = _mean_scale(idb)
+                    if not (math.isfinite(mb) and mb > FLOOR_SCALE):
+                        break  # keep the last σ with a firing
+                    gb = math.log(mb)
+                    xn = xb - gb * (xb - xa) / (gb - ga) if gb != ga else xb
+                    xa, ga, ident = xb, gb, idb
+                    xb = min(max(xn, lo), hi)
+                sigma = math.exp(xa)
+                settled = abs(ga) <= 1e-3
+                if not settled:
+                    at = " (at the bound of its range)" if xb in (lo, hi) or xa in (lo, hi) else ""
+                    extra.append(f"the charge scale did not settle in {iters} identifications{at} (σ {sigma:.4g}, "
+                                 f"mean combustion scale {math.exp(ga):.3f})")
+        except ArithmeticError as e:
+            raise EngineError(f"diagnose: the charge-scale iteration failed ({e}); try scaling='none'") from None
     else:
         ident = identify(eng, speed, load_per=load_per, **identify_kwargs)
+        if ident.identified.any() and not _mean_scale(ident) > FLOOR_SCALE:
+            no_firing = True
+            if not any("does not fire" in n for n in ident.notes):
+                extra.append(f"no firing (mean combustion scale below the misfire floor {FLOOR_SCALE:g}): every "
+                             f"firing a misfire")
     info = dict(ident.info)
     info.update(charge_scale=float(sigma), charge_iterations=iters, scaling=scaling,
                 calibration=None if calibration is None else calibration.to_json_dict(), analysis=analysis,
-                engine=_scaled(eng, sigma) if scaling == "charge" else eng)
-    notes = ident.notes
-    if scaling == "charge" and abs(g0) > 1e-3:
-        notes = notes + (f"the charge scale did not settle in {max_iterations} identifications (mean combustion scale "
-                         f"{math.exp(g0):.3f})",)
+                engine=_scaled(eng, sigma) if scaling == "charge" else eng, calibration_source=cal_source,
+                no_firing=no_firing)
+    if cal_source is not None and cal_source.startswith("preset"):
+        extra.append(f"calibration: the preset's own ({cal_source[len('preset '):]})")
+    notes = ident.notes + tuple(extra)
+    if no_firing:
+        return dataclasses.replace(ident, info=info, notes=notes, misfire=ident.misfire | ident.identified)
     return dataclasses.replace(ident, info=info, notes=notes)
 
 

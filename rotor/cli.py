@@ -147,7 +147,10 @@ def _build_parser():
     p.add_argument("--columns", metavar="NAMES",
                    help="column names in file order, as for analyze; - skips a column (time,-,encoder_v: speed only)")
     p.add_argument("--calibration", metavar="FILE", help="a saved calibration (inertia, TDC, tooth errors, pressure "
-                   "scale) to use")
+                   "scale) to use (default: the preset's own where it ships one, e.g. tue-single; a calibration of "
+                   "another engine is refused)")
+    p.add_argument("--no-calibration", action="store_true",
+                   help="not even the preset's own calibration: the engine file as it is")
     p.add_argument("--save-calibration", metavar="FILE", help="calibrate from this log's pressure channel, write the "
                    "calibration as JSON and use it (unless --calibration is given)")
     p.add_argument("--pressure-gain", type=_positive_float, metavar="PA_PER_UNIT",
@@ -384,6 +387,9 @@ def _cmd_diagnose(args):
 
     engine = rotor.load_engine(args.engine)
     cal = Calibration.load(args.calibration) if args.calibration else None
+    cal_source = f"file {args.calibration}" if args.calibration else None
+    if cal is not None:
+        cal.check_engine(engine, where=f"--calibration {args.calibration}")
     written = []
     if args.save_calibration:
         folder = os.path.dirname(os.path.abspath(args.save_calibration))
@@ -393,9 +399,16 @@ def _cmd_diagnose(args):
         new.save(args.save_calibration)
         written.append(args.save_calibration)
         if cal is None:
-            cal = new
-    ident = diagnose(engine, args.log, cal, wheel=args.wheel, columns=args.columns, tdc_deg=args.tdc_deg,
-                     load_per=args.load_per, scaling=args.scaling, threshold=args.threshold)
+            cal, cal_source = new, f"saved from this log to {args.save_calibration}"
+    try:
+        use = cal if cal is not None or args.no_calibration else "preset"  # the preset's own, if it ships one
+        ident = diagnose(engine, args.log, use, wheel=args.wheel, columns=args.columns, tdc_deg=args.tdc_deg,
+                         load_per=args.load_per, scaling=args.scaling, threshold=args.threshold)
+    except ArithmeticError as e:  # a one-line error, not a traceback
+        raise rotor.EngineError(f"{args.log}: the diagnosis failed ({e})") from None
+    if cal is None and ident.info.get("calibration") is not None:  # the preset's own
+        cal = Calibration.from_json_dict(ident.info["calibration"])
+        cal_source = ident.info.get("calibration_source")
     analysis = ident.info.get("analysis")
     measured = None
     if cal is not None and analysis is not None and analysis.pressure is not None and engine.cylinders == 1:
@@ -431,7 +444,9 @@ def _cmd_diagnose(args):
             cycles.append(row)
         out = {"engine": ident.engine_name, "source": analysis.source if analysis is not None else args.log,
                "cylinders": ident.cylinders, "cycles": cycles, "misfires": ident.misfires(),
-               "calibration": None if cal is None else cal.to_json_dict(),
+               "calibration": None if cal is None else {**cal.to_json_dict(), "loaded_from": cal_source},
+               "calibration_source": cal_source,
+               "ambiguous_pairs": [list(p) for p in ident.ambiguous_pairs],
                "scaling": ident.info.get("scaling"), "charge_scale": num(ident.info.get("charge_scale", 1.0)),
                "tdc_after_gap_deg": None if analysis is None else num(np.rad2deg(analysis.tdc_rad)),
                "tdc_method": None if analysis is None else analysis.tdc_method,
@@ -443,6 +458,7 @@ def _cmd_diagnose(args):
     else:
         if cal is not None:
             sys.stdout.write(cal.summary())
+            print(f"  calibration: {cal_source}")
         sys.stdout.write(ident.summary())
         if measured is not None:
             err = ident.imep_pa[:, 0] - measured

@@ -540,8 +540,8 @@ def identify(
     """
     wall = time.perf_counter()
     if parameters not in PARAMETERS:
-        raise EngineError(f"parameters = {parameters!r}: one of {', '.join(map(repr, PARAMETERS))} "
-                          f"(Wiebe start and duration, pressure scale: not yet)")
+        raise EngineError(f"parameters = {parameters!r}: only 'imep_scale' (one combustion scale per firing) is "
+                          f"implemented; Wiebe start, Wiebe duration and a pressure scale are not")
     check_fidelity(fidelity, engine)
     for name, v, lo in (("block_cycles", block_cycles, 1), ("overlap", overlap, 0), ("max_steps", max_steps, 1)):
         if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= lo):

@@ -178,3 +178,29 @@ def test_real_imep_from_speed_alone(real_calibration, name, mean_tol, rms_tol):
     assert abs(np.mean(err)) < mean_tol
     assert np.sqrt(np.mean(err**2)) < rms_tol
     assert not ident.misfire.any()
+
+
+def test_engine_identity_is_stored_and_checked(tmp_path):
+    """A calibration stores the engine's cylinders, strokes and geometry and refuses another engine; an
+    older file without them is checked by the name alone."""
+    eng = rotor.load_engine("tue-single")
+    d = _calibration().to_json_dict()
+    d.update(engine=eng.name, cylinders=1, strokes=4,
+             geometry={k: float(getattr(eng.geometry, k)) for k in ("bore_m", "stroke_m", "rod_length_m")})
+    cal = rotor.Calibration.from_json_dict(d)
+    cal.check_engine(eng)
+    p = tmp_path / "c.json"
+    cal.save(p)
+    assert rotor.Calibration.load(p).geometry == cal.geometry and rotor.Calibration.load(p).cylinders == 1
+    with pytest.raises(rotor.EngineError, match="another engine .*MWM"):
+        cal.check_engine(rotor.load_engine("mwm6"))
+    with pytest.raises(rotor.EngineError, match="bore_m"):
+        cal.check_engine(eqx.tree_at(lambda e: e.geometry.bore_m, eng, 0.07))
+    old = {k: v for k, v in d.items() if k not in ("cylinders", "strokes", "geometry")}
+    cal_old = rotor.Calibration.from_json_dict(old)
+    assert cal_old.cylinders == 0 and cal_old.geometry == {}
+    cal_old.check_engine(eng)
+    with pytest.raises(rotor.EngineError, match="geometry"):
+        rotor.Calibration.from_json_dict({**d, "geometry": {"bore_m": "wide"}})
+    with pytest.raises(rotor.EngineError, match="cylinders"):
+        rotor.Calibration.from_json_dict({**d, "cylinders": -1})
