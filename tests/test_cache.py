@@ -36,4 +36,7 @@ def test_a_compiled_kernel_is_reused_by_the_next_process(tmp_path):
     assert any("_closed_steady" in n for n in written), written
     subprocess.run([sys.executable, "-c", code], env=env, check=True)
     again = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "c").glob("*-cache")}
-    assert again == written  # every executable read back, none compiled and written again
+    # every executable of the first process read back, none compiled and written again (a
+    # small eager operation may join the cache when a loaded machine makes its compile
+    # cross the 0.1 s threshold: new names are allowed, rewritten ones are not)
+    assert {name: again[name] for name in written} == written
