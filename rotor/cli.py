@@ -332,6 +332,20 @@ def _cmd_simulate(args):
     _report(res, args, "simulate")
 
 
+def _plot_log(make_figure, args, kind):
+    """Write ``make_figure()`` to DIR/<log stem>_<kind>.png (``--plot DIR``); the path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from .plotting import save_figure
+
+    os.makedirs(args.plot, exist_ok=True)
+    stem = os.path.splitext(os.path.basename(args.log))[0]
+    path = os.path.join(args.plot, f"{stem}_{kind}.png")
+    save_figure(make_figure(), path)
+    return path
+
+
 def _cmd_analyze(args):
     from ._checks import LogError
     from .logged_speed import analyze_log
@@ -361,16 +375,7 @@ def _cmd_analyze(args):
         res.tooth_errors.save(args.save_tooth_errors)
         written.append(args.save_tooth_errors)
     if args.plot:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        from .plotting import save_figure
-
-        os.makedirs(args.plot, exist_ok=True)
-        stem = os.path.splitext(os.path.basename(args.log))[0]
-        path = os.path.join(args.plot, f"{stem}_analysis.png")
-        save_figure(res.plot(), path)
-        written.append(path)
+        written.append(_plot_log(res.plot, args, "analysis"))
     if args.json:
         print(json.dumps(res.to_json_dict(), indent=1, allow_nan=False))  # never NaN: not JSON
     else:
@@ -414,16 +419,7 @@ def _cmd_diagnose(args):
     if cal is not None and analysis is not None and analysis.pressure is not None and engine.cylinders == 1:
         measured = measured_imep(engine, analysis, cal.pressure_gain_pa)
     if args.plot:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        from .plotting import save_figure
-
-        os.makedirs(args.plot, exist_ok=True)
-        stem = os.path.splitext(os.path.basename(args.log))[0]
-        path = os.path.join(args.plot, f"{stem}_diagnosis.png")
-        save_figure(ident.plot(), path)
-        written.append(path)
+        written.append(_plot_log(ident.plot, args, "diagnosis"))
     if args.json:
         def num(x):
             x = float(x)
