@@ -389,7 +389,7 @@ class Bench:
 
         if self.wanted("numba RK4"):
             rows += self.runs("numba RK4", spc, self.settings["numba"], cycles, numba_go)
-        for method in SCIPY if cycles <= self.scipy_max and self.wanted("scipy") else ():
+        for method in [m for m in SCIPY if self.wanted(f"scipy {m}")] if cycles <= self.scipy_max else ():
             def go(rtol, method=method):
                 t0 = time.perf_counter()
                 sol = scipy_time(ph, self.omega0, self.c, cycles, method, rtol, dense=True)
