@@ -32,6 +32,7 @@ import json
 import os
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
 
@@ -41,35 +42,25 @@ from scipy.interpolate import CubicSpline
 import rotor
 from rotor.wheel import TWO_PI
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import synthetic_wheel  # noqa: E402
+from synthetic_wheel import WHEEL  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "identification.json"
-WHEEL = rotor.Wheel(60, 2)
 GAP_DEG = -60.0
-ERRORS = np.deg2rad(np.random.default_rng(7).uniform(-0.2, 0.2, WHEEL.edges_per_rev))
-ERRORS -= ERRORS.mean()
 SPEEDS = {"4chn15": [800.0, 1250.0, 1800.0], "mwm6": [1200.0, 1700.0, 2200.0]}
 LOADS = [0.1, 0.2, 0.5, 1.0]
 THRESHOLDS = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8]
 
 
 def tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s=20e-9):
-    r0, r1 = int(np.floor((lo - gap) / TWO_PI)) - 1, int(np.ceil((hi - gap) / TWO_PI)) + 1
-    revs = np.arange(r0, r1)
-    ang = (gap + TWO_PI * revs[:, None] + WHEEL.pitch_rad * np.arange(WHEEL.edges_per_rev)[None, :]
-           + ERRORS[None, :]).ravel()
-    ang = ang[(ang >= lo) & (ang <= hi)]
-    return t_of_theta(ang) + rng.normal(0.0, jitter_s, ang.size)
+    return synthetic_wheel.tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s)
 
 
 def calibration():
     """The wheel's errors from a bare-wheel coast-down 3000 → 500 rpm (as tests/test_analyze_roundtrip.py)."""
-    w0, w1, revs = 3000 / 30 * np.pi, 500 / 30 * np.pi, 300
-    theta = np.linspace(0.0, TWO_PI * revs, revs * 720 + 1)
-    a = (w0**2 - w1**2) / 2 / theta[-1]
-    G = 60.0 * (np.cos(theta) - 1) + 25.0 * (np.cos(2 * theta) - 1)
-    inv = 1 / np.sqrt(w0**2 - 2 * a * theta + 2 * G)
-    t = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * np.diff(theta))])
-    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], 0.3, np.random.default_rng(1))
+    edges = synthetic_wheel.coast_down_edges(20e-9)
     return rotor.estimate_tooth_errors(rotor.locate_teeth(edges, WHEEL), engine_orders=())
 
 

@@ -16,6 +16,8 @@ and the note says by about how much); 200 ns of timer jitter; unequal cylinders 
 orders); the firing revolution from the speed alone (flagged as uncertain).
 """
 
+import sys
+
 import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
@@ -23,38 +25,25 @@ from scipy.interpolate import CubicSpline
 import rotor
 from rotor.wheel import TWO_PI
 
-WHEEL = rotor.Wheel(60, 2)
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import synthetic_wheel  # noqa: E402
+from synthetic_wheel import ERRORS, WHEEL  # noqa: E402
+
 PITCH = WHEEL.pitch_rad
 JITTER_S = 20e-9  # timer jitter (σ), a 50 MHz capture timer
 GAP_DEG = -60.0  # crank angle of the first tooth edge after the gap: TDC is 60° after the gap
-RNG = np.random.default_rng(7)
-ERRORS = np.deg2rad(RNG.uniform(-0.2, 0.2, WHEEL.edges_per_rev))
-ERRORS -= ERRORS.mean()
 
 
 def tooth_times(t_of_theta, theta_lo, theta_hi, gap_rad, rng, jitter_s=JITTER_S):
-    """Edge times of the wheel's teeth (with ERRORS) between two crank angles, plus jitter."""
-    r0, r1 = int(np.floor((theta_lo - gap_rad) / TWO_PI)) - 1, int(np.ceil((theta_hi - gap_rad) / TWO_PI)) + 1
-    revs = np.arange(r0, r1)
-    ang = gap_rad + TWO_PI * revs[:, None] + PITCH * np.arange(WHEEL.edges_per_rev)[None, :] + ERRORS[None, :]
-    ang = ang.ravel()
-    ang = ang[(ang >= theta_lo) & (ang <= theta_hi)]
-    return t_of_theta(ang) + rng.normal(0.0, jitter_s, ang.size)
+    return synthetic_wheel.tooth_times(t_of_theta, theta_lo, theta_hi, gap_rad, rng, jitter_s)
 
 
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory):
     """Tooth errors from a coast-down 3000 → 500 rpm of the bare wheel with a 1/ω² fluctuation."""
-    # ½ω² = ½ω0² − a·θ + G(θ): a constant drag and a periodic gas-torque work G (orders 1, 2)
-    w0, w1 = 3000 / 30 * np.pi, 500 / 30 * np.pi
-    revs = 300
-    theta = np.linspace(0.0, TWO_PI * revs, revs * 720 + 1)
-    a = (w0**2 - w1**2) / 2 / theta[-1]
-    G = 60.0 * (np.cos(theta) - 1) + 25.0 * (np.cos(2 * theta) - 1)  # [J/kg·m²]: ±20 % speed at 500 rpm
-    omega = np.sqrt(w0**2 - 2 * a * theta + 2 * G)
-    inv = 1 / omega
-    t = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * np.diff(theta))])
-    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], 0.3, np.random.default_rng(1))
+    edges = synthetic_wheel.coast_down_edges(JITTER_S)
     track = rotor.locate_teeth(edges, WHEEL)
     te = rotor.estimate_tooth_errors(track, engine_orders=())
     path = tmp_path_factory.mktemp("wheel") / "teeth.json"

@@ -10,6 +10,8 @@ Loads: 100 % and 20 % (the combustion scaled to 0.2 of the engine file's, the lo
 balancing it at the steady speed).
 """
 
+import sys
+
 import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
@@ -18,36 +20,27 @@ import rotor
 from rotor.identification import symmetric_pairs
 from rotor.wheel import TWO_PI
 
-WHEEL = rotor.Wheel(60, 2)
-PITCH = WHEEL.pitch_rad
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import synthetic_wheel  # noqa: E402
+from synthetic_wheel import WHEEL  # noqa: E402
+
 JITTER_S = 20e-9
 GAP_DEG = -60.0  # TDC of cylinder 1 lies 60° after the gap
-ERRORS = np.deg2rad(np.random.default_rng(7).uniform(-0.2, 0.2, WHEEL.edges_per_rev))
-ERRORS -= ERRORS.mean()
 CYCLES = 12  # simulated; the analysis keeps the 10 complete cycles inside the tooth record
 SPREAD = {"4chn15": [1.0, 1.1, 0.9, 1.05], "mwm6": [1.0, 1.1, 0.9, 1.05, 0.95, 0.92]}
 MISFIRES = {"4chn15": [(3, 2), (5, 4), (8, 1)], "mwm6": [(3, 2), (4, 6), (8, 3)]}
 
 
 def tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s=JITTER_S):
-    """Edge times of the wheel's teeth (with ERRORS) between two crank angles, plus jitter."""
-    r0, r1 = int(np.floor((lo - gap) / TWO_PI)) - 1, int(np.ceil((hi - gap) / TWO_PI)) + 1
-    revs = np.arange(r0, r1)
-    ang = (gap + TWO_PI * revs[:, None] + PITCH * np.arange(WHEEL.edges_per_rev)[None, :] + ERRORS[None, :]).ravel()
-    ang = ang[(ang >= lo) & (ang <= hi)]
-    return t_of_theta(ang) + rng.normal(0.0, jitter_s, ang.size)
+    return synthetic_wheel.tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s)
 
 
 @pytest.fixture(scope="module")
 def tooth_errors():
     """The wheel's errors from a coast-down 3000 → 500 rpm of the bare wheel (test_analyze_roundtrip)."""
-    w0, w1, revs = 3000 / 30 * np.pi, 500 / 30 * np.pi, 300
-    theta = np.linspace(0.0, TWO_PI * revs, revs * 720 + 1)
-    a = (w0**2 - w1**2) / 2 / theta[-1]
-    G = 60.0 * (np.cos(theta) - 1) + 25.0 * (np.cos(2 * theta) - 1)
-    inv = 1 / np.sqrt(w0**2 - 2 * a * theta + 2 * G)
-    t = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * np.diff(theta))])
-    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], 0.3, np.random.default_rng(1))
+    edges = synthetic_wheel.coast_down_edges(JITTER_S)
     return rotor.estimate_tooth_errors(rotor.locate_teeth(edges, WHEEL), engine_orders=())
 
 
