@@ -78,10 +78,28 @@ from .inverse import (  # noqa: E402
 from .identification import Identification, identify  # noqa: E402
 from .misfire import contribution_index  # noqa: E402
 from .calibration import Calibration, calibrate, cylinder_torques, diagnose, measured_imep  # noqa: E402
+from .flywheel import (  # noqa: E402
+    DiscFlywheel,
+    FlywheelDesign,
+    OperatingPoint,
+    TextbookFlywheel,
+    design_flywheel,
+    inertia_for_delta,
+    lightest_disc,
+    textbook_flywheel,
+)
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "design_flywheel",
+    "textbook_flywheel",
+    "inertia_for_delta",
+    "lightest_disc",
+    "FlywheelDesign",
+    "TextbookFlywheel",
+    "DiscFlywheel",
+    "OperatingPoint",
     "enable_compilation_cache",
     "EngineError",
     "Engine",

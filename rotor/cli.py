@@ -36,14 +36,37 @@ def _engine_arg(p):
     p.add_argument("--rpm", type=_positive_float, help="crank speed [rev/min] (default: the file's [operating] rpm)")
 
 
-def _speed(text):
+def _nonnegative_float(text):
     try:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
     if not (v >= 0 and v < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text!r} must be zero or a positive speed")
+        raise argparse.ArgumentTypeError(f"{text!r} must be zero or positive")
     return v
+
+
+_speed = _nonnegative_float  # a speed may be zero (from rest)
+
+
+def _number_list(text, check, what):
+    out = []
+    for item in filter(None, (t.strip() for t in text.split(","))):
+        try:
+            out.append(check(item))
+        except argparse.ArgumentTypeError as e:
+            raise argparse.ArgumentTypeError(f"{text!r}: {e}; expected {what}") from None
+    if not out:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected {what}")
+    return out
+
+
+def _speed_list(text):
+    return _number_list(text, _positive_float, "speeds in rpm separated by commas, e.g. 800,1250,2000")
+
+
+def _scale_list(text):
+    return _number_list(text, _speed, "scales ≥ 0 separated by commas, e.g. 0.3,1,1")
 
 
 def _whole(text):
@@ -167,6 +190,31 @@ def _build_parser():
                    help="misfire threshold of the contribution index (default 0.5)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write the diagnosis plot to DIR")
+
+    p = sub.add_parser("flywheel", help="the smallest flywheel keeping δ ≤ --delta at every operating point, "
+                       "against the textbook (seed 004 §3.2.12)")
+    p.add_argument("engine", metavar="ENGINE", help="engine file (.toml) or preset name (see `rotor presets`)")
+    p.add_argument("--delta", type=_positive_float, required=True, help="target irregularity δ, e.g. 0.01")
+    p.add_argument("--rpm", type=_speed_list, metavar="RPM,...",
+                   help="operating speeds [rev/min], e.g. 800,1250,2000 (default: the file's [operating] rpm)")
+    p.add_argument("--imep-scale", type=_scale_list, default=[1.0], metavar="S,...",
+                   help="fuelling of each operating point (combustion scale, 1 = the engine file's), one for all or "
+                        "one per --rpm, e.g. 0.3,1,1 for idle to rated (default 1)")
+    p.add_argument("--load", default="none", metavar="SPEC",
+                   help="load at every point: none (default: the load balances the engine), or a speed-dependent "
+                        "load such as propeller:K,EXP (the fuelling is then scaled to carry it)")
+    p.add_argument("--shaft-inertia", type=_nonnegative_float, default=0.0, metavar="KGM2",
+                   help="the crankshaft's own inertia without the flywheel [kg·m²] (default 0)")
+    p.add_argument("--max-diameter", type=_positive_float, metavar="M", help="outer diameter limit of the disc [m]")
+    p.add_argument("--max-width", type=_positive_float, metavar="M", help="width limit of the disc [m]")
+    p.add_argument("--max-rim-speed", type=_positive_float, metavar="M_S", help="rim speed limit [m/s]")
+    p.add_argument("--density", type=_positive_float, default=7200.0, metavar="KG_M3",
+                   help="flywheel material density [kg/m³] (default 7200, cast iron)")
+    p.add_argument("--bore", type=_nonnegative_float, default=0.0, metavar="M", help="bore of the disc [m] (default 0)")
+    p.add_argument("--fidelity", choices=("variable", "series", "coefficients", "constant"), default="variable",
+                   help="inertia model of the steady state (default variable: the exact I(θ))")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="DIR", help="write the design plot to DIR")
 
     sub.add_parser("presets", help="list the built-in engines")
 
@@ -384,6 +432,40 @@ def _cmd_analyze(args):
             print(f"wrote {p}")
 
 
+def _cmd_flywheel(args):
+    import rotor
+    from .flywheel import OperatingPoint, design_flywheel
+
+    engine = rotor.load_engine(args.engine)
+    rpms = args.rpm if args.rpm else [float(engine.operating.rpm)]
+    scales = args.imep_scale
+    if len(scales) not in (1, len(rpms)):
+        raise rotor.EngineError(f"--imep-scale gives {len(scales)} values for {len(rpms)} speeds: give one for all "
+                                "or one per --rpm")
+    scales = scales * len(rpms) if len(scales) == 1 else scales
+    load = rotor.parse_load(args.load)
+    points = [OperatingPoint(r, s, load) for r, s in zip(rpms, scales)]
+    design = design_flywheel(engine, args.delta, points, shaft_inertia_kgm2=args.shaft_inertia, density_kg_m3=args.density,
+                             bore_m=args.bore, max_outer_diameter_m=args.max_diameter, max_width_m=args.max_width,
+                             max_rim_speed_m_s=args.max_rim_speed, fidelity=args.fidelity)
+    written = []
+    if args.plot:
+        from .plotting import plot_flywheel_design, save_figure
+
+        os.makedirs(args.plot, exist_ok=True)
+        path = os.path.join(args.plot, "flywheel.png")
+        save_figure(plot_flywheel_design(design, engine), path)
+        written.append(path)
+    if args.json:
+        d = design.to_dict()
+        d["plots"] = written
+        print(json.dumps(d, indent=2))
+        return
+    print(design.report())
+    for p in written:
+        print(f"wrote {p}")
+
+
 def _cmd_diagnose(args):
     import numpy as np
 
@@ -502,6 +584,7 @@ _COMMANDS = {
     "simulate": _cmd_simulate,
     "analyze": _cmd_analyze,
     "diagnose": _cmd_diagnose,
+    "flywheel": _cmd_flywheel,
     "presets": _cmd_presets,
     "demo": _cmd_demo,
 }

@@ -321,7 +321,7 @@ def _is_zero(x):
         return True
     if isinstance(x, jax.core.Tracer):
         return False
-    return bool(jnp.all(x == 0))
+    return bool(np.all(np.asarray(x) == 0))  # numpy: under a jit trace jnp would give a tracer
 
 
 def linear_losses(load, friction_abc):

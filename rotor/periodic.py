@@ -294,8 +294,8 @@ def _finish_arrays(engine, scene, E, t, omega_m):
     m_loss = scene.loss(omega, t)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
     # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
-    # the gas torque (the tables, unscaled) plus the reciprocating inertia torque
-    gas = val[:, _MM] + jnp.sum(val[:, _DM:], axis=1)
+    # the gas torque at this point's fuelling plus the reciprocating inertia torque
+    gas = val[:, _MM] + jnp.sum(sc * val[:, _DM:], axis=1)
     total = gas + train.textbook_k * omega_m**2
     work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
     excess = jnp.max(work) - jnp.min(work)

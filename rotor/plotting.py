@@ -8,7 +8,7 @@ import numpy as np
 import jax.numpy as jnp
 
 __all__ = ["plot_table", "plot_torque", "plot_inertia", "plot_speed", "save_figure", "plot_log_analysis",
-           "plot_identification"]
+           "plot_identification", "plot_flywheel_design"]
 
 
 def _axes(ax, nrows=1, figsize=(8, 4.5)):
@@ -305,4 +305,48 @@ def plot_identification(ident, engine=None, axes=None):
     ax_i.grid(True, alpha=0.3)
     ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
     ax_i.legend(fontsize=8, ncol=min(5, ident.cylinders + 1))
+    return axes
+
+
+def plot_flywheel_design(design, engine, axes=None, rpm_range=None, n: int = 25):
+    """Plot a :class:`rotor.flywheel.FlywheelDesign`: δ against mean speed [rpm] at full
+    fuelling with the designed and the textbook ``[crankshaft]`` inertia, the target and
+    the operating points (left); the inertia each point needs, by Newton through the
+    steady state and by the textbook [kg·m²] (right). ``rpm_range``: (low, high) of the
+    sweep [rev/min] (default the points' range ±20 %); ``n``: sweep points.
+
+    **Returns:** the two Axes.
+    """
+    from .flywheel import OperatingPoint, _Evaluator
+
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    ax, bx = axes
+    rpms = np.array([p.rpm for p in design.points])
+    lo, hi = rpm_range if rpm_range is not None else (0.8 * rpms.min(), 1.2 * rpms.max())
+    sweep = np.linspace(lo, hi, n)
+    s = design.settings
+    ev = _Evaluator(engine, design.fidelity, design.friction, s.get("grid_deg", 0.25))
+    for J, label, style in ((design.crankshaft_inertia_kgm2, "designed", "-"),
+                            (design.textbook_inertia_kgm2, "textbook", "--")):
+        d = [ev.state(J, OperatingPoint(r))[0] for r in sweep]
+        ax.plot(sweep, d, style, label=f"{label}, J = {J:.4g} kg·m² (full fuelling)")
+    ax.axhline(design.delta_target, color="k", lw=0.8, ls=":", label=f"target δ = {design.delta_target:g}")
+    ax.plot(rpms, [p.delta for p in design.points], "o", color="C0", label="operating points (design)")
+    ax.plot([design.binding_rpm], [design.delta_achieved], "*", ms=14, color="C3", label="binding point")
+    ax.set_xlabel("mean speed [rpm]")
+    ax.set_ylabel("δ = (ω_max − ω_min)/ω_mean")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    x = np.arange(len(rpms))
+    bx.bar(x - 0.2, [p.inertia_kgm2 for p in design.points], 0.4, label="Newton through the steady state")
+    bx.bar(x + 0.2, [p.textbook.crankshaft_inertia_kgm2 for p in design.points], 0.4,
+           label="textbook J₀ − rods and pistons")
+    bx.set_xticks(x, [f"{r:g} rpm" for r in rpms])
+    bx.set_ylabel("[crankshaft] inertia for δ target [kg·m²]")
+    bx.legend(fontsize=8)
+    bx.grid(True, axis="y", alpha=0.3)
+    ax.set_title(design.engine_name, fontsize=10)
     return axes

@@ -1,0 +1,489 @@
+"""Flywheel sizing: the textbook rule and the smallest flywheel found through the simulator.
+
+**Textbook** (seed 004 §3.2.12): from one turning-moment diagram at constant speed (gas
+plus reciprocating inertia torque), the excess work L_excess (the largest swing of
+∫(M − M_mean)dθ) gives the inertia of everything that turns, J₀ = L_excess/(δ·ω²); the
+flywheel takes J_flywheel = 0.85·J₀ and, at a mean diameter D = (2…3)·S, a mass
+m = 4·J_flywheel/D² (a thin rim).
+
+**Through the simulator** (:func:`design_flywheel`): the smallest ``[crankshaft]
+inertia_kgm2`` for which the periodic steady state (:func:`rotor.steady_state`, with the
+variable inertia I(θ), friction and the load of each point) has δ ≤ δ_target at every
+operating point. δ falls monotonically with the inertia, so at each point the inertia that
+gives exactly δ_target is the root of log δ(J) − log δ_target in u = log J, found by
+Newton's method (optimistix) with dδ/dJ by forward-mode autodiff through the steady state;
+log δ is nearly linear in log J (δ ∝ 1/J to first order), so it converges in a few steps.
+The design is the largest of these roots; its point is the binding one.
+
+The flywheel enters the one-degree-of-freedom model only through its inertia, so the
+lightest flywheel splits exactly from the inertia: a disc of outer diameter D, bore d and
+width b has J = ρπb(D⁴ − d⁴)/32 and m = 8J/(D² + d²), so for the required inertia the
+lightest disc is the widest allowed diameter (outer diameter and rim-speed limits), with
+the width that gives the inertia, which must not exceed the width limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import NamedTuple, Optional
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from ._checks import EngineError
+from .periodic import NoSteadyStateError, steady_state
+from .speed_result import RPM_PER_RAD_S
+
+__all__ = [
+    "OperatingPoint",
+    "TextbookFlywheel",
+    "DiscFlywheel",
+    "FlywheelDesign",
+    "textbook_flywheel",
+    "design_flywheel",
+    "lightest_disc",
+    "inertia_for_delta",
+]
+
+TEXTBOOK_SHARE = 0.85  # seed 004 §3.2.12: J_flywheel = 0.85·J₀
+CAST_IRON_KG_M3 = 7200.0
+
+
+class OperatingPoint(NamedTuple):
+    """One operating point: mean speed ``rpm`` [rev/min], the fuelling ``imep_scale``
+    (combustion scale [-], 1 = the engine file's pressure) and a ``load`` (None or a
+    :class:`rotor.ConstantLoad`: the load balances the engine; a speed-dependent load:
+    the fuelling is scaled to carry it)."""
+
+    rpm: float
+    imep_scale: float = 1.0
+    load: object = None
+
+
+def _points(points, engine) -> list[OperatingPoint]:
+    if points is None:
+        points = [float(engine.operating.rpm)]
+    if isinstance(points, (int, float, OperatingPoint)):
+        points = [points]
+    out = []
+    for p in points:
+        p = p if isinstance(p, OperatingPoint) else OperatingPoint(*p) if isinstance(p, tuple) else OperatingPoint(p)
+        rpm = float(p.rpm)
+        if not (math.isfinite(rpm) and rpm > 0):
+            raise EngineError(f"operating point rpm = {p.rpm!r}: must be a positive, finite speed in rpm")
+        scale = np.asarray(p.imep_scale, dtype=float)
+        if not (np.all(np.isfinite(scale)) and np.all(scale >= 0)):
+            raise EngineError(f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be ≥ 0 and finite")
+        out.append(OperatingPoint(rpm, p.imep_scale, p.load))
+    if not out:
+        raise EngineError("no operating points: give at least one rpm")
+    return out
+
+
+def _check_delta(delta):
+    d = float(delta)
+    if not (math.isfinite(d) and 0 < d < 1):
+        raise EngineError(f"delta = {delta!r}: the target irregularity (ω_max − ω_min)/ω_mean must lie in (0, 1), "
+                          "e.g. 0.01 for 1 %")
+    return d
+
+
+# ----------------------------------------------------------------------------- textbook
+@dataclass(frozen=True)
+class TextbookFlywheel:
+    """The textbook sizing at one operating point (seed 004 §3.2.12), SI units.
+
+    ``total_inertia_kgm2`` is J₀ (everything that turns and reciprocates);
+    ``crankshaft_inertia_kgm2`` is J₀ less the cycle-mean inertia of the rods and pistons,
+    the ``[crankshaft] inertia_kgm2`` the textbook implies; ``flywheel_kgm2`` = 0.85·J₀,
+    ``mean_diameter_m`` = ``diameter_strokes``·S and ``mass_kg`` = 4·J_flywheel/D²."""
+
+    rpm: float
+    delta: float
+    excess_work_J: float
+    total_inertia_kgm2: float
+    crankshaft_inertia_kgm2: float
+    flywheel_kgm2: float
+    mean_diameter_m: float
+    mass_kg: float
+
+
+def _textbook(engine, delta, point, excess_work, mechanism_inertia, diameter_strokes):
+    omega = point.rpm / RPM_PER_RAD_S
+    j0 = excess_work / (delta * omega**2)
+    jf = TEXTBOOK_SHARE * j0
+    dm = diameter_strokes * float(engine.geometry.stroke_m)
+    return TextbookFlywheel(rpm=point.rpm, delta=delta, excess_work_J=excess_work, total_inertia_kgm2=j0,
+                            crankshaft_inertia_kgm2=j0 - mechanism_inertia, flywheel_kgm2=jf,
+                            mean_diameter_m=dm, mass_kg=4 * jf / dm**2)
+
+
+def textbook_flywheel(engine, delta: float, rpm=None, *, imep_scale=1.0, load=None,
+                      diameter_strokes: float = 2.5, fidelity: str = "variable", friction=None,
+                      grid_deg: float = 0.25) -> TextbookFlywheel:
+    """The textbook flywheel of seed 004 §3.2.12 at one operating point.
+
+    **Arguments:** ``engine`` (a :class:`rotor.Engine`); ``delta``, the target irregularity
+    [-]; ``rpm`` [rev/min] (default ``[operating] rpm``); ``imep_scale`` [-] and ``load`` as
+    in :func:`rotor.steady_state`; ``diameter_strokes``, the mean diameter in strokes (the
+    seed's 2…3) [-]; ``fidelity``, ``friction``, ``grid_deg`` [deg] as in
+    :func:`rotor.steady_state`.
+    """
+    delta = _check_delta(delta)
+    if not 0 < diameter_strokes < 100:
+        raise EngineError(f"diameter_strokes = {diameter_strokes!r}: the seed takes a mean diameter of 2…3 strokes")
+    (point,) = _points([OperatingPoint(engine.operating.rpm if rpm is None else rpm, imep_scale, load)], engine)
+    ev = _Evaluator(engine, fidelity, friction, grid_deg)
+    _, excess, mech, _ = ev.state(float(engine.crankshaft.inertia_kgm2), point)
+    return _textbook(engine, delta, point, float(excess), float(mech), diameter_strokes)
+
+
+# ----------------------------------------------------------------------------- through the simulator
+def _with_inertia(engine, inertia):
+    return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, jnp.asarray(inertia, dtype=jnp.float64))
+
+
+@eqx.filter_jit
+def _state(engine, inertia, rpm, scale, load, fidelity, friction, grid_deg):
+    """δ, the textbook excess work [J], the mechanism's mean inertia [kg·m²] and the
+    peak speed [rad/s] of the steady state with ``[crankshaft] inertia_kgm2 = inertia``."""
+    r = steady_state(_with_inertia(engine, inertia), rpm, load, fidelity=fidelity, friction=friction,
+                     imep_scale=scale, grid_deg=grid_deg)
+    mech = r.info["excess_work_J"] / (r.info["textbook_delta"] * (rpm / RPM_PER_RAD_S) ** 2) - inertia
+    ok = jnp.min(r.omega) > 0.01 * r.mean_omega
+    return jnp.where(ok, r.delta, jnp.nan), r.info["excess_work_J"], mech, jnp.max(r.omega)
+
+
+@eqx.filter_jit
+def _root(engine, u0, log_target, rpm, scale, load, fidelity, friction, grid_deg, rtol):
+    def fn(u, _):
+        d, *_ = _state(engine, jnp.exp(u), rpm, scale, load, fidelity, friction, grid_deg)
+        return jnp.log(d) - log_target
+
+    sol = optx.root_find(fn, optx.Newton(rtol=rtol, atol=rtol), u0, max_steps=60, throw=False)
+    return sol.value, sol.result == optx.RESULTS.successful, sol.stats["num_steps"]
+
+
+class _Evaluator:
+    def __init__(self, engine, fidelity, friction, grid_deg):
+        self.engine, self.fidelity, self.friction, self.grid_deg = engine, fidelity, friction, grid_deg
+
+    def _args(self, point):
+        rpm = jnp.asarray(point.rpm, dtype=jnp.float64)
+        scale = jnp.asarray(point.imep_scale, dtype=jnp.float64)
+        return rpm, scale, point.load
+
+    def state(self, inertia, point):
+        out = _state(self.engine, jnp.asarray(inertia, dtype=jnp.float64), *self._args(point), self.fidelity,
+                     self.friction, self.grid_deg)
+        return tuple(float(v) for v in jax.device_get(out))
+
+    def root(self, u0, log_target, point, rtol):
+        u, ok, steps = _root(self.engine, jnp.asarray(u0, dtype=jnp.float64), jnp.asarray(log_target),
+                             *self._args(point), self.fidelity, self.friction, self.grid_deg, rtol)
+        return float(u), bool(ok), int(steps)
+
+
+def inertia_for_delta(engine, delta: float, rpm=None, *, imep_scale=1.0, load=None, fidelity: str = "variable",
+                      friction=None, grid_deg: float = 0.25, rtol: float = 1e-10) -> float:
+    """The ``[crankshaft] inertia_kgm2`` [kg·m²] at which the steady state at one operating
+    point has exactly δ = ``delta`` (Newton's method through :func:`rotor.steady_state`).
+    Arguments as in :func:`design_flywheel`, for one point."""
+    design = design_flywheel(engine, delta, [OperatingPoint(engine.operating.rpm if rpm is None else rpm,
+                                                            imep_scale, load)],
+                             fidelity=fidelity, friction=friction, grid_deg=grid_deg, rtol=rtol)
+    return design.crankshaft_inertia_kgm2
+
+
+# ----------------------------------------------------------------------------- geometry
+@dataclass(frozen=True)
+class DiscFlywheel:
+    """A steel or cast-iron disc flywheel [m, kg, kg·m², m/s]: outer diameter, bore, width
+    (axial), density, its inertia and mass, and its peak rim speed (at ``peak_rpm``)."""
+
+    outer_diameter_m: float
+    bore_m: float
+    width_m: float
+    density_kg_m3: float
+    inertia_kgm2: float
+    mass_kg: float
+    rim_speed_m_s: float
+    peak_rpm: float
+    limited_by: str
+
+
+def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float = CAST_IRON_KG_M3,
+                  bore_m: float = 0.0, max_outer_diameter_m: Optional[float] = None,
+                  max_width_m: Optional[float] = None, max_rim_speed_m_s: Optional[float] = None) -> DiscFlywheel:
+    """The lightest disc with inertia ``inertia_kgm2`` [kg·m²] under the limits.
+
+    A disc of outer diameter D, bore d and width b has J = ρπb(D⁴ − d⁴)/32 and mass
+    m = 8J/(D² + d²): for a given inertia the lightest is the largest allowed D, with the
+    width b = 32J/(ρπ(D⁴ − d⁴)). **Arguments:** ``peak_rpm``, the highest crank speed
+    [rev/min] (for the rim speed); ``density_kg_m3`` [kg/m³] (default cast iron 7200);
+    ``bore_m`` [m]; the limits: outer diameter [m], width [m], rim speed [m/s]; at least
+    one of the outer diameter or the rim speed must be given.
+    """
+    J = float(inertia_kgm2)
+    if not (math.isfinite(J) and J > 0):
+        raise EngineError(f"flywheel inertia {inertia_kgm2!r} kg·m²: must be positive (the crankshaft alone meets "
+                          "the target, or the shaft's own inertia is larger than the requirement)")
+    for name, v in (("density_kg_m3", density_kg_m3), ("peak_rpm", peak_rpm)):
+        if not (math.isfinite(float(v)) and float(v) > 0):
+            raise EngineError(f"{name} = {v!r}: must be positive")
+    for name, v in (("max_outer_diameter_m", max_outer_diameter_m), ("max_width_m", max_width_m),
+                    ("max_rim_speed_m_s", max_rim_speed_m_s)):
+        if v is not None and not (math.isfinite(float(v)) and float(v) > 0):
+            raise EngineError(f"{name} = {v!r}: a limit must be positive (or left out)")
+    if not (bore_m >= 0):
+        raise EngineError(f"bore_m = {bore_m!r}: must be ≥ 0")
+    omega = peak_rpm / RPM_PER_RAD_S
+    bounds = {}
+    if max_outer_diameter_m is not None:
+        bounds["outer diameter"] = float(max_outer_diameter_m)
+    if max_rim_speed_m_s is not None:
+        bounds["rim speed"] = 2 * float(max_rim_speed_m_s) / omega
+    if not bounds:
+        raise EngineError("the lightest disc is as large as allowed: give max_outer_diameter_m or max_rim_speed_m_s "
+                          "(or use the textbook's mean diameter of 2…3 strokes)")
+    limited_by = min(bounds, key=bounds.get)
+    D = bounds[limited_by]
+    if D <= bore_m:
+        raise EngineError(f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the "
+                          f"bore {bore_m:.4g} m")
+    rho = float(density_kg_m3)
+    width = 32 * J / (rho * math.pi * (D**4 - bore_m**4))
+    if max_width_m is not None and width > max_width_m:
+        need_D = (32 * J / (rho * math.pi * max_width_m) + bore_m**4) ** 0.25
+        raise EngineError(
+            f"no disc meets the limits: {J:.4g} kg·m² at an outer diameter of {D:.4g} m ({limited_by} limit) needs a "
+            f"width of {width * 1e3:.1f} mm, more than the {max_width_m * 1e3:.1f} mm allowed; allow a width of "
+            f"{width * 1e3:.1f} mm, an outer diameter of {need_D:.4g} m, or a looser δ target")
+    mass = rho * math.pi * width * (D**2 - bore_m**2) / 4
+    return DiscFlywheel(outer_diameter_m=D, bore_m=float(bore_m), width_m=width, density_kg_m3=rho,
+                        inertia_kgm2=J, mass_kg=mass, rim_speed_m_s=omega * D / 2, peak_rpm=float(peak_rpm),
+                        limited_by=limited_by)
+
+
+# ----------------------------------------------------------------------------- the design
+@dataclass(frozen=True)
+class PointResult:
+    """One operating point of a design: the inertia that meets δ_target there exactly
+    [kg·m²], δ with the designed inertia [-], the peak speed [rev/min] and the textbook."""
+
+    rpm: float
+    imep_scale: object
+    load: str
+    inertia_kgm2: float
+    delta: float
+    peak_rpm: float
+    newton_steps: int
+    textbook: TextbookFlywheel
+
+
+@dataclass(frozen=True)
+class FlywheelDesign:
+    """The smallest ``[crankshaft] inertia_kgm2`` meeting δ ≤ ``delta_target`` at every
+    point, the textbook estimate, and (with limits) the lightest disc.
+
+    - ``crankshaft_inertia_kgm2``: the designed ``[crankshaft] inertia_kgm2`` [kg·m²];
+    - ``binding_rpm``: the point that sets it; ``delta_achieved``: δ there [-];
+    - ``textbook``: the textbook sizing at the point where it asks most;
+      ``textbook_inertia_kgm2``: its ``[crankshaft]`` equivalent (J₀ less the rods and pistons);
+    - ``flywheel_kgm2``: the design less ``shaft_inertia_kgm2`` (what the flywheel must add);
+    - ``disc``: a :class:`DiscFlywheel` or None; ``points``: per point.
+    """
+
+    engine_name: str
+    delta_target: float
+    crankshaft_inertia_kgm2: float
+    binding_rpm: float
+    delta_achieved: float
+    shaft_inertia_kgm2: float
+    flywheel_kgm2: float
+    textbook: TextbookFlywheel
+    points: tuple
+    disc: Optional[DiscFlywheel] = None
+    fidelity: str = "variable"
+    settings: dict = field(default_factory=dict)
+    friction: object = None  # as given to design_flywheel (for plots); not in to_dict
+
+    @property
+    def textbook_inertia_kgm2(self) -> float:
+        return self.textbook.crankshaft_inertia_kgm2
+
+    @property
+    def textbook_ratio(self) -> float:
+        """textbook ``[crankshaft]`` inertia / designed [-] (> 1: the textbook oversizes)."""
+        return self.textbook_inertia_kgm2 / self.crankshaft_inertia_kgm2
+
+    def to_dict(self) -> dict:
+        d = {
+            "engine": self.engine_name,
+            "delta_target": self.delta_target,
+            "crankshaft_inertia_kgm2": self.crankshaft_inertia_kgm2,
+            "textbook_inertia_kgm2": self.textbook_inertia_kgm2,
+            "textbook_ratio": self.textbook_ratio,
+            "binding_rpm": self.binding_rpm,
+            "delta_achieved": self.delta_achieved,
+            "shaft_inertia_kgm2": self.shaft_inertia_kgm2,
+            "flywheel_kgm2": self.flywheel_kgm2,
+            "textbook": asdict(self.textbook),
+            "fidelity": self.fidelity,
+            "points": [dict(asdict(p), textbook=asdict(p.textbook)) for p in self.points],
+            "disc": None if self.disc is None else asdict(self.disc),
+        }
+        d.update(self.settings)
+        return d
+
+    def report(self) -> str:
+        """A comparison of the textbook and the designed flywheel, as text."""
+        t = self.textbook
+        lines = [
+            f"{self.engine_name}: flywheel for δ ≤ {self.delta_target:g} at {len(self.points)} operating point(s)",
+            "",
+            f"  {'rpm':>7} {'imep scale':>10} {'load':>14} {'J for δ target':>15} {'δ (design)':>11} "
+            f"{'J textbook':>11}",
+        ]
+        for p in self.points:
+            mark = "  ← binding" if p.rpm == self.binding_rpm and p.inertia_kgm2 == self.crankshaft_inertia_kgm2 else ""
+            scale = p.imep_scale if isinstance(p.imep_scale, (int, float)) else "per cyl."
+            lines.append(f"  {p.rpm:7g} {scale:>10} {p.load:>14} {p.inertia_kgm2:15.4f} {p.delta:11.5f} "
+                         f"{p.textbook.crankshaft_inertia_kgm2:11.4f}{mark}")
+        lines += [
+            "",
+            f"  designed [crankshaft] inertia_kgm2   {self.crankshaft_inertia_kgm2:10.4f} kg·m²  (binding at "
+            f"{self.binding_rpm:g} rpm, δ = {self.delta_achieved:.5f})",
+            f"  textbook (seed 004 §3.2.12) at {t.rpm:g} rpm: J₀ = L_excess/(δ·ω²) = {t.excess_work_J:.1f} J / "
+            f"({t.delta:g}·{t.rpm / RPM_PER_RAD_S:.1f}²) = {t.total_inertia_kgm2:.4f} kg·m²",
+            f"    as [crankshaft] inertia_kgm2 (J₀ less rods and pistons) {t.crankshaft_inertia_kgm2:10.4f} kg·m²  "
+            f"= {self.textbook_ratio:.3f} × the design ({100 * (self.textbook_ratio - 1):+.1f} %)",
+            f"    flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean diameter "
+            f"{t.mean_diameter_m:.3f} m",
+            f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: {self.flywheel_kgm2:.4f} kg·m²",
+        ]
+        if self.disc is not None:
+            d = self.disc
+            lines.append(f"  lightest disc: D = {d.outer_diameter_m:.3f} m ({d.limited_by} limit), bore "
+                         f"{d.bore_m:.3f} m, width {d.width_m * 1e3:.1f} mm, {d.mass_kg:.1f} kg, rim speed "
+                         f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm")
+        return "\n".join(lines)
+
+    def plot(self, engine, ax=None, rpm_range=None, n: int = 25):
+        """δ against speed for the designed and the textbook inertia at full fuelling,
+        with the target and the operating points (needs the ``engine``)."""
+        from .plotting import plot_flywheel_design
+
+        return plot_flywheel_design(self, engine, ax=ax, rpm_range=rpm_range, n=n)
+
+
+def _load_name(load):
+    return "balanced" if load is None else type(load).__name__
+
+
+def design_flywheel(
+    engine,
+    delta: float,
+    points=None,
+    *,
+    shaft_inertia_kgm2: float = 0.0,
+    diameter_strokes: float = 2.5,
+    density_kg_m3: float = CAST_IRON_KG_M3,
+    bore_m: float = 0.0,
+    max_outer_diameter_m: Optional[float] = None,
+    max_width_m: Optional[float] = None,
+    max_rim_speed_m_s: Optional[float] = None,
+    fidelity: str = "variable",
+    friction=None,
+    grid_deg: float = 0.25,
+    rtol: float = 1e-10,
+) -> FlywheelDesign:
+    """The smallest flywheel keeping δ ≤ ``delta`` at every operating point.
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`; its ``[crankshaft] inertia_kgm2`` is only the
+      starting guess.
+    - ``delta``: the target irregularity (ω_max − ω_min)/ω_mean [-], e.g. 0.01.
+    - ``points``: the operating points: rpm values [rev/min], :class:`OperatingPoint`
+      (rpm, imep_scale, load) or tuples of those; default the engine's ``[operating] rpm``
+      at full fuelling with a balancing load.
+    - ``shaft_inertia_kgm2``: the crankshaft's own inertia without the flywheel [kg·m²]
+      (``flywheel_kgm2`` is the design less this).
+    - ``diameter_strokes``: the textbook's mean diameter in strokes [-] (2…3).
+    - ``density_kg_m3`` [kg/m³], ``bore_m`` [m], ``max_outer_diameter_m`` [m],
+      ``max_width_m`` [m], ``max_rim_speed_m_s`` [m/s]: the lightest disc
+      (:func:`lightest_disc`), made when an outer diameter or rim-speed limit is given.
+    - ``fidelity``, ``friction``, ``grid_deg`` [deg]: as in :func:`rotor.steady_state`.
+    - ``rtol``: Newton tolerance on log J [-].
+
+    **Returns:** a :class:`FlywheelDesign`; ``.report()`` compares it with the textbook.
+
+    **Raises:** :class:`rotor.EngineError` for a bad target or point, an operating point
+    with no steady state, or limits no disc can meet.
+    """
+    delta = _check_delta(delta)
+    pts = _points(points, engine)
+    ev = _Evaluator(engine, fidelity, friction, grid_deg)
+    j_start = float(engine.crankshaft.inertia_kgm2)
+    log_target = math.log(delta)
+    results = []
+    for p in pts:
+        # the textbook diagram does not depend on the inertia; find a start with a steady state
+        j_try = j_start
+        for _ in range(6):
+            d0, excess, mech, _ = ev.state(j_try, p)
+            if math.isfinite(d0):
+                break
+            j_try *= 10
+        else:
+            raise EngineError(f"no steady state at {p.rpm:g} rpm even with a {j_try:g} kg·m² crankshaft: the engine "
+                              "cannot run at this point (check its fuelling and load)")
+        tb = _textbook(engine, delta, p, excess, mech, diameter_strokes)
+        # start from the textbook inertia scaled by this point's own δ/J slope (δ ∝ 1/(J + mech))
+        u0 = math.log(max((j_try + mech) * d0 / delta - mech, 1e-3 * (j_try + mech)))
+        u, ok, steps = ev.root(u0, log_target, p, rtol)
+        J = math.exp(u)
+        d_check = ev.state(J, p)[0] if ok else float("nan")
+        if not ok or not abs(d_check / delta - 1) < 1e-6:
+            raise EngineError(
+                f"at {p.rpm:g} rpm no crankshaft inertia gives δ = {delta:g} (Newton stopped at {J:.4g} kg·m² "
+                f"with δ = {d_check:.4g}); a target this loose may need no flywheel at all, or the engine stalls "
+                "there: check rotor.steady_state at this point")
+        results.append((p, J, steps, tb))
+    i_bind = int(np.argmax([r[1] for r in results]))
+    J_design = results[i_bind][1]
+    point_results = []
+    peak = 0.0
+    for p, J, steps, tb in results:
+        try:  # the eager steady state: every check of rotor.steady_state applies to the design
+            r = steady_state(_with_inertia(engine, J_design), p.rpm, p.load, fidelity=fidelity, friction=friction,
+                             imep_scale=p.imep_scale, grid_deg=grid_deg)
+        except NoSteadyStateError as e:
+            raise EngineError(f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}")
+        peak = max(peak, float(r.max_rpm))
+        point_results.append(PointResult(rpm=p.rpm, imep_scale=_jsonable(p.imep_scale), load=_load_name(p.load),
+                                         inertia_kgm2=J, delta=float(r.delta), peak_rpm=float(r.max_rpm),
+                                         newton_steps=steps, textbook=tb))
+    tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
+    flywheel = J_design - float(shaft_inertia_kgm2)
+    disc = None
+    if max_outer_diameter_m is not None or max_rim_speed_m_s is not None:
+        disc = lightest_disc(flywheel, peak_rpm=peak, density_kg_m3=density_kg_m3, bore_m=bore_m,
+                             max_outer_diameter_m=max_outer_diameter_m, max_width_m=max_width_m,
+                             max_rim_speed_m_s=max_rim_speed_m_s)
+    return FlywheelDesign(
+        engine_name=engine.name, delta_target=delta, crankshaft_inertia_kgm2=J_design,
+        binding_rpm=pts[i_bind].rpm, delta_achieved=point_results[i_bind].delta,
+        shaft_inertia_kgm2=float(shaft_inertia_kgm2), flywheel_kgm2=flywheel, textbook=tb_worst,
+        points=tuple(point_results), disc=disc, fidelity=fidelity,
+        settings={"grid_deg": grid_deg, "diameter_strokes": diameter_strokes}, friction=friction,
+    )
+
+
+def _jsonable(x):
+    a = np.asarray(x, dtype=float)
+    return float(a) if a.ndim == 0 else a.tolist()

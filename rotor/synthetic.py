@@ -1,0 +1,269 @@
+"""A simulated bench recording: rotor's own steady state written as a raw log in the format
+of the real ``tue-4gb10`` bench files, so that the reading path (:func:`rotor.read_log`,
+:func:`rotor.analyze_log`, :func:`rotor.calibrate`, :func:`rotor.diagnose`, ``rotor analyze``,
+``rotor diagnose``) runs where the real files are absent.
+
+The file is tab separated, one row per sample: time [s], pressure sensor voltage [V],
+encoder voltage [V] (read it with ``columns="time,pressure_v,encoder_v"``, as the real
+files). What it holds:
+
+- **Speed**: the periodic steady state of the engine (:func:`rotor.steady_state`, the
+  load balanced to the engine's mean torque) at ``rpm``, repeated cycle after cycle; every
+  cycle is the same (no cycle-to-cycle variation), so the analysed cycles can be compared
+  with the simulator's one.
+- **Pressure channel**: cylinder 1's absolute pressure (:func:`rotor.cylinder_pressure`)
+  through the bench's calibration, ``V = 5·(0.115 + 0.00385·p[bar])`` (the inverse of
+  the data README's ``p[bar] = (V/5 − 0.115)/0.00385``: 0.59 V at 1 bar, 51.95 bar/V),
+  plus white noise of a twentieth of ``noise_v`` (0.0005 V, 0.026 bar at the default: the
+  real files' noise, 0.0006 V).
+- **Encoder channel**: the wheel's analog pulse train, low −0.73 V, high 4.0 V (the
+  real files' levels), high for 45 % of each tooth pitch from the tooth's rising edge,
+  each edge a linear ramp of 40 µs (about 4 samples at 100 kHz: a sampled edge as the
+  bench's, rising over a few samples), plus white noise of ``noise_v``. The rising
+  edges sit at the tooth angles plus a fixed tooth-spacing error per tooth (uniform
+  in ±``tooth_error_deg``, zero mean, drawn from ``seed``), every revolution the same
+  errors. The gap is a plain gap of ``missing`` pitches (the real wheel's narrow, low
+  pulse after the gap and the wide one before it are not imitated).
+- **imep_scale**: for a Wiebe cycle the whole cycle is scaled, the intake pressure and
+  the IMEP by one factor (a throttled spark-ignition engine: ``rotor.diagnose``'s charge
+  scaling, so a recording at 0.25 stands in for the bench's no load); for any other
+  pressure model the combustion part alone (:func:`rotor.steady_state`'s ``imep_scale``).
+
+The recording starts 36…180° (drawn from ``seed``) before a TDC at the start of intake
+and ends 36…180° after the end of the ``cycles``-th cycle from there, so that
+:func:`rotor.analyze_log` finds exactly ``cycles`` complete cycles (0 = TDC before intake,
+as rotor counts them): 0.49–0.50 s, about 49,000 rows, for the default 12 cycles at
+3000 rpm (the real files: 50,000 rows).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import pathlib
+
+import numpy as np
+
+from ._checks import EngineError
+
+__all__ = ["simulated_recording", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
+
+BENCH_GAIN_PA_PER_V = 1e5 / (5 * 0.00385)  # the bench's sensor: 51.95 bar per volt
+BENCH_OFFSET_V = 5 * 0.115  # the sensor's output at 0 bar [V]
+DEFAULT_GAP_DEG = -29.4  # the real bench: TDC 29.4° after the gap (rotor.analyze_log on full_load.txt)
+LOW_V, HIGH_V = -0.73, 4.0  # encoder levels of the real files
+DUTY = 0.45  # high part of a tooth pitch (the real files: 14–15 of 33 samples)
+RAMP_S = 40e-6  # duration of an edge's linear ramp [s]
+EDGE_LEVEL = 0.32  # a rising edge crosses this fraction of the swing at its true time (rotor.find_edges' level)
+WHEEL_SEED = 0  # the wheel's tooth errors: one wheel for every recording, whatever ``seed``
+MIN_SAMPLES_PER_PITCH = 10  # below this the pulses get too few samples for the edge finder
+
+
+PRESSURE_POINTS_PER_REV = 2880  # the pressure is computed every 0.125° and interpolated
+
+
+def _pressure_jit(engine, theta):
+    import equinox as eqx
+
+    from .forces import cylinder_pressure
+
+    global _PRESSURE
+    if _PRESSURE is None:
+        _PRESSURE = eqx.filter_jit(cylinder_pressure)
+    return _PRESSURE(engine, theta)
+
+
+_PRESSURE = None
+
+
+def pressure_volts(p_pa):
+    """The bench sensor's voltage [V] for an absolute pressure [Pa]: V = 5·(0.115 + 0.00385·p[bar])."""
+    return BENCH_OFFSET_V + np.asarray(p_pa, dtype=np.float64) / BENCH_GAIN_PA_PER_V
+
+
+def _number(name, x, *, positive=False, nonnegative=False):
+    if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise EngineError(f"{name} = {x!r}: must be a number")
+    x = float(x)
+    if not math.isfinite(x):
+        raise EngineError(f"{name} = {x!r}: must be finite")
+    if positive and not x > 0:
+        raise EngineError(f"{name} = {x!r}: must be positive")
+    if nonnegative and not x >= 0:
+        raise EngineError(f"{name} = {x!r}: must not be negative")
+    return x
+
+
+def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12, imep_scale: float = 1.0,
+                        sample_rate_hz: float = 100_000.0, wheel=None, gap_deg: float = DEFAULT_GAP_DEG,
+                        tooth_error_deg: float = 0.1, noise_v: float = 0.01, seed: int = 0) -> pathlib.Path:
+    """Write a simulated raw bench recording (time, pressure voltage, encoder voltage) to ``path``.
+
+    **Arguments:**
+    - ``path``: the file to write (str or path-like); written whole or not at all (a
+      temporary file in the same folder, then renamed). Its folder must exist.
+    - ``engine``: a preset name (``"tue-single"``, default), the path of an engine file, or
+      a :class:`rotor.Engine`. The pressure channel is cylinder 1's.
+    - ``rpm``: time-mean crank speed [rpm]; default the engine's ``[operating] rpm``.
+    - ``cycles``: complete engine cycles recorded [-], 2 or more (default 12, about the
+      real files' 0.5 s at 3000 rpm); :func:`rotor.analyze_log` finds this many.
+    - ``imep_scale``: IMEP relative to the engine file's [-], > 0 (see the module doc: a
+      Wiebe cycle is scaled whole, intake pressure with it; 1 = the file's, the bench's
+      full load; about 0.6 and 0.22 stand in for its half and no load).
+    - ``sample_rate_hz``: sampling rate [Hz] (default 100 kHz, the bench's); at least 10
+      samples per tooth pitch at the fastest point of the cycle.
+    - ``wheel``: a :class:`rotor.Wheel` or a spec such as ``"60-2"`` (default 60-2) with a
+      gap (missing teeth ≥ 1).
+    - ``gap_deg``: crank angle of the gap, i.e. of the first tooth's rising edge after it,
+      relative to TDC of cylinder 1 [deg] (the wheel turns with the crank, so every TDC
+      sees the same); default −29.4: the gap passes 29.4° before TDC, as on the real bench
+      (``analyze_log`` then reports TDC 29.4° after the gap).
+    - ``tooth_error_deg``: the wheel's tooth-spacing errors are uniform in ±this [deg]
+      (default 0.1; below a quarter of a pitch).
+    - ``noise_v``: standard deviation of white noise on the encoder channel [V] (default
+      0.01, ten times the real files' 0.001 V; the pressure channel gets a twentieth of it).
+    - ``seed``: seeds the tooth errors, the noise and the start angle; the same arguments
+      give the same file.
+
+    **Returns:** the path written (:class:`pathlib.Path`).
+
+    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) naming the argument that
+    cannot be used; :class:`rotor.NoSteadyStateError` where the engine has no steady state
+    at that speed.
+    """
+    import equinox as eqx
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
+    from ._io import atomic_path
+    from .engine import Engine
+    from .engine_file import load_engine
+    from .periodic import steady_state
+    from .wheel import Wheel, parse_wheel
+
+    # ---------------------------------------------------------------- arguments
+    if isinstance(engine, Engine):
+        eng = engine
+    elif isinstance(engine, (str, os.PathLike)):
+        eng = load_engine(engine)
+    else:
+        raise EngineError(f"engine = {engine!r}: a preset name, an engine file or a rotor.Engine")
+    if isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 2:
+        raise EngineError(f"cycles = {cycles!r}: a whole number of engine cycles, 2 or more")
+    cycles = int(cycles)
+    rpm = float(eng.operating.rpm) if rpm is None else _number("rpm", rpm, positive=True)
+    imep_scale = _number("imep_scale", imep_scale, positive=True)
+    fs = _number("sample_rate_hz", sample_rate_hz, positive=True)
+    gap_deg = _number("gap_deg", gap_deg)
+    tooth_error_deg = _number("tooth_error_deg", tooth_error_deg, nonnegative=True)
+    noise_v = _number("noise_v", noise_v, nonnegative=True)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise EngineError(f"seed = {seed!r}: a whole number")
+    try:
+        w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
+    except ValueError as e:
+        raise EngineError(f"wheel = {wheel!r}: {e}") from None
+    if w.missing < 1:
+        raise EngineError(f"wheel = {w.spec!r}: a simulated recording needs a wheel with a gap (e.g. 60-2); an "
+                          f"index channel is not simulated")
+    pitch_deg = 360.0 / w.teeth
+    if tooth_error_deg >= pitch_deg / 4:
+        raise EngineError(f"tooth_error_deg = {tooth_error_deg:g}: must be below a quarter of the {w.spec} wheel's "
+                          f"pitch ({pitch_deg / 4:g}°)")
+    if w.missing > w.teeth - 3:
+        raise EngineError(f"wheel = {w.spec!r}: too few teeth for a simulated recording")
+
+    # ---------------------------------------------------------------- the speed
+    pressure = eng.pressure
+    if all(hasattr(pressure, k) for k in ("intake_pa", "imep_pa")):  # a Wiebe cycle: the whole charge scaled
+        eng = eqx.tree_at(lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), eng,
+                          (pressure.intake_pa * imep_scale, pressure.imep_pa * imep_scale))
+        comb_scale = 1.0
+    else:
+        comb_scale = imep_scale
+    ss = steady_state(eng, rpm, imep_scale=comb_scale)
+    period = float(ss.info["period_s"])
+    cycle_rad = float(ss.cycle_rad)
+    theta1 = np.asarray(ss.theta, dtype=np.float64)
+    t1 = np.asarray(ss.t, dtype=np.float64)
+    omega1 = np.asarray(ss.omega, dtype=np.float64)
+    w_max = float(omega1.max())
+    pitch_s = (2 * np.pi / w.teeth) / w_max
+    if pitch_s * fs < MIN_SAMPLES_PER_PITCH:
+        raise EngineError(f"sample_rate_hz = {fs:g}: {pitch_s * fs:.1f} samples per tooth pitch at the "
+                          f"fastest point ({w_max * 30 / np.pi:.0f} rpm) of a {w.spec} wheel; need at least "
+                          f"{MIN_SAMPLES_PER_PITCH} (raise the sampling rate or lower rpm)")
+
+    rng = np.random.default_rng(seed)
+    revs = round(cycle_rad / (2 * np.pi))
+    # the spline covers one cycle more than the recording each side
+    n_cyc = cycles + 3
+    theta = (theta1[None, :] + cycle_rad * np.arange(-1, n_cyc - 1)[:, None]).ravel()
+    t = (t1[None, :] + period * np.arange(-1, n_cyc - 1)[:, None]).ravel()
+    omega = np.tile(omega1, n_cyc)
+    theta = np.append(theta, theta[-1] + (theta1[1] - theta1[0]))
+    t = np.append(t, period * (n_cyc - 1))
+    omega = np.append(omega, omega1[0])
+    t_of = CubicHermiteSpline(theta, t, 1.0 / omega)
+    theta_of = CubicHermiteSpline(t, theta, omega)
+    # from 36…180° (drawn) before the first cycle's start to 36…180° after the last one's end: exactly
+    # ``cycles`` complete cycles, with room for the edges around them
+    lead_in, lead_out = rng.uniform(0.1, 0.5, 2) * 2 * np.pi
+    t0 = float(t_of(-lead_in))
+    duration = float(t_of(cycles * cycle_rad + lead_out)) - t0
+    n = int(math.floor(duration * fs)) + 1
+    ts = np.arange(n) / fs  # the file's time column
+    th = theta_of(t0 + ts)  # crank angle of each sample
+
+    # ---------------------------------------------------------------- pressure channel
+    # on a fine grid of one cycle (one compiled call), then a periodic cubic spline at the samples
+    grid = np.arange(PRESSURE_POINTS_PER_REV * revs) * (cycle_rad / (PRESSURE_POINTS_PER_REV * revs))
+    p_grid = np.asarray(_pressure_jit(eng, grid))[:, 0]
+    if comb_scale != 1.0:  # scale the combustion part: fired − motored
+        motored = eqx.tree_at(lambda e: e.pressure, eng, eng.pressure.motored(eng.strokes))
+        p0 = np.asarray(_pressure_jit(motored, grid))[:, 0]
+        p_grid = p0 + comb_scale * (p_grid - p0)
+    p_of = CubicSpline(np.append(grid, cycle_rad), np.append(p_grid, p_grid[0]), bc_type="periodic")
+    p = p_of(np.mod(th, cycle_rad))
+    pv = pressure_volts(p) + rng.normal(0.0, noise_v / 20, n)
+
+    # ---------------------------------------------------------------- encoder channel
+    E = w.edges_per_rev
+    err = np.random.default_rng(WHEEL_SEED).uniform(-1.0, 1.0, E) * np.deg2rad(tooth_error_deg)
+    err -= err.mean()
+    pitch = 2 * np.pi / w.teeth
+    gap = np.deg2rad(gap_deg)
+    # the first edge after the gap at crank angle gap (+ k·2π): relative to TDC before intake, and to firing TDC
+    r0 = int(math.floor((th[0] - gap) / (2 * np.pi))) - 1
+    r1 = int(math.ceil((th[-1] - gap) / (2 * np.pi))) + 1
+    rev = np.arange(r0, r1 + 1)
+    rise = (gap + 2 * np.pi * rev[:, None] + pitch * np.arange(E)[None, :] + err[None, :]).ravel()
+    fall = rise + DUTY * pitch
+    keep = (rise > theta[0]) & (fall < theta[-1])
+    rise_t, fall_t = t_of(rise[keep]) - t0, t_of(fall[keep]) - t0
+    # high(t) is a sum of boxes [rise, fall); filtered by a box of RAMP_S each edge becomes a linear ramp.
+    # The sample value is the box average, (H(s + (1 − l)·R) − H(s − l·R))/R with H the high time up to s,
+    # evaluated exactly for every sample from the sorted edges; l = EDGE_LEVEL puts a rising edge's crossing of
+    # that fraction of the swing (where rotor.find_edges times it) at the edge's true time.
+    R = RAMP_S
+    knots = np.sort(np.concatenate([rise_t, fall_t]))
+    is_rise = np.isin(knots, rise_t)
+    level = np.cumsum(np.where(is_rise, 1.0, -1.0))  # the state after each knot (1 high, 0 low)
+    H_knots = np.concatenate([[0.0], np.cumsum(level[:-1] * np.diff(knots))])
+
+    def H(s):
+        i = np.searchsorted(knots, s, side="right") - 1
+        inside = i >= 0
+        ii = np.clip(i, 0, None)
+        return np.where(inside, H_knots[ii] + level[ii] * (s - knots[ii]), 0.0)
+
+    frac = (H(ts + (1 - EDGE_LEVEL) * R) - H(ts - EDGE_LEVEL * R)) / R
+    ev = LOW_V + (HIGH_V - LOW_V) * frac + rng.normal(0.0, noise_v, n)
+
+    # ---------------------------------------------------------------- write
+    path = pathlib.Path(path)
+    if not path.parent.is_dir():
+        raise EngineError(f"path = {os.fspath(path)!r}: the folder {os.fspath(path.parent)!r} does not exist")
+    data = np.column_stack([ts, pv, ev])
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
+    return path
