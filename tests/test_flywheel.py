@@ -1,0 +1,170 @@
+"""Flywheel design: the textbook rule, the inertia found by Newton through the steady state
+(checked by a bisection with another steady-state method and by a time-domain run), the
+lightest disc (checked by a general constrained optimiser) and the command line."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import rotor
+from rotor.flywheel import OperatingPoint, _with_inertia
+
+
+@pytest.fixture(scope="module")
+def six():
+    return rotor.load_engine("mwm6")
+
+
+def _bisect(engine, point, delta, lo, hi, rel=1e-5):
+    """[crankshaft] inertia with δ = delta at one point by bisection on δ(J), δ from the
+    shooting method (RK4 cycle map + Newton), not the closed form the design uses."""
+    def d(J):
+        return float(rotor.steady_state(_with_inertia(engine, J), point.rpm, point.load, imep_scale=point.imep_scale,
+                                        method="shooting").delta)
+
+    assert d(lo) > delta > d(hi), "the bracket must hold the root"
+    while hi / lo - 1 > rel:
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if d(mid) > delta else (lo, mid)
+    return math.sqrt(lo * hi)
+
+
+def test_textbook_formulas(diesel):
+    tb = rotor.textbook_flywheel(diesel, 0.01, 1250)
+    omega = 1250 * math.pi / 30
+    # the excess work of the textbook total torque, computed independently by engine_summary
+    assert tb.excess_work_J == pytest.approx(rotor.engine_summary(diesel, 1250)["excess_work_J"], rel=2e-3)
+    assert tb.total_inertia_kgm2 == pytest.approx(tb.excess_work_J / (0.01 * omega**2), rel=1e-12)
+    assert tb.flywheel_kgm2 == pytest.approx(0.85 * tb.total_inertia_kgm2, rel=1e-12)
+    assert tb.mean_diameter_m == pytest.approx(2.5 * 0.205)
+    assert tb.mass_kg == pytest.approx(4 * tb.flywheel_kgm2 / tb.mean_diameter_m**2, rel=1e-12)
+    mech = float(rotor.mean_reduced_inertia(diesel)) - float(diesel.crankshaft.inertia_kgm2)
+    assert tb.total_inertia_kgm2 - tb.crankshaft_inertia_kgm2 == pytest.approx(mech, rel=1e-6)
+
+
+@pytest.mark.parametrize("preset, points", [
+    ("4chn15", [OperatingPoint(600, 0.25), OperatingPoint(900, 0.6), 1250]),
+    ("mwm6", [1000, 1600, 2200]),
+])
+def test_design_meets_target_and_agrees_with_bisection(preset, points):
+    engine = rotor.load_engine(preset)
+    target = 0.01
+    design = rotor.design_flywheel(engine, target, points)
+    J = design.crankshaft_inertia_kgm2
+    # every point within the target, the binding one on it
+    assert all(p.delta <= target * (1 + 1e-6) for p in design.points)
+    assert design.delta_achieved == pytest.approx(target, rel=1e-6)
+    assert J == max(p.inertia_kgm2 for p in design.points)
+    binding = next(p for p in points if (p if isinstance(p, OperatingPoint) else OperatingPoint(p)).rpm
+                   == design.binding_rpm)
+    binding = binding if isinstance(binding, OperatingPoint) else OperatingPoint(binding)
+    # δ at the design by another method (shooting on the RK4 cycle map) and in the time domain
+    r = rotor.steady_state(_with_inertia(engine, J), binding.rpm, imep_scale=binding.imep_scale, method="shooting")
+    assert float(r.delta) == pytest.approx(target, rel=1e-3)
+    run = rotor.simulate(_with_inertia(engine, J), rpm=float(r.omega[0]) * 30 / np.pi, cycles=2, method="time",
+                         load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])), combustion=np.full(
+                             (2, engine.cylinders), binding.imep_scale), progress=False)
+    assert float(run.delta_per_cycle[-1]) == pytest.approx(target, rel=1e-3)
+    # the inertia agrees with a bisection on the simulator (the issue asks 1 %; it is far closer)
+    J_bis = _bisect(engine, binding, target, 0.5 * J, 2 * J)
+    assert J == pytest.approx(J_bis, rel=1e-3)
+
+
+def test_design_scales_as_one_over_delta(diesel):
+    """δ ∝ 1/(J + mechanism) to first order: halving δ doubles the total inertia."""
+    a = rotor.design_flywheel(diesel, 0.01)
+    b = rotor.design_flywheel(diesel, 0.005)
+    mech = a.textbook.total_inertia_kgm2 - a.textbook.crankshaft_inertia_kgm2
+    ratio = (b.crankshaft_inertia_kgm2 + mech) / (a.crankshaft_inertia_kgm2 + mech)
+    assert ratio == pytest.approx(2.0, rel=5e-3)
+    assert b.crankshaft_inertia_kgm2 > a.crankshaft_inertia_kgm2
+
+
+def test_textbook_close_at_small_delta_and_worse_at_large(diesel):
+    """J₀ = L/(δω²) is the first-order theory: within 1 % at δ = 0.5 %, several % off at 10 %."""
+    small = rotor.design_flywheel(diesel, 0.005).textbook_ratio
+    large = rotor.design_flywheel(diesel, 0.1).textbook_ratio
+    assert abs(small - 1) < 0.01
+    assert abs(large - 1) > 2 * abs(small - 1)
+
+
+def test_lightest_disc_matches_a_general_optimiser():
+    from scipy.optimize import minimize
+
+    J, rho, bore, peak, vmax, bmax = 1.0, 7200.0, 0.05, 2300.0, 40.0, 0.15
+    disc = rotor.lightest_disc(J, peak_rpm=peak, density_kg_m3=rho, bore_m=bore, max_rim_speed_m_s=vmax,
+                               max_width_m=bmax, max_outer_diameter_m=0.5)
+    assert disc.limited_by == "rim speed"
+    assert disc.rim_speed_m_s == pytest.approx(vmax)
+    assert disc.inertia_kgm2 == pytest.approx(rho * math.pi * disc.width_m * (disc.outer_diameter_m**4 - bore**4) / 32)
+    omega = peak * math.pi / 30
+
+    def mass(x):
+        D, b = x
+        return rho * math.pi * b * (D**2 - bore**2) / 4
+
+    cons = [{"type": "eq", "fun": lambda x: rho * math.pi * x[1] * (x[0]**4 - bore**4) / 32 / J - 1},
+            {"type": "ineq", "fun": lambda x: vmax - omega * x[0] / 2},
+            {"type": "ineq", "fun": lambda x: 0.5 - x[0]},
+            {"type": "ineq", "fun": lambda x: bmax - x[1]}]
+    best = minimize(mass, [0.25, 0.1], constraints=cons, method="SLSQP", bounds=[(0.06, 1.0), (1e-3, 1.0)],
+                    options={"ftol": 1e-12, "maxiter": 500})
+    assert best.success
+    assert disc.mass_kg == pytest.approx(best.fun, rel=1e-5)
+    assert disc.outer_diameter_m == pytest.approx(best.x[0], rel=1e-4)
+
+
+def test_lightest_disc_errors():
+    with pytest.raises(rotor.EngineError, match="needs a width of"):
+        rotor.lightest_disc(50.0, peak_rpm=1250, max_outer_diameter_m=0.5, max_width_m=0.1)
+    with pytest.raises(rotor.EngineError, match="max_outer_diameter_m or max_rim_speed_m_s"):
+        rotor.lightest_disc(1.0, peak_rpm=1250)
+    with pytest.raises(rotor.EngineError, match="must be positive"):
+        rotor.lightest_disc(-1.0, peak_rpm=1250, max_outer_diameter_m=0.5)
+
+
+def test_design_with_disc_and_shaft(diesel):
+    d = rotor.design_flywheel(diesel, 0.01, shaft_inertia_kgm2=1.5, max_outer_diameter_m=0.7, max_width_m=0.2)
+    assert d.flywheel_kgm2 == pytest.approx(d.crankshaft_inertia_kgm2 - 1.5)
+    assert d.disc.inertia_kgm2 == pytest.approx(d.flywheel_kgm2)
+    assert d.disc.width_m <= 0.2
+    assert "lightest disc" in d.report()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(delta=0.0), "must lie in"),
+    (dict(delta=float("nan")), "must lie in"),
+    (dict(delta=0.01, points=[-5.0]), "positive, finite speed"),
+    (dict(delta=0.01, points=[]), "no operating points"),
+    (dict(delta=0.01, points=[OperatingPoint(1000, -1.0)]), "imep_scale"),
+])
+def test_bad_input(diesel, kwargs, match):
+    with pytest.raises(rotor.EngineError, match=match):
+        rotor.design_flywheel(diesel, **kwargs)
+
+
+def test_cli_json_and_errors(capsys, tmp_path):
+    from rotor.cli import main
+
+    assert main(["flywheel", "4chn15", "--delta", "0.01", "--rpm", "800,1250", "--imep-scale", "0.4,1", "--json",
+                 "--plot", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for key in ("crankshaft_inertia_kgm2", "textbook_inertia_kgm2", "binding_rpm", "delta_achieved"):
+        assert key in out
+    assert out["binding_rpm"] in (800.0, 1250.0)
+    assert out["delta_achieved"] == pytest.approx(0.01, rel=1e-6)
+    assert [p["rpm"] for p in out["points"]] == [800.0, 1250.0]
+    assert (tmp_path / "flywheel.png").stat().st_size > 10_000
+    # the design is the [crankshaft] value: the engine with it meets the target at the binding point
+    engine = rotor.load_engine("4chn15")
+    scale = 0.4 if out["binding_rpm"] == 800.0 else 1.0
+    r = rotor.steady_state(_with_inertia(engine, out["crankshaft_inertia_kgm2"]), out["binding_rpm"], imep_scale=scale)
+    assert float(r.delta) == pytest.approx(0.01, rel=1e-6)
+
+    assert main(["flywheel", "4chn15", "--delta", "0.01", "--rpm", "800,900", "--imep-scale", "1,1,1"]) == 2
+    assert "one per --rpm" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["flywheel", "4chn15", "--delta", "0.01", "--rpm", "800,abc"])
+    assert "not a number" in capsys.readouterr().err
