@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo test bench bench-quick clean
+.PHONY: install demo test notebooks bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "rotor needs Python >= 3.11 (set PYTHON=...)")'
@@ -21,6 +21,10 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q
 
+# re-execute the notebooks in their full form and save their outputs (a few minutes)
+notebooks: $(STAMP)
+	$(PY) -m pytest -q -p no:cacheprovider --nbmake --overwrite notebooks
+
 # every figure in benchmarks/README.md (about 1.5 h on 2 CPUs; numba for the baseline)
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[test,bench]'
@@ -32,6 +36,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/simulator_speed.py
 	$(PY) benchmarks/logged_speed.py
 	$(PY) benchmarks/seed004_accuracy.py
+	$(PY) benchmarks/flywheel.py
 
 # the quick forms (a few minutes)
 bench-quick: $(STAMP)
