@@ -65,6 +65,10 @@ def _speed_list(text):
     return _number_list(text, _positive_float, "speeds in rpm separated by commas, e.g. 800,1250,2000")
 
 
+def _delta_list(text):
+    return _number_list(text, _positive_float, "targets separated by commas, e.g. 0.01 or 0.03,0.01,0.005")
+
+
 def _scale_list(text):
     return _number_list(text, _speed, "scales ≥ 0 separated by commas, e.g. 0.3,1,1")
 
@@ -194,7 +198,9 @@ def _build_parser():
     p = sub.add_parser("flywheel", help="the smallest flywheel keeping δ ≤ --delta at every operating point, "
                        "against the textbook (seed 004 §3.2.12)")
     p.add_argument("engine", metavar="ENGINE", help="engine file (.toml) or preset name (see `rotor presets`)")
-    p.add_argument("--delta", type=_positive_float, required=True, help="target irregularity δ, e.g. 0.01")
+    p.add_argument("--delta", type=_delta_list, required=True, metavar="D,...",
+                   help="target irregularity δ = (ω_max − ω_min)/ω_mean, e.g. 0.01; one for all or one per --rpm "
+                        "(e.g. 0.03,0.01,0.005: looser at idle)")
     p.add_argument("--rpm", type=_speed_list, metavar="RPM,...",
                    help="operating speeds [rev/min], e.g. 800,1250,2000 (default: the file's [operating] rpm)")
     p.add_argument("--imep-scale", type=_scale_list, default=[1.0], metavar="S,...",
@@ -438,14 +444,16 @@ def _cmd_flywheel(args):
 
     engine = rotor.load_engine(args.engine)
     rpms = args.rpm if args.rpm else [float(engine.operating.rpm)]
-    scales = args.imep_scale
-    if len(scales) not in (1, len(rpms)):
-        raise rotor.EngineError(f"--imep-scale gives {len(scales)} values for {len(rpms)} speeds: give one for all "
-                                "or one per --rpm")
-    scales = scales * len(rpms) if len(scales) == 1 else scales
+    def per_point(values, option):
+        if len(values) not in (1, len(rpms)):
+            raise rotor.EngineError(f"{option} gives {len(values)} values for {len(rpms)} speeds: give one for all "
+                                    "or one per --rpm")
+        return values * len(rpms) if len(values) == 1 else values
+
+    scales, deltas = per_point(args.imep_scale, "--imep-scale"), per_point(args.delta, "--delta")
     load = rotor.parse_load(args.load)
-    points = [OperatingPoint(r, s, load) for r, s in zip(rpms, scales)]
-    design = design_flywheel(engine, args.delta, points, shaft_inertia_kgm2=args.shaft_inertia, density_kg_m3=args.density,
+    points = [OperatingPoint(r, s, load, d) for r, s, d in zip(rpms, scales, deltas)]
+    design = design_flywheel(engine, None, points, shaft_inertia_kgm2=args.shaft_inertia, density_kg_m3=args.density,
                              bore_m=args.bore, max_outer_diameter_m=args.max_diameter, max_width_m=args.max_width,
                              max_rim_speed_m_s=args.max_rim_speed, fidelity=args.fidelity)
     written = []

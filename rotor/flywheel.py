@@ -55,13 +55,15 @@ CAST_IRON_KG_M3 = 7200.0
 
 class OperatingPoint(NamedTuple):
     """One operating point: mean speed ``rpm`` [rev/min], the fuelling ``imep_scale``
-    (combustion scale [-], 1 = the engine file's pressure) and a ``load`` (None or a
+    (combustion scale [-], 1 = the engine file's pressure), a ``load`` (None or a
     :class:`rotor.ConstantLoad`: the load balances the engine; a speed-dependent load:
-    the fuelling is scaled to carry it)."""
+    the fuelling is scaled to carry it) and its own target ``delta`` [-] (None: the
+    design's; e.g. a looser one at idle)."""
 
     rpm: float
     imep_scale: float = 1.0
     load: object = None
+    delta: Optional[float] = None
 
 
 def _points(points, engine) -> list[OperatingPoint]:
@@ -78,7 +80,9 @@ def _points(points, engine) -> list[OperatingPoint]:
         scale = np.asarray(p.imep_scale, dtype=float)
         if not (np.all(np.isfinite(scale)) and np.all(scale >= 0)):
             raise EngineError(f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be ≥ 0 and finite")
-        out.append(OperatingPoint(rpm, p.imep_scale, p.load))
+        if p.delta is not None:
+            _check_delta(p.delta)
+        out.append(OperatingPoint(rpm, p.imep_scale, p.load, p.delta))
     if not out:
         raise EngineError("no operating points: give at least one rpm")
     return out
@@ -278,6 +282,7 @@ class PointResult:
     rpm: float
     imep_scale: object
     load: str
+    delta_target: float
     inertia_kgm2: float
     delta: float
     peak_rpm: float
@@ -287,11 +292,12 @@ class PointResult:
 
 @dataclass(frozen=True)
 class FlywheelDesign:
-    """The smallest ``[crankshaft] inertia_kgm2`` meeting δ ≤ ``delta_target`` at every
-    point, the textbook estimate, and (with limits) the lightest disc.
+    """The smallest ``[crankshaft] inertia_kgm2`` meeting each point's δ target, the
+    textbook estimate, and (with limits) the lightest disc.
 
     - ``crankshaft_inertia_kgm2``: the designed ``[crankshaft] inertia_kgm2`` [kg·m²];
-    - ``binding_rpm``: the point that sets it; ``delta_achieved``: δ there [-];
+    - ``binding_rpm``: the point that sets it; ``delta_target``: its target [-];
+      ``delta_achieved``: δ there [-];
     - ``textbook``: the textbook sizing at the point where it asks most;
       ``textbook_inertia_kgm2``: its ``[crankshaft]`` equivalent (J₀ less the rods and pistons);
     - ``flywheel_kgm2``: the design less ``shaft_inertia_kgm2`` (what the flywheel must add);
@@ -344,15 +350,16 @@ class FlywheelDesign:
         """A comparison of the textbook and the designed flywheel, as text."""
         t = self.textbook
         lines = [
-            f"{self.engine_name}: flywheel for δ ≤ {self.delta_target:g} at {len(self.points)} operating point(s)",
+            f"{self.engine_name}: the smallest flywheel for δ ≤ target at {len(self.points)} operating point(s)",
             "",
-            f"  {'rpm':>7} {'imep scale':>10} {'load':>14} {'J for δ target':>15} {'δ (design)':>11} "
+            f"  {'rpm':>7} {'imep scale':>10} {'load':>12} {'δ target':>9} {'J for target':>13} {'δ (design)':>11} "
             f"{'J textbook':>11}",
         ]
         for p in self.points:
             mark = "  ← binding" if p.rpm == self.binding_rpm and p.inertia_kgm2 == self.crankshaft_inertia_kgm2 else ""
             scale = p.imep_scale if isinstance(p.imep_scale, (int, float)) else "per cyl."
-            lines.append(f"  {p.rpm:7g} {scale:>10} {p.load:>14} {p.inertia_kgm2:15.4f} {p.delta:11.5f} "
+            lines.append(f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {p.inertia_kgm2:13.4f} "
+                         f"{p.delta:11.5f} "
                          f"{p.textbook.crankshaft_inertia_kgm2:11.4f}{mark}")
         lines += [
             "",
@@ -387,7 +394,7 @@ def _load_name(load):
 
 def design_flywheel(
     engine,
-    delta: float,
+    delta: Optional[float],
     points=None,
     *,
     shaft_inertia_kgm2: float = 0.0,
@@ -407,10 +414,11 @@ def design_flywheel(
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`; its ``[crankshaft] inertia_kgm2`` is only the
       starting guess.
-    - ``delta``: the target irregularity (ω_max − ω_min)/ω_mean [-], e.g. 0.01.
+    - ``delta``: the target irregularity (ω_max − ω_min)/ω_mean [-], e.g. 0.01, for
+      every point that gives none of its own (None if all do).
     - ``points``: the operating points: rpm values [rev/min], :class:`OperatingPoint`
-      (rpm, imep_scale, load) or tuples of those; default the engine's ``[operating] rpm``
-      at full fuelling with a balancing load.
+      (rpm, imep_scale, load, delta) or tuples of those; default the engine's
+      ``[operating] rpm`` at full fuelling with a balancing load.
     - ``shaft_inertia_kgm2``: the crankshaft's own inertia without the flywheel [kg·m²]
       (``flywheel_kgm2`` is the design less this).
     - ``diameter_strokes``: the textbook's mean diameter in strokes [-] (2…3).
@@ -425,13 +433,16 @@ def design_flywheel(
     **Raises:** :class:`rotor.EngineError` for a bad target or point, an operating point
     with no steady state, or limits no disc can meet.
     """
-    delta = _check_delta(delta)
     pts = _points(points, engine)
+    if delta is None and any(p.delta is None for p in pts):
+        raise EngineError("no δ target: give delta, or one in every OperatingPoint")
+    default = None if delta is None else _check_delta(delta)
     ev = _Evaluator(engine, fidelity, friction, grid_deg)
     j_start = float(engine.crankshaft.inertia_kgm2)
-    log_target = math.log(delta)
     results = []
     for p in pts:
+        delta = default if p.delta is None else float(p.delta)
+        log_target = math.log(delta)
         # the textbook diagram does not depend on the inertia; find a start with a steady state
         j_try = j_start
         for _ in range(6):
@@ -453,12 +464,12 @@ def design_flywheel(
                 f"at {p.rpm:g} rpm no crankshaft inertia gives δ = {delta:g} (Newton stopped at {J:.4g} kg·m² "
                 f"with δ = {d_check:.4g}); a target this loose may need no flywheel at all, or the engine stalls "
                 "there: check rotor.steady_state at this point")
-        results.append((p, J, steps, tb))
+        results.append((p, J, steps, tb, delta))
     i_bind = int(np.argmax([r[1] for r in results]))
     J_design = results[i_bind][1]
     point_results = []
     peak = 0.0
-    for p, J, steps, tb in results:
+    for p, J, steps, tb, target in results:
         try:  # the eager steady state: every check of rotor.steady_state applies to the design
             r = steady_state(_with_inertia(engine, J_design), p.rpm, p.load, fidelity=fidelity, friction=friction,
                              imep_scale=p.imep_scale, grid_deg=grid_deg)
@@ -466,7 +477,7 @@ def design_flywheel(
             raise EngineError(f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}")
         peak = max(peak, float(r.max_rpm))
         point_results.append(PointResult(rpm=p.rpm, imep_scale=_jsonable(p.imep_scale), load=_load_name(p.load),
-                                         inertia_kgm2=J, delta=float(r.delta), peak_rpm=float(r.max_rpm),
+                                         delta_target=target, inertia_kgm2=J, delta=float(r.delta), peak_rpm=float(r.max_rpm),
                                          newton_steps=steps, textbook=tb))
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
     flywheel = J_design - float(shaft_inertia_kgm2)
@@ -476,7 +487,7 @@ def design_flywheel(
                              max_outer_diameter_m=max_outer_diameter_m, max_width_m=max_width_m,
                              max_rim_speed_m_s=max_rim_speed_m_s)
     return FlywheelDesign(
-        engine_name=engine.name, delta_target=delta, crankshaft_inertia_kgm2=J_design,
+        engine_name=engine.name, delta_target=results[i_bind][4], crankshaft_inertia_kgm2=J_design,
         binding_rpm=pts[i_bind].rpm, delta_achieved=point_results[i_bind].delta,
         shaft_inertia_kgm2=float(shaft_inertia_kgm2), flywheel_kgm2=flywheel, textbook=tb_worst,
         points=tuple(point_results), disc=disc, fidelity=fidelity,

@@ -168,3 +168,17 @@ def test_cli_json_and_errors(capsys, tmp_path):
     with pytest.raises(SystemExit):
         main(["flywheel", "4chn15", "--delta", "0.01", "--rpm", "800,abc"])
     assert "not a number" in capsys.readouterr().err
+
+
+def test_per_point_targets(diesel):
+    """Each point may carry its own target (looser at idle); the binding point meets its own."""
+    pts = [OperatingPoint(600, 0.25, None, 0.04), OperatingPoint(1250, 1.0, None, 0.005)]
+    d = rotor.design_flywheel(diesel, None, pts)
+    alone = [rotor.design_flywheel(diesel, p.delta, [OperatingPoint(p.rpm, p.imep_scale)]).crankshaft_inertia_kgm2
+             for p in pts]
+    assert d.crankshaft_inertia_kgm2 == pytest.approx(max(alone), rel=1e-9)
+    for p, target in zip(d.points, (0.04, 0.005)):
+        assert p.delta_target == target and p.delta <= target * (1 + 1e-6)
+    assert d.delta_achieved == pytest.approx(d.delta_target, rel=1e-6)
+    with pytest.raises(rotor.EngineError, match="no δ target"):
+        rotor.design_flywheel(diesel, None, [1250])
