@@ -127,22 +127,25 @@ def figure(rows):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     for i, preset in enumerate(POINTS):
         for label, style in (("rated", "o-"), ("idle to rated", "s--")):
             rs = [r for r in rows if r["preset"] == preset and r["points"] == label]
             x = [r["delta_target"] for r in rs]
             ax.plot(x, [100 * (r["textbook_ratio"] - 1) for r in rs], style, color=f"C{i}",
-                    label=f"{preset}, {label}: textbook at its worst point")
+                    label=f"{preset}, {label}")
             if label == "idle to rated":
-                ax.plot(x, [100 * (r["textbook_rated_ratio"] - 1) for r in rs], "x:", color=f"C{i}",
-                        label=f"{preset}, {label}: textbook at the rated point only")
-    ax.set_xscale("log")
-    ax.set_xlabel("target δ")
+                bx.plot(x, [100 * (r["textbook_rated_ratio"] - 1) for r in rs], style, color=f"C{i}",
+                        label=f"{preset}, {label}")
+    ax.set_title("textbook J₀ = L_excess/(δ·ω²) at each point, the largest", fontsize=9)
+    bx.set_title("textbook at the rated point only (one turning-moment diagram)", fontsize=9)
+    for a in (ax, bx):
+        a.set_xscale("log")
+        a.set_xlabel("target δ")
+        a.axhline(0, color="k", lw=0.7)
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=8)
     ax.set_ylabel("textbook [crankshaft] inertia / design − 1 [%]")
-    ax.axhline(0, color="k", lw=0.7)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
     FIG.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(FIG) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
@@ -153,7 +156,11 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="δ = 0.01 only, 2 repeats")
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--figure-only", action="store_true", help="redraw the figure from the saved JSON")
     args = ap.parse_args()
+    if args.figure_only:
+        figure(json.loads(OUT.read_text())["rows"])
+        return 0
     deltas = [0.01] if args.quick else DELTAS
     repeats = 2 if args.quick else args.repeats
     engines = {name: rotor.load_engine(name) for name in POINTS}
