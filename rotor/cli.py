@@ -579,8 +579,19 @@ def _cmd_demo(args):
     print(f"load step {load:.0f} -> {1.2 * load:.0f} N·m at t = 0.5 s, PI governor:")
     sys.stdout.write(_format_result(trans))
     print()
+    # the flywheel for δ ≤ 0.01 at rated speed and ≤ 0.03 at a part-load idle, against the textbook
+    from .flywheel import OperatingPoint
+    from .plotting import plot_flywheel_design, save_figure
+
+    rpm = float(engine.operating.rpm)
+    design = rotor.design_flywheel(engine, 0.01, [OperatingPoint(0.5 * rpm, 0.3, None, 0.03), rpm])
+    print(design.report())
+    print()
+    os.makedirs(args.out, exist_ok=True)
+    fly = os.path.join(args.out, "flywheel.png")
+    save_figure(plot_flywheel_design(design, engine), fly)
     for path in (_write_plots(engine, None, args.out) + _plot_result(steady, args.out, "steady")
-                 + _plot_result(trans, args.out, "load_step")):
+                 + _plot_result(trans, args.out, "load_step") + [fly]):
         print(f"wrote {path}")
 
 
