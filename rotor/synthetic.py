@@ -18,11 +18,14 @@ files). What it holds:
   real files' noise, 0.0006 V).
 - **Encoder channel**: the wheel's analog pulse train, low −0.73 V, high 4.0 V (the
   real files' levels), high for 45 % of each tooth pitch from the tooth's rising edge,
-  each edge a linear ramp of 40 µs (about 4 samples at 100 kHz: a sampled edge as the
-  bench's, rising over a few samples), plus white noise of ``noise_v``. The rising
+  each edge a linear ramp over 4 samples (40 µs at 100 kHz; the bench's edges rise over
+  2–3 samples), timed so that it crosses 32 % of the swing, where
+  :func:`rotor.find_edges` times an edge, at the edge's true time, plus white noise of ``noise_v``. The rising
   edges sit at the tooth angles plus a fixed tooth-spacing error per tooth (uniform
-  in ±``tooth_error_deg``, zero mean, drawn from ``seed``), every revolution the same
-  errors. The gap is a plain gap of ``missing`` pitches (the real wheel's narrow, low
+  in ±``tooth_error_deg``, zero mean), every revolution the same errors, and every
+  recording too, whatever its ``seed``: one wheel, as on a bench, so that tooth errors
+  estimated or calibrated on one recording apply to the others
+  (:func:`simulated_tooth_errors` gives the true ones). The gap is a plain gap of ``missing`` pitches (the real wheel's narrow, low
   pulse after the gap and the wide one before it are not imitated).
 - **imep_scale**: for a Wiebe cycle the whole cycle is scaled, the intake pressure and
   the IMEP by one factor (a throttled spark-ignition engine: ``rotor.diagnose``'s charge
@@ -46,14 +49,14 @@ import numpy as np
 
 from ._checks import EngineError
 
-__all__ = ["simulated_recording", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
+__all__ = ["simulated_recording", "simulated_tooth_errors", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
 
 BENCH_GAIN_PA_PER_V = 1e5 / (5 * 0.00385)  # the bench's sensor: 51.95 bar per volt
 BENCH_OFFSET_V = 5 * 0.115  # the sensor's output at 0 bar [V]
 DEFAULT_GAP_DEG = -29.4  # the real bench: TDC 29.4° after the gap (rotor.analyze_log on full_load.txt)
 LOW_V, HIGH_V = -0.73, 4.0  # encoder levels of the real files
 DUTY = 0.45  # high part of a tooth pitch (the real files: 14–15 of 33 samples)
-RAMP_S = 40e-6  # duration of an edge's linear ramp [s]
+RAMP_SAMPLES = 4.0  # an edge's linear ramp [samples] (at most a third of the shortest high pulse)
 EDGE_LEVEL = 0.32  # a rising edge crosses this fraction of the swing at its true time (rotor.find_edges' level)
 WHEEL_SEED = 0  # the wheel's tooth errors: one wheel for every recording, whatever ``seed``
 MIN_SAMPLES_PER_PITCH = 10  # below this the pulses get too few samples for the edge finder
@@ -74,6 +77,23 @@ def _pressure_jit(engine, theta):
 
 
 _PRESSURE = None
+
+
+def _wheel_errors(wheel, tooth_error_deg):
+    e = np.random.default_rng(WHEEL_SEED).uniform(-1.0, 1.0, wheel.edges_per_rev) * np.deg2rad(tooth_error_deg)
+    return e - e.mean()
+
+
+def simulated_tooth_errors(wheel=None, tooth_error_deg: float = 0.1):
+    """The true tooth-spacing errors of the wheel that :func:`simulated_recording` draws with
+    the same ``wheel`` and ``tooth_error_deg`` [deg] (the same for every ``seed``), as a
+    :class:`rotor.ToothErrors` (``method="simulated"``) to compare an estimate with, or to
+    analyse a simulated recording with its exact correction."""
+    from .wheel import ToothErrors, Wheel, parse_wheel
+
+    w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
+    tooth_error_deg = _number("tooth_error_deg", tooth_error_deg, nonnegative=True)
+    return ToothErrors(w.spec, _wheel_errors(w, tooth_error_deg), method="simulated", source="rotor.synthetic")
 
 
 def pressure_volts(p_pa):
@@ -122,8 +142,8 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
       (default 0.1; below a quarter of a pitch).
     - ``noise_v``: standard deviation of white noise on the encoder channel [V] (default
       0.01, ten times the real files' 0.001 V; the pressure channel gets a twentieth of it).
-    - ``seed``: seeds the tooth errors, the noise and the start angle; the same arguments
-      give the same file.
+    - ``seed``: seeds the noise and where the recording starts; the same arguments give the
+      same file. The wheel's tooth errors do not depend on it (one wheel for all recordings).
 
     **Returns:** the path written (:class:`pathlib.Path`).
 
@@ -136,11 +156,15 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
 
     from ._io import atomic_path
     from .engine import Engine
+    from .calibration import SIGMA_RANGE
     from .engine_file import load_engine
     from .periodic import steady_state
     from .wheel import Wheel, parse_wheel
 
     # ---------------------------------------------------------------- arguments
+    path = pathlib.Path(path)
+    if not path.parent.is_dir():
+        raise EngineError(f"path = {os.fspath(path)!r}: the folder {os.fspath(path.parent)!r} does not exist")
     if isinstance(engine, Engine):
         eng = engine
     elif isinstance(engine, (str, os.PathLike)):
@@ -175,6 +199,10 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     # ---------------------------------------------------------------- the speed
     pressure = eng.pressure
     if all(hasattr(pressure, k) for k in ("intake_pa", "imep_pa")):  # a Wiebe cycle: the whole charge scaled
+        lo, hi = SIGMA_RANGE
+        if not lo <= imep_scale <= hi:
+            raise EngineError(f"imep_scale = {imep_scale:g}: scales this engine's Wiebe cycle whole (intake pressure "
+                              f"with the IMEP); the physical range is {lo:g} … {hi:g}")
         eng = eqx.tree_at(lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), eng,
                           (pressure.intake_pa * imep_scale, pressure.imep_pa * imep_scale))
         comb_scale = 1.0
@@ -228,8 +256,7 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
 
     # ---------------------------------------------------------------- encoder channel
     E = w.edges_per_rev
-    err = np.random.default_rng(WHEEL_SEED).uniform(-1.0, 1.0, E) * np.deg2rad(tooth_error_deg)
-    err -= err.mean()
+    err = _wheel_errors(w, tooth_error_deg)
     pitch = 2 * np.pi / w.teeth
     gap = np.deg2rad(gap_deg)
     # the first edge after the gap at crank angle gap (+ k·2π): relative to TDC before intake, and to firing TDC
@@ -240,14 +267,14 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     fall = rise + DUTY * pitch
     keep = (rise > theta[0]) & (fall < theta[-1])
     rise_t, fall_t = t_of(rise[keep]) - t0, t_of(fall[keep]) - t0
-    # high(t) is a sum of boxes [rise, fall); filtered by a box of RAMP_S each edge becomes a linear ramp.
+    # high(t) is a sum of boxes [rise, fall); filtered by a box of width R each edge becomes a linear ramp.
     # The sample value is the box average, (H(s + (1 − l)·R) − H(s − l·R))/R with H the high time up to s,
     # evaluated exactly for every sample from the sorted edges; l = EDGE_LEVEL puts a rising edge's crossing of
     # that fraction of the swing (where rotor.find_edges times it) at the edge's true time.
-    R = RAMP_S
-    knots = np.sort(np.concatenate([rise_t, fall_t]))
-    is_rise = np.isin(knots, rise_t)
-    level = np.cumsum(np.where(is_rise, 1.0, -1.0))  # the state after each knot (1 high, 0 low)
+    R = min(RAMP_SAMPLES / fs, DUTY * pitch_s / 3)
+    # rise < fall < next rise: the errors are below a quarter pitch, the high part 45 % of one
+    knots = np.column_stack([rise_t, fall_t]).ravel()
+    level = np.tile([1.0, 0.0], rise_t.size)  # the state after each knot (1 high, 0 low)
     H_knots = np.concatenate([[0.0], np.cumsum(level[:-1] * np.diff(knots))])
 
     def H(s):
@@ -260,9 +287,6 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     ev = LOW_V + (HIGH_V - LOW_V) * frac + rng.normal(0.0, noise_v, n)
 
     # ---------------------------------------------------------------- write
-    path = pathlib.Path(path)
-    if not path.parent.is_dir():
-        raise EngineError(f"path = {os.fspath(path)!r}: the folder {os.fspath(path.parent)!r} does not exist")
     data = np.column_stack([ts, pv, ev])
     with atomic_path(path) as tmp:
         np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
