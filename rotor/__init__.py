@@ -78,6 +78,7 @@ from .inverse import (  # noqa: E402
 from .identification import Identification, identify  # noqa: E402
 from .misfire import contribution_index  # noqa: E402
 from .calibration import Calibration, calibrate, cylinder_torques, diagnose, measured_imep  # noqa: E402
+from .synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
 from .flywheel import (  # noqa: E402
     DiscFlywheel,
     FlywheelDesign,
@@ -92,6 +93,8 @@ from .flywheel import (  # noqa: E402
 __version__ = "0.1.0"
 
 __all__ = [
+    "simulated_recording",
+    "simulated_tooth_errors",
     "design_flywheel",
     "textbook_flywheel",
     "inertia_for_delta",
