@@ -38,6 +38,7 @@ __all__ = [
 ]
 
 
+@eqx.filter_jit  # one compiled call per shape, not hundreds of eager operations
 def cylinder_pressure(engine, theta):
     """Absolute pressure in every cylinder [Pa], shape ``theta.shape + (cylinders,)``.
 
@@ -47,6 +48,7 @@ def cylinder_pressure(engine, theta):
     return engine.pressure(phi, engine.geometry, engine.strokes)
 
 
+@eqx.filter_jit  # one compiled call per shape, not hundreds of eager operations
 def cylinder_gas_torques(engine, theta, model: str = "exact"):
     """Gas torque of each cylinder, (p − p_cc)·A·ds/dθ [N·m], shape ``theta.shape + (cylinders,)``.
 
@@ -58,6 +60,7 @@ def cylinder_gas_torques(engine, theta, model: str = "exact"):
     return force * ds
 
 
+@eqx.filter_jit  # one compiled call per shape, not hundreds of eager operations
 def gas_torque(engine, theta, model: str = "exact"):
     """Total gas torque of the engine on the crankshaft [N·m], shape of ``theta``.
 
