@@ -298,8 +298,12 @@ class FlywheelDesign:
     - ``crankshaft_inertia_kgm2``: the designed ``[crankshaft] inertia_kgm2`` [kg·m²];
     - ``binding_rpm``: the point that sets it; ``delta_target``: its target [-];
       ``delta_achieved``: δ there [-];
-    - ``textbook``: the textbook sizing at the point where it asks most;
-      ``textbook_inertia_kgm2``: its ``[crankshaft]`` equivalent (J₀ less the rods and pistons);
+    - ``textbook``: the textbook sizing at the point where it asks most (the textbook
+      applied at every point; at one point only it can be far off: see ``points``);
+      ``textbook_inertia_kgm2``: its ``[crankshaft]`` equivalent (J₀ less the rods and
+      pistons); ``textbook_ratio``: that over the design; ``textbook_total_ratio``: J₀ over
+      the design's total mean inertia (the fairer ratio when the rods and pistons are a
+      large share);
     - ``flywheel_kgm2``: the design less ``shaft_inertia_kgm2`` (what the flywheel must add);
     - ``disc``: a :class:`DiscFlywheel` or None; ``points``: per point.
     """
@@ -327,6 +331,13 @@ class FlywheelDesign:
         """textbook ``[crankshaft]`` inertia / designed [-] (> 1: the textbook oversizes)."""
         return self.textbook_inertia_kgm2 / self.crankshaft_inertia_kgm2
 
+    @property
+    def textbook_total_ratio(self) -> float:
+        """textbook J₀ / the design's total mean inertia (crankshaft + rods and pistons) [-]."""
+        t = self.textbook
+        mechanism = t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2
+        return t.total_inertia_kgm2 / (self.crankshaft_inertia_kgm2 + mechanism)
+
     def to_dict(self) -> dict:
         d = {
             "engine": self.engine_name,
@@ -334,6 +345,7 @@ class FlywheelDesign:
             "crankshaft_inertia_kgm2": self.crankshaft_inertia_kgm2,
             "textbook_inertia_kgm2": self.textbook_inertia_kgm2,
             "textbook_ratio": self.textbook_ratio,
+            "textbook_total_ratio": self.textbook_total_ratio,
             "binding_rpm": self.binding_rpm,
             "delta_achieved": self.delta_achieved,
             "shaft_inertia_kgm2": self.shaft_inertia_kgm2,
@@ -368,11 +380,13 @@ class FlywheelDesign:
             f"  textbook (seed 004 §3.2.12) at {t.rpm:g} rpm: J₀ = L_excess/(δ·ω²) = {t.excess_work_J:.1f} J / "
             f"({t.delta:g}·{t.rpm / RPM_PER_RAD_S:.1f}²) = {t.total_inertia_kgm2:.4f} kg·m²",
             f"    as [crankshaft] inertia_kgm2 (J₀ less rods and pistons) {t.crankshaft_inertia_kgm2:10.4f} kg·m²  "
-            f"= {self.textbook_ratio:.3f} × the design ({100 * (self.textbook_ratio - 1):+.1f} %)",
+            f"= {self.textbook_ratio:.3f} × the design ({100 * (self.textbook_ratio - 1):+.1f} %; as total inertias "
+            f"{100 * (self.textbook_total_ratio - 1):+.1f} %)",
             f"    flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean diameter "
             f"{t.mean_diameter_m:.3f} m",
-            f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: {self.flywheel_kgm2:.4f} kg·m²",
         ]
+        if self.shaft_inertia_kgm2:
+            lines.append(f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: {self.flywheel_kgm2:.4f} kg·m²")
         if self.disc is not None:
             d = self.disc
             lines.append(f"  lightest disc: D = {d.outer_diameter_m:.3f} m ({d.limited_by} limit), bore "
@@ -380,12 +394,11 @@ class FlywheelDesign:
                          f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm")
         return "\n".join(lines)
 
-    def plot(self, engine, ax=None, rpm_range=None, n: int = 25):
-        """δ against speed for the designed and the textbook inertia at full fuelling,
-        with the target and the operating points (needs the ``engine``)."""
+    def plot(self, engine, axes=None, rpm_range=None, n: int = 25):
+        """Plot the design (needs the ``engine``): see :func:`rotor.plotting.plot_flywheel_design`."""
         from .plotting import plot_flywheel_design
 
-        return plot_flywheel_design(self, engine, ax=ax, rpm_range=rpm_range, n=n)
+        return plot_flywheel_design(self, engine, axes=axes, rpm_range=rpm_range, n=n)
 
 
 def _load_name(load):

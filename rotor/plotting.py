@@ -309,11 +309,12 @@ def plot_identification(ident, engine=None, axes=None):
 
 
 def plot_flywheel_design(design, engine, axes=None, rpm_range=None, n: int = 25):
-    """Plot a :class:`rotor.flywheel.FlywheelDesign`: δ against mean speed [rpm] at full
-    fuelling with the designed and the textbook ``[crankshaft]`` inertia, the target and
-    the operating points (left); the inertia each point needs, by Newton through the
-    steady state and by the textbook [kg·m²] (right). ``rpm_range``: (low, high) of the
-    sweep [rev/min] (default the points' range ±20 %); ``n``: sweep points.
+    """Plot a :class:`rotor.flywheel.FlywheelDesign`: δ against mean speed [rpm] with the
+    designed and the textbook ``[crankshaft]`` inertia, the fuelling interpolated between
+    the operating points (balancing load), the points with their targets (left); the
+    inertia each point needs, by Newton through the steady state and by the textbook
+    [kg·m²] (right). ``rpm_range``: (low, high) of the sweep [rev/min] (default the
+    points' range ±20 %); ``n``: sweep points.
 
     **Returns:** the two Axes.
     """
@@ -329,14 +330,21 @@ def plot_flywheel_design(design, engine, axes=None, rpm_range=None, n: int = 25)
     sweep = np.linspace(lo, hi, n)
     s = design.settings
     ev = _Evaluator(engine, design.fidelity, design.friction, s.get("grid_deg", 0.25))
+    order = np.argsort(rpms)
+    scales = [np.mean(p.imep_scale) for p in design.points]
+    fuel = np.interp(sweep, rpms[order], np.asarray(scales)[order])
     for J, label, style in ((design.crankshaft_inertia_kgm2, "designed", "-"),
                             (design.textbook_inertia_kgm2, "textbook", "--")):
-        d = [ev.state(J, OperatingPoint(r))[0] for r in sweep]
-        ax.plot(sweep, d, style, label=f"{label}, J = {J:.4g} kg·m² (full fuelling)")
-    ax.axhline(design.delta_target, color="k", lw=0.8, ls=":", label=f"target δ = {design.delta_target:g}")
+        d = [ev.state(J, OperatingPoint(r, f))[0] for r, f in zip(sweep, fuel)]
+        ax.plot(sweep, d, style, label=f"{label}, J = {J:.4g} kg·m²")
+    targets = [p.delta_target for p in design.points]
+    if len(set(targets)) == 1:
+        ax.axhline(targets[0], color="k", lw=0.8, ls=":", label=f"target δ = {targets[0]:g}")
+    else:
+        ax.plot(rpms[order], np.asarray(targets)[order], "k:", lw=0.8, marker="_", ms=14, label="targets")
     ax.plot(rpms, [p.delta for p in design.points], "o", color="C0", label="operating points (design)")
     ax.plot([design.binding_rpm], [design.delta_achieved], "*", ms=14, color="C3", label="binding point")
-    ax.set_xlabel("mean speed [rpm]")
+    ax.set_xlabel("mean speed [rpm] (fuelling interpolated between the points)")
     ax.set_ylabel("δ = (ω_max − ω_min)/ω_mean")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)

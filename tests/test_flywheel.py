@@ -182,3 +182,17 @@ def test_per_point_targets(diesel):
     assert d.delta_achieved == pytest.approx(d.delta_target, rel=1e-6)
     with pytest.raises(rotor.EngineError, match="no δ target"):
         rotor.design_flywheel(diesel, None, [1250])
+
+
+def test_plot_and_report(diesel):
+    import matplotlib.pyplot as plt
+
+    d = rotor.design_flywheel(diesel, 0.01, [OperatingPoint(600, 0.25, None, 0.03), 1250])
+    axes = d.plot(diesel, n=5)
+    assert len(axes) == 2 and len(axes[0].lines) >= 4
+    plt.close("all")
+    text = d.report()
+    assert "binding" in text and "a shaft of" not in text  # no shaft line when none was given
+    mech = float(rotor.mean_reduced_inertia(diesel)) - float(diesel.crankshaft.inertia_kgm2)
+    assert d.textbook_total_ratio == pytest.approx(
+        d.textbook.total_inertia_kgm2 / (d.crankshaft_inertia_kgm2 + mech), rel=1e-6)
