@@ -583,7 +583,8 @@ def identify(
     vh = float(engine.geometry.displacement_m3)
     a_ref = float(np.sum(comb)) * vh / float(engine.cycle_rad)  # the engine file's mean combustion torque
     p, cov, res, steps, e_ref, ok = jax.device_get(
-        _fit_blocks(bases, jnp.asarray(blocks), jnp.asarray(pos), jnp.asarray(offset_L), a_ref, rtol, nscale, na, max_steps))
+        _fit_blocks(bases, jnp.asarray(blocks), jnp.asarray(pos), jnp.asarray(offset_L), jnp.asarray(a_ref), rtol, nscale,
+                    na, max_steps))  # a_ref traced: a new combustion does not recompile
 
     scale = np.zeros((C, n))
     scale_std = np.zeros((C, n))
