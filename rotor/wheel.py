@@ -385,8 +385,24 @@ def firing_orders(cylinders: int, strokes: int, teeth: int) -> tuple:
     return tuple(range(step, (teeth + 1) // 2, step))
 
 
+def _inertia_ripple(wheel, engine, tdc_deg):
+    """Each edge's angle deviation [rad] (mean zero) that the engine's varying reduced
+    inertia makes at constant kinetic energy, ω ∝ I(θ)^(-1/2), as the tooth-error estimate
+    measures it (against a uniform time-to-angle map over the revolution); edge 0 is the
+    first after the gap, cylinder 1's TDC ``tdc_deg`` after it."""
+    from .inertia import reduced_inertia
+
+    fine = np.linspace(0.0, TWO_PI, 2881)
+    root = np.sqrt(np.asarray(reduced_inertia(engine, fine - math.radians(tdc_deg))))
+    T = np.concatenate([[0.0], np.cumsum(0.5 * (root[1:] + root[:-1]) * np.diff(fine))])  # ∝ time at constant E
+    nominal = wheel.pitch_rad * np.arange(wheel.edges_per_rev)
+    d = TWO_PI * np.interp(nominal, fine, T) / T[-1] - nominal
+    return d - d.mean()
+
+
 def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: int = 4, cylinders: int = 1,
-                          coastdown_ratio: float = 1.5, source: str = "") -> ToothErrors:
+                          coastdown_ratio: float = 1.5, source: str = "", engine=None,
+                          tdc_deg: Optional[float] = None) -> ToothErrors:
     """Tooth-spacing errors of the wheel, from the log itself.
 
     **Arguments:**
@@ -401,6 +417,12 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
     - ``coastdown_ratio``: if the fastest revolution is this much faster than the
       slowest, each tooth's error is regressed on (ω̄/ω)² (the gas and friction torque
       part of the fluctuation scales so) instead of averaged.
+    - ``engine``, ``tdc_deg``: the :class:`rotor.Engine` on the wheel and the angle from
+      the first edge after the gap to cylinder 1's TDC [deg]: the speed ripple of its
+      varying reduced inertia I(θ) (reciprocating masses), which does not die with speed
+      and would otherwise be taken for the wheel's, is removed first. This makes the
+      engine's own fuel-cut coast-down a wheel calibration (4chn15: 0.29° wrong without,
+      0.01° with; ``tests/test_wheel_inertia.py``).
 
     **Returns:** :class:`ToothErrors`.
     """
@@ -422,6 +444,11 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
     if tt.size != R * E:
         raise LogError("tooth errors: the revolutions are not complete")  # locate_teeth guarantees it
     d = (theta(tt) - TWO_PI * rev - w.pitch_rad * tooth).reshape(R, E)
+    if engine is not None:
+        if tdc_deg is None or not math.isfinite(float(tdc_deg)):
+            raise LogError("tooth errors with an engine's inertia ripple removed need tdc_deg: the angle from the "
+                           "first edge after the gap to cylinder 1's TDC [deg]")
+        d = d - _inertia_ripple(w, engine, float(tdc_deg))[None, :]
     omega = TWO_PI / np.diff(t0)
     method = "revolution average"
     if omega.max() > coastdown_ratio * omega.min() and R >= 8:
@@ -435,6 +462,8 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
     else:
         a = d.mean(axis=0)
         se = d.std(axis=0, ddof=1) / np.sqrt(R) if R > 1 else np.zeros(E)
+    if engine is not None:
+        method += f", {engine.name}'s inertia ripple removed (TDC {float(tdc_deg):g}° after the gap)"
     a = a - a.mean()
     # single teeth far off the rest (e.g. the edges that border the gap) are the wheel's;
     # they are left out of the order analysis, so their broad spectrum does not mask the engine's

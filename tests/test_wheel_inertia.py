@@ -1,0 +1,59 @@
+"""The engine's own fuel-cut coast-down as a wheel calibration: the speed ripple of its
+varying reduced inertia (ω ∝ I(θ)^-½ at constant energy) does not die with speed, so the
+coast-down regression takes it for tooth errors unless the engine is given."""
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
+
+import rotor
+
+WHEEL = rotor.Wheel(60, 2)
+GAP_DEG = -60.0  # the first edge after the gap passes 60° before cylinder 1's TDC
+ERRORS = np.deg2rad(np.random.default_rng(7).uniform(-0.2, 0.2, WHEEL.edges_per_rev))
+ERRORS -= ERRORS.mean()
+
+
+def _edges(theta, t, rng):
+    t_of = CubicSpline(theta, t)
+    gap = np.deg2rad(GAP_DEG)
+    revs = np.arange(np.floor((theta[0] - gap) / (2 * np.pi)) - 1, np.ceil((theta[-1] - gap) / (2 * np.pi)) + 1)
+    ang = (gap + 2 * np.pi * revs[:, None] + WHEEL.pitch_rad * np.arange(WHEEL.edges_per_rev) + ERRORS).ravel()
+    ang = ang[(ang >= theta[0]) & (ang <= theta[-1])]
+    return t_of(ang) + rng.normal(0.0, 20e-9, ang.size)
+
+
+def _worst_deg(errors):
+    d = np.asarray(errors) - ERRORS
+    return float(np.rad2deg(np.abs(d - d.mean()).max()))
+
+
+@pytest.fixture(scope="module")
+def fuel_cut():
+    engine = rotor.load_engine("4chn15")
+    run = rotor.simulate(engine, rpm=1250, cycles=12, load=rotor.ConstantLoad(450.0),
+                         combustion=np.zeros((12, engine.cylinders)), step_deg=0.25, progress=False)
+    track = rotor.locate_teeth(_edges(np.asarray(run.theta), np.asarray(run.t), np.random.default_rng(3)), WHEEL)
+    return engine, track
+
+
+def test_fuel_cut_coast_down_calibrates_with_the_engine(fuel_cut):
+    engine, track = fuel_cut
+    plain = rotor.estimate_tooth_errors(track, engine_orders=())
+    fixed = rotor.estimate_tooth_errors(track, engine_orders=(), engine=engine, tdc_deg=-GAP_DEG)
+    assert "coast-down regression" in plain.method and "inertia ripple removed" in fixed.method
+    assert _worst_deg(plain.errors_rad) > 0.2   # the ripple of 4 × 9.72 kg taken for the wheel's
+    assert _worst_deg(fixed.errors_rad) < 0.02  # measured 0.0095°
+
+
+def test_wrong_tdc_does_not_help(fuel_cut):
+    """The ripple is placed by TDC: 45° off, the estimate stays far off (the test can fail)."""
+    engine, track = fuel_cut
+    off = rotor.estimate_tooth_errors(track, engine_orders=(), engine=engine, tdc_deg=-GAP_DEG + 45)
+    assert _worst_deg(off.errors_rad) > 0.1
+
+
+def test_engine_needs_tdc(fuel_cut):
+    engine, track = fuel_cut
+    with pytest.raises(rotor.LogError, match="tdc_deg"):
+        rotor.estimate_tooth_errors(track, engine_orders=(), engine=engine)
