@@ -208,7 +208,11 @@ def _build_parser():
                         "one per --rpm, e.g. 0.3,1,1 for idle to rated (default 1)")
     p.add_argument("--load", default="none", metavar="SPEC",
                    help="load at every point: none (default: the load balances the engine), or a speed-dependent "
-                        "load such as propeller:K,EXP (the fuelling is then scaled to carry it)")
+                        "load such as propeller:TORQUE_NM,RPM (that torque at that speed, ∝ speed²; the fuelling is "
+                        "then scaled to carry it)")
+    p.add_argument("--max-rpm", type=_positive_float, metavar="RPM",
+                   help="highest crank speed the flywheel must stand, for --max-rim-speed (default: the larger of the "
+                        "file's [operating] rpm and the highest speed at the points)")
     p.add_argument("--shaft-inertia", type=_nonnegative_float, default=0.0, metavar="KGM2",
                    help="the crankshaft's own inertia without the flywheel [kg·m²] (default 0)")
     p.add_argument("--max-diameter", type=_positive_float, metavar="M", help="outer diameter limit of the disc [m]")
@@ -455,7 +459,7 @@ def _cmd_flywheel(args):
     points = [OperatingPoint(r, s, load, d) for r, s, d in zip(rpms, scales, deltas)]
     design = design_flywheel(engine, None, points, shaft_inertia_kgm2=args.shaft_inertia, density_kg_m3=args.density,
                              bore_m=args.bore, max_outer_diameter_m=args.max_diameter, max_width_m=args.max_width,
-                             max_rim_speed_m_s=args.max_rim_speed, fidelity=args.fidelity)
+                             max_rim_speed_m_s=args.max_rim_speed, max_rpm=args.max_rpm, fidelity=args.fidelity)
     written = []
     if args.plot:
         from .plotting import plot_flywheel_design, save_figure

@@ -77,12 +77,24 @@ def _points(points, engine) -> list[OperatingPoint]:
         rpm = float(p.rpm)
         if not (math.isfinite(rpm) and rpm > 0):
             raise EngineError(f"operating point rpm = {p.rpm!r}: must be a positive, finite speed in rpm")
-        scale = np.asarray(p.imep_scale, dtype=float)
-        if not (np.all(np.isfinite(scale)) and np.all(scale >= 0)):
-            raise EngineError(f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be ≥ 0 and finite")
+        try:
+            scale = np.asarray(p.imep_scale, dtype=float)
+        except (TypeError, ValueError):
+            scale = np.array(np.nan)
+        if not (np.all(np.isfinite(scale)) and np.all(scale >= 0)) or scale.shape not in ((), (engine.cylinders,)):
+            raise EngineError(f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be one number ≥ 0 "
+                              f"or one per cylinder ({engine.cylinders})")
+        load = p.load
+        if isinstance(load, str):
+            from .loads import parse_load
+
+            load = parse_load(load)
+        if load is not None and not hasattr(load, "torque"):
+            raise EngineError(f"operating point at {rpm:g} rpm: load = {p.load!r} is not a load (a rotor.ConstantLoad, "
+                              "rotor.PropellerLoad, … or a spec such as 'propeller:3000,1250')")
         if p.delta is not None:
             _check_delta(p.delta)
-        out.append(OperatingPoint(rpm, p.imep_scale, p.load, p.delta))
+        out.append(OperatingPoint(rpm, p.imep_scale, load, p.delta))
     if not out:
         raise EngineError("no operating points: give at least one rpm")
     return out
@@ -234,8 +246,8 @@ def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float 
     """
     J = float(inertia_kgm2)
     if not (math.isfinite(J) and J > 0):
-        raise EngineError(f"flywheel inertia {inertia_kgm2!r} kg·m²: must be positive (the crankshaft alone meets "
-                          "the target, or the shaft's own inertia is larger than the requirement)")
+        raise EngineError(f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
+                          "the target: no flywheel is needed)")
     for name, v in (("density_kg_m3", density_kg_m3), ("peak_rpm", peak_rpm)):
         if not (math.isfinite(float(v)) and float(v) > 0):
             raise EngineError(f"{name} = {v!r}: must be positive")
@@ -243,8 +255,12 @@ def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float 
                     ("max_rim_speed_m_s", max_rim_speed_m_s)):
         if v is not None and not (math.isfinite(float(v)) and float(v) > 0):
             raise EngineError(f"{name} = {v!r}: a limit must be positive (or left out)")
-    if not (bore_m >= 0):
-        raise EngineError(f"bore_m = {bore_m!r}: must be ≥ 0")
+    try:
+        bore_m = float(bore_m)
+    except (TypeError, ValueError):
+        bore_m = float("nan")
+    if not (bore_m >= 0 and math.isfinite(bore_m)):
+        raise EngineError("bore_m: must be a number ≥ 0 [m]")
     omega = peak_rpm / RPM_PER_RAD_S
     bounds = {}
     if max_outer_diameter_m is not None:
@@ -256,17 +272,19 @@ def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float 
                           "(or use the textbook's mean diameter of 2…3 strokes)")
     limited_by = min(bounds, key=bounds.get)
     D = bounds[limited_by]
-    if D <= bore_m:
+    if not D**4 - bore_m**4 > 0 or D <= bore_m:
         raise EngineError(f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the "
                           f"bore {bore_m:.4g} m")
     rho = float(density_kg_m3)
     width = 32 * J / (rho * math.pi * (D**4 - bore_m**4))
     if max_width_m is not None and width > max_width_m:
         need_D = (32 * J / (rho * math.pi * max_width_m) + bore_m**4) ** 0.25
+        larger = (f"an outer diameter of {need_D:.4g} m" if limited_by == "outer diameter"
+                  else f"a rim speed of {need_D * omega / 2:.4g} m/s")
         raise EngineError(
             f"no disc meets the limits: {J:.4g} kg·m² at an outer diameter of {D:.4g} m ({limited_by} limit) needs a "
             f"width of {width * 1e3:.1f} mm, more than the {max_width_m * 1e3:.1f} mm allowed; allow a width of "
-            f"{width * 1e3:.1f} mm, an outer diameter of {need_D:.4g} m, or a looser δ target")
+            f"{width * 1e3:.1f} mm, {larger}, or a looser δ target")
     mass = rho * math.pi * width * (D**2 - bore_m**2) / 4
     return DiscFlywheel(outer_diameter_m=D, bore_m=float(bore_m), width_m=width, density_kg_m3=rho,
                         inertia_kgm2=J, mass_kg=mass, rim_speed_m_s=omega * D / 2, peak_rpm=float(peak_rpm),
@@ -288,6 +306,7 @@ class PointResult:
     peak_rpm: float
     newton_steps: int
     textbook: TextbookFlywheel
+    fuel_scale: Optional[float] = None  # the fuelling solved for a speed-dependent load [-]
 
 
 @dataclass(frozen=True)
@@ -321,6 +340,8 @@ class FlywheelDesign:
     fidelity: str = "variable"
     settings: dict = field(default_factory=dict)
     friction: object = None  # as given to design_flywheel (for plots); not in to_dict
+    binding_index: int = 0  # of the binding point in ``points``
+    loads: tuple = ()  # each point's load object (for plots); not in to_dict
 
     @property
     def textbook_inertia_kgm2(self) -> float:
@@ -364,34 +385,54 @@ class FlywheelDesign:
         lines = [
             f"{self.engine_name}: the smallest flywheel for δ ≤ target at {len(self.points)} operating point(s)",
             "",
-            f"  {'rpm':>7} {'imep scale':>10} {'load':>12} {'δ target':>9} {'J for target':>13} {'δ (design)':>11} "
+            f"  {'rpm':>7} {'fuelling':>10} {'load':>12} {'δ target':>9} {'J for target':>13} {'δ (design)':>11} "
             f"{'J textbook':>11}",
         ]
-        for p in self.points:
-            mark = "  ← binding" if p.rpm == self.binding_rpm and p.inertia_kgm2 == self.crankshaft_inertia_kgm2 else ""
-            scale = p.imep_scale if isinstance(p.imep_scale, (int, float)) else "per cyl."
-            lines.append(f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {p.inertia_kgm2:13.4f} "
-                         f"{p.delta:11.5f} "
-                         f"{p.textbook.crankshaft_inertia_kgm2:11.4f}{mark}")
+        for i, p in enumerate(self.points):
+            mark = "  ← binding" if i == self.binding_index else ""
+            scale = f"{p.imep_scale:g}" if isinstance(p.imep_scale, (int, float)) else "per cyl."
+            if p.fuel_scale is not None:  # solved for a speed-dependent load
+                scale = f"×{p.fuel_scale:.3g}" if isinstance(p.imep_scale, (int, float)) and p.imep_scale == 1 else \
+                    f"{scale} ×{p.fuel_scale:.3g}"
+            need = f"{p.inertia_kgm2:13.4f}" if p.inertia_kgm2 > 0 else f"{'none':>13}"
+            tb = p.textbook.crankshaft_inertia_kgm2
+            tb = f"{tb:11.4f}" if tb > 0 else f"{'n/a':>11}"
+            lines.append(f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {need} {p.delta:11.5f} "
+                         f"{tb}{mark}")
         lines += [
             "",
             f"  designed [crankshaft] inertia_kgm2   {self.crankshaft_inertia_kgm2:10.4f} kg·m²  (binding at "
             f"{self.binding_rpm:g} rpm, δ = {self.delta_achieved:.5f})",
             f"  textbook (seed 004 §3.2.12) at {t.rpm:g} rpm: J₀ = L_excess/(δ·ω²) = {t.excess_work_J:.1f} J / "
             f"({t.delta:g}·{t.rpm / RPM_PER_RAD_S:.1f}²) = {t.total_inertia_kgm2:.4f} kg·m²",
-            f"    as [crankshaft] inertia_kgm2 (J₀ less rods and pistons) {t.crankshaft_inertia_kgm2:10.4f} kg·m²  "
-            f"= {self.textbook_ratio:.3f} × the design ({100 * (self.textbook_ratio - 1):+.1f} %; as total inertias "
-            f"{100 * (self.textbook_total_ratio - 1):+.1f} %)",
-            f"    flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean diameter "
-            f"{t.mean_diameter_m:.3f} m",
         ]
+        if t.crankshaft_inertia_kgm2 > 0:
+            lines.append(
+                f"    as [crankshaft] inertia_kgm2 (J₀ less rods and pistons) {t.crankshaft_inertia_kgm2:10.4f} kg·m²  "
+                f"= {self.textbook_ratio:.3f} × the design ({100 * (self.textbook_ratio - 1):+.1f} %; as total "
+                f"inertias {100 * (self.textbook_total_ratio - 1):+.1f} %)")
+        else:
+            lines.append("    not applicable: J₀ is smaller than the rods' and pistons' own mean inertia "
+                         f"({t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2:.4g} kg·m²)")
+        if t.delta > 0.2:
+            lines.append(f"    (δ = {t.delta:g} is not small: the textbook's first-order theory does not hold)")
+        mech = t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2
+        lines.append(f"    the seed's flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean "
+                     f"diameter {t.mean_diameter_m:.3f} m; its 0.85 assumes the shaft, rods and pistons make "
+                     f"0.15·J₀ = {0.15 * t.total_inertia_kgm2:.4g} kg·m² (rods and pistons here: {mech:.4g})")
         if self.shaft_inertia_kgm2:
-            lines.append(f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: {self.flywheel_kgm2:.4f} kg·m²")
+            if self.flywheel_kgm2 > 0:
+                r = t.flywheel_kgm2 / self.flywheel_kgm2
+                lines.append(f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: "
+                             f"{self.flywheel_kgm2:.4f} kg·m² (the seed's 0.85·J₀ is {r:.3f} × it, {100 * (r - 1):+.1f} %)")
+            else:
+                lines.append(f"  a shaft of {self.shaft_inertia_kgm2:g} kg·m² alone meets the target: no flywheel "
+                             "is needed")
         if self.disc is not None:
             d = self.disc
             lines.append(f"  lightest disc: D = {d.outer_diameter_m:.3f} m ({d.limited_by} limit), bore "
                          f"{d.bore_m:.3f} m, width {d.width_m * 1e3:.1f} mm, {d.mass_kg:.1f} kg, rim speed "
-                         f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm")
+                         f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm (the highest speed it must stand)")
         return "\n".join(lines)
 
     def plot(self, engine, axes=None, rpm_range=None, n: int = 25):
@@ -417,6 +458,7 @@ def design_flywheel(
     max_outer_diameter_m: Optional[float] = None,
     max_width_m: Optional[float] = None,
     max_rim_speed_m_s: Optional[float] = None,
+    max_rpm: Optional[float] = None,
     fidelity: str = "variable",
     friction=None,
     grid_deg: float = 0.25,
@@ -438,6 +480,9 @@ def design_flywheel(
     - ``density_kg_m3`` [kg/m³], ``bore_m`` [m], ``max_outer_diameter_m`` [m],
       ``max_width_m`` [m], ``max_rim_speed_m_s`` [m/s]: the lightest disc
       (:func:`lightest_disc`), made when an outer diameter or rim-speed limit is given.
+    - ``max_rpm``: the highest crank speed the flywheel must stand, for the rim speed
+      [rev/min]; default the larger of the engine's ``[operating] rpm`` and the highest
+      speed within the cycle at any point.
     - ``fidelity``, ``friction``, ``grid_deg`` [deg]: as in :func:`rotor.steady_state`.
     - ``rtol``: Newton tolerance on log J [-].
 
@@ -450,52 +495,40 @@ def design_flywheel(
     if delta is None and any(p.delta is None for p in pts):
         raise EngineError("no δ target: give delta, or one in every OperatingPoint")
     default = None if delta is None else _check_delta(delta)
+    _check_design_args(shaft_inertia_kgm2, diameter_strokes, grid_deg, max_rpm,
+                       max_outer_diameter_m is not None or max_rim_speed_m_s is not None, max_width_m, bore_m)
     ev = _Evaluator(engine, fidelity, friction, grid_deg)
     j_start = float(engine.crankshaft.inertia_kgm2)
     results = []
     for p in pts:
-        delta = default if p.delta is None else float(p.delta)
-        log_target = math.log(delta)
-        # the textbook diagram does not depend on the inertia; find a start with a steady state
-        j_try = j_start
-        for _ in range(6):
-            d0, excess, mech, _ = ev.state(j_try, p)
-            if math.isfinite(d0):
-                break
-            j_try *= 10
-        else:
-            raise EngineError(f"no steady state at {p.rpm:g} rpm even with a {j_try:g} kg·m² crankshaft: the engine "
-                              "cannot run at this point (check its fuelling and load)")
-        tb = _textbook(engine, delta, p, excess, mech, diameter_strokes)
-        # start from the textbook inertia scaled by this point's own δ/J slope (δ ∝ 1/(J + mech))
-        u0 = math.log(max((j_try + mech) * d0 / delta - mech, 1e-3 * (j_try + mech)))
-        u, ok, steps = ev.root(u0, log_target, p, rtol)
-        J = math.exp(u)
-        d_check = ev.state(J, p)[0] if ok else float("nan")
-        if not ok or not abs(d_check / delta - 1) < 1e-6:
-            raise EngineError(
-                f"at {p.rpm:g} rpm no crankshaft inertia gives δ = {delta:g} (Newton stopped at {J:.4g} kg·m² "
-                f"with δ = {d_check:.4g}); a target this loose may need no flywheel at all, or the engine stalls "
-                "there: check rotor.steady_state at this point")
-        results.append((p, J, steps, tb, delta))
+        target = default if p.delta is None else float(p.delta)
+        J, steps, tb = _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol)
+        results.append((p, J, steps, tb, target))
     i_bind = int(np.argmax([r[1] for r in results]))
     J_design = results[i_bind][1]
+    if J_design <= 0:
+        raise EngineError("no flywheel is needed: δ stays below the target at every point even with (almost) no "
+                          "crankshaft inertia; the rods and pistons alone are enough (a [crankshaft] inertia_kgm2 "
+                          "must still be > 0)")
     point_results = []
-    peak = 0.0
+    peak = float(engine.operating.rpm) if max_rpm is None else float(max_rpm)
     for p, J, steps, tb, target in results:
         try:  # the eager steady state: every check of rotor.steady_state applies to the design
             r = steady_state(_with_inertia(engine, J_design), p.rpm, p.load, fidelity=fidelity, friction=friction,
                              imep_scale=p.imep_scale, grid_deg=grid_deg)
         except NoSteadyStateError as e:
             raise EngineError(f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}")
-        peak = max(peak, float(r.max_rpm))
-        point_results.append(PointResult(rpm=p.rpm, imep_scale=_jsonable(p.imep_scale), load=_load_name(p.load),
-                                         delta_target=target, inertia_kgm2=J, delta=float(r.delta), peak_rpm=float(r.max_rpm),
-                                         newton_steps=steps, textbook=tb))
+        if max_rpm is None:
+            peak = max(peak, float(r.max_rpm))
+        fuel = r.info.get("fuel_scale")
+        point_results.append(PointResult(
+            rpm=p.rpm, imep_scale=_jsonable(p.imep_scale), load=_load_name(p.load), delta_target=target,
+            inertia_kgm2=J, delta=float(r.delta), peak_rpm=float(r.max_rpm), newton_steps=steps, textbook=tb,
+            fuel_scale=None if fuel is None else float(fuel)))
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
     flywheel = J_design - float(shaft_inertia_kgm2)
     disc = None
-    if max_outer_diameter_m is not None or max_rim_speed_m_s is not None:
+    if (max_outer_diameter_m is not None or max_rim_speed_m_s is not None) and flywheel > 0:
         disc = lightest_disc(flywheel, peak_rpm=peak, density_kg_m3=density_kg_m3, bore_m=bore_m,
                              max_outer_diameter_m=max_outer_diameter_m, max_width_m=max_width_m,
                              max_rim_speed_m_s=max_rim_speed_m_s)
@@ -503,9 +536,60 @@ def design_flywheel(
         engine_name=engine.name, delta_target=results[i_bind][4], crankshaft_inertia_kgm2=J_design,
         binding_rpm=pts[i_bind].rpm, delta_achieved=point_results[i_bind].delta,
         shaft_inertia_kgm2=float(shaft_inertia_kgm2), flywheel_kgm2=flywheel, textbook=tb_worst,
-        points=tuple(point_results), disc=disc, fidelity=fidelity,
+        points=tuple(point_results), disc=disc, fidelity=fidelity, binding_index=i_bind,
         settings={"grid_deg": grid_deg, "diameter_strokes": diameter_strokes}, friction=friction,
+        loads=tuple(p.load for p in pts),
     )
+
+
+def _check_design_args(shaft, diameter_strokes, grid_deg, max_rpm, disc, max_width_m, bore_m):
+    def number(name, v, lo, strict=True):
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            x = float("nan")
+        if not (math.isfinite(x) and (x > lo if strict else x >= lo)):
+            raise EngineError(f"{name} = {v!r}: must be a number {'>' if strict else '≥'} {lo:g}")
+
+    number("shaft_inertia_kgm2", shaft, 0.0, strict=False)
+    number("diameter_strokes", diameter_strokes, 0.0)
+    number("grid_deg", grid_deg, 0.0)
+    if max_rpm is not None:
+        number("max_rpm", max_rpm, 0.0)
+    if not disc and (max_width_m is not None or bore_m):
+        raise EngineError("a width limit or a bore shapes the lightest disc, which needs an outer-diameter or a "
+                          "rim-speed limit as well (max_outer_diameter_m or max_rim_speed_m_s)")
+
+
+def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
+    """The [crankshaft] inertia with δ = target at one point (0 where none is needed), the
+    Newton steps and the textbook there."""
+    j_try = j_start
+    for _ in range(6):  # the textbook diagram does not depend on the inertia; find a start with a steady state
+        d0, excess, mech, _ = ev.state(j_try, p)
+        if math.isfinite(d0):
+            break
+        j_try *= 10
+    else:
+        raise EngineError(f"no steady state at {p.rpm:g} rpm even with a {j_try / 10:g} kg·m² crankshaft: the engine "
+                          "cannot run at this point (check its fuelling and load)")
+    tb = _textbook(engine, target, p, excess, mech, diameter_strokes)
+    # start from this point's own δ/J slope (δ ∝ 1/(J + mech))
+    u0 = math.log(max((j_try + mech) * d0 / target - mech, 1e-3 * (j_try + mech)))
+    u, ok, steps = ev.root(u0, math.log(target), p, rtol)
+    J = math.exp(u)
+    d_check = ev.state(J, p)[0] if ok else float("nan")
+    if ok and abs(d_check / target - 1) < 1e-6:
+        return J, steps, tb
+    # why not: no flywheel needed (δ below the target with almost no crankshaft inertia), or a target too tight
+    j_floor = 1e-6 * (j_try + mech)
+    d_floor = ev.state(j_floor, p)[0]
+    if math.isfinite(d_floor) and d_floor <= target:
+        return 0.0, steps, tb
+    raise EngineError(
+        f"at {p.rpm:g} rpm Newton's method found no crankshaft inertia with δ = {target:g} (it stopped at "
+        f"{J:.4g} kg·m², δ = {d_check:.4g}; with a {j_try:g} kg·m² crankshaft δ = {d0:.4g}): check the target "
+        "(too tight for float64 below about 1e-8?), the tolerance rtol, and rotor.steady_state at this point")
 
 
 def _jsonable(x):

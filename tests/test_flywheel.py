@@ -196,3 +196,71 @@ def test_plot_and_report(diesel):
     mech = float(rotor.mean_reduced_inertia(diesel)) - float(diesel.crankshaft.inertia_kgm2)
     assert d.textbook_total_ratio == pytest.approx(
         d.textbook.total_inertia_kgm2 / (d.crankshaft_inertia_kgm2 + mech), rel=1e-6)
+
+
+def _excess_work(engine, scales, rpm, n=2880):
+    """The textbook excess work from the per-cylinder gas torques, fired and motored, at
+    each cylinder's fuelling, plus the reciprocating inertia torque (independent of the
+    steady-state tables)."""
+    import jax.numpy as jnp
+
+    motored = engine.replace(pressure=engine.pressure.motored(engine.strokes))
+    th = jnp.arange(n) * (engine.cycle_rad / n)
+    fired = np.asarray(rotor.cylinder_gas_torques(engine, th))
+    mot = np.asarray(rotor.cylinder_gas_torques(motored, th))
+    total = (mot + np.asarray(scales) * (fired - mot)).sum(-1) + np.asarray(
+        rotor.reciprocating_inertia_torque(engine, th, rpm * np.pi / 30))
+    W = np.cumsum(total - total.mean()) * engine.cycle_rad / n
+    return W.max() - W.min()
+
+
+@pytest.mark.parametrize("scale", [0.3, [1.0, 1.0, 1.0, 0.0], "propeller"])
+def test_textbook_excess_work_at_the_points_fuelling(diesel, scale):
+    """The textbook diagram is the point's own: part fuelling, one cylinder out, or the
+    fuelling solved for a propeller load."""
+    load = rotor.PropellerLoad(300.0, 1250.0) if scale == "propeller" else None
+    s = 1.0 if scale == "propeller" else scale
+    r = rotor.steady_state(diesel, 900, load, imep_scale=s)
+    fuel = float(r.info["fuel_scale"]) if load is not None else 1.0
+    expected = _excess_work(diesel, fuel * np.broadcast_to(np.asarray(s, float), (4,)), 900)
+    assert float(r.info["excess_work_J"]) == pytest.approx(expected, rel=2e-3)
+    tb = rotor.textbook_flywheel(diesel, 0.01, 900, imep_scale=s, load=load)
+    assert tb.excess_work_J == pytest.approx(expected, rel=2e-3)
+
+
+def test_rim_speed_at_the_highest_speed(diesel):
+    """The rim speed limit holds at the fastest the flywheel turns: by default the larger of
+    [operating] rpm and the points' peak speeds, or max_rpm."""
+    d = rotor.design_flywheel(diesel, 0.03, [OperatingPoint(600, 0.25)], max_rim_speed_m_s=50)
+    assert d.disc.peak_rpm >= 1250  # the engine runs at 1250 rpm, not only at the idle point
+    omega = d.disc.peak_rpm * math.pi / 30
+    assert d.disc.rim_speed_m_s == pytest.approx(50.0) and omega * d.disc.outer_diameter_m / 2 == pytest.approx(50.0)
+    d2 = rotor.design_flywheel(diesel, 0.03, [OperatingPoint(600, 0.25)], max_rim_speed_m_s=50, max_rpm=2000)
+    assert d2.disc.peak_rpm == 2000 and d2.disc.outer_diameter_m == pytest.approx(
+        d.disc.outer_diameter_m * d.disc.peak_rpm / 2000)
+
+
+def test_no_flywheel_needed_and_shaft_alone(diesel):
+    with pytest.raises(rotor.EngineError, match="no flywheel is needed"):
+        rotor.design_flywheel(rotor.load_engine("v8"), 0.2)
+    # a point that needs none next to one that does: the design follows the other
+    d = rotor.design_flywheel(rotor.load_engine("v8"), None, [OperatingPoint(3000, 1.0, None, 0.2),
+                                                                OperatingPoint(3000, 1.0, None, 0.01)])
+    assert d.points[0].inertia_kgm2 == 0.0 and d.binding_index == 1
+    big = rotor.design_flywheel(diesel, 0.01, shaft_inertia_kgm2=100.0)
+    assert big.flywheel_kgm2 < 0 and "alone meets the target" in big.report()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(max_width_m=0.1), "outer-diameter or a rim-speed limit"),
+    (dict(shaft_inertia_kgm2=-1.0), "shaft_inertia_kgm2"),
+    (dict(diameter_strokes=0.0), "diameter_strokes"),
+    (dict(grid_deg=0.0), "grid_deg"),
+    (dict(points=[OperatingPoint(1250, [1.0, 1.0])]), "one per cylinder"),
+    (dict(points=[OperatingPoint(1250, 1.0, "propeller")]), "propeller"),
+    (dict(points=[OperatingPoint(1250, 1.0, 42)]), "is not a load"),
+    (dict(max_outer_diameter_m=1e-300), "not larger than the bore"),
+])
+def test_bad_design_arguments(diesel, kwargs, match):
+    with pytest.raises(rotor.EngineError, match=match):
+        rotor.design_flywheel(diesel, 0.01, **kwargs)
