@@ -77,7 +77,14 @@ from .inverse import (  # noqa: E402
 )
 from .identification import Identification, identify  # noqa: E402
 from .misfire import contribution_index  # noqa: E402
-from .calibration import Calibration, calibrate, cylinder_torques, diagnose, measured_imep  # noqa: E402
+from .calibration import (  # noqa: E402
+    Calibration,
+    calibrate,
+    cylinder_torques,
+    diagnose,
+    measured_imep,
+    preset_calibration,
+)
 from .synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
 from .flywheel import (  # noqa: E402
     DiscFlywheel,
@@ -93,6 +100,7 @@ from .flywheel import (  # noqa: E402
 __version__ = "0.1.0"
 
 __all__ = [
+    "preset_calibration",
     "simulated_recording",
     "simulated_tooth_errors",
     "design_flywheel",
