@@ -154,6 +154,9 @@ def _build_parser():
                    help="tooth-spacing correction: estimate from this log (default), none, or a JSON file")
     p.add_argument("--engine-orders", default="auto", metavar="auto|none|K,K",
                    help="orders of the per-revolution pattern left to the engine when estimating (default auto)")
+    p.add_argument("--engine", metavar="ENGINE", help="engine file or preset on the wheel: its inertia ripple is taken "
+                   "out of the tooth-error estimate (needs --tdc-deg), so its own fuel-cut coast-down calibrates the "
+                   "wheel")
     p.add_argument("--save-tooth-errors", metavar="FILE", help="write the tooth errors applied as JSON")
     p.add_argument("--max-order", type=_positive_float, help="highest order reported and used for δ "
                    "(default teeth/4)")
@@ -404,6 +407,12 @@ def _plot_log(make_figure, args, kind):
     return path
 
 
+def _load_engine(spec):
+    import rotor
+
+    return rotor.load_engine(spec)
+
+
 def _cmd_analyze(args):
     from ._checks import LogError
     from .logged_speed import analyze_log
@@ -425,7 +434,7 @@ def _cmd_analyze(args):
                       tdc_deg=args.tdc_deg, firing=firing, tooth_errors=te, engine_orders=eo,
                       max_order=args.max_order, points_per_cycle=args.points_per_cycle, edge=args.edge,
                       compression_ratio=args.compression_ratio, rod_ratio=args.rod_ratio,
-                      denoise=not args.no_denoise)
+                      denoise=not args.no_denoise, engine=_load_engine(args.engine) if args.engine else None)
     written = []
     if args.save_tooth_errors:
         if res.tooth_errors is None:

@@ -383,7 +383,7 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
                 tdc_deg: Optional[float] = None, firing="auto", tooth_errors="estimate", engine_orders="auto",
                 max_order: Optional[float] = None, points_per_cycle: Optional[int] = None, edge: str = "rising",
                 compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None,
-                denoise: bool = True) -> LogAnalysis:
+                denoise: bool = True, engine=None) -> LogAnalysis:
     """Per-cycle mean speed, δ and order spectrum of a logged recording.
 
     **Arguments:**
@@ -407,6 +407,9 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
       ``None`` (no correction), a :class:`rotor.wheel.ToothErrors` or the path of one
       saved as JSON.
     - ``engine_orders``: passed to the estimate (``"auto"``, a list, or ``()``).
+    - ``engine``: a :class:`rotor.Engine`: the speed ripple of its varying reduced
+      inertia is removed before the tooth errors are estimated (needs ``tdc_deg``), which
+      makes the engine's own fuel-cut coast-down a wheel calibration.
     - ``max_order``: highest order reported and used for δ (default: a quarter of the
       teeth per revolution, 15 for a 60-tooth wheel; 12 for a speed log); below half the
       teeth per revolution.
@@ -474,8 +477,11 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
             raise LogError(f"{name}: the {track.t.size} tooth edges span about {span_rev:.2f} revolutions; a "
                            f"{strokes}-stroke cycle needs {revs} (a longer log)")
         if isinstance(tooth_errors, str) and tooth_errors == "estimate":
+            if engine is not None and tdc_deg is None:
+                raise LogError("engine given to take its inertia ripple out of the tooth-error estimate: give tdc_deg "
+                               "as well (the angle from the gap to cylinder 1's TDC [deg])")
             te = estimate_tooth_errors(track, engine_orders=engine_orders, strokes=strokes, cylinders=cylinders,
-                                       source=name)
+                                       source=name, engine=engine, tdc_deg=tdc_deg)
         elif tooth_errors is None or (isinstance(tooth_errors, str) and tooth_errors == "none"):
             te = None
         elif isinstance(tooth_errors, ToothErrors):

@@ -57,3 +57,25 @@ def test_engine_needs_tdc(fuel_cut):
     engine, track = fuel_cut
     with pytest.raises(rotor.LogError, match="tdc_deg"):
         rotor.estimate_tooth_errors(track, engine_orders=(), engine=engine)
+
+
+def test_analyze_log_and_cli_take_the_engine(fuel_cut, tmp_path, capsys):
+    import json
+
+    from rotor.cli import main
+
+    engine, track = fuel_cut
+    log = rotor.Log.from_arrays(tooth_time_s=track.t)
+    a = rotor.analyze_log(log, WHEEL, tdc_deg=-GAP_DEG, engine=engine, engine_orders=())
+    assert _worst_deg(a.tooth_errors.errors_rad) < 0.02
+    with pytest.raises(rotor.LogError, match="tdc_deg"):
+        rotor.analyze_log(log, WHEEL, engine=engine, engine_orders=())
+    path = tmp_path / "coast.csv"
+    np.savetxt(path, track.t, header="tooth_time_s", comments="")
+    out = tmp_path / "wheel.json"
+    assert main(["analyze", str(path), "--wheel", "60-2", "--columns", "tooth_time_s", "--engine", "4chn15",
+                 "--tdc-deg", str(-GAP_DEG), "--engine-orders", "none", "--save-tooth-errors", str(out),
+                 "--json"]) == 0
+    capsys.readouterr()
+    saved = json.loads(out.read_text())
+    assert _worst_deg(saved["errors_rad"]) < 0.02 and "inertia ripple removed" in saved["method"]
