@@ -2,25 +2,24 @@
 varying reduced inertia (ω ∝ I(θ)^-½ at constant energy) does not die with speed, so the
 coast-down regression takes it for tooth errors unless the engine is given."""
 
+import sys
+
 import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
 import rotor
+from conftest import ROOT
 
-WHEEL = rotor.Wheel(60, 2)
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import synthetic_wheel  # noqa: E402
+from synthetic_wheel import ERRORS, WHEEL  # noqa: E402
+
 GAP_DEG = -60.0  # the first edge after the gap passes 60° before cylinder 1's TDC
-ERRORS = np.deg2rad(np.random.default_rng(7).uniform(-0.2, 0.2, WHEEL.edges_per_rev))
-ERRORS -= ERRORS.mean()
 
 
 def _edges(theta, t, rng):
-    t_of = CubicSpline(theta, t)
-    gap = np.deg2rad(GAP_DEG)
-    revs = np.arange(np.floor((theta[0] - gap) / (2 * np.pi)) - 1, np.ceil((theta[-1] - gap) / (2 * np.pi)) + 1)
-    ang = (gap + 2 * np.pi * revs[:, None] + WHEEL.pitch_rad * np.arange(WHEEL.edges_per_rev) + ERRORS).ravel()
-    ang = ang[(ang >= theta[0]) & (ang <= theta[-1])]
-    return t_of(ang) + rng.normal(0.0, 20e-9, ang.size)
+    return synthetic_wheel.tooth_times(CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), rng, 20e-9)
 
 
 def _worst_deg(errors):
