@@ -48,6 +48,7 @@ import pathlib
 import numpy as np
 
 from ._checks import EngineError
+from .forces import cylinder_pressure  # compiled once per shape
 
 __all__ = ["simulated_recording", "simulated_tooth_errors", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
 
@@ -63,20 +64,6 @@ MIN_SAMPLES_PER_PITCH = 10  # below this the pulses get too few samples for the 
 
 
 PRESSURE_POINTS_PER_REV = 2880  # the pressure is computed every 0.125° and interpolated
-
-
-def _pressure_jit(engine, theta):
-    import equinox as eqx
-
-    from .forces import cylinder_pressure
-
-    global _PRESSURE
-    if _PRESSURE is None:
-        _PRESSURE = eqx.filter_jit(cylinder_pressure)
-    return _PRESSURE(engine, theta)
-
-
-_PRESSURE = None
 
 
 def _wheel_errors(wheel, tooth_error_deg):
@@ -245,10 +232,10 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     # ---------------------------------------------------------------- pressure channel
     # on a fine grid of one cycle (one compiled call), then a periodic cubic spline at the samples
     grid = np.arange(PRESSURE_POINTS_PER_REV * revs) * (cycle_rad / (PRESSURE_POINTS_PER_REV * revs))
-    p_grid = np.asarray(_pressure_jit(eng, grid))[:, 0]
+    p_grid = np.asarray(cylinder_pressure(eng, grid))[:, 0]
     if comb_scale != 1.0:  # scale the combustion part: fired − motored
         motored = eqx.tree_at(lambda e: e.pressure, eng, eng.pressure.motored(eng.strokes))
-        p0 = np.asarray(_pressure_jit(motored, grid))[:, 0]
+        p0 = np.asarray(cylinder_pressure(motored, grid))[:, 0]
         p_grid = p0 + comb_scale * (p_grid - p0)
     p_of = CubicSpline(np.append(grid, cycle_rad), np.append(p_grid, p_grid[0]), bc_type="periodic")
     p = p_of(np.mod(th, cycle_rad))
