@@ -407,14 +407,9 @@ def _plot_log(make_figure, args, kind):
     return path
 
 
-def _load_engine(spec):
-    import rotor
-
-    return rotor.load_engine(spec)
-
-
 def _cmd_analyze(args):
     from ._checks import LogError
+    from .engine_file import load_engine
     from .logged_speed import analyze_log
 
     if args.engine_orders == "auto":
@@ -434,7 +429,7 @@ def _cmd_analyze(args):
                       tdc_deg=args.tdc_deg, firing=firing, tooth_errors=te, engine_orders=eo,
                       max_order=args.max_order, points_per_cycle=args.points_per_cycle, edge=args.edge,
                       compression_ratio=args.compression_ratio, rod_ratio=args.rod_ratio,
-                      denoise=not args.no_denoise, engine=_load_engine(args.engine) if args.engine else None)
+                      denoise=not args.no_denoise, engine=load_engine(args.engine) if args.engine else None)
     written = []
     if args.save_tooth_errors:
         if res.tooth_errors is None:

@@ -35,6 +35,7 @@ import numpy as np
 import optimistix as optx
 
 from ._checks import EngineError
+from .inertia import mean_reduced_inertia
 from .periodic import NoSteadyStateError, steady_state
 from .speed_result import RPM_PER_RAD_S
 
@@ -150,12 +151,11 @@ def textbook_flywheel(engine, delta: float, rpm=None, *, imep_scale=1.0, load=No
     :func:`rotor.steady_state`.
     """
     delta = _check_delta(delta)
-    if not 0 < diameter_strokes < 100:
-        raise EngineError(f"diameter_strokes = {diameter_strokes!r}: the seed takes a mean diameter of 2…3 strokes")
+    _number("diameter_strokes", diameter_strokes, 0.0)
     (point,) = _points([OperatingPoint(engine.operating.rpm if rpm is None else rpm, imep_scale, load)], engine)
     ev = _Evaluator(engine, fidelity, friction, grid_deg)
-    _, excess, mech, _ = ev.state(float(engine.crankshaft.inertia_kgm2), point)
-    return _textbook(engine, delta, point, float(excess), float(mech), diameter_strokes)
+    _, excess = ev.state(float(engine.crankshaft.inertia_kgm2), point)
+    return _textbook(engine, delta, point, excess, ev.mechanism, diameter_strokes)
 
 
 # ----------------------------------------------------------------------------- through the simulator
@@ -165,19 +165,18 @@ def _with_inertia(engine, inertia):
 
 @eqx.filter_jit
 def _state(engine, inertia, rpm, scale, load, fidelity, friction, grid_deg):
-    """δ, the textbook excess work [J], the mechanism's mean inertia [kg·m²] and the
-    peak speed [rad/s] of the steady state with ``[crankshaft] inertia_kgm2 = inertia``."""
+    """δ (NaN where the crankshaft nearly stops) and the textbook excess work [J] of the
+    steady state with ``[crankshaft] inertia_kgm2 = inertia``."""
     r = steady_state(_with_inertia(engine, inertia), rpm, load, fidelity=fidelity, friction=friction,
                      imep_scale=scale, grid_deg=grid_deg)
-    mech = r.info["excess_work_J"] / (r.info["textbook_delta"] * (rpm / RPM_PER_RAD_S) ** 2) - inertia
     ok = jnp.min(r.omega) > 0.01 * r.mean_omega
-    return jnp.where(ok, r.delta, jnp.nan), r.info["excess_work_J"], mech, jnp.max(r.omega)
+    return jnp.where(ok, r.delta, jnp.nan), r.info["excess_work_J"]
 
 
 @eqx.filter_jit
 def _root(engine, u0, log_target, rpm, scale, load, fidelity, friction, grid_deg, rtol):
     def fn(u, _):
-        d, *_ = _state(engine, jnp.exp(u), rpm, scale, load, fidelity, friction, grid_deg)
+        d, _ = _state(engine, jnp.exp(u), rpm, scale, load, fidelity, friction, grid_deg)
         return jnp.log(d) - log_target
 
     sol = optx.root_find(fn, optx.Newton(rtol=rtol, atol=rtol), u0, max_steps=60, throw=False)
@@ -185,8 +184,12 @@ def _root(engine, u0, log_target, rpm, scale, load, fidelity, friction, grid_deg
 
 
 class _Evaluator:
+    """The steady state of one engine at operating points, as a function of its inertia;
+    ``mechanism``: the cycle-mean inertia of its rods and pistons [kg·m²]."""
+
     def __init__(self, engine, fidelity, friction, grid_deg):
         self.engine, self.fidelity, self.friction, self.grid_deg = engine, fidelity, friction, grid_deg
+        self.mechanism = float(mean_reduced_inertia(engine)) - float(engine.crankshaft.inertia_kgm2)
 
     def _args(self, point):
         rpm = jnp.asarray(point.rpm, dtype=jnp.float64)
@@ -542,20 +545,22 @@ def design_flywheel(
     )
 
 
-def _check_design_args(shaft, diameter_strokes, grid_deg, max_rpm, disc, max_width_m, bore_m):
-    def number(name, v, lo, strict=True):
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            x = float("nan")
-        if not (math.isfinite(x) and (x > lo if strict else x >= lo)):
-            raise EngineError(f"{name} = {v!r}: must be a number {'>' if strict else '≥'} {lo:g}")
+def _number(name, v, lo, strict=True):
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        x = float("nan")
+    if not (math.isfinite(x) and (x > lo if strict else x >= lo)):
+        raise EngineError(f"{name} = {v!r}: must be a number {'>' if strict else '≥'} {lo:g}")
+    return x
 
-    number("shaft_inertia_kgm2", shaft, 0.0, strict=False)
-    number("diameter_strokes", diameter_strokes, 0.0)
-    number("grid_deg", grid_deg, 0.0)
+
+def _check_design_args(shaft, diameter_strokes, grid_deg, max_rpm, disc, max_width_m, bore_m):
+    _number("shaft_inertia_kgm2", shaft, 0.0, strict=False)
+    _number("diameter_strokes", diameter_strokes, 0.0)
+    _number("grid_deg", grid_deg, 0.0)
     if max_rpm is not None:
-        number("max_rpm", max_rpm, 0.0)
+        _number("max_rpm", max_rpm, 0.0)
     if not disc and (max_width_m is not None or bore_m):
         raise EngineError("a width limit or a bore shapes the lightest disc, which needs an outer-diameter or a "
                           "rim-speed limit as well (max_outer_diameter_m or max_rim_speed_m_s)")
@@ -566,13 +571,14 @@ def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
     Newton steps and the textbook there."""
     j_try = j_start
     for _ in range(6):  # the textbook diagram does not depend on the inertia; find a start with a steady state
-        d0, excess, mech, _ = ev.state(j_try, p)
+        d0, excess = ev.state(j_try, p)
         if math.isfinite(d0):
             break
         j_try *= 10
     else:
         raise EngineError(f"no steady state at {p.rpm:g} rpm even with a {j_try / 10:g} kg·m² crankshaft: the engine "
                           "cannot run at this point (check its fuelling and load)")
+    mech = ev.mechanism
     tb = _textbook(engine, target, p, excess, mech, diameter_strokes)
     # start from this point's own δ/J slope (δ ∝ 1/(J + mech))
     u0 = math.log(max((j_try + mech) * d0 / target - mech, 1e-3 * (j_try + mech)))
