@@ -61,7 +61,7 @@ import jax
 import jax.numpy as jnp
 
 import rotor  # switches float64 on
-from rotor.kinematics import piston_motion
+from rotor.engine.kinematics import piston_motion
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = ROOT / ".." / "shared" / "data"
@@ -135,7 +135,7 @@ def trace_imep_pa(angle_deg, pressure_pa, geom: rotor.Geometry) -> float:
 def cylinder_volume(theta_deg, geom: dict, compression_ratio: float):
     """V(θ) [m³], θ from TDC [deg], as numpy: rotor's own cylinder volume."""
     theta = jnp.deg2rad(jnp.asarray(theta_deg, dtype=jnp.float64))
-    return np.asarray(rotor.pressure.cylinder_volume_m3(theta, rotor.Geometry(**geom), compression_ratio))
+    return np.asarray(rotor.engine.pressure.cylinder_volume_m3(theta, rotor.Geometry(**geom), compression_ratio))
 
 
 # ----------------------------------------------------------------------------- tue: signals

@@ -95,7 +95,7 @@ def plot(out, path):
     import numpy as np
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from rotor._io import atomic_path
+    from rotor.fileio import atomic_path
 
     presets = list(out["presets"])
     fig, axes = plt.subplots(1, len(presets), figsize=(3.2 * len(presets), 3.6), sharey=True, squeeze=False)
@@ -136,7 +136,7 @@ def main():
     RESULTS.mkdir(parents=True, exist_ok=True)
     stem = "compile_time_quick" if args.quick else "compile_time"
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from rotor._io import write_text_atomic
+    from rotor.fileio import write_text_atomic
 
     write_text_atomic(RESULTS / f"{stem}.json", json.dumps(out, indent=1))
     plot(out, RESULTS / f"{stem}.png")

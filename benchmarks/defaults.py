@@ -36,8 +36,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import rotor  # noqa: E402
-from rotor._io import write_text_atomic  # noqa: E402
-from rotor.transient import DEFAULT_RTOL  # noqa: E402
+from rotor.fileio import write_text_atomic  # noqa: E402
+from rotor.dynamics.transient import DEFAULT_RTOL  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CYCLES = 100

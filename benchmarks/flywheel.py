@@ -18,7 +18,7 @@ part-load fuelling at the lower speeds):
   ``textbook_rated_ratio``: the same from the rated point alone (the seed's practice);
 - ``timing``: the design's first call (compile and run, in a process that has made no other
   design) and the median of ``--repeats`` later calls, and a bisection on the same jitted
-  closed-form δ(J) (``rotor.flywheel._state``) to the same tolerance as Newton's, for the ratio.
+  closed-form δ(J) (``rotor.design.flywheel._state``) to the same tolerance as Newton's, for the ratio.
 
 Writes ``benchmarks/results/flywheel.json`` and ``benchmarks/figures/flywheel_textbook.png``.
 """
@@ -37,8 +37,8 @@ from pathlib import Path
 import numpy as np
 
 import rotor
-from rotor._io import atomic_path
-from rotor.flywheel import OperatingPoint, _Evaluator, _with_inertia
+from rotor.fileio import atomic_path
+from rotor.design.flywheel import OperatingPoint, _Evaluator, _with_inertia
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "flywheel.json"

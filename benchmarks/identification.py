@@ -40,7 +40,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 import rotor
-from rotor.wheel import TWO_PI
+from rotor.logs.wheel import TWO_PI
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import synthetic_wheel  # noqa: E402
@@ -183,7 +183,7 @@ def main(argv=None):
                            "machine": platform.machine(), "cpus": os.cpu_count()},
               "setup": {"wheel": "60-2", "tooth_errors_deg": 0.2, "jitter_s": 20e-9, "imep_spread": "±10 % uniform",
                         "cov": 0.02, "misfire_rate": 0.03, "cycles_simulated": args.cycles, "seeds": args.seeds,
-                        "threshold": rotor.identification.MISFIRE_THRESHOLD}}
+                        "threshold": rotor.diagnostics.identification.MISFIRE_THRESHOLD}}
     te = calibration()
     cases = []
     for name, speeds in SPEEDS.items():
@@ -232,7 +232,7 @@ def main(argv=None):
         print(f"timing {t['engine']}: {t['cycles']} cycles in {t['median_s'] * 1e3:.0f} ms (median of {args.repeats}); "
               f"first call {t['first_call_s']:.1f} s")
     OUT.parent.mkdir(parents=True, exist_ok=True)
-    from rotor._io import write_text_atomic
+    from rotor.fileio import write_text_atomic
 
     write_text_atomic(OUT, json.dumps(result, indent=1) + "\n")
     print(f"wrote {OUT}")

@@ -120,7 +120,7 @@ def main(argv=None):
     else:
         result["tue-4gb10"] = f"not found at {tue}"
     OUT.parent.mkdir(parents=True, exist_ok=True)
-    from rotor._io import write_text_atomic
+    from rotor.fileio import write_text_atomic
 
     write_text_atomic(OUT, json.dumps(result, indent=1) + "\n")
     print(f"wrote {OUT}")

@@ -60,7 +60,7 @@ def main():
     res["versions"] = {"rotor": rotor.__version__, "jax": jax.__version__, "python": platform.python_version()}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    from rotor._io import write_text_atomic
+    from rotor.fileio import write_text_atomic
 
     write_text_atomic(out, json.dumps(res, indent=2))
     print(f"\nwrote {out}")

@@ -47,7 +47,7 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 
 import rotor
-from rotor._io import atomic_path, write_text_atomic
+from rotor.fileio import atomic_path, write_text_atomic
 
 RESULTS = Path(__file__).resolve().parent / "results"
 RPM = 1250.0

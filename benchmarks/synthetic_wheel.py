@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 import rotor
-from rotor.wheel import TWO_PI
+from rotor.logs.wheel import TWO_PI
 
 WHEEL = rotor.Wheel(60, 2)
 ERRORS = np.deg2rad(np.random.default_rng(7).uniform(-0.2, 0.2, WHEEL.edges_per_rev))

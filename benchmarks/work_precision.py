@@ -71,7 +71,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 os.environ.setdefault("ROTOR_COMPILATION_CACHE", "off")  # compile times as in a first run
 import rotor  # noqa: E402
 from reference import scipy_angle_reference  # noqa: E402
-from rotor._io import atomic_path, write_text_atomic  # noqa: E402
+from rotor.fileio import atomic_path, write_text_atomic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 TARGET = 1e-6

@@ -8,14 +8,14 @@ import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
 
-from ._cache import enable_compilation_cache  # noqa: E402
+from .cache import enable_compilation_cache  # noqa: E402
 
 enable_compilation_cache()
 
-from ._checks import EngineError, LogError  # noqa: E402
-from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
-from .engine_file import engine_from_dict, load_engine, preset_names  # noqa: E402
-from .forces import (  # noqa: E402
+from .checks import EngineError, LogError  # noqa: E402
+from .engine.model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
+from .engine.file import engine_from_dict, load_engine, preset_names  # noqa: E402
+from .engine.forces import (  # noqa: E402
     crank_forces,
     cylinder_gas_torques,
     cylinder_pressure,
@@ -26,18 +26,18 @@ from .forces import (  # noqa: E402
     reciprocating_inertia_torque,
     total_torque,
 )
-from .inertia import (  # noqa: E402
+from .engine.inertia import (  # noqa: E402
     cylinder_inertia,
     inertia_coefficients,
     mean_reduced_inertia,
     reduced_inertia,
     reduced_inertia_derivative,
 )
-from .kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
-from .mechanism import engine_piston_motion  # noqa: E402
-from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle, periodic_pchip  # noqa: E402
-from .friction import Friction  # noqa: E402
-from .loads import (  # noqa: E402
+from .engine.kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
+from .engine.mechanism import engine_piston_motion  # noqa: E402
+from .engine.pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle, periodic_pchip  # noqa: E402
+from .engine.friction import Friction  # noqa: E402
+from .dynamics.loads import (  # noqa: E402
     ConstantLoad,
     Governor,
     Load,
@@ -47,17 +47,17 @@ from .loads import (  # noqa: E402
     TableLoad,
     parse_load,
 )
-from .combustion import combustion_pattern  # noqa: E402
-from .crank_train import CrankTrain, crank_train  # noqa: E402
-from .speed_result import Orders, SpeedResult  # noqa: E402
-from .periodic import NoSteadyStateError, steady_state  # noqa: E402
-from .transient import simulate  # noqa: E402
+from .dynamics.combustion import combustion_pattern  # noqa: E402
+from .dynamics.crank_train import CrankTrain, crank_train  # noqa: E402
+from .dynamics.result import Orders, SpeedResult  # noqa: E402
+from .dynamics.steady import NoSteadyStateError, steady_state  # noqa: E402
+from .dynamics.transient import simulate  # noqa: E402
 from . import summary  # noqa: E402
-from .summary import engine_summary  # noqa: E402
-from .table import CrankTable, crank_table  # noqa: E402
-from .logs import Log, read_log  # noqa: E402
-from .encoder import Edges, find_edges  # noqa: E402
-from .wheel import (  # noqa: E402
+from .engine.summary import engine_summary  # noqa: E402
+from .engine.table import CrankTable, crank_table  # noqa: E402
+from .logs.reader import Log, read_log  # noqa: E402
+from .logs.edges import Edges, find_edges  # noqa: E402
+from .logs.wheel import (  # noqa: E402
     ToothErrors,
     ToothTrack,
     Wheel,
@@ -66,8 +66,8 @@ from .wheel import (  # noqa: E402
     locate_teeth,
     parse_wheel,
 )
-from .logged_speed import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
-from .inverse import (  # noqa: E402
+from .logs.analysis import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
+from .diagnostics.inverse import (  # noqa: E402
     HarmonicTorque,
     IndicatedTorque,
     TorqueOrders,
@@ -75,9 +75,9 @@ from .inverse import (  # noqa: E402
     harmonic_torque,
     indicated_torque,
 )
-from .identification import Identification, identify  # noqa: E402
-from .misfire import contribution_index  # noqa: E402
-from .calibration import (  # noqa: E402
+from .diagnostics.identification import Identification, identify  # noqa: E402
+from .diagnostics.misfire import contribution_index  # noqa: E402
+from .diagnostics.calibration import (  # noqa: E402
     Calibration,
     calibrate,
     cylinder_torques,
@@ -85,8 +85,8 @@ from .calibration import (  # noqa: E402
     measured_imep,
     preset_calibration,
 )
-from .synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
-from .flywheel import (  # noqa: E402
+from .diagnostics.synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
+from .design.flywheel import (  # noqa: E402
     DiscFlywheel,
     FlywheelDesign,
     OperatingPoint,

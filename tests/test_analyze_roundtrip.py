@@ -23,7 +23,7 @@ import pytest
 from scipy.interpolate import CubicSpline
 
 import rotor
-from rotor.wheel import TWO_PI
+from rotor.logs.wheel import TWO_PI
 
 from conftest import ROOT
 
@@ -138,7 +138,7 @@ def test_estimate_on_the_firing_run_with_cylinders(engine_run):
     (±0.2°, 0.03° per order) and this engine (δ = 0.0067, an inline four with a heavy
     flywheel) δ comes out at 0.029, 4.4× the simulator's — no data from a firing run can do
     better; the note says so and gives the size (±0.026), which covers the error."""
-    from rotor.wheel import _order_fit_matrix
+    from rotor.logs.wheel import _order_fit_matrix
 
     res = engine_run
     an = _analyse(res, "estimate", cylinders=4)

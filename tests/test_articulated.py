@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.articulated import SlaveGeometry, slave_piston_motion
+from rotor.engine.articulated import SlaveGeometry, slave_piston_motion
 
 R, L, L1 = 0.05, 0.18, 0.14
 TH = jnp.linspace(0, 2 * np.pi, 361)

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.logged_speed import LogAnalysis
+from rotor.logs.analysis import LogAnalysis
 from conftest import SHARED_DATA
 
 TUE = SHARED_DATA / "tue-4gb10"

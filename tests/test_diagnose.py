@@ -133,7 +133,7 @@ def _tue_coast_teeth(tmp_path):
     tooth times of a 60-2 wheel whose gap lies 29.4° before TDC (20 ns jitter): (file, simulated run)."""
     from scipy.interpolate import CubicSpline
 
-    from rotor.wheel import TWO_PI
+    from rotor.logs.wheel import TWO_PI
 
     w, gap = rotor.Wheel(60, 2), np.deg2rad(-29.4)
     e = rotor.Calibration.load(PRESET_CAL).apply(rotor.load_engine("tue-single"))
@@ -177,14 +177,14 @@ def test_coast_down_through_diagnose(tmp_path, capsys):
 
 def test_arithmetic_failure_is_one_line(tmp_path, capsys, monkeypatch):
     """Whatever arithmetic still fails inside the charge iteration is a one-line error (exit 2)."""
-    import rotor.identification
+    import rotor.diagnostics.identification
 
     path, _ = _tue_coast_teeth(tmp_path)
 
     def boom(*a, **k):
         raise OverflowError("math range error")
 
-    monkeypatch.setattr(rotor.identification, "identify", boom)
+    monkeypatch.setattr(rotor.diagnostics.identification, "identify", boom)
     with pytest.raises(rotor.EngineError, match="charge-scale iteration failed"):
         rotor.diagnose(rotor.load_engine("tue-single"), path, PRESET_CAL, wheel="60-2")
     rc, out, err = _run(capsys, "diagnose", str(path), "--engine", "tue-single", "--wheel", "60-2", "--json")
@@ -212,7 +212,7 @@ def test_calibration_of_another_engine_is_refused(tmp_path, capsys):
 def test_shipped_preset_calibration():
     """rotor/presets/tue-single.calibration.json (benchmarks/diagnose_real.py from full_load.txt) is the
     tue-single preset's, and diagnose finds it by default."""
-    from rotor.calibration import preset_calibration
+    from rotor.diagnostics.calibration import preset_calibration
 
     eng = rotor.load_engine("tue-single")
     cal, path = preset_calibration(eng)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.dynamics import TRACES
+from rotor.dynamics.equation import TRACES
 
 from conftest import ROOT
 
@@ -116,7 +116,7 @@ def test_fidelity_levels_differ_by_the_pinned_amounts(diesel):
 def test_series_fidelity_is_the_lambda_series_and_converges_as_lambda_cubed(diesel):
     """``fidelity="series"``: I(θ) = J + Σ(m_rot·R² + m_rec·s′²) with the λ-series s′ (closed
     form, checked on the table), and its δ error against exact kinematics shrinks as λ³."""
-    from rotor.crank_train import crank_train
+    from rotor.dynamics.crank_train import crank_train
 
     g = diesel.geometry
     R, L = float(g.crank_radius_m), float(g.rod_length_m)

@@ -7,7 +7,7 @@ import pytest
 
 import rotor
 from rotor import LogError
-from rotor.wheel import TWO_PI
+from rotor.logs.wheel import TWO_PI
 
 FS = 100e3  # samples per second
 

@@ -12,7 +12,7 @@ import pytest
 
 import rotor
 from rotor.cli import main
-from rotor.engine_file import preset_path
+from rotor.engine.file import preset_path
 
 BASE = tomllib.loads(preset_path("4chn15").read_text())
 

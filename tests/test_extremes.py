@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.engine_file import preset_path
+from rotor.engine.file import preset_path
 
 RPM = 30 / np.pi
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.flywheel import OperatingPoint, _with_inertia
+from rotor.design.flywheel import OperatingPoint, _with_inertia
 
 
 @pytest.fixture(scope="module")

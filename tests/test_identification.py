@@ -17,8 +17,8 @@ import pytest
 from scipy.interpolate import CubicSpline
 
 import rotor
-from rotor.identification import symmetric_pairs
-from rotor.wheel import TWO_PI
+from rotor.diagnostics.identification import symmetric_pairs
+from rotor.logs.wheel import TWO_PI
 
 from conftest import ROOT
 
@@ -129,7 +129,7 @@ def test_blocks_match_one_fit():
 def test_firings_cut_by_the_record():
     """A firing with 10 % of its combustion torque inside the record is fitted but not
     identified; one with 0.5 % inside is not fitted (shares its neighbour's scale)."""
-    from rotor.identification import _layout
+    from rotor.diagnostics.identification import _layout
 
     pos, own, count = _layout(np.array([0.1]), np.array([0.9]), np.array([0]), 3)
     assert own[:, 0].tolist() == [False, True, True] and count == 4  # firings 0 … 3 fitted, −1 outside

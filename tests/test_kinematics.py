@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.kinematics import piston_motion, rod_motion
+from rotor.engine.kinematics import piston_motion, rod_motion
 
 TH = jnp.linspace(0, 2 * np.pi, 721)
 R = 0.05

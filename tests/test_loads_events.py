@@ -159,7 +159,7 @@ def test_cli_simulate_stall(capsys):
 def test_cli_errors_are_one_line(capsys, argv, pattern, tmp_path):
     if argv[1] == "4chn15" and "--rpm" in argv:
         # a light flywheel: no steady state at low speed
-        src = rotor.engine_file.preset_path("4chn15").read_text()
+        src = rotor.engine.file.preset_path("4chn15").read_text()
         path = tmp_path / "light.toml"
         path.write_text(src.replace("inertia_kgm2 = 10.2", "inertia_kgm2 = 0.01"))
         argv = [argv[0], str(path), *argv[2:]]

@@ -8,7 +8,7 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 
 import rotor
-from rotor.pressure import periodic_pchip
+from rotor.engine.pressure import periodic_pchip
 
 
 def test_pchip_matches_scipy_on_the_periodic_extension(diesel):
@@ -80,8 +80,8 @@ def test_compression_is_the_polytrope(diesel):
     w = _wiebe()
     e = _engine(w, diesel)
     phi = jnp.deg2rad(jnp.linspace(190, 340, 50))
-    V = rotor.pressure.cylinder_volume_m3(phi, e.geometry, 14.5)
-    Vb = rotor.pressure.cylinder_volume_m3(jnp.pi, e.geometry, 14.5)
+    V = rotor.engine.pressure.cylinder_volume_m3(phi, e.geometry, 14.5)
+    Vb = rotor.engine.pressure.cylinder_volume_m3(jnp.pi, e.geometry, 14.5)
     assert np.allclose(w(phi, e.geometry), 127800.0 * (Vb / V) ** 1.33, rtol=1e-12)
 
 
@@ -179,7 +179,7 @@ def test_wiebe_heat_integral_against_adaptive_quadrature(preset):
     m) and from firing TDC, before, in and long after the burn."""
     from scipy.integrate import quad
 
-    from rotor.pressure import cylinder_volume_m3
+    from rotor.engine.pressure import cylinder_volume_m3
 
     src = rotor.load_engine(preset).pressure
     g = rotor.load_engine(preset).geometry

@@ -1,4 +1,4 @@
-"""rotor.synthetic.simulated_recording: a simulated raw bench recording in the format of the
+"""rotor.diagnostics.synthetic.simulated_recording: a simulated raw bench recording in the format of the
 real tue-4gb10 files, read back by the same code path (read_log, analyze_log, calibrate,
 diagnose) and compared with the simulator it was made from."""
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.synthetic import BENCH_GAIN_PA_PER_V, DEFAULT_GAP_DEG, simulated_recording, simulated_tooth_errors
+from rotor.diagnostics.synthetic import BENCH_GAIN_PA_PER_V, DEFAULT_GAP_DEG, simulated_recording, simulated_tooth_errors
 
 from conftest import SHARED_DATA
 
@@ -74,7 +74,7 @@ def test_analyze_finds_every_tooth_the_speed_and_tdc(full):
 def test_delta_and_orders_against_the_steady_state(full, steady):
     """δ of each analysed cycle against the simulator's steady-state δ (0.0677).
 
-    - with the wheel's true errors (rotor.synthetic.simulated_tooth_errors): within 0.5 %
+    - with the wheel's true errors (rotor.diagnostics.synthetic.simulated_tooth_errors): within 0.5 %
       (measured 0.3 %; what is left is the 0.01 V noise on the edges, 85 ns of timing jitter);
     - with the errors estimated from this firing run (the default): within 4 % (measured
       −1.9 … −2.2 %). Honest, not loose: a firing run cannot tell the engine's whole orders

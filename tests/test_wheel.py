@@ -6,7 +6,7 @@ import pytest
 
 import rotor
 from rotor import LogError
-from rotor.wheel import TWO_PI
+from rotor.logs.wheel import TWO_PI
 
 
 def coastdown_t_of_theta(w0=3000 / 30 * np.pi, w1=500 / 30 * np.pi, revs=200, fluct=0.15):
@@ -123,7 +123,7 @@ def test_steady_estimate_keeps_the_engine_orders_out():
     te = rotor.estimate_tooth_errors(track)
     assert set(te.engine_orders) >= {2, 4}
     phi = w.pitch_rad * np.arange(58)
-    from rotor.wheel import _order_fit_matrix
+    from rotor.logs.wheel import _order_fit_matrix
 
     X = _order_fit_matrix(phi, te.engine_orders)
     beta, *_ = np.linalg.lstsq(X, err, rcond=None)
@@ -153,7 +153,7 @@ def test_log_starting_right_at_the_gap():
 
 
 def test_firing_orders():
-    from rotor.wheel import firing_orders
+    from rotor.logs.wheel import firing_orders
 
     assert firing_orders(4, 4, 60) == tuple(range(2, 30, 2))
     assert firing_orders(6, 4, 60) == tuple(range(3, 30, 3))

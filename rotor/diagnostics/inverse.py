@@ -1,6 +1,6 @@
 """Inverse dynamics: the indicated (gas) torque from the crankshaft speed ω(θ).
 
-The equation of motion (:mod:`rotor.dynamics`) in energy form,
+The equation of motion (:mod:`rotor.dynamics.equation`) in energy form,
 
     d/dθ [½·I(θ)·ω²] = I(θ)·ω·dω/dθ + ½·I′(θ)·ω²
                      = M_gas(θ) + k(θ)·ω² − M_friction(ω) − M_load(ω, t),
@@ -53,10 +53,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._checks import EngineError, arrays_only
-from .crank_train import _I, _K, crank_train
-from .dynamics import friction_coefficients
-from .loads import ConstantLoad, Load
+from ..checks import EngineError, arrays_only
+from ..dynamics.crank_train import _I, _K, crank_train
+from ..dynamics.equation import friction_coefficients
+from ..dynamics.loads import ConstantLoad, Load
 
 __all__ = [
     "IndicatedTorque",
@@ -196,8 +196,8 @@ def _check_cycle(engine, cycle_rad, what):
 
 def _speed_input(engine, speed, cycle_rad, t_start_s, periodic):
     """(ω (C, P), end sample or None, t (C, P) or None, t0, periodic) from any accepted input."""
-    from .logged_speed import LogAnalysis
-    from .speed_result import SpeedResult
+    from ..logs.analysis import LogAnalysis
+    from ..dynamics.result import SpeedResult
 
     end = None
     t = None
@@ -372,13 +372,13 @@ def indicated_torque(
     - ``speed``: ω [rad/s] on the uniform cycle-angle grid (0 = TDC of cylinder 1 before
       intake): an array (P,) for one cycle or (cycles, P) for consecutive cycles of one
       continuous recording, a :class:`rotor.SpeedResult` or a :class:`rotor.LogAnalysis`.
-    - ``load``: the load torque acting, a :mod:`rotor.loads` load, a constant torque
+    - ``load``: the load torque acting, a :mod:`rotor.dynamics.loads` load, a constant torque
       [N·m], or None (taken as zero: see the module doc for what the result means then).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False (none).
     - ``regularisation``: None (default), ``"orders"`` (engine orders up to ``max_order``
       kept) or ``"tikhonov"`` (gain 1/(1 + λ·ν⁴) at order ν, λ = ``tikhonov_weight``
       [rad⁴], default ``max_order``⁻⁴).
-    - ``fidelity``: of the crank train's I(θ) (see :func:`rotor.crank_train`); the same
+    - ``fidelity``: of the crank train's I(θ) (see :func:`rotor.dynamics.crank_train`); the same
       as the simulation's for a round trip.
     - ``grid_deg``: node spacing of the crank-train tables [deg].
     - ``cycle_rad``: the cycle of an array ``speed`` [rad], checked against the engine's.

@@ -20,7 +20,7 @@ import numpy as np
 import equinox as eqx
 import jax.numpy as jnp
 
-from ._checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
+from ..checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
 from .kinematics import piston_motion
 
 __all__ = [

@@ -4,7 +4,7 @@ Found directly, never by integrating until transients die:
 
 - with losses a + c·ω² (friction without its speed-linear term; no load, a constant
   load or a propeller law) the cycle is linear in the kinetic energy E (see
-  :mod:`rotor.dynamics`), E(θ) = α(θ)·E₀ + β(θ) once the periodicity condition has
+  :mod:`rotor.dynamics.equation`), E(θ) = α(θ)·E₀ + β(θ) once the periodicity condition has
   fixed the balancing load or fuel; the mean-speed condition is one scalar equation in E₀,
   solved by Newton's method (optimistix) on log(E₀ − E*), E* the smallest E₀ that keeps
   E > 0 over the cycle (``method="closed"``);
@@ -32,9 +32,9 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from ._checks import EngineError, arrays_only, concrete
+from ..checks import EngineError, arrays_only, concrete
 from .crank_train import _DM, _MM, check_fidelity, grid_points, train_from_engine
-from .dynamics import (
+from .equation import (
     Scene,
     _cumulative,
     _wrap,
@@ -46,7 +46,7 @@ from .dynamics import (
     linear_parts,
 )
 from .loads import ConstantLoad
-from .speed_result import RPM_PER_RAD_S, SpeedResult
+from .result import RPM_PER_RAD_S, SpeedResult
 
 __all__ = ["steady_state", "NoSteadyStateError"]
 
@@ -215,7 +215,7 @@ def steady_state(
       (:class:`rotor.PolynomialLoad`, :class:`rotor.PropellerLoad`,
       :class:`rotor.TableLoad`; the fuelling is scaled to carry it).
     - ``fidelity``: ``"variable"`` (default), ``"series"`` (λ-series kinematics),
-      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.crank_train`).
+      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.dynamics.crank_train`).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's, if any) or False.
     - ``imep_scale``: combustion scale per cylinder (a number or one per cylinder) [-].
     - ``method``: ``"auto"`` (closed form where the losses allow, else shooting),

@@ -2,7 +2,7 @@
 
 :func:`simulate` starts at crank angle 0 with speed ``rpm`` (0: from rest) and runs
 ``cycles`` cycles, or until the crankshaft stops (a stall: ``result.stalled``, with the
-time and angle). See :mod:`rotor.dynamics` for the formulations ``"closed"``,
+time and angle). See :mod:`rotor.dynamics.equation` for the formulations ``"closed"``,
 ``"grid"``, ``"angle"`` and ``"time"``; ``method="auto"`` picks the cheapest valid one:
 ``"time"`` from rest, ``"closed"`` where the losses are a + c·ω² and nothing changes in
 time, ``"grid"`` otherwise.
@@ -19,9 +19,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._checks import EngineError, arrays_only, concrete
+from ..checks import EngineError, arrays_only, concrete
 from .crank_train import crank_train
-from .dynamics import (
+from .equation import (
     Scene,
     _traced,
     angle_run,
@@ -32,7 +32,7 @@ from .dynamics import (
     linear_losses,
     time_run,
 )
-from .speed_result import RPM_PER_RAD_S, SpeedResult
+from .result import RPM_PER_RAD_S, SpeedResult
 
 __all__ = ["simulate", "METHODS"]
 
@@ -126,10 +126,10 @@ def simulate(
     - ``engine``: a :class:`rotor.Engine`.
     - ``rpm``: the starting speed [rpm] (0: from rest); default ``[operating] rpm``.
     - ``cycles``: number of cycles to run.
-    - ``load``: a load (:mod:`rotor.loads`) or None.
+    - ``load``: a load (:mod:`rotor.dynamics.loads`) or None.
     - ``method``: ``"auto"`` (default), ``"closed"``, ``"grid"``, ``"angle"`` or ``"time"``.
     - ``fidelity``: ``"variable"`` (default), ``"series"`` (λ-series kinematics),
-      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.crank_train`).
+      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.dynamics.crank_train`).
     - ``rtol``: relative tolerance of the adaptive methods (default 1e-9).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False (none).
     - ``governor``: a :class:`rotor.Governor` scaling the fuelling, or None.

@@ -30,7 +30,7 @@ from typing import Optional
 
 import numpy as np
 
-from ._checks import LogError
+from ..checks import LogError
 
 __all__ = ["COLUMN_NAMES", "Log", "parse_columns", "read_log"]
 

@@ -74,7 +74,7 @@ from typing import Optional
 import equinox as eqx
 import numpy as np
 
-from ._checks import EngineError
+from ..checks import EngineError
 
 __all__ = ["Calibration", "calibrate", "diagnose", "measured_imep", "cylinder_torques", "preset_calibration",
            "CALIBRATION_FORMAT"]
@@ -85,7 +85,7 @@ BIN_DEG = 0.5  # the pressure signal is averaged in bins of this width per cycle
 DEFAULT_MAX_ORDER = 4.0
 SCALINGS = ("charge", "none")
 SIGMA_RANGE = (0.05, 5.0)  # the charge scale's physical range: intake pressure × σ (a deep throttle … a big boost)
-PRESETS_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "presets")
+PRESETS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "presets")
 
 
 # ----------------------------------------------------------------------------- the record
@@ -179,7 +179,7 @@ class Calibration:
     @classmethod
     def from_json_dict(cls, d, where: str = "calibration") -> "Calibration":
         """Build from :meth:`to_json_dict`'s dict; errors name ``where`` and the key."""
-        from .wheel import ToothErrors
+        from ..logs.wheel import ToothErrors
 
         if not isinstance(d, dict):
             raise EngineError(f"{where}: not a calibration (a JSON object is needed)")
@@ -243,7 +243,7 @@ class Calibration:
 
     def save(self, path) -> None:
         """Write as JSON, whole or not at all."""
-        from ._io import write_text_atomic
+        from ..fileio import write_text_atomic
 
         path = os.fspath(path)
         folder = os.path.dirname(os.path.abspath(path))
@@ -345,7 +345,7 @@ def _binned_pressure(analysis, step_deg=BIN_DEG):
 
 
 def _displacement(engine, theta):
-    from .mechanism import engine_piston_motion
+    from ..engine.mechanism import engine_piston_motion
 
     pm = engine_piston_motion(engine, np.asarray(theta))
     return np.asarray(pm.s)[..., 0], np.asarray(pm.ds)[..., 0]
@@ -393,7 +393,7 @@ def _lowpass(x, max_order, P, revs):
 def _energy_balance(engine, analysis, gain, max_order):
     """Least squares of ½(J + I_m)ω² = E₀ + g·W_u + b·A·s − Σ a_k·ramp_k (low-passed):
     returns J, b (offset less crankcase) [Pa], a_k [N·m] and fit figures."""
-    from .inertia import reduced_inertia
+    from ..engine.inertia import reduced_inertia
 
     C, P = analysis.omega.shape
     if C < 2:
@@ -477,7 +477,7 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     **Returns:** :class:`Calibration`. Raises :class:`rotor.EngineError` /
     :class:`rotor.LogError` for what cannot be calibrated.
     """
-    from .logged_speed import LogAnalysis, analyze_log
+    from ..logs.analysis import LogAnalysis, analyze_log
 
     _check_single(engine, "calibrate")
     if scaling not in SCALINGS:
@@ -501,7 +501,7 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     if not str(a.tdc_method).startswith(("pressure", "given")):
         raise EngineError(f"{a.source}: TDC is not known ({a.tdc_method})")
     vh = float(engine.geometry.displacement_m3)
-    from .forces import imep_pa as _imep
+    from ..engine.forces import imep_pa as _imep
 
     w_cycle = _signal_work(engine, a)[:, -1]
     nominal = float(_imep(engine))
@@ -582,12 +582,12 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
     :class:`rotor.LogAnalysis` when the log was read here).
 
     **No firing** (a coast-down, fuel cut): where the firings' mean combustion scale lies
-    below the misfire floor (:data:`rotor.misfire.FLOOR_SCALE`) the charge iteration stops
+    below the misfire floor (:data:`rotor.diagnostics.misfire.FLOOR_SCALE`) the charge iteration stops
     (σ stays the calibration's), every firing is a misfire, and a note says so. σ is kept
     within :data:`SIGMA_RANGE`.
     """
     from .identification import identify
-    from .logged_speed import analyze_log
+    from ..logs.analysis import analyze_log
 
     from .misfire import FLOOR_SCALE
 
@@ -692,7 +692,7 @@ def cylinder_torques(engine, ident) -> np.ndarray:
     (firing k of a cylinder owns the half cycle either side of its TDC; here each cycle's
     grid takes the scale of that cycle's firing). ``engine``: the one identified
     (``ident.info["engine"]`` after :func:`diagnose`)."""
-    from .forces import cylinder_gas_torques
+    from ..engine.forces import cylinder_gas_torques
 
     C, P = ident.omega.shape
     theta = np.arange(P) * float(engine.cycle_rad) / P

@@ -5,7 +5,7 @@ A cylinder's gas torque in its k-th firing is
     M_c = M_motored,c + s[k, c] · (M_fired,c − M_motored,c)
 
 where the fired trace is the engine's ``[pressure]`` and the motored one its
-``motored()`` trace (see :mod:`rotor.pressure`). s = 1 is the engine file's cycle, s = 0
+``motored()`` trace (see :mod:`rotor.engine.pressure`). s = 1 is the engine file's cycle, s = 0
 a misfire (the cylinder is only compressed and expanded), s = 1.1 a cylinder burning 10 %
 more. The cylinder's IMEP is affine in s: IMEP = IMEP_motored + s·(IMEP_fired − IMEP_motored);
 the simulation results report it per cycle and cylinder.
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._checks import EngineError
+from ..checks import EngineError
 
 __all__ = ["combustion_pattern"]
 

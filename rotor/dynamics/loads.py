@@ -24,7 +24,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from ._checks import EngineError, as_f64, check_finite, check_positive, concrete
+from ..checks import EngineError, as_f64, check_finite, check_positive, concrete
 
 __all__ = [
     "Load",

@@ -92,7 +92,7 @@ class CrankTable:
 
         **Returns:** the matplotlib Axes (or array of Axes for kinematics).
         """
-        from .plotting import plot_table
+        from ..plotting import plot_table
 
         return plot_table(self, which, ax=ax)
 

@@ -3,8 +3,8 @@
 The pipeline of :func:`analyze_log`:
 
 1. tooth edges: the ``tooth_time_s`` column, or found in ``encoder_v``
-   (:func:`rotor.encoder.find_edges`);
-2. each edge placed on the wheel (:func:`rotor.wheel.locate_teeth`), its angle corrected
+   (:func:`rotor.logs.edges.find_edges`);
+2. each edge placed on the wheel (:func:`rotor.logs.wheel.locate_teeth`), its angle corrected
    by the wheel's tooth-spacing errors (estimated from the log, given, or none);
 3. time as a function of angle, t(φ), a cubic spline through the edges; the speed is
    ω(φ) = 1/t'(φ) [rad/s], sampled on a uniform grid of each engine cycle;
@@ -32,9 +32,9 @@ from typing import Optional
 
 import numpy as np
 
-from ._checks import LogError
-from .encoder import Edges, find_edges
-from .logs import Log, read_log
+from ..checks import LogError
+from .edges import Edges, find_edges
+from .reader import Log, read_log
 from .wheel import ToothErrors, ToothTrack, estimate_tooth_errors, locate_teeth, parse_wheel
 
 __all__ = ["LogAnalysis", "analyze_log", "tdc_from_pressure"]
@@ -57,9 +57,9 @@ class LogAnalysis:
     ``firing_parity`` (which revolutions, counted from the first gap, hold firing TDC:
     0 or 1) and ``firing_method``; ``cycle_start_rad`` (wheel angle of each cycle's start).
 
-    **Wheel:** ``track`` (:class:`rotor.wheel.ToothTrack`, ``None`` for a speed log),
-    ``tooth_errors`` (:class:`rotor.wheel.ToothErrors` applied, or ``None``),
-    ``edges`` (:class:`rotor.encoder.Edges` of an analog signal, or ``None``).
+    **Wheel:** ``track`` (:class:`rotor.logs.wheel.ToothTrack`, ``None`` for a speed log),
+    ``tooth_errors`` (:class:`rotor.logs.wheel.ToothErrors` applied, or ``None``),
+    ``edges`` (:class:`rotor.logs.edges.Edges` of an analog signal, or ``None``).
     ``pressure``: (cycle angle [rad], pressure signal) of the complete cycles when a
     pressure channel was given, for the plot. ``cylinders``: as given; ``delta_weight``:
     the weight of each order in the speed whose max − min is δ (1: taken whole; see
@@ -206,7 +206,7 @@ class LogAnalysis:
     def plot(self, axes=None):
         """The combined plot (speed over the cycle, per-cycle mean speed and δ, order
         spectrum, pressure if logged); see :func:`rotor.plotting.plot_log_analysis`."""
-        from .plotting import plot_log_analysis
+        from ..plotting import plot_log_analysis
 
         return plot_log_analysis(self, axes=axes)
 
@@ -387,14 +387,14 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
     """Per-cycle mean speed, δ and order spectrum of a logged recording.
 
     **Arguments:**
-    - ``source``: a file (read by :func:`rotor.logs.read_log` with ``columns``) or a
-      :class:`rotor.logs.Log` (e.g. ``Log.from_arrays(tooth_time_s=edges)``).
-    - ``wheel``: ``"60-2"``, ``"36-1"``, … or a :class:`rotor.wheel.Wheel`; needed
+    - ``source``: a file (read by :func:`rotor.logs.reader.read_log` with ``columns``) or a
+      :class:`rotor.logs.reader.Log` (e.g. ``Log.from_arrays(tooth_time_s=edges)``).
+    - ``wheel``: ``"60-2"``, ``"36-1"``, … or a :class:`rotor.logs.wheel.Wheel`; needed
       unless the log is a speed series (``rpm``).
     - ``strokes``: 4 (default) or 2.
     - ``cylinders``: of the engine, evenly firing (default 1). With more than one, the
       tooth-error estimate from this log leaves every whole multiple of the firing order
-      to the engine (:func:`rotor.wheel.firing_orders`): a firing run cannot tell the
+      to the engine (:func:`rotor.logs.wheel.firing_orders`): a firing run cannot tell the
       wheel's errors at those orders from the engine's fluctuation.
     - ``tdc_deg``: angle from the gap (the first tooth edge after it) to TDC of
       cylinder 1 [deg]; default: from the pressure channel if there is one, else 0
@@ -403,8 +403,8 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
     - ``firing``: which revolutions hold firing TDC (four-stroke): ``"auto"`` (pressure,
       else cam, else speed), ``"pressure"``, ``"cam"``, ``"speed"``, or 0/1 (the parity
       of the revolutions counted from the first gap).
-    - ``tooth_errors``: ``"estimate"`` (from this log, :func:`rotor.wheel.estimate_tooth_errors`),
-      ``None`` (no correction), a :class:`rotor.wheel.ToothErrors` or the path of one
+    - ``tooth_errors``: ``"estimate"`` (from this log, :func:`rotor.logs.wheel.estimate_tooth_errors`),
+      ``None`` (no correction), a :class:`rotor.logs.wheel.ToothErrors` or the path of one
       saved as JSON.
     - ``engine_orders``: passed to the estimate (``"auto"``, a list, or ``()``).
     - ``engine``: a :class:`rotor.Engine`: the speed ripple of its varying reduced
@@ -424,7 +424,7 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
       for TDC from the pressure by a polytropic fit (:func:`tdc_from_pressure`);
       without them TDC is the pressure peak, some degrees late when the engine fires.
 
-    **Returns:** :class:`LogAnalysis`. Raises :class:`rotor.logs.LogError` with the row,
+    **Returns:** :class:`LogAnalysis`. Raises :class:`rotor.logs.reader.LogError` with the row,
     column or time of anything that cannot be analysed.
     """
     from scipy.interpolate import CubicSpline, PchipInterpolator

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._checks import EngineError
-from .engine import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
+from ..checks import EngineError
+from .model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
 from .friction import Friction
 from .pressure import PRESSURE_KINDS
 

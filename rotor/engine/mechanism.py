@@ -1,7 +1,7 @@
 """Engine-level crank mechanism: every cylinder's piston motion at the engine crank angle.
 
-Ordinary cylinders use the closed forms of :mod:`rotor.kinematics` at their own
-mechanical angle; slave cylinders of articulated rods use :mod:`rotor.articulated`.
+Ordinary cylinders use the closed forms of :mod:`rotor.engine.kinematics` at their own
+mechanical angle; slave cylinders of articulated rods use :mod:`rotor.engine.articulated`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ __all__ = ["slave_geometry", "engine_piston_motion"]
 
 
 def slave_geometry(engine, slave: int, master: int) -> SlaveGeometry:
-    """The :class:`rotor.articulated.SlaveGeometry` of 0-based cylinder ``slave`` on ``master``."""
+    """The :class:`rotor.engine.articulated.SlaveGeometry` of 0-based cylinder ``slave`` on ``master``."""
     g, art = engine.geometry, engine.articulated
     banks = engine.layout.banks_deg
     return SlaveGeometry(
@@ -37,7 +37,7 @@ def engine_piston_motion(engine, theta, model: str = "exact") -> PistonMotion:
     - ``theta``: engine crank angle [rad], any shape.
     - ``model``: ``"exact"`` or ``"series"`` (slave pistons are always exact).
 
-    **Returns:** a :class:`rotor.kinematics.PistonMotion` whose fields have shape
+    **Returns:** a :class:`rotor.engine.kinematics.PistonMotion` whose fields have shape
     ``theta.shape + (cylinders,)`` [m, m/rad, m/rad²].
     """
     g = engine.geometry

@@ -22,7 +22,7 @@ import numpy as np
 import equinox as eqx
 import jax.numpy as jnp
 
-from ._checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
+from ..checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
 from .friction import Friction
 from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle
 

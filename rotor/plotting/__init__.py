@@ -72,7 +72,7 @@ def plot_torque(engine, rpm=None, ax=None, points_per_deg: int = 2):
 
     **Returns:** the Axes.
     """
-    from .forces import gas_torque, total_torque
+    from ..engine.forces import gas_torque, total_torque
 
     rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
     cycle_deg = 360 * engine.strokes / 2
@@ -100,7 +100,7 @@ def plot_inertia(engine, ax=None):
 
     **Returns:** the Axes.
     """
-    from .inertia import reduced_inertia
+    from ..engine.inertia import reduced_inertia
 
     deg = np.linspace(0, 360, 721)
     theta = jnp.deg2rad(deg)
@@ -177,7 +177,7 @@ def save_figure(ax, path) -> None:
     """Save the figure holding ``ax`` to ``path``, whole or not at all, and close it."""
     import matplotlib.pyplot as plt
 
-    from ._io import atomic_path
+    from ..fileio import atomic_path
 
     fig = np.ravel(ax)[0].figure
     try:
@@ -278,7 +278,7 @@ def plot_identification(ident, engine=None, axes=None):
     if engine is None:
         engine = ident.info.get("engine") if isinstance(ident.info, dict) else None
     if engine is not None:
-        from .calibration import cylinder_torques
+        from ..diagnostics.calibration import cylinder_torques
 
         m = cylinder_torques(engine, ident)
         for c in range(m.shape[2]):
@@ -309,7 +309,7 @@ def plot_identification(ident, engine=None, axes=None):
 
 
 def plot_flywheel_design(design, engine, axes=None, rpm_range=None, n: int = 25):
-    """Plot a :class:`rotor.flywheel.FlywheelDesign`: δ against mean speed [rpm] with the
+    """Plot a :class:`rotor.design.flywheel.FlywheelDesign`: δ against mean speed [rpm] with the
     designed and the textbook ``[crankshaft]`` inertia, the fuelling interpolated between
     the operating points (balancing load), the points with their targets (left); the
     inertia each point needs, by Newton through the steady state and by the textbook
@@ -318,7 +318,7 @@ def plot_flywheel_design(design, engine, axes=None, rpm_range=None, n: int = 25)
 
     **Returns:** the two Axes.
     """
-    from .flywheel import OperatingPoint, _Evaluator
+    from ..design.flywheel import OperatingPoint, _Evaluator
 
     if axes is None:
         import matplotlib.pyplot as plt

@@ -21,7 +21,7 @@ import dataclasses
 
 import numpy as np
 
-from ._checks import LogError
+from ..checks import LogError
 
 __all__ = ["Edges", "find_edges", "signal_levels"]
 

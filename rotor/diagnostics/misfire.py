@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._checks import EngineError
+from ..checks import EngineError
 
 __all__ = ["contribution_index", "MISFIRE_THRESHOLD", "FLOOR_SCALE"]
 

@@ -84,7 +84,7 @@ def _whole(text):
 
 
 def _dynamics_args(p):
-    from .loads import _LOAD_HELP
+    from ..dynamics.loads import _LOAD_HELP
 
     p.add_argument("--load", default="none", metavar="SPEC", help=_LOAD_HELP + " (default none)")
     p.add_argument("--fidelity", choices=("variable", "series", "coefficients", "constant"), default="variable",
@@ -238,14 +238,14 @@ def _build_parser():
 
 
 def _version():
-    from . import __version__
+    from .. import __version__
 
     return __version__
 
 
 def _cmd_table(args):
     import rotor
-    from ._io import write_text_atomic
+    from ..fileio import write_text_atomic
 
     engine = rotor.load_engine(args.engine)
     table = rotor.crank_table(engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics,
@@ -259,7 +259,7 @@ def _cmd_table(args):
 
 def _cmd_info(args):
     import rotor
-    from .summary import format_summary
+    from ..engine.summary import format_summary
 
     engine = rotor.load_engine(args.engine)
     summary = rotor.engine_summary(engine, rpm=args.rpm)
@@ -274,7 +274,7 @@ def _write_plots(engine, rpm, out):
 
     matplotlib.use("Agg")
     import rotor
-    from .plotting import plot_inertia, plot_torque, save_figure
+    from ..plotting import plot_inertia, plot_torque, save_figure
 
     os.makedirs(out, exist_ok=True)
     table = rotor.crank_table(engine, rpm=rpm, step_deg=2.0, kinematics="exact")
@@ -330,7 +330,7 @@ def _plot_result(res, out, prefix):
     import matplotlib
 
     matplotlib.use("Agg")
-    from .plotting import save_figure
+    from ..plotting import save_figure
 
     os.makedirs(out, exist_ok=True)
     written = []
@@ -366,7 +366,7 @@ def _cmd_steady(args):
 
 
 def _parse_misfires(text):
-    from ._checks import EngineError
+    from ..checks import EngineError
 
     pairs = []
     for item in filter(None, (t.strip() for t in text.split(","))):
@@ -398,7 +398,7 @@ def _plot_log(make_figure, args, kind):
     import matplotlib
 
     matplotlib.use("Agg")
-    from .plotting import save_figure
+    from ..plotting import save_figure
 
     os.makedirs(args.plot, exist_ok=True)
     stem = os.path.splitext(os.path.basename(args.log))[0]
@@ -408,9 +408,9 @@ def _plot_log(make_figure, args, kind):
 
 
 def _cmd_analyze(args):
-    from ._checks import LogError
-    from .engine_file import load_engine
-    from .logged_speed import analyze_log
+    from ..checks import LogError
+    from ..engine.file import load_engine
+    from ..logs.analysis import analyze_log
 
     if args.engine_orders == "auto":
         eo = "auto"
@@ -448,7 +448,7 @@ def _cmd_analyze(args):
 
 def _cmd_flywheel(args):
     import rotor
-    from .flywheel import OperatingPoint, design_flywheel
+    from ..design.flywheel import OperatingPoint, design_flywheel
 
     engine = rotor.load_engine(args.engine)
     rpms = args.rpm if args.rpm else [float(engine.operating.rpm)]
@@ -466,7 +466,7 @@ def _cmd_flywheel(args):
                              max_rim_speed_m_s=args.max_rim_speed, max_rpm=args.max_rpm, fidelity=args.fidelity)
     written = []
     if args.plot:
-        from .plotting import plot_flywheel_design, save_figure
+        from ..plotting import plot_flywheel_design, save_figure
 
         os.makedirs(args.plot, exist_ok=True)
         path = os.path.join(args.plot, "flywheel.png")
@@ -486,7 +486,7 @@ def _cmd_diagnose(args):
     import numpy as np
 
     import rotor
-    from .calibration import Calibration, calibrate, diagnose, measured_imep
+    from ..diagnostics.calibration import Calibration, calibrate, diagnose, measured_imep
 
     engine = rotor.load_engine(args.engine)
     cal = Calibration.load(args.calibration) if args.calibration else None
@@ -571,7 +571,7 @@ def _cmd_presets(args):
 
 def _cmd_demo(args):
     import rotor
-    from .summary import format_summary
+    from ..engine.summary import format_summary
 
     engine = rotor.load_engine(args.engine)
     sys.stdout.write(format_summary(rotor.engine_summary(engine)))
@@ -588,8 +588,8 @@ def _cmd_demo(args):
     sys.stdout.write(_format_result(trans))
     print()
     # the flywheel for δ ≤ 0.01 at rated speed and ≤ 0.03 at a part-load idle, against the textbook
-    from .flywheel import OperatingPoint
-    from .plotting import plot_flywheel_design, save_figure
+    from ..design.flywheel import OperatingPoint
+    from ..plotting import plot_flywheel_design, save_figure
 
     rpm = float(engine.operating.rpm)
     design = rotor.design_flywheel(engine, 0.01, [OperatingPoint(0.5 * rpm, 0.3, None, 0.03), rpm])

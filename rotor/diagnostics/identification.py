@@ -2,7 +2,7 @@
 
 :func:`identify` fits the engine model to a measured (or simulated) speed ω(θ) on the
 uniform cycle-angle grid of consecutive cycles, by least squares through the closed-form
-energy cycle of :mod:`rotor.dynamics`:
+energy cycle of :mod:`rotor.dynamics.equation`:
 
     dE/dθ = M_motored(θ) + Σ_c s[k, c]·ΔM_c(θ) − a_k − 2(c − k(θ))/I(θ)·E,   E = ½·I(θ)·ω²,
 
@@ -55,7 +55,7 @@ every load (the errors are those of the speed signal, which grow as ω²: jitter
 calibration's residual tooth errors, 0.0015° at most); each cylinder's mean IMEP over the
 record within 0.73 %. The direct simulated speed (no wheel) gives the scales to 1e-9.
 
-**Misfires** (:mod:`rotor.misfire`): the contribution index s / s_ref and the misfire
+**Misfires** (:mod:`rotor.diagnostics.misfire`): the contribution index s / s_ref and the misfire
 flag index < 0.5 (see there for the reference, the floor that makes a coast-down all
 misfires, and the rates measured by ``benchmarks/identification.py``).
 
@@ -83,10 +83,10 @@ import lineax as lx
 import numpy as np
 import optimistix as optx
 
-from ._checks import EngineError
-from .crank_train import _DM, _I, _K, _MM, train_from_engine, check_fidelity, grid_points
-from .dynamics import _cumulative, _wrap, friction_coefficients, node_offsets
-from .loads import ConstantLoad, Load
+from ..checks import EngineError
+from ..dynamics.crank_train import _DM, _I, _K, _MM, train_from_engine, check_fidelity, grid_points
+from ..dynamics.equation import _cumulative, _wrap, friction_coefficients, node_offsets
+from ..dynamics.loads import ConstantLoad, Load
 from .misfire import FLOOR_SCALE, MISFIRE_THRESHOLD, contribution_index
 
 __all__ = ["Identification", "identify", "PARAMETERS"]
@@ -188,7 +188,7 @@ class Identification:
     def plot(self, engine=None, axes=None):
         """Speed, identified torque per cylinder, IMEP per cycle with misfires marked
         (:func:`rotor.plotting.plot_identification`)."""
-        from .plotting import plot_identification
+        from ..plotting import plot_identification
 
         return plot_identification(self, engine=engine, axes=axes)
 
@@ -390,8 +390,8 @@ def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, na: int, 
 
 # ----------------------------------------------------------------------------- inputs
 def _speed(engine, speed, cycle_rad):
-    from .logged_speed import LogAnalysis
-    from .speed_result import SpeedResult
+    from ..logs.analysis import LogAnalysis
+    from ..dynamics.result import SpeedResult
 
     t_start = None
     phase = None
@@ -522,11 +522,11 @@ def identify(
       leaves to the firing-order fluctuation alone).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False; a + c·ω².
     - ``parameters``: ``"imep_scale"`` (one combustion scale per firing).
-    - ``fidelity``, ``grid_deg``: of the tables (:func:`rotor.crank_train`); the tables'
+    - ``fidelity``, ``grid_deg``: of the tables (:func:`rotor.dynamics.crank_train`); the tables'
       nodes are refined so that the P samples of a cycle fall on nodes.
     - ``block_cycles``, ``overlap``: cycles per block core, and the cycles added on each
       side (see the module doc).
-    - ``threshold``, ``misfire_floor``: of the misfire index (:mod:`rotor.misfire`).
+    - ``threshold``, ``misfire_floor``: of the misfire index (:mod:`rotor.diagnostics.misfire`).
     - ``phase_reference``: whether the grid's cycle is known to start at cylinder 1's
       intake TDC (not 360° off); default: True for a SpeedResult or an array, from the
       firing revolution's method for a LogAnalysis (found from the speed: False).

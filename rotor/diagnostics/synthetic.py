@@ -47,8 +47,8 @@ import pathlib
 
 import numpy as np
 
-from ._checks import EngineError
-from .forces import cylinder_pressure  # compiled once per shape
+from ..checks import EngineError
+from ..engine.forces import cylinder_pressure  # compiled once per shape
 
 __all__ = ["simulated_recording", "simulated_tooth_errors", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
 
@@ -76,7 +76,7 @@ def simulated_tooth_errors(wheel=None, tooth_error_deg: float = 0.1):
     the same ``wheel`` and ``tooth_error_deg`` [deg] (the same for every ``seed``), as a
     :class:`rotor.ToothErrors` (``method="simulated"``) to compare an estimate with, or to
     analyse a simulated recording with its exact correction."""
-    from .wheel import ToothErrors, Wheel, parse_wheel
+    from ..logs.wheel import ToothErrors, Wheel, parse_wheel
 
     w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
     tooth_error_deg = _number("tooth_error_deg", tooth_error_deg, nonnegative=True)
@@ -141,12 +141,12 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     import equinox as eqx
     from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
-    from ._io import atomic_path
-    from .engine import Engine
+    from ..fileio import atomic_path
+    from ..engine.model import Engine
     from .calibration import SIGMA_RANGE
-    from .engine_file import load_engine
-    from .periodic import steady_state
-    from .wheel import Wheel, parse_wheel
+    from ..engine.file import load_engine
+    from ..dynamics.steady import steady_state
+    from ..logs.wheel import Wheel, parse_wheel
 
     # ---------------------------------------------------------------- arguments
     path = pathlib.Path(path)

@@ -31,10 +31,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._checks import EngineError, arrays_only
-from .forces import cylinder_gas_torques, reciprocating_inertia_torque
-from .inertia import _ordinary_cylinder_inertia, inertia_coefficients, mean_reduced_inertia, reduced_inertia
-from .kinematics import piston_motion
+from ..checks import EngineError, arrays_only
+from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
+from ..engine.inertia import _ordinary_cylinder_inertia, inertia_coefficients, mean_reduced_inertia, reduced_inertia
+from ..engine.kinematics import piston_motion
 
 __all__ = ["CrankTrain", "crank_train", "FIDELITIES"]
 

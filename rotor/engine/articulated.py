@@ -74,7 +74,7 @@ def slave_piston_motion(alpha_master, g: SlaveGeometry) -> PistonMotion:
       slave's own crank angle plus its bank angle from the master).
     - ``g``: a :class:`SlaveGeometry`.
 
-    **Returns:** a :class:`rotor.kinematics.PistonMotion` [m, m/rad, m/rad²]; the TDC is
+    **Returns:** a :class:`rotor.engine.kinematics.PistonMotion` [m, m/rad, m/rad²]; the TDC is
     the slave piston's outermost position over a revolution (it differs slightly from
     the master's TDC plus the bank angle, and its stroke from 2R).
     """

@@ -21,7 +21,7 @@ from typing import ClassVar
 import equinox as eqx
 import jax.numpy as jnp
 
-from ._checks import as_f64, check_finite, check_positive
+from ..checks import as_f64, check_finite, check_positive
 
 __all__ = ["Friction"]
 

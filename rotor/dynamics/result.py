@@ -261,6 +261,6 @@ class SpeedResult:
         (rpm against time over the run), ``"torque"`` (engine and load torque over the
         last cycle) or ``"orders"`` (speed harmonics by engine order).
         """
-        from .plotting import plot_speed
+        from ..plotting import plot_speed
 
         return plot_speed(self, ax=ax, kind=kind)

@@ -34,10 +34,10 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from ._checks import EngineError
-from .inertia import mean_reduced_inertia
-from .periodic import NoSteadyStateError, steady_state
-from .speed_result import RPM_PER_RAD_S
+from ..checks import EngineError
+from ..engine.inertia import mean_reduced_inertia
+from ..dynamics.steady import NoSteadyStateError, steady_state
+from ..dynamics.result import RPM_PER_RAD_S
 
 __all__ = [
     "OperatingPoint",
@@ -87,7 +87,7 @@ def _points(points, engine) -> list[OperatingPoint]:
                               f"or one per cylinder ({engine.cylinders})")
         load = p.load
         if isinstance(load, str):
-            from .loads import parse_load
+            from ..dynamics.loads import parse_load
 
             load = parse_load(load)
         if load is not None and not hasattr(load, "torque"):
@@ -440,7 +440,7 @@ class FlywheelDesign:
 
     def plot(self, engine, axes=None, rpm_range=None, n: int = 25):
         """Plot the design (needs the ``engine``): see :func:`rotor.plotting.plot_flywheel_design`."""
-        from .plotting import plot_flywheel_design
+        from ..plotting import plot_flywheel_design
 
         return plot_flywheel_design(self, engine, axes=axes, rpm_range=rpm_range, n=n)
 

@@ -41,7 +41,7 @@ from typing import Optional
 
 import numpy as np
 
-from ._checks import LogError
+from ..checks import LogError
 
 __all__ = ["Wheel", "parse_wheel", "ToothTrack", "locate_teeth", "ToothErrors", "estimate_tooth_errors", "firing_orders"]
 
@@ -290,7 +290,7 @@ class ToothErrors:
 
     def save(self, path) -> None:
         """Write as JSON (whole or not at all), to reuse on other recordings of the same wheel."""
-        from ._io import write_text_atomic
+        from ..fileio import write_text_atomic
 
         path = os.fspath(path)
         folder = os.path.dirname(os.path.abspath(path))
@@ -390,7 +390,7 @@ def _inertia_ripple(wheel, engine, tdc_deg):
     inertia makes at constant kinetic energy, ω ∝ I(θ)^(-1/2), as the tooth-error estimate
     measures it (against a uniform time-to-angle map over the revolution); edge 0 is the
     first after the gap, cylinder 1's TDC ``tdc_deg`` after it."""
-    from .inertia import reduced_inertia
+    from ..engine.inertia import reduced_inertia
 
     fine = np.linspace(0.0, TWO_PI, 2881)
     root = np.sqrt(np.asarray(reduced_inertia(engine, fine - math.radians(tdc_deg))))
