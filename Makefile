@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo test notebooks bench bench-quick clean
+.PHONY: install demo lint test notebooks bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "rotor needs Python >= 3.11 (set PYTHON=...)")'
@@ -18,7 +18,14 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/rotor demo --out out
 
-test: $(STAMP)
+# the house rules first (seconds), then the suite
+lint: $(STAMP)
+	$(VENV)/bin/ruff check rotor tests benchmarks
+	$(VENV)/bin/ruff format --check rotor tests benchmarks
+	$(VENV)/bin/lint-imports --no-cache
+	$(VENV)/bin/mypy
+
+test: lint
 	$(PY) -m pytest -q
 
 # re-execute the notebooks in their full form and save their outputs (a few minutes)

@@ -53,12 +53,11 @@ import sys
 import time
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.optimize import least_squares
-
-import jax
-import jax.numpy as jnp
 
 import rotor  # switches float64 on
 from rotor.engine.kinematics import piston_motion
@@ -139,8 +138,9 @@ def cylinder_volume(theta_deg, geom: dict, compression_ratio: float):
 
 
 # ----------------------------------------------------------------------------- tue: signals
-def read_bench(path, columns=(0, 1, 2), gain_v_per_bar=TUE_CALIBRATION["gain_v_per_bar"],
-               offset_v=TUE_CALIBRATION["offset_v"]):
+def read_bench(
+    path, columns=(0, 1, 2), gain_v_per_bar=TUE_CALIBRATION["gain_v_per_bar"], offset_v=TUE_CALIBRATION["offset_v"]
+):
     """Read a bench recording: (time [s], pressure [bar], encoder [V]).
 
     **Arguments:** ``columns``: indices of time, pressure voltage and encoder voltage;
@@ -252,8 +252,15 @@ def bin_cycles(theta, p, fire_tdc_deg, step=1.0):
     return grid, sums[complete] / counts[complete]
 
 
-def fit_tdc(theta, p, fire_rev_start, geom=TUE_GEOMETRY, compression_ratio=TUE_COMPRESSION_RATIO,
-            window=TUE_TDC_WINDOW_DEG, guess=None):
+def fit_tdc(
+    theta,
+    p,
+    fire_rev_start,
+    geom=TUE_GEOMETRY,
+    compression_ratio=TUE_COMPRESSION_RATIO,
+    window=TUE_TDC_WINDOW_DEG,
+    guess=None,
+):
     """Firing TDC [deg after the gap] and pressure offset by a polytropic compression fit.
 
     The trace is averaged over the firing revolutions on a 0.5° grid of the angle from the
@@ -291,8 +298,12 @@ def fit_tdc(theta, p, fire_rev_start, geom=TUE_GEOMETRY, compression_ratio=TUE_C
         tdc = float(sol.x[0])
         if moved < 0.01:
             break
-    return dict(tdc_after_gap_deg=tdc, offset_bar=float(sol.x[3]), exponent=float(sol.x[1]),
-                rms_log=float(np.sqrt(np.mean(sol.fun**2))))
+    return dict(
+        tdc_after_gap_deg=tdc,
+        offset_bar=float(sol.x[3]),
+        exponent=float(sol.x[1]),
+        rms_log=float(np.sqrt(np.mean(sol.fun**2))),
+    )
 
 
 def tue_cycle(data_dir, name="full_load.txt", step=1.0, tdc_shift_deg=0.0, **tdc_kw):
@@ -374,8 +385,7 @@ def wiebe_pressure_fn(geom: rotor.Geometry, angle_deg, fixed: dict, keys):
     return f
 
 
-def fit_wiebe(angle_deg, pressure_pa, geom: rotor.Geometry, fixed: dict, start: dict, keys=FIT_KEYS,
-              bounds=BOUNDS):
+def fit_wiebe(angle_deg, pressure_pa, geom: rotor.Geometry, fixed: dict, start: dict, keys=FIT_KEYS, bounds=BOUNDS):
     """Least-squares fit of the WiebeCycle parameters ``keys`` to a trace (errors / peak)."""
     keys = tuple(keys)
     f = wiebe_pressure_fn(geom, angle_deg, fixed, keys)
@@ -391,8 +401,18 @@ def fit_wiebe(angle_deg, pressure_pa, geom: rotor.Geometry, fixed: dict, start: 
 
     z0 = np.clip((np.array([start[k] for k in keys]) - lo) / scale, 1e-6, 1 - 1e-6)
     # finite-difference Jacobian on the bounded, scaled parameters (see the module docstring)
-    sol = least_squares(res, z0, jac="3-point", bounds=(0.0, 1.0), x_scale="jac", max_nfev=300,
-                        xtol=1e-10, ftol=1e-10, gtol=1e-10, diff_step=1e-5)
+    sol = least_squares(
+        res,
+        z0,
+        jac="3-point",
+        bounds=(0.0, 1.0),
+        x_scale="jac",
+        max_nfev=300,
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
+        diff_step=1e-5,
+    )
     params = dict(fixed)
     params.update({k: float(v) for k, v in zip(keys, unpack(sol.x))})
     return params, sol
@@ -442,9 +462,18 @@ def calibrate_tue(data_dir):
     a, p = c["angle_deg"], c["pressure_pa"]
     imep = trace_imep_pa(a, p, geom)
     fixed = dict(compression_ratio=TUE_COMPRESSION_RATIO, imep_pa=imep, crankcase_pa=101325.0)
-    start = dict(intake_pa=float(np.mean(p[(a > 30) & (a < 170)])), exhaust_pa=float(np.mean(p[(a > 560) & (a < 690)])),
-                 start_deg=350.0, duration_deg=60.0, form_factor=2.0, compression_exponent=1.25,
-                 expansion_exponent=1.25, exhaust_open_deg=500.0, blowdown_deg=50.0, overlap_deg=30.0)
+    start = dict(
+        intake_pa=float(np.mean(p[(a > 30) & (a < 170)])),
+        exhaust_pa=float(np.mean(p[(a > 560) & (a < 690)])),
+        start_deg=350.0,
+        duration_deg=60.0,
+        form_factor=2.0,
+        compression_exponent=1.25,
+        expansion_exponent=1.25,
+        exhaust_open_deg=500.0,
+        blowdown_deg=50.0,
+        overlap_deg=30.0,
+    )
     params, sol = fit_wiebe(a, p, geom, fixed, start)
     model = np.asarray(rotor.WiebeCycle(**params)(np.deg2rad(a), geom, 4))
     errs = fit_errors(a, p, model)
@@ -467,8 +496,11 @@ def calibrate_tue(data_dir):
         readme_calibration_exhaust_bar=float(np.mean(raw[(a > 560) & (a < 690)]) / 1e5),
         pegged_intake_bar=float(np.mean(p[(a > 30) & (a < 170)]) / 1e5),
         pegged_exhaust_bar=float(np.mean(p[(a > 560) & (a < 690)]) / 1e5),
-        cycle_peak_bar_min_mean_max=[float(c["cycle_peaks_bar"].min()), float(c["cycle_peaks_bar"].mean()),
-                                     float(c["cycle_peaks_bar"].max())],
+        cycle_peak_bar_min_mean_max=[
+            float(c["cycle_peaks_bar"].min()),
+            float(c["cycle_peaks_bar"].mean()),
+            float(c["cycle_peaks_bar"].max()),
+        ],
         imep_measured_pa=imep,
         imep_fitted_pa=float(rotor.imep_pa(_engine(geom, params))),
         fit=errs,
@@ -488,8 +520,11 @@ def tue_tdc_checks(data_dir):
     out = {"window": {}, "compression_ratio": {}, "recording": {}, "imep_bar_tdc_shift": {}}
 
     def brief(c):
-        return dict(tdc_after_gap_deg=round(c["tdc_after_gap_deg"], 2), offset_bar=round(c["offset_bar"], 3),
-                    exponent=round(c["exponent"], 3))
+        return dict(
+            tdc_after_gap_deg=round(c["tdc_after_gap_deg"], 2),
+            offset_bar=round(c["offset_bar"], 3),
+            exponent=round(c["exponent"], 3),
+        )
 
     for w in ((-100.0, -10.0), (-80.0, -10.0), (-70.0, -15.0), (-120.0, -20.0)):
         out["window"][f"{w[0]:g}..{w[1]:g}"] = brief(tue_cycle(data_dir, window=w))
@@ -498,8 +533,11 @@ def tue_tdc_checks(data_dir):
     for name in ("No_load.txt", "half_load.txt"):
         if (Path(data_dir) / "tue-4gb10" / name).is_file():
             c = tue_cycle(data_dir, name)
-            out["recording"][name] = dict(brief(c), rpm=round(c["rpm"], 1),
-                                          imep_bar=round(trace_imep_pa(c["angle_deg"], c["pressure_pa"], geom) / 1e5, 3))
+            out["recording"][name] = dict(
+                brief(c),
+                rpm=round(c["rpm"], 1),
+                imep_bar=round(trace_imep_pa(c["angle_deg"], c["pressure_pa"], geom) / 1e5, 3),
+            )
     for shift in (-1.0, 1.0):
         c = tue_cycle(data_dir, tdc_shift_deg=shift)
         out["imep_bar_tdc_shift"][f"{shift:+g}"] = round(trace_imep_pa(c["angle_deg"], c["pressure_pa"], geom) / 1e5, 3)
@@ -508,10 +546,15 @@ def tue_tdc_checks(data_dir):
 
 def _engine(geom, params):
     return rotor.Engine(
-        name="fit", strokes=4, cylinders=1, geometry=geom,
-        masses=rotor.Masses(reciprocating_kg=1.0), crankshaft=rotor.Crankshaft(inertia_kgm2=1.0),
+        name="fit",
+        strokes=4,
+        cylinders=1,
+        geometry=geom,
+        masses=rotor.Masses(reciprocating_kg=1.0),
+        crankshaft=rotor.Crankshaft(inertia_kgm2=1.0),
         layout=rotor.Layout(throw_angles_deg=[0.0], firing_order=[1]),
-        pressure=rotor.WiebeCycle(**params), operating=rotor.Operating(rpm=1000.0),
+        pressure=rotor.WiebeCycle(**params),
+        operating=rotor.Operating(rpm=1000.0),
     )
 
 
@@ -520,16 +563,32 @@ def calibrate_mwm(data_dir, compression_ratio=MWM_COMPRESSION_RATIO):
     a, p = mwm_trace(data_dir)
     pa, pp = mwm_points(data_dir)
     imep = trace_imep_pa(a, p, geom)
-    start = dict(intake_pa=float(np.mean(p[(a > 30) & (a < 170)])), exhaust_pa=float(np.mean(p[(a > 600) & (a < 700)])),
-                 start_deg=352.0, duration_deg=60.0, form_factor=1.0, compression_exponent=1.35,
-                 expansion_exponent=1.3, exhaust_open_deg=500.0, blowdown_deg=60.0, overlap_deg=30.0)
+    start = dict(
+        intake_pa=float(np.mean(p[(a > 30) & (a < 170)])),
+        exhaust_pa=float(np.mean(p[(a > 600) & (a < 700)])),
+        start_deg=352.0,
+        duration_deg=60.0,
+        form_factor=1.0,
+        compression_exponent=1.35,
+        expansion_exponent=1.3,
+        exhaust_open_deg=500.0,
+        blowdown_deg=60.0,
+        overlap_deg=30.0,
+    )
     out = {}
     fixed = dict(compression_ratio=compression_ratio, imep_pa=imep, crankcase_pa=101325.0)
     params, sol = fit_wiebe(a, p, geom, fixed, start)
     # the same fit with the compression ratio free, for the report
     bounds = dict(BOUNDS, compression_ratio=(12.0, 24.0))
-    free_params, _ = fit_wiebe(a, p, geom, dict(imep_pa=imep, crankcase_pa=101325.0),
-                               dict(params, compression_ratio=compression_ratio), FIT_KEYS + ("compression_ratio",), bounds)
+    free_params, _ = fit_wiebe(
+        a,
+        p,
+        geom,
+        dict(imep_pa=imep, crankcase_pa=101325.0),
+        dict(params, compression_ratio=compression_ratio),
+        FIT_KEYS + ("compression_ratio",),
+        bounds,
+    )
     model = np.asarray(rotor.WiebeCycle(**params)(np.deg2rad(a), geom, 4))
     model_pts = np.asarray(rotor.WiebeCycle(**params)(np.deg2rad(pa), geom, 4))
     free_model = np.asarray(rotor.WiebeCycle(**free_params)(np.deg2rad(a), geom, 4))
@@ -548,8 +607,9 @@ def calibrate_mwm(data_dir, compression_ratio=MWM_COMPRESSION_RATIO):
         nfev=int(sol.nfev),
         wiebe=params,
         wiebe_rounded=rounded(params),
-        free_compression_ratio=dict(compression_ratio=free_params["compression_ratio"],
-                                    fit=fit_errors(a, p, free_model), wiebe=free_params),
+        free_compression_ratio=dict(
+            compression_ratio=free_params["compression_ratio"], fit=fit_errors(a, p, free_model), wiebe=free_params
+        ),
     )
     return out
 
@@ -598,12 +658,18 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(DEFAULT_OUT), help="JSON file for the results")
     args = ap.parse_args(argv)
     data = Path(args.data)
-    need = [data / "tue-4gb10" / "full_load.txt", data / "mwm-diesel" / "pressure_data.csv",
-            data / "mwm-diesel" / "peak_data.csv"]
+    need = [
+        data / "tue-4gb10" / "full_load.txt",
+        data / "mwm-diesel" / "pressure_data.csv",
+        data / "mwm-diesel" / "peak_data.csv",
+    ]
     missing = [str(p) for p in need if not p.is_file()]
     if missing:
-        print(f"calibrate_presets: the data are not there: {', '.join(missing)}\n"
-              f"(the shared data folder, {data}, is not part of the project; pass --data DIR)", file=sys.stderr)
+        print(
+            f"calibrate_presets: the data are not there: {', '.join(missing)}\n"
+            f"(the shared data folder, {data}, is not part of the project; pass --data DIR)",
+            file=sys.stderr,
+        )
         return 2
     t0 = time.perf_counter()
     res = {"tue": calibrate_tue(data), "mwm": calibrate_mwm(data)}

@@ -72,19 +72,26 @@ def import_time(repeats=5):
 
     empty = statistics.median(wall("pass") for _ in range(repeats))
     whole = [wall("import rotor") for _ in range(repeats)]
-    return {"median_s": statistics.median(whole) - empty, "process_s": whole, "empty_process_s": empty,
-            "repeats": repeats}
+    return {
+        "median_s": statistics.median(whole) - empty,
+        "process_s": whole,
+        "empty_process_s": empty,
+        "repeats": repeats,
+    }
 
 
 def versions():
+    import platform
+
     import diffrax
     import equinox
     import jax
     import jaxlib
-    import platform
 
     return {m.__name__: m.__version__ for m in (jax, jaxlib, diffrax, equinox)} | {
-        "python": platform.python_version(), "cpu_count": os.cpu_count()}
+        "python": platform.python_version(),
+        "cpu_count": os.cpu_count(),
+    }
 
 
 def plot(out, path):
@@ -131,8 +138,11 @@ def main():
                 cold = child(name, entry, cache)
                 warm = child(name, entry, cache)
             p[entry] = {"cold": cold, "warm": warm}
-            print(f"{name:11s} {entry:7s} {cold['compile_s']:6.2f}s {warm['compile_s']:6.2f}s "
-                  f"{cold['run_s'] * 1e3:6.1f}ms", flush=True)
+            print(
+                f"{name:11s} {entry:7s} {cold['compile_s']:6.2f}s {warm['compile_s']:6.2f}s "
+                f"{cold['run_s'] * 1e3:6.1f}ms",
+                flush=True,
+            )
     RESULTS.mkdir(parents=True, exist_ok=True)
     stem = "compile_time_quick" if args.quick else "compile_time"
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))

@@ -36,8 +36,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import rotor  # noqa: E402
-from rotor.fileio import write_text_atomic  # noqa: E402
 from rotor.dynamics.transient import DEFAULT_RTOL  # noqa: E402
+from rotor.fileio import write_text_atomic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CYCLES = 100
@@ -78,12 +78,17 @@ def timed(fn):
 
 def last_cycle(r):
     w = np.asarray(r.omega)
-    return w[-(r.points_per_cycle + 1):]
+    return w[-(r.points_per_cycle + 1) :]
 
 
 def main():
-    out = {"stated_accuracy": 1e-6, "qualify_at": QUALIFY, "cycles": CYCLES, "scenes": {},
-           "versions": {"jax": jax.__version__, "rotor": rotor.__version__}}
+    out = {
+        "stated_accuracy": 1e-6,
+        "qualify_at": QUALIFY,
+        "cycles": CYCLES,
+        "scenes": {},
+        "versions": {"jax": jax.__version__, "rotor": rotor.__version__},
+    }
     for name, e in scenes().items():
         rpm = float(e.operating.rpm)
         load = rotor.PropellerLoad(float(rotor.mean_gas_torque(e)), rpm)
@@ -114,12 +119,18 @@ def main():
     # the cheapest qualifying setting per method: the loosest that qualifies on every scene
     choice = {}
     for method, (knob, values) in CANDIDATES.items():
-        ok = [v for i, v in enumerate(values)
-              if all(sc["runs"][method][i]["error"] <= QUALIFY for sc in out["scenes"].values())]
-        worst = {v: max(sc["runs"][method][i]["error"] for sc in out["scenes"].values())
-                 for i, v in enumerate(values)}
-        choice[method] = {"knob": knob, "cheapest_qualifying": ok[0] if ok else None, "default": DEFAULTS[method],
-                          "worst_error_by_setting": {str(k): w for k, w in worst.items()}}
+        ok = [
+            v
+            for i, v in enumerate(values)
+            if all(sc["runs"][method][i]["error"] <= QUALIFY for sc in out["scenes"].values())
+        ]
+        worst = {v: max(sc["runs"][method][i]["error"] for sc in out["scenes"].values()) for i, v in enumerate(values)}
+        choice[method] = {
+            "knob": knob,
+            "cheapest_qualifying": ok[0] if ok else None,
+            "default": DEFAULTS[method],
+            "worst_error_by_setting": {str(k): w for k, w in worst.items()},
+        }
     out["choice"] = choice
     RESULTS.mkdir(parents=True, exist_ok=True)
     write_text_atomic(RESULTS / "defaults.json", json.dumps(out, indent=1))

@@ -45,8 +45,13 @@ def compare(engine, folder, cal, name, **kw):
     t0 = time.perf_counter()
     ident = rotor.diagnose(engine, folder / f"{name}.txt", cal, columns="time,-,encoder_v", **kw)
     wall = time.perf_counter() - t0
-    pressure = rotor.analyze_log(folder / f"{name}.txt", "60-2", columns="time,pressure_v,encoder_v",
-                                 tdc_deg=cal.tdc_after_gap_deg, tooth_errors=cal.tooth_errors)
+    pressure = rotor.analyze_log(
+        folder / f"{name}.txt",
+        "60-2",
+        columns="time,pressure_v,encoder_v",
+        tdc_deg=cal.tdc_after_gap_deg,
+        tooth_errors=cal.tooth_errors,
+    )
     if not np.allclose(pressure.t_start_s, ident.t_start_s, atol=1e-9):
         raise RuntimeError(f"{name}: the speed-only cycles are not the pressure's")
     meas = rotor.measured_imep(engine, pressure, cal.pressure_gain_pa)
@@ -85,8 +90,9 @@ def main(argv=None):
     results = {"gain_pa_per_v": GAIN, "calibrations": {}, "runs": {}}
     for cal_name in RECORDINGS:
         t0 = time.perf_counter()
-        cal = rotor.calibrate(engine, folder / f"{cal_name}.txt", wheel="60-2", columns="time,pressure_v,encoder_v",
-                              pressure_gain=GAIN)
+        cal = rotor.calibrate(
+            engine, folder / f"{cal_name}.txt", wheel="60-2", columns="time,pressure_v,encoder_v", pressure_gain=GAIN
+        )
         cal_wall = time.perf_counter() - t0
         if cal_name == "full_load":
             here = "tue-4gb10/full_load.txt"  # not this machine's path
@@ -100,18 +106,25 @@ def main(argv=None):
         d.pop("tooth_errors")
         d["wall_s"] = cal_wall
         results["calibrations"][cal_name] = d
-        variants = {"default (charge scaling, load per block)": (cal, {}),
-                    "scaling none": (cal, {"scaling": "none"}),
-                    "load per cycle": (cal, {"load_per": "cycle"})}
+        variants = {
+            "default (charge scaling, load per block)": (cal, {}),
+            "scaling none": (cal, {"scaling": "none"}),
+            "load per cycle": (cal, {"load_per": "cycle"}),
+        }
         if cal_name == "full_load":
             ebal = dataclasses.replace(cal, inertia_kgm2=cal.fit["energy_balance_inertia_kgm2"])
             variants["energy-balance inertia (no refinement)"] = (ebal, {})
         runs = {}
         for vname, (c, kw) in variants.items():
             runs[vname] = {name: compare(engine, folder, c, name, **kw) for name in RECORDINGS}
-            print(f"calibrated on {cal_name:9s} {vname:42s} " + "  ".join(
-                f"{n}: {r['error_mean_bar']:+.3f} bar ({r['error_mean_pct']:+.1f} %), rms {r['error_rms_bar']:.3f}"
-                for n, r in runs[vname].items()), flush=True)
+            print(
+                f"calibrated on {cal_name:9s} {vname:42s} "
+                + "  ".join(
+                    f"{n}: {r['error_mean_bar']:+.3f} bar ({r['error_mean_pct']:+.1f} %), rms {r['error_rms_bar']:.3f}"
+                    for n, r in runs[vname].items()
+                ),
+                flush=True,
+            )
         results["runs"][cal_name] = runs
     args.out.write_text(json.dumps(results, indent=1) + "\n")
     print(f"wrote {args.out} and {CAL_OUT}")

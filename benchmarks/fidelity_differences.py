@@ -36,9 +36,14 @@ import rotor
 ORDERS = tuple(0.5 * k for k in range(1, 25))  # 0.5 … 12
 OUT = Path(__file__).parent / "results"
 MODELS = ("variable", "series", "coefficients", "constant")
-CHOICES = {"series": "λ-series kinematics", "coefficients": "A·cos²θ+B·cosθ+C inertia",
-           "constant": "constant inertia + inertia torque", "friction": "friction on (FMEP 0.5 bar + 0.06 bar/(m/s))",
-           "table_pchip_5deg": "pressure as a 5° table, PCHIP", "table_linear_5deg": "pressure as a 5° table, linear"}
+CHOICES = {
+    "series": "λ-series kinematics",
+    "coefficients": "A·cos²θ+B·cosθ+C inertia",
+    "constant": "constant inertia + inertia torque",
+    "friction": "friction on (FMEP 0.5 bar + 0.06 bar/(m/s))",
+    "table_pchip_5deg": "pressure as a 5° table, PCHIP",
+    "table_linear_5deg": "pressure as a 5° table, linear",
+}
 
 
 def _row(r):
@@ -87,14 +92,15 @@ def main() -> int:
         print(f"\n{name}: δ = {v['delta']:.5g} (variable inertia, exact kinematics); change against it")
         print("| model choice | δ | " + " | ".join(f"order {float(k):g}" for k in orders) + " |")
         print("|---" * (2 + len(orders)) + "|")
-        print("| variable (reference), amplitude [rad/s] | — | "
-              + " | ".join(f"{amps[k]:.4g}" for k in orders) + " |")
+        print("| variable (reference), amplitude [rad/s] | — | " + " | ".join(f"{amps[k]:.4g}" for k in orders) + " |")
         for key, label in CHOICES.items():
             r = rows[key]
             cells = [f"{100 * (r['speed_amplitude_rad_s'][k] / amps[k] - 1):+.3g} %" for k in orders]
             print(f"| {label} | {100 * (r['delta'] / v['delta'] - 1):+.3g} % | " + " | ".join(cells) + " |")
-        print(f"| textbook δ = L_excess/(J·ω²) | {100 * (v['textbook_delta'] / v['delta'] - 1):+.3g} % |"
-              + " |" * len(orders))
+        print(
+            f"| textbook δ = L_excess/(J·ω²) | {100 * (v['textbook_delta'] / v['delta'] - 1):+.3g} % |"
+            + " |" * len(orders)
+        )
     return 0
 
 

@@ -37,24 +37,29 @@ from pathlib import Path
 import numpy as np
 
 import rotor
-from rotor.fileio import atomic_path
 from rotor.design.flywheel import OperatingPoint, _Evaluator, _with_inertia
+from rotor.fileio import atomic_path
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "flywheel.json"
 FIG = ROOT / "benchmarks" / "figures" / "flywheel_textbook.png"
 DELTAS = [0.002, 0.005, 0.01, 0.02, 0.05, 0.1]
 POINTS = {
-    "4chn15": {"rated": [OperatingPoint(1250.0)],
-               "idle to rated": [OperatingPoint(600.0, 0.25), OperatingPoint(900.0, 0.6), OperatingPoint(1250.0)]},
-    "mwm6": {"rated": [OperatingPoint(2200.0)],
-             "idle to rated": [OperatingPoint(800.0, 0.25), OperatingPoint(1500.0, 0.6), OperatingPoint(2200.0)]},
+    "4chn15": {
+        "rated": [OperatingPoint(1250.0)],
+        "idle to rated": [OperatingPoint(600.0, 0.25), OperatingPoint(900.0, 0.6), OperatingPoint(1250.0)],
+    },
+    "mwm6": {
+        "rated": [OperatingPoint(2200.0)],
+        "idle to rated": [OperatingPoint(800.0, 0.25), OperatingPoint(1500.0, 0.6), OperatingPoint(2200.0)],
+    },
 }
 
 
 def shooting_delta(engine, J, p):
-    return float(rotor.steady_state(_with_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale,
-                                    method="shooting").delta)
+    return float(
+        rotor.steady_state(_with_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale, method="shooting").delta
+    )
 
 
 def bisect(f, target, lo, hi, rel):
@@ -74,25 +79,41 @@ def case(engine, preset, label, points, delta):
     p = next(q for q in points if q.rpm == d.binding_rpm)
     J_bis, n_bis = bisect(lambda j: shooting_delta(engine, j, p), delta, 0.7 * J, 1.4 * J, 1e-9)
     r = rotor.steady_state(_with_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale)
-    run = rotor.simulate(_with_inertia(engine, J), rpm=float(r.omega[0]) * 30 / np.pi, cycles=2, method="time",
-                         load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])),
-                         combustion=np.full((2, engine.cylinders), p.imep_scale), progress=False)
+    run = rotor.simulate(
+        _with_inertia(engine, J),
+        rpm=float(r.omega[0]) * 30 / np.pi,
+        cycles=2,
+        method="time",
+        load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])),
+        combustion=np.full((2, engine.cylinders), p.imep_scale),
+        progress=False,
+    )
     rated = next(pt for pt in d.points if pt.rpm == max(q.rpm for q in points))
     row = {
-        "preset": preset, "points": label, "delta_target": delta,
-        "crankshaft_inertia_kgm2": J, "binding_rpm": d.binding_rpm, "delta_achieved": d.delta_achieved,
-        "bisection_inertia_kgm2": J_bis, "bisection_evaluations": n_bis,
+        "preset": preset,
+        "points": label,
+        "delta_target": delta,
+        "crankshaft_inertia_kgm2": J,
+        "binding_rpm": d.binding_rpm,
+        "delta_achieved": d.delta_achieved,
+        "bisection_inertia_kgm2": J_bis,
+        "bisection_evaluations": n_bis,
         "design_vs_bisection": J / J_bis - 1,
         "shooting_delta_at_design": shooting_delta(engine, J, p),
         "time_domain_delta": float(run.delta_per_cycle[-1]),
-        "textbook_inertia_kgm2": d.textbook_inertia_kgm2, "textbook_ratio": d.textbook_ratio,
+        "textbook_inertia_kgm2": d.textbook_inertia_kgm2,
+        "textbook_ratio": d.textbook_ratio,
         "textbook_rated_ratio": rated.textbook.crankshaft_inertia_kgm2 / J,
-        "textbook_flywheel_kgm2": d.textbook.flywheel_kgm2, "textbook_mass_kg": d.textbook.mass_kg,
+        "textbook_flywheel_kgm2": d.textbook.flywheel_kgm2,
+        "textbook_mass_kg": d.textbook.mass_kg,
         "newton_steps": [pt.newton_steps for pt in d.points],
     }
-    print(f"{preset:7} {label:14} δ={delta:<6g} J={J:9.4f} bind {d.binding_rpm:6g} rpm  vs bisection "
-          f"{row['design_vs_bisection']:+.1e}  time-domain δ/target−1 {row['time_domain_delta'] / delta - 1:+.1e}  "
-          f"textbook ×{d.textbook_ratio:.4f} (rated only ×{row['textbook_rated_ratio']:.4f})", flush=True)
+    print(
+        f"{preset:7} {label:14} δ={delta:<6g} J={J:9.4f} bind {d.binding_rpm:6g} rpm  vs bisection "
+        f"{row['design_vs_bisection']:+.1e}  time-domain δ/target−1 {row['time_domain_delta'] / delta - 1:+.1e}  "
+        f"textbook ×{d.textbook_ratio:.4f} (rated only ×{row['textbook_rated_ratio']:.4f})",
+        flush=True,
+    )
     return row
 
 
@@ -116,9 +137,12 @@ def timing(engine, points, delta, repeats):
         for p in points:
             bisect(lambda j: ev.state(j, p)[0], delta, 0.1 * J, 10 * J, 1e-10)
         bis.append(time.perf_counter() - t)
-    return {"first_call_s": first, "design_median_s": statistics.median(runs),
-            "bisection_median_s": statistics.median(bis),
-            "bisection_over_design": statistics.median(bis) / statistics.median(runs)}
+    return {
+        "first_call_s": first,
+        "design_median_s": statistics.median(runs),
+        "bisection_median_s": statistics.median(bis),
+        "bisection_over_design": statistics.median(bis) / statistics.median(runs),
+    }
 
 
 def figure(rows):
@@ -132,11 +156,15 @@ def figure(rows):
         for label, style in (("rated", "o-"), ("idle to rated", "s--")):
             rs = [r for r in rows if r["preset"] == preset and r["points"] == label]
             x = [r["delta_target"] for r in rs]
-            ax.plot(x, [100 * (r["textbook_ratio"] - 1) for r in rs], style, color=f"C{i}",
-                    label=f"{preset}, {label}")
+            ax.plot(x, [100 * (r["textbook_ratio"] - 1) for r in rs], style, color=f"C{i}", label=f"{preset}, {label}")
             if label == "idle to rated":
-                bx.plot(x, [100 * (r["textbook_rated_ratio"] - 1) for r in rs], style, color=f"C{i}",
-                        label=f"{preset}, {label}")
+                bx.plot(
+                    x,
+                    [100 * (r["textbook_rated_ratio"] - 1) for r in rs],
+                    style,
+                    color=f"C{i}",
+                    label=f"{preset}, {label}",
+                )
     ax.set_title("textbook J₀ = L_excess/(δ·ω²) at each point, the largest", fontsize=9)
     bx.set_title("textbook at the rated point only (one turning-moment diagram)", fontsize=9)
     for a in (ax, bx):
@@ -166,10 +194,16 @@ def main():
     engines = {name: rotor.load_engine(name) for name in POINTS}
     timings = {name: timing(engines[name], POINTS[name]["idle to rated"], 0.01, repeats) for name in POINTS}
     for name, t in timings.items():
-        print(f"{name}: first call {t['first_call_s']:.2f} s, then {t['design_median_s'] * 1e3:.0f} ms; bisection on "
-              f"the same δ(J) {t['bisection_median_s'] * 1e3:.0f} ms ({t['bisection_over_design']:.1f}×)")
-    rows = [case(engines[name], name, label, pts, d)
-            for name in POINTS for label, pts in POINTS[name].items() for d in deltas]
+        print(
+            f"{name}: first call {t['first_call_s']:.2f} s, then {t['design_median_s'] * 1e3:.0f} ms; bisection on "
+            f"the same δ(J) {t['bisection_median_s'] * 1e3:.0f} ms ({t['bisection_over_design']:.1f}×)"
+        )
+    rows = [
+        case(engines[name], name, label, pts, d)
+        for name in POINTS
+        for label, pts in POINTS[name].items()
+        for d in deltas
+    ]
     import jax
     import jaxlib
 
@@ -178,8 +212,13 @@ def main():
         "timing": timings,
         "worst_design_vs_bisection": max(abs(r["design_vs_bisection"]) for r in rows),
         "worst_time_domain": max(abs(r["time_domain_delta"] / r["delta_target"] - 1) for r in rows),
-        "versions": {"jax": jax.__version__, "jaxlib": jaxlib.__version__, "python": platform.python_version(),
-                     "numpy": np.__version__, "rotor": rotor.__version__},
+        "versions": {
+            "jax": jax.__version__,
+            "jaxlib": jaxlib.__version__,
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "rotor": rotor.__version__,
+        },
         "machine": platform.platform(),
         "quick": args.quick,
     }
@@ -188,8 +227,10 @@ def main():
         Path(tmp).write_text(json.dumps(out, indent=2))
     if not args.quick:
         figure(rows)
-    print(f"worst design vs bisection {out['worst_design_vs_bisection']:.1e}, worst time-domain δ "
-          f"{out['worst_time_domain']:.1e}; wrote {OUT.relative_to(ROOT)}")
+    print(
+        f"worst design vs bisection {out['worst_design_vs_bisection']:.1e}, worst time-domain δ "
+        f"{out['worst_time_domain']:.1e}; wrote {OUT.relative_to(ROOT)}"
+    )
     return 0
 
 

@@ -69,8 +69,9 @@ def analyse(res, te, seed):
     edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(seed))
     first_ref = np.deg2rad(GAP_DEG) + TWO_PI * np.ceil((theta[0] - np.deg2rad(GAP_DEG)) / TWO_PI)
     parity = int(np.floor((TWO_PI - first_ref) / TWO_PI)) % 2
-    an = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=edges), WHEEL, tdc_deg=-GAP_DEG, firing=parity,
-                           tooth_errors=te)
+    an = rotor.analyze_log(
+        rotor.Log.from_arrays(tooth_time_s=edges), WHEEL, tdc_deg=-GAP_DEG, firing=parity, tooth_errors=te
+    )
     P = res.points_per_cycle
     t_sim = np.asarray(res.t)[: res.uniform_cycles * P : P]
     k = np.array([int(np.argmin(np.abs(t_sim - t0))) for t0 in an.t_start_s])
@@ -83,11 +84,18 @@ def run_case(name, rpm, load, cycles, seed, te):
     rng = np.random.default_rng(1000 * seed + int(rpm) + int(100 * load))
     s = load * rng.uniform(0.9, 1.1, n)
     st = rotor.steady_state(e, rpm=rpm, imep_scale=s)
-    comb = rotor.combustion_pattern(cycles, n, imep_scale=s, cov=0.02, misfire_rate=0.03,
-                                    seed=int(rng.integers(1 << 30)))
-    res = rotor.simulate(e, rpm=float(st.omega[0]) * 30 / np.pi, cycles=cycles,
-                         load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])), step_deg=0.25, combustion=comb,
-                         progress=False)
+    comb = rotor.combustion_pattern(
+        cycles, n, imep_scale=s, cov=0.02, misfire_rate=0.03, seed=int(rng.integers(1 << 30))
+    )
+    res = rotor.simulate(
+        e,
+        rpm=float(st.omega[0]) * 30 / np.pi,
+        cycles=cycles,
+        load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])),
+        step_deg=0.25,
+        combustion=comb,
+        progress=False,
+    )
     an, k = analyse(res, te, seed)
     idf = rotor.identify(e, an)
     truth = comb[k]
@@ -101,18 +109,26 @@ def run_case(name, rpm, load, cycles, seed, te):
     mis = (truth == 0)[ok]
     index = idf.contribution[ok]
     return {
-        "engine": name, "rpm": rpm, "load": load, "seed": seed, "cycles": int(idf.cycles),
-        "firings": int(ok.sum()), "misfires": int(mis.sum()),
+        "engine": name,
+        "rpm": rpm,
+        "load": load,
+        "seed": seed,
+        "cycles": int(idf.cycles),
+        "firings": int(ok.sum()),
+        "misfires": int(mis.sum()),
         "imep_error_max_pct": float(100 * np.abs(err).max()),
         "imep_error_rms_pct": float(100 * np.sqrt(np.mean(err**2))),
         "imep_error_p95_pct": float(100 * np.percentile(np.abs(err), 95)),
         "cylinder_mean_imep_error_max_pct": float(100 * np.abs(cyl_mean).max()),
-        "missed": int(np.sum(mis & ~idf.misfire[ok])), "false_alarms": int(np.sum(~mis & idf.misfire[ok])),
+        "missed": int(np.sum(mis & ~idf.misfire[ok])),
+        "false_alarms": int(np.sum(~mis & idf.misfire[ok])),
         "index_normal_min": float(index[~mis].min()),
         "index_misfire_max": float(index[mis].max()) if mis.any() else None,
-        "rms_residual_rad_s": idf.rms_residual, "r2": idf.fit_r2,
+        "rms_residual_rad_s": idf.rms_residual,
+        "r2": idf.fit_r2,
         "scale_std_median": float(np.median(idf.scale_std)),
-        "_index": index, "_mis": mis,
+        "_index": index,
+        "_mis": mis,
     }
 
 
@@ -123,14 +139,28 @@ def coast_down(name, te):
     # a constant drag that slows the crankshaft to 70 % of its speed over the run
     e0 = 0.5 * float(rotor.mean_reduced_inertia(e)) * (rpm / 30 * np.pi) ** 2
     load = e0 * (1 - 0.7**2) / (cycles * float(e.cycle_rad))
-    res = rotor.simulate(e, rpm=rpm, cycles=cycles, load=rotor.ConstantLoad(load), step_deg=0.25,
-                         combustion=np.zeros((cycles, e.cylinders)), progress=False)
+    res = rotor.simulate(
+        e,
+        rpm=rpm,
+        cycles=cycles,
+        load=rotor.ConstantLoad(load),
+        step_deg=0.25,
+        combustion=np.zeros((cycles, e.cylinders)),
+        progress=False,
+    )
     an, _ = analyse(res, te, 5)
     idf = rotor.identify(e, an)
-    return {"engine": name, "rpm_first_last": [float(an.mean_rpm[0]), float(an.mean_rpm[-1])],
-            "firings": int(idf.identified.sum()), "flagged": int(idf.misfire[idf.identified].sum()),
-            "max_abs_scale": float(np.abs(idf.scale).max()), "max_abs_index": float(np.abs(idf.contribution).max()),
-            "load_torque_Nm": load, "load_found_Nm_mean": float(idf.load_torque_Nm.mean()), "notes": list(idf.notes)}
+    return {
+        "engine": name,
+        "rpm_first_last": [float(an.mean_rpm[0]), float(an.mean_rpm[-1])],
+        "firings": int(idf.identified.sum()),
+        "flagged": int(idf.misfire[idf.identified].sum()),
+        "max_abs_scale": float(np.abs(idf.scale).max()),
+        "max_abs_index": float(np.abs(idf.contribution).max()),
+        "load_torque_Nm": load,
+        "load_found_Nm_mean": float(idf.load_torque_Nm.mean()),
+        "notes": list(idf.notes),
+    }
 
 
 def timing(name, te, repeats):
@@ -138,9 +168,15 @@ def timing(name, te, repeats):
     n = e.cylinders
     comb = rotor.combustion_pattern(104, n, imep_scale=np.linspace(0.9, 1.1, n), misfire_rate=0.02, seed=3)
     st = rotor.steady_state(e, imep_scale=np.linspace(0.9, 1.1, n))
-    res = rotor.simulate(e, rpm=float(st.omega[0]) * 30 / np.pi, cycles=104,
-                         load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])), step_deg=0.25, combustion=comb,
-                         progress=False)
+    res = rotor.simulate(
+        e,
+        rpm=float(st.omega[0]) * 30 / np.pi,
+        cycles=104,
+        load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])),
+        step_deg=0.25,
+        combustion=comb,
+        progress=False,
+    )
     an, k = analyse(res, te, 3)
     sel = k[:100]
     an100 = _first_cycles(an, 100)
@@ -154,9 +190,17 @@ def timing(name, te, repeats):
         walls.append(time.perf_counter() - t0)
     found = idf.misfires()
     truth = [(int(a), int(b) + 1) for a, b in np.argwhere(comb[sel] == 0)]
-    return {"engine": name, "cycles": idf.cycles, "points_per_cycle": an100.points_per_cycle,
-            "blocks": idf.info["blocks"], "first_call_s": first, "median_s": statistics.median(walls),
-            "runs_s": walls, "misfires_true": len(truth), "misfires_found_equal": found == truth}
+    return {
+        "engine": name,
+        "cycles": idf.cycles,
+        "points_per_cycle": an100.points_per_cycle,
+        "blocks": idf.info["blocks"],
+        "first_call_s": first,
+        "median_s": statistics.median(walls),
+        "runs_s": walls,
+        "misfires_true": len(truth),
+        "misfires_found_equal": found == truth,
+    }
 
 
 def _first_cycles(an, c):
@@ -177,13 +221,30 @@ def main(argv=None):
     import jaxlib
     import optimistix
 
-    result = {"versions": {"jax": jax.__version__, "jaxlib": jaxlib.__version__, "optimistix": optimistix.__version__,
-                           "equinox": equinox.__version__, "numpy": np.__version__,
-                           "python": platform.python_version(), "rotor": rotor.__version__,
-                           "machine": platform.machine(), "cpus": os.cpu_count()},
-              "setup": {"wheel": "60-2", "tooth_errors_deg": 0.2, "jitter_s": 20e-9, "imep_spread": "±10 % uniform",
-                        "cov": 0.02, "misfire_rate": 0.03, "cycles_simulated": args.cycles, "seeds": args.seeds,
-                        "threshold": rotor.diagnostics.identification.MISFIRE_THRESHOLD}}
+    result = {
+        "versions": {
+            "jax": jax.__version__,
+            "jaxlib": jaxlib.__version__,
+            "optimistix": optimistix.__version__,
+            "equinox": equinox.__version__,
+            "numpy": np.__version__,
+            "python": platform.python_version(),
+            "rotor": rotor.__version__,
+            "machine": platform.machine(),
+            "cpus": os.cpu_count(),
+        },
+        "setup": {
+            "wheel": "60-2",
+            "tooth_errors_deg": 0.2,
+            "jitter_s": 20e-9,
+            "imep_spread": "±10 % uniform",
+            "cov": 0.02,
+            "misfire_rate": 0.03,
+            "cycles_simulated": args.cycles,
+            "seeds": args.seeds,
+            "threshold": rotor.diagnostics.identification.MISFIRE_THRESHOLD,
+        },
+    }
     te = calibration()
     cases = []
     for name, speeds in SPEEDS.items():
@@ -192,34 +253,59 @@ def main(argv=None):
                 for seed in range(args.seeds):
                     c = run_case(name, rpm, load, args.cycles, seed, te)
                     cases.append(c)
-                    print(f"{name} {rpm:6.0f} rpm load {load:4.0%} seed {seed}: IMEP error max "
-                          f"{c['imep_error_max_pct']:.2f} % rms {c['imep_error_rms_pct']:.2f} %; misfires "
-                          f"{c['misfires']}, missed {c['missed']}, false {c['false_alarms']}; index normal ≥ "
-                          f"{c['index_normal_min']:.3f}", flush=True)
+                    print(
+                        f"{name} {rpm:6.0f} rpm load {load:4.0%} seed {seed}: IMEP error max "
+                        f"{c['imep_error_max_pct']:.2f} % rms {c['imep_error_rms_pct']:.2f} %; misfires "
+                        f"{c['misfires']}, missed {c['missed']}, false {c['false_alarms']}; index normal ≥ "
+                        f"{c['index_normal_min']:.3f}",
+                        flush=True,
+                    )
     summary = {}
     for name in SPEEDS:
         mine = [c for c in cases if c["engine"] == name]
         summary[name] = {
-            "by_rpm": {str(r): {"max_pct": max(c["imep_error_max_pct"] for c in mine if c["rpm"] == r),
-                                "rms_pct": float(np.sqrt(np.mean([c["imep_error_rms_pct"] ** 2 for c in mine
-                                                                  if c["rpm"] == r])))} for r in SPEEDS[name]},
-            "by_load": {str(ld): {"max_pct": max(c["imep_error_max_pct"] for c in mine if c["load"] == ld),
-                                  "rms_pct": float(np.sqrt(np.mean([c["imep_error_rms_pct"] ** 2 for c in mine
-                                                                    if c["load"] == ld])))} for ld in LOADS},
+            "by_rpm": {
+                str(r): {
+                    "max_pct": max(c["imep_error_max_pct"] for c in mine if c["rpm"] == r),
+                    "rms_pct": float(np.sqrt(np.mean([c["imep_error_rms_pct"] ** 2 for c in mine if c["rpm"] == r]))),
+                }
+                for r in SPEEDS[name]
+            },
+            "by_load": {
+                str(ld): {
+                    "max_pct": max(c["imep_error_max_pct"] for c in mine if c["load"] == ld),
+                    "rms_pct": float(np.sqrt(np.mean([c["imep_error_rms_pct"] ** 2 for c in mine if c["load"] == ld]))),
+                }
+                for ld in LOADS
+            },
         }
     result["summary"] = summary
     rates = {}
     for label, sel in (("load_20pct_and_up", lambda c: c["load"] >= 0.2), ("load_10pct", lambda c: c["load"] < 0.2)):
         idx = np.concatenate([c["_index"] for c in cases if sel(c)])
         mis = np.concatenate([c["_mis"] for c in cases if sel(c)])
-        rates[label] = {"misfires": int(mis.sum()), "normal_firings": int((~mis).sum()),
-                        "by_threshold": [{"threshold": t, "miss_rate": float(np.mean(idx[mis] >= t)) if mis.any()
-                                          else None, "false_alarm_rate": float(np.mean(idx[~mis] < t))}
-                                         for t in THRESHOLDS],
-                        "index_normal_min": float(idx[~mis].min()),
-                        "index_misfire_max": float(idx[mis].max()) if mis.any() else None}
-        print(label, rates[label]["misfires"], "misfires,", rates[label]["normal_firings"], "normal; index normal ≥",
-              f"{rates[label]['index_normal_min']:.3f}, misfire ≤ {rates[label]['index_misfire_max']}")
+        rates[label] = {
+            "misfires": int(mis.sum()),
+            "normal_firings": int((~mis).sum()),
+            "by_threshold": [
+                {
+                    "threshold": t,
+                    "miss_rate": float(np.mean(idx[mis] >= t)) if mis.any() else None,
+                    "false_alarm_rate": float(np.mean(idx[~mis] < t)),
+                }
+                for t in THRESHOLDS
+            ],
+            "index_normal_min": float(idx[~mis].min()),
+            "index_misfire_max": float(idx[mis].max()) if mis.any() else None,
+        }
+        print(
+            label,
+            rates[label]["misfires"],
+            "misfires,",
+            rates[label]["normal_firings"],
+            "normal; index normal ≥",
+            f"{rates[label]['index_normal_min']:.3f}, misfire ≤ {rates[label]['index_misfire_max']}",
+        )
     result["misfire_rates"] = rates
     for c in cases:
         del c["_index"], c["_mis"]
@@ -229,8 +315,10 @@ def main(argv=None):
         print("coast-down", c["engine"], f"{c['flagged']}/{c['firings']} flagged, max |scale| {c['max_abs_scale']:.4f}")
     result["timing"] = [timing(name, te, args.repeats) for name in SPEEDS]
     for t in result["timing"]:
-        print(f"timing {t['engine']}: {t['cycles']} cycles in {t['median_s'] * 1e3:.0f} ms (median of {args.repeats}); "
-              f"first call {t['first_call_s']:.1f} s")
+        print(
+            f"timing {t['engine']}: {t['cycles']} cycles in {t['median_s'] * 1e3:.0f} ms (median of {args.repeats}); "
+            f"first call {t['first_call_s']:.1f} s"
+        )
     OUT.parent.mkdir(parents=True, exist_ok=True)
     from rotor.fileio import write_text_atomic
 

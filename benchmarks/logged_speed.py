@@ -58,8 +58,16 @@ def main(argv=None):
     ap.add_argument("--data", default=str(ROOT / ".." / "shared" / "data"))
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args(argv)
-    result = {"versions": {"numpy": np.__version__, "scipy": scipy.__version__, "python": platform.python_version(),
-                           "rotor": rotor.__version__, "machine": platform.machine(), "cpus": __import__("os").cpu_count()}}
+    result = {
+        "versions": {
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "python": platform.python_version(),
+            "rotor": rotor.__version__,
+            "machine": platform.machine(),
+            "cpus": __import__("os").cpu_count(),
+        }
+    }
     edges = synthetic_edges()
     log = rotor.Log.from_arrays(tooth_time_s=edges)
     med, walls, an = time_it(lambda: rotor.analyze_log(log, "60-2", tdc_deg=0.0, firing=0), args.repeats)
@@ -102,16 +110,24 @@ def main(argv=None):
                 "tdc_after_gap_deg": float(np.rad2deg(a.tdc_rad)),
                 "tdc_method": a.tdc_method,
                 "firing_parity": a.firing_parity,
-                "tooth_errors_deg_first_last": [float(a.tooth_errors.errors_deg[0]),
-                                                float(a.tooth_errors.errors_deg[-1])],
+                "tooth_errors_deg_first_last": [
+                    float(a.tooth_errors.errors_deg[0]),
+                    float(a.tooth_errors.errors_deg[-1]),
+                ],
                 "tooth_errors_rms_deg": float(np.rad2deg(a.tooth_errors.rms_rad)),
                 "engine_orders_left_out": list(a.tooth_errors.engine_orders),
             }
-            print(f"{name}: {a.cycles} cycles, {a.mean_rpm.mean():.1f} rpm, δ {a.delta.mean():.4f} "
-                  f"(uncorrected {raw.delta.mean():.4f}), half order {a.amplitude_of(0.5).mean():.3f} rad/s, "
-                  f"TDC {np.rad2deg(a.tdc_rad):.2f}°, {med:.3f} s")
-        errs = np.array([rotor.analyze_log(tue / f"{n}.txt", "60-2", columns=COLS, **GEOM).tooth_errors.errors_deg
-                         for n in ("No_load", "half_load", "full_load")])
+            print(
+                f"{name}: {a.cycles} cycles, {a.mean_rpm.mean():.1f} rpm, δ {a.delta.mean():.4f} "
+                f"(uncorrected {raw.delta.mean():.4f}), half order {a.amplitude_of(0.5).mean():.3f} rad/s, "
+                f"TDC {np.rad2deg(a.tdc_rad):.2f}°, {med:.3f} s"
+            )
+        errs = np.array(
+            [
+                rotor.analyze_log(tue / f"{n}.txt", "60-2", columns=COLS, **GEOM).tooth_errors.errors_deg
+                for n in ("No_load", "half_load", "full_load")
+            ]
+        )
         rep["tooth_errors_spread_across_recordings_deg"] = {
             "max_abs_from_mean": float(np.max(np.abs(errs - errs.mean(0)))),
             "rms_from_mean": float(np.sqrt(np.mean((errs - errs.mean(0)) ** 2))),

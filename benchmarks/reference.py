@@ -29,6 +29,7 @@ def physics(engine):
             p0, p1 = src._parts(phi, g, src._burn())
             return p0 + heat * p1
     else:
+
         def pressure(phi):
             return src(phi, g, engine.strokes)
 
@@ -53,7 +54,8 @@ def scipy_angle_reference(engine, rpm, cycles, load_c, theta_out, rtol=1e-12):
 
     i0 = float(f(0.0)[0])
     y0 = [0.5 * i0 * (rpm / RPM) ** 2, 0.0]
-    sol = solve_ivp(rhs, (0.0, cycles * engine.cycle_rad), y0, method="DOP853", rtol=rtol, atol=rtol * 1e3,
-                    dense_output=True)
+    sol = solve_ivp(
+        rhs, (0.0, cycles * engine.cycle_rad), y0, method="DOP853", rtol=rtol, atol=rtol * 1e3, dense_output=True
+    )
     E, t = sol.sol(theta_out)
     return np.sqrt(2 * E / np.asarray(f(jnp.asarray(theta_out))[0])), t

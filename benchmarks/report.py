@@ -35,12 +35,18 @@ def families(rows):
 
 
 def work_precision(wp, extra):
-    print(f"Versions: {', '.join(f'{k} {v}' for k, v in wp['versions'].items())}. "
-          f"`import rotor`: {wp['import_rotor']['median_s']:.2f} s (whole process).\n")
-    print("At error ω ≤ 1e-6 (max |ω − ω_ref| / mean ω over the last cycle), the fastest measured setting "
-          "of each group, median wall time after compile:\n")
-    print("| preset | cycles | rotor (1° samples) | rotor, 4° samples | best scipy | numba RK4 | scipy / rotor | "
-          "rotor / numba (1°; 4°) |")
+    print(
+        f"Versions: {', '.join(f'{k} {v}' for k, v in wp['versions'].items())}. "
+        f"`import rotor`: {wp['import_rotor']['median_s']:.2f} s (whole process).\n"
+    )
+    print(
+        "At error ω ≤ 1e-6 (max |ω − ω_ref| / mean ω over the last cycle), the fastest measured setting "
+        "of each group, median wall time after compile:\n"
+    )
+    print(
+        "| preset | cycles | rotor (1° samples) | rotor, 4° samples | best scipy | numba RK4 | scipy / rotor | "
+        "rotor / numba (1°; 4°) |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, p in wp["presets"].items():
         for n, res in p["horizons"].items():
@@ -54,24 +60,41 @@ def work_precision(wp, extra):
             skipped = [x for x in rows if x["family"].startswith("scipy") and x.get("skipped")]
 
             def cell(b):
-                return f"{b['family'].replace('rotor ', '').replace('scipy ', '')} {b['setting']}: " \
-                       f"{fmt_s(b['median_s'])} ({b['error']['omega_rel']:.0e})" if b else "—"
+                return (
+                    f"{b['family'].replace('rotor ', '').replace('scipy ', '')} {b['setting']}: "
+                    f"{fmt_s(b['median_s'])} ({b['error']['omega_rel']:.0e})"
+                    if b
+                    else "—"
+                )
 
-            scipy_cell = cell(s) if s else ("not within the cap" + (
-                f" (predicted ≥ {min(x['predicted_s'] for x in skipped):.0f} s)" if skipped else "")
-                if int(n) <= wp.get("scipy_max_cycles", 1000) else "not run")
+            scipy_cell = (
+                cell(s)
+                if s
+                else (
+                    "not within the cap"
+                    + (f" (predicted ≥ {min(x['predicted_s'] for x in skipped):.0f} s)" if skipped else "")
+                    if int(n) <= wp.get("scipy_max_cycles", 1000)
+                    else "not run"
+                )
+            )
             ratio_s = f"{s['median_s'] / r['median_s']:.0f}×" if s and r else "—"
-            ratio_n = (f"{r['median_s'] / nb['median_s']:.1f}" if r and nb else "—") + "; " + (
-                f"{r4['median_s'] / nb4['median_s']:.1f}" if r4 and nb4 else "—")
+            ratio_n = (
+                (f"{r['median_s'] / nb['median_s']:.1f}" if r and nb else "—")
+                + "; "
+                + (f"{r4['median_s'] / nb4['median_s']:.1f}" if r4 and nb4 else "—")
+            )
             print(f"| {name} | {n} | {cell(r)} | {cell(r4)} | {scipy_cell} | {cell(nb)} | {ratio_s} | {ratio_n} |")
-    print("\nThe cheapest setting of every family per accuracy level (1000 cycles where measured, else the "
-          "longest horizon), median time:\n")
+    print(
+        "\nThe cheapest setting of every family per accuracy level (1000 cycles where measured, else the "
+        "longest horizon), median time:\n"
+    )
     print("| preset | family | " + " | ".join(f"ω ≤ {lv:g}" for lv in LEVELS) + " |")
     print("|---|---|" + "---|" * len(LEVELS))
     for name, p in wp["presets"].items():
         n = "1000" if "1000" in p["horizons"] else list(p["horizons"])[-1]
         rows = p["horizons"][n]["runs"] + (
-            extra["presets"].get(name, {}).get("horizons", {}).get(n, {}).get("runs", []) if extra else [])
+            extra["presets"].get(name, {}).get("horizons", {}).get(n, {}).get("runs", []) if extra else []
+        )
         for fam in families(rows):
             cells = []
             for lv in LEVELS:
@@ -85,14 +108,19 @@ def work_precision(wp, extra):
 
 
 def compile_table(ct):
-    print(f"\n`import rotor`: {ct['import_rotor']['median_s']:.2f} s (median of {ct['import_rotor']['repeats']}, "
-          "process minus an empty one).\n")
+    print(
+        f"\n`import rotor`: {ct['import_rotor']['median_s']:.2f} s (median of {ct['import_rotor']['repeats']}, "
+        "process minus an empty one).\n"
+    )
     entries = list(next(iter(ct["presets"].values())))
     print("| preset | " + " | ".join(f"{e}: cold / warm" for e in entries) + " |")
     print("|---|" + "---|" * len(entries))
     for name, p in ct["presets"].items():
-        print(f"| {name} | " + " | ".join(f"{p[e]['cold']['compile_s']:.1f} / {p[e]['warm']['compile_s']:.1f} s"
-                                          for e in entries) + " |")
+        print(
+            f"| {name} | "
+            + " | ".join(f"{p[e]['cold']['compile_s']:.1f} / {p[e]['warm']['compile_s']:.1f} s" for e in entries)
+            + " |"
+        )
 
 
 def main():

@@ -21,9 +21,18 @@ import rotor
 
 HERE = Path(__file__).resolve().parent
 DATA = HERE.parent / "tests" / "data"
-COLUMNS = [("s_m", "s_m", 1), ("v_m_s", "v_m_s", 1), ("j_m_s2", "j_m_s2", 1), ("pg_N", "pg_kN", 1e3),
-           ("pj_N", "pj_kN", 1e3), ("psum_N", "psum_kN", 1e3), ("n_N", "n_kN", 1e3), ("k_N", "k_kN", 1e3),
-           ("z_N", "z_kN", 1e3), ("t_N", "t_kN", 1e3)]
+COLUMNS = [
+    ("s_m", "s_m", 1),
+    ("v_m_s", "v_m_s", 1),
+    ("j_m_s2", "j_m_s2", 1),
+    ("pg_N", "pg_kN", 1e3),
+    ("pj_N", "pj_kN", 1e3),
+    ("psum_N", "psum_kN", 1e3),
+    ("n_N", "n_kN", 1e3),
+    ("k_N", "k_kN", 1e3),
+    ("z_N", "z_kN", 1e3),
+    ("t_N", "t_kN", 1e3),
+]
 
 
 def _read(name):
@@ -54,7 +63,9 @@ def main():
     print("|---|---|---|---|---|")
     for col in res["series"]:
         s, e = res["series"][col], res["exact"][col]
-        print(f"| {col} | {s['max_error_pct']:.3f} % | {s['at_deg']:g}° | {e['max_error_pct']:.3f} % | {e['at_deg']:g}° |")
+        print(
+            f"| {col} | {s['max_error_pct']:.3f} % | {s['at_deg']:g}° | {e['max_error_pct']:.3f} % | {e['at_deg']:g}° |"
+        )
     import jax
 
     res["versions"] = {"rotor": rotor.__version__, "jax": jax.__version__, "python": platform.python_version()}

@@ -29,9 +29,9 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from reference import scipy_angle_reference
 
 import rotor
-from reference import scipy_angle_reference
 
 RPM = 30 / np.pi
 OUT = Path(__file__).parent / "results"
@@ -43,8 +43,11 @@ def coasting():
     for method, cycles in (("closed", 1000), ("grid", 100), ("angle", 100), ("time", 20)):
         r = rotor.simulate(engine, rpm=1000.0, cycles=cycles, method=method)
         ke = 0.5 * rotor.reduced_inertia(engine, r.theta) * r.omega**2
-        out[method] = {"cycles": cycles, "max_relative_energy_change": float(jnp.max(jnp.abs(ke / ke[0] - 1))),
-                       "delta": float(r.delta)}
+        out[method] = {
+            "cycles": cycles,
+            "max_relative_energy_change": float(jnp.max(jnp.abs(ke / ke[0] - 1))),
+            "delta": float(r.delta),
+        }
     return out
 
 
@@ -53,15 +56,19 @@ def formulations():
     for preset, load in (("4chn15", rotor.PropellerLoad(1100.0, 1250.0)), ("mwm6", rotor.PropellerLoad(400.0, 2200.0))):
         engine = rotor.load_engine(preset)
         cycles, rpm = 4, 0.95 * float(engine.operating.rpm)
-        runs = {m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m)
-                for m in ("closed", "grid", "angle", "time")}
+        runs = {
+            m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m)
+            for m in ("closed", "grid", "angle", "time")
+        }
         P = runs["closed"].points_per_cycle
         last = slice((cycles - 1) * P, cycles * P)
         theta = np.asarray(runs["closed"].theta[last])
         w_ref, t_ref = scipy_angle_reference(engine, rpm, cycles, float(load.c), theta)
         out[preset] = {
-            m: {"omega_error": float(np.max(np.abs(np.asarray(r.omega[last]) - w_ref)) / np.mean(w_ref)),
-                "time_error": float(abs(float(r.t[last][0]) - t_ref[0]) / t_ref[0])}
+            m: {
+                "omega_error": float(np.max(np.abs(np.asarray(r.omega[last]) - w_ref)) / np.mean(w_ref)),
+                "time_error": float(abs(float(r.t[last][0]) - t_ref[0]) / t_ref[0]),
+            }
             for m, r in runs.items()
         }
     return out
@@ -126,9 +133,15 @@ def gradient():
 
 
 def main() -> int:
-    results = {"coasting": coasting(), "formulations": formulations(), "steady": steady(), "gradient": gradient(),
-               "grid_convergence": grid_convergence(), "rtol_sweep": rtol_sweep(),
-               "versions": {"jax": jax.__version__, "rotor": rotor.__version__}}
+    results = {
+        "coasting": coasting(),
+        "formulations": formulations(),
+        "steady": steady(),
+        "gradient": gradient(),
+        "grid_convergence": grid_convergence(),
+        "rtol_sweep": rtol_sweep(),
+        "versions": {"jax": jax.__version__, "rotor": rotor.__version__},
+    }
     OUT.mkdir(exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=OUT, suffix=".json")
     with os.fdopen(fd, "w") as f:

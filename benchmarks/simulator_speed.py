@@ -75,8 +75,9 @@ class NumpyEngine:
         if pressure == "linear":
             self.pressure = lambda deg: np.interp(deg, self.p_deg, self.p_pa, period=720.0)
         else:  # periodic PCHIP, as rotor: interior slopes only, over three periods
-            self.pressure = PchipInterpolator(np.concatenate([self.p_deg - 720, self.p_deg, self.p_deg + 720]),
-                                              np.tile(self.p_pa, 3))
+            self.pressure = PchipInterpolator(
+                np.concatenate([self.p_deg - 720, self.p_deg, self.p_deg + 720]), np.tile(self.p_pa, 3)
+            )
 
     def terms(self, theta):
         """I(θ), I'(θ) and the gas torque M_gas(θ)."""
@@ -102,8 +103,16 @@ class NumpyEngine:
             return y[0] - end
 
         reached.terminal, reached.direction = True, 1
-        return solve_ivp(f, (0.0, 3.0 * end / omega0), [0.0, omega0], method=method, rtol=rtol, atol=ATOL,
-                         events=reached, dense_output=dense)
+        return solve_ivp(
+            f,
+            (0.0, 3.0 * end / omega0),
+            [0.0, omega0],
+            method=method,
+            rtol=rtol,
+            atol=ATOL,
+            events=reached,
+            dense_output=dense,
+        )
 
     def reference(self, omega0, load, cycles, theta_out):
         """(t, ω) at the sorted angles ``theta_out``: angle domain, y = (ω, t), DOP853 at
@@ -122,7 +131,7 @@ class NumpyEngine:
             at = theta_out[(theta_out >= a) & ((theta_out < b) | (b == end))]
             t_eval = at if at.size and at[-1] == b else np.append(at, b)
             sol = solve_ivp(f, (a, b), y, method="DOP853", rtol=1e-13, atol=1e-14, t_eval=t_eval)
-            out.append(sol.y[:, :at.size])
+            out.append(sol.y[:, : at.size])
             a, y = b, sol.y[:, -1]
         omega, t = np.concatenate(out, axis=1)
         return t, omega
@@ -139,13 +148,15 @@ def at_angles(sol, theta):
 
 def last(r):
     """(t, ω) of a rotor result over its last cycle."""
-    return np.asarray(r.t[-r.points_per_cycle:]), np.asarray(r.omega[-r.points_per_cycle:])
+    return np.asarray(r.t[-r.points_per_cycle :]), np.asarray(r.omega[-r.points_per_cycle :])
 
 
 def errors(t, omega, t_ref, omega_ref):
     """Max |ω − ω_ref|/ω_mean over the samples, and |t − t_ref| at the last one [s]."""
-    return {"omega_rel": float(np.max(np.abs(omega - omega_ref)) / np.mean(omega_ref)),
-            "t_end_s": float(abs(t[-1] - t_ref[-1]))}
+    return {
+        "omega_rel": float(np.max(np.abs(omega - omega_ref)) / np.mean(omega_ref)),
+        "t_end_s": float(abs(t[-1] - t_ref[-1])),
+    }
 
 
 # --------------------------------------------------------------------------- timing
@@ -178,16 +189,23 @@ def bench_steady(engine, ne, repeats):
     sol = ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8)
     sp = median_time(lambda: ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8), repeats)
     sp.update(rtol=1e-8, atol=ATOL, nfev=int(sol.nfev), omega_end_over_start=float(sol.y[1, -1] / omega0))
+
     # where the steady state's time goes: the tables alone, and the whole at a 1° grid
     def tables():
         rotor.crank_train(engine).values.block_until_ready()
 
     tables()
     coarse, _ = timed_rotor(lambda: rotor.steady_state(engine, grid_deg=1.0), repeats)
-    return {"rotor_steady_state": rot, "scipy_rk45_one_cycle": sp, "omega0_rad_s": omega0,
-            "load_torque_Nm": m_load, "ratio_scipy_over_rotor": sp["median_s"] / rot["median_s"],
-            "rotor_tables_only": median_time(tables, repeats), "rotor_steady_state_grid_1deg": coarse,
-            "ratio_scipy_over_rotor_grid_1deg": sp["median_s"] / coarse["median_s"]}
+    return {
+        "rotor_steady_state": rot,
+        "scipy_rk45_one_cycle": sp,
+        "omega0_rad_s": omega0,
+        "load_torque_Nm": m_load,
+        "ratio_scipy_over_rotor": sp["median_s"] / rot["median_s"],
+        "rotor_tables_only": median_time(tables, repeats),
+        "rotor_steady_state_grid_1deg": coarse,
+        "ratio_scipy_over_rotor_grid_1deg": sp["median_s"] / coarse["median_s"],
+    }
 
 
 def bench_transient(engine, cycles, repeats, scipy_repeats):
@@ -202,15 +220,19 @@ def bench_transient(engine, cycles, repeats, scipy_repeats):
 
     res = {"cycles": cycles, "rpm": RPM, "load": f"PropellerLoad({PROPELLER[0]:g} N·m, {PROPELLER[1]:g} rpm)"}
     runs = {}
-    for name, kw in (("closed", {"method": "auto"}), ("grid", {"method": "grid"}), ("angle", {"method": "angle", "rtol": 1e-10})):
+    for name, kw in (
+        ("closed", {"method": "auto"}),
+        ("grid", {"method": "grid"}),
+        ("angle", {"method": "angle", "rtol": 1e-10}),
+    ):
         res[f"rotor_{name}"], runs[name] = timed_rotor(lambda kw=kw: sim(**kw), repeats)
         res[f"rotor_{name}"]["method"] = runs[name].method
-    theta = np.asarray(runs["closed"].theta[-runs["closed"].points_per_cycle:])
+    theta = np.asarray(runs["closed"].theta[-runs["closed"].points_per_cycle :])
     rotor_ref = last(sim(method="angle", rtol=1e-14))
     exact_lin = NumpyEngine(engine, "linear").reference(w0, user_load, cycles, theta)
     exact_pchip = NumpyEngine(engine, "pchip").reference(w0, user_load, cycles, theta)
     for name, r in runs.items():
-        assert np.allclose(np.asarray(r.theta[-r.points_per_cycle:]), theta)
+        assert np.allclose(np.asarray(r.theta[-r.points_per_cycle :]), theta)
         res[f"rotor_{name}"]["error_solver"] = errors(*last(r), *rotor_ref)
         res[f"rotor_{name}"]["error"] = errors(*last(r), *exact_pchip)
     res["cross_checks"] = {
@@ -221,13 +243,20 @@ def bench_transient(engine, cycles, repeats, scipy_repeats):
     start = time.perf_counter()
     dop = ne.run(w0, user_load, cycles, "DOP853", 1e-12, dense=True)
     res["cross_checks"]["scipy_dop853_rtol1e-12_time_domain_vs_reference"] = dict(
-        errors(*at_angles(dop, theta), *exact_lin), wall_s=time.perf_counter() - start)
+        errors(*at_angles(dop, theta), *exact_lin), wall_s=time.perf_counter() - start
+    )
     ladder = []
     for rtol in LSODA_RTOLS:
         start = time.perf_counter()
         sol = ne.run(w0, user_load, cycles, "LSODA", rtol, dense=True)
-        ladder.append({"rtol": rtol, "wall_s_dense": time.perf_counter() - start, "nfev": int(sol.nfev),
-                       "error": errors(*at_angles(sol, theta), *exact_lin)})
+        ladder.append(
+            {
+                "rtol": rtol,
+                "wall_s_dense": time.perf_counter() - start,
+                "nfev": int(sol.nfev),
+                "error": errors(*at_angles(sol, theta), *exact_lin),
+            }
+        )
     res["lsoda_ladder"] = ladder
     res["lsoda_pick"] = "the loosest rtol whose error ω <= rotor's (total) error ω, else the most accurate one"
     timed = {}
@@ -236,8 +265,9 @@ def bench_transient(engine, cycles, repeats, scipy_repeats):
         good = [x for x in ladder if x["error"]["omega_rel"] <= target]
         pick = good[0] if good else min(ladder, key=lambda x: x["error"]["omega_rel"])
         if pick["rtol"] not in timed:
-            timed[pick["rtol"]] = median_time(lambda: ne.run(w0, user_load, cycles, "LSODA", pick["rtol"]),
-                                              scipy_repeats)
+            timed[pick["rtol"]] = median_time(
+                lambda: ne.run(w0, user_load, cycles, "LSODA", pick["rtol"]), scipy_repeats
+            )
         res[f"lsoda_vs_{name}"] = dict(pick, **timed[pick["rtol"]], atol=ATOL, meets_rotor_error=bool(good))
         res[f"ratio_lsoda_over_rotor_{name}"] = timed[pick["rtol"]]["median_s"] / res[f"rotor_{name}"]["median_s"]
     return res
@@ -251,8 +281,13 @@ def versions():
     import jaxlib
 
     mods = {m.__name__: m.__version__ for m in (rotor, jax, jaxlib, diffrax, equinox, np, scipy)}
-    return dict(mods, python=platform.python_version(), platform=platform.platform(), cpu_count=os.cpu_count(),
-                jax_backend=jax.default_backend())
+    return dict(
+        mods,
+        python=platform.python_version(),
+        platform=platform.platform(),
+        cpu_count=os.cpu_count(),
+        jax_backend=jax.default_backend(),
+    )
 
 
 def fmt_s(v):
@@ -267,14 +302,16 @@ def plot(res, path):
 
     s, tr = res["steady_state"], res["transient"]
     n = tr["cycles"]
-    bars = [("rotor\nsteady_state", s["rotor_steady_state"], "C0"),
-            ("scipy RK45\none cycle", s["scipy_rk45_one_cycle"], "C1"),
-            (f"rotor closed\n{n} cycles", tr["rotor_closed"], "C0"),
-            (f"scipy LSODA\nrtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"], "C1"),
-            (f"rotor grid\n{n} cycles", tr["rotor_grid"], "C0"),
-            (f"scipy LSODA\nrtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"], "C1"),
-            (f"rotor angle\n{n} cycles", tr["rotor_angle"], "C0"),
-            (f"scipy LSODA\nrtol {tr['lsoda_vs_angle']['rtol']:g}", tr["lsoda_vs_angle"], "C1")]
+    bars = [
+        ("rotor\nsteady_state", s["rotor_steady_state"], "C0"),
+        ("scipy RK45\none cycle", s["scipy_rk45_one_cycle"], "C1"),
+        (f"rotor closed\n{n} cycles", tr["rotor_closed"], "C0"),
+        (f"scipy LSODA\nrtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"], "C1"),
+        (f"rotor grid\n{n} cycles", tr["rotor_grid"], "C0"),
+        (f"scipy LSODA\nrtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"], "C1"),
+        (f"rotor angle\n{n} cycles", tr["rotor_angle"], "C0"),
+        (f"scipy LSODA\nrtol {tr['lsoda_vs_angle']['rtol']:g}", tr["lsoda_vs_angle"], "C1"),
+    ]
     fig, ax = plt.subplots(figsize=(11, 4.5))
     x = np.arange(len(bars))
     ax.bar(x, [b[1]["median_s"] for b in bars], color=[b[2] for b in bars])
@@ -304,29 +341,40 @@ def report(res):
     print(f"   scipy RK45, one cycle  {ms(sp)}   ({sp['nfev']} RHS calls)")
     print(f"   ratio scipy/rotor      {s['ratio_scipy_over_rotor']:10.1f} x    (target >= 100)")
     print(f"   of which the tables    {ms(s['rotor_tables_only'])}")
-    print(f"   steady state at 1° grid{ms(s['rotor_steady_state_grid_1deg'])}   ratio "
-          f"{s['ratio_scipy_over_rotor_grid_1deg']:.1f} x")
-    print(f"\n2. {tr['cycles']}-cycle transient from {RPM:g} rpm, {tr['load']}; error ω: max|ω−ω_ref|/ω_mean, "
-          "last cycle; t: at its end")
+    print(
+        f"   steady state at 1° grid{ms(s['rotor_steady_state_grid_1deg'])}   ratio "
+        f"{s['ratio_scipy_over_rotor_grid_1deg']:.1f} x"
+    )
+    print(
+        f"\n2. {tr['cycles']}-cycle transient from {RPM:g} rpm, {tr['load']}; error ω: max|ω−ω_ref|/ω_mean, "
+        "last cycle; t: at its end"
+    )
     print("   run                         median time   error ω   error t [s]  (rotor solver-only ω error)")
-    for name, r in (("rotor closed (auto)", tr["rotor_closed"]), ("rotor grid (RK4, 0.5°)", tr["rotor_grid"]),
-                    ("rotor angle (rtol 1e-10)", tr["rotor_angle"]),
-                    (f"LSODA rtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"]),
-                    (f"LSODA rtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"]),
-                    (f"LSODA rtol {tr['lsoda_vs_angle']['rtol']:g}", tr["lsoda_vs_angle"])):
+    for name, r in (
+        ("rotor closed (auto)", tr["rotor_closed"]),
+        ("rotor grid (RK4, 0.5°)", tr["rotor_grid"]),
+        ("rotor angle (rtol 1e-10)", tr["rotor_angle"]),
+        (f"LSODA rtol {tr['lsoda_vs_closed']['rtol']:g}", tr["lsoda_vs_closed"]),
+        (f"LSODA rtol {tr['lsoda_vs_grid']['rtol']:g}", tr["lsoda_vs_grid"]),
+        (f"LSODA rtol {tr['lsoda_vs_angle']['rtol']:g}", tr["lsoda_vs_angle"]),
+    ):
         extra = f"  ({r['error_solver']['omega_rel']:.1e})" if "error_solver" in r else ""
         print(f"   {name:27s} {ms(r)}   {r['error']['omega_rel']:.1e}   {r['error']['t_end_s']:.1e}{extra}")
     for name in ("closed", "grid", "angle"):
         pick = tr[f"lsoda_vs_{name}"]
         note = "" if pick["meets_rotor_error"] else "  (no rtol tried reaches rotor's error; the most accurate shown)"
         print(f"   ratio LSODA/rotor {name:6s}  {tr[f'ratio_lsoda_over_rotor_{name}']:10.1f} x{note}")
-    print("   (target >= 30)  LSODA ladder, rtol: error ω = "
-          + ", ".join(f"{x['rtol']:g}: {x['error']['omega_rel']:.1e}" for x in tr["lsoda_ladder"]))
+    print(
+        "   (target >= 30)  LSODA ladder, rtol: error ω = "
+        + ", ".join(f"{x['rtol']:g}: {x['error']['omega_rel']:.1e}" for x in tr["lsoda_ladder"])
+    )
     c = tr["cross_checks"]
     print("   errors against segmented DOP853 of each run's own physics (np.interp for scipy, PCHIP for rotor)")
-    for key, what in (("rotor_angle_rtol1e-14_vs_numpy_pchip_reference", "rotor rtol 1e-14 vs numpy PCHIP ref"),
-                      ("scipy_dop853_rtol1e-12_time_domain_vs_reference", "plain DOP853 rtol 1e-12 vs ref"),
-                      ("numpy_pchip_vs_numpy_linear_reference", "PCHIP vs np.interp physics")):
+    for key, what in (
+        ("rotor_angle_rtol1e-14_vs_numpy_pchip_reference", "rotor rtol 1e-14 vs numpy PCHIP ref"),
+        ("scipy_dop853_rtol1e-12_time_domain_vs_reference", "plain DOP853 rtol 1e-12 vs ref"),
+        ("numpy_pchip_vs_numpy_linear_reference", "PCHIP vs np.interp physics"),
+    ):
         print(f"   cross-check {what:36s} ω {c[key]['omega_rel']:.1e}, t {c[key]['t_end_s']:.1e} s")
 
 
@@ -336,8 +384,12 @@ def main():
     args = ap.parse_args()
     repeats, scipy_repeats, cycles = (3, 1, 20) if args.quick else (7, 3, 100)
     engine = rotor.load_engine("4chn15")
-    res = {"quick": args.quick, "engine": "4chn15", "versions": versions(),
-           "notes": __doc__.split("\n\n", 1)[1].rsplit("\n\n", 1)[0]}
+    res = {
+        "quick": args.quick,
+        "engine": "4chn15",
+        "versions": versions(),
+        "notes": __doc__.split("\n\n", 1)[1].rsplit("\n\n", 1)[0],
+    }
     res["steady_state"] = bench_steady(engine, NumpyEngine(engine), repeats)
     res["transient"] = bench_transient(engine, cycles, repeats, scipy_repeats)
     RESULTS.mkdir(parents=True, exist_ok=True)

@@ -69,8 +69,9 @@ from scipy.interpolate import PchipInterpolator
 
 sys.path.insert(0, str(Path(__file__).parent))
 os.environ.setdefault("ROTOR_COMPILATION_CACHE", "off")  # compile times as in a first run
-import rotor  # noqa: E402
 from reference import scipy_angle_reference  # noqa: E402
+
+import rotor  # noqa: E402
 from rotor.fileio import atomic_path, write_text_atomic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -78,10 +79,22 @@ TARGET = 1e-6
 ATOL = 1e-10
 REF_SPC = 11520  # numba reference: 1/16°, a divisor of every pressure node spacing
 RTOLS = [10.0**-k for k in range(3, 13)]
-FULL = {"closed": [1.0, 0.5, 0.25, 0.125], "grid": [90, 180, 360, 720, 1440, 2880], "angle": RTOLS,
-        "time": [1e-4, 1e-6, 1e-8, 1e-10], "scipy": RTOLS, "numba": [90, 180, 360, 720, 1440, 2880]}
-QUICK = {"closed": [1.0, 0.25], "grid": [720], "angle": [1e-8], "time": [1e-6],
-         "scipy": [1e-4, 1e-6], "numba": [180, 720]}
+FULL = {
+    "closed": [1.0, 0.5, 0.25, 0.125],
+    "grid": [90, 180, 360, 720, 1440, 2880],
+    "angle": RTOLS,
+    "time": [1e-4, 1e-6, 1e-8, 1e-10],
+    "scipy": RTOLS,
+    "numba": [90, 180, 360, 720, 1440, 2880],
+}
+QUICK = {
+    "closed": [1.0, 0.25],
+    "grid": [720],
+    "angle": [1e-8],
+    "time": [1e-6],
+    "scipy": [1e-4, 1e-6],
+    "numba": [180, 720],
+}
 SCIPY = ("RK45", "DOP853", "LSODA")
 
 
@@ -111,9 +124,23 @@ class Physics:
         assert x[0] == 0 and np.allclose(np.diff(x), self.h) and np.isclose(x[-1] + self.h, C), "uniform grid"
         n = x.size
         self.pchip = PchipInterpolator(np.concatenate([x - C, x, x + C]), np.tile(p, 3))
-        self.coef = np.ascontiguousarray(self.pchip.c[:, n:2 * n])  # the middle period's cubics
-        self.nb = (self.R, self.L, self.k, self.A, self.m_rec, self.m_rot, self.J, self.p_cc, self.tdc, self.fire,
-                   self.shift, C, self.h, self.coef)
+        self.coef = np.ascontiguousarray(self.pchip.c[:, n : 2 * n])  # the middle period's cubics
+        self.nb = (
+            self.R,
+            self.L,
+            self.k,
+            self.A,
+            self.m_rec,
+            self.m_rot,
+            self.J,
+            self.p_cc,
+            self.tdc,
+            self.fire,
+            self.shift,
+            C,
+            self.h,
+            self.coef,
+        )
 
     def terms(self, theta):
         """I(θ), I′(θ), M_gas(θ) at one angle, numpy."""
@@ -124,8 +151,11 @@ class Physics:
         ds = R * (sa * cb + ca * sb) / cb
         d2s = R * (ca * cb - sa * sb) / cb + L * (R * ca / (L * cb)) ** 2 / cb
         p = self.pchip(np.rad2deg(np.mod(theta - self.fire + self.shift, self.cycle)))
-        return (self.J + np.sum(self.m_rot * R * R + self.m_rec * ds * ds), 2 * self.m_rec * np.dot(ds, d2s),
-                self.A * np.dot(p - self.p_cc, ds))
+        return (
+            self.J + np.sum(self.m_rot * R * R + self.m_rec * ds * ds),
+            2 * self.m_rec * np.dot(ds, d2s),
+            self.A * np.dot(p - self.p_cc, ds),
+        )
 
 
 @numba.njit(cache=False)
@@ -187,8 +217,16 @@ def scipy_time(ph, omega0, c, cycles, method, rtol, dense=False):
         return y[0] - end
 
     reached.terminal, reached.direction = True, 1
-    sol = solve_ivp(f, (0.0, 3 * end / omega0), [0.0, omega0], method=method, rtol=rtol, atol=ATOL,
-                    events=reached, dense_output=dense)
+    sol = solve_ivp(
+        f,
+        (0.0, 3 * end / omega0),
+        [0.0, omega0],
+        method=method,
+        rtol=rtol,
+        atol=ATOL,
+        events=reached,
+        dense_output=dense,
+    )
     if sol.status != 1:
         raise RuntimeError(f"solve_ivp did not reach the end: {sol.message}")
     return sol
@@ -205,19 +243,21 @@ def scipy_last_cycle(sol, theta):
 
 def numpy_dop853(ph, omega0, c, cycles, theta):
     """Confirmation of the numba reference: angle domain, energy form, DOP853 rtol 1e-13."""
+
     def f(th, y):
         inertia, _, m_gas = ph.terms(th)
         w = np.sqrt(2 * y[0] / inertia)
         return [m_gas - c * w * w, 1 / w]
 
     e0 = 0.5 * ph.terms(0.0)[0] * omega0**2
-    sol = solve_ivp(f, (0.0, cycles * ph.cycle), [e0, 0.0], method="DOP853", rtol=1e-13, atol=[1e-13 * e0, 1e-15],
-                    t_eval=theta)
+    sol = solve_ivp(
+        f, (0.0, cycles * ph.cycle), [e0, 0.0], method="DOP853", rtol=1e-13, atol=[1e-13 * e0, 1e-15], t_eval=theta
+    )
     return theta, sol.y[1], np.sqrt(2 * sol.y[0] / np.array([ph.terms(x)[0] for x in theta]))
 
 
 # --------------------------------------------------------------------------- errors and timing
-def last_cycle(theta, t, omega, start, step=np.deg2rad(1.0)):
+def last_cycle(theta, t, omega, start, step=np.pi / 180):
     """{index of the 1° angle in the last cycle: (t, ω)} for samples on those angles."""
     theta, t, omega = (np.asarray(a, dtype=float) for a in (theta, t, omega))
     k = np.rint((theta - start) / step)
@@ -229,8 +269,11 @@ def error(run, ref):
     k, t, w = run
     kr, tr, wr = ref
     assert np.array_equal(kr, np.arange(kr.size)) and k.size and k[0] == 0, "last cycle incomplete"
-    return {"omega_rel": float(np.max(np.abs(w - wr[k])) / np.mean(wr)), "t_rel": float(abs(t[0] - tr[0]) / tr[0]),
-            "points": int(k.size)}
+    return {
+        "omega_rel": float(np.max(np.abs(w - wr[k])) / np.mean(wr)),
+        "t_rel": float(abs(t[0] - tr[0]) / tr[0]),
+        "points": int(k.size),
+    }
 
 
 def repeats_for(seconds, quick):
@@ -283,13 +326,18 @@ class Bench:
         d_inertia = np.max(np.abs(ours[:, 0] - np.asarray(rotor.reduced_inertia(e, th)))) / ph.J
         m_ref = np.asarray(rotor.gas_torque(e, th))
         d_gas = np.max(np.abs(ours[:, 2] - m_ref)) / np.max(np.abs(m_ref))
-        d_numba = max(np.max(np.abs(nb[:, 0] - ours[:, 0])) / ph.J, np.max(np.abs(nb[:, 1] - ours[:, 2]))
-                      / np.max(np.abs(m_ref)))
+        d_numba = max(
+            np.max(np.abs(nb[:, 0] - ours[:, 0])) / ph.J, np.max(np.abs(nb[:, 1] - ours[:, 2])) / np.max(np.abs(m_ref))
+        )
         assert d_inertia < 1e-9 and d_numba < 1e-9, (d_inertia, d_numba)
         if isinstance(e.pressure, rotor.PressureTable):
             assert d_gas < 1e-9, d_gas
-        return {"pressure": ph.pressure_note, "inertia_vs_rotor_max_rel": float(d_inertia),
-                "gas_torque_vs_rotor_max_rel_to_peak": float(d_gas), "numba_vs_numpy_max_rel": float(d_numba)}
+        return {
+            "pressure": ph.pressure_note,
+            "inertia_vs_rotor_max_rel": float(d_inertia),
+            "gas_torque_vs_rotor_max_rel_to_peak": float(d_gas),
+            "numba_vs_numpy_max_rel": float(d_numba),
+        }
 
     def wanted(self, family):
         return self.families is None or any(family.startswith(f) for f in self.families)
@@ -321,10 +369,17 @@ class Bench:
                     self.history[key] = (cycles, row["median_s"])
                 except Exception as exc:  # a setting that fails is a result too
                     row.update(failed=f"{type(exc).__name__}: {exc}"[:300])
-            print(f"  {cycles:>6} {family:18s} {row['setting']:>12s}  " + (
-                f"{row['median_s']:9.4f} s  ω {row['error']['omega_rel']:.1e}  t {row['error']['t_rel']:.1e}"
-                if "median_s" in row else f"skipped, predicted {row['predicted_s']:.0f} s" if "skipped" in row
-                else row["failed"][:80]), flush=True)
+            print(
+                f"  {cycles:>6} {family:18s} {row['setting']:>12s}  "
+                + (
+                    f"{row['median_s']:9.4f} s  ω {row['error']['omega_rel']:.1e}  t {row['error']['t_rel']:.1e}"
+                    if "median_s" in row
+                    else f"skipped, predicted {row['predicted_s']:.0f} s"
+                    if "skipped" in row
+                    else row["failed"][:80]
+                ),
+                flush=True,
+            )
             out.append(row)
             looser = row
         return out
@@ -345,23 +400,29 @@ class Bench:
         t0 = time.perf_counter()
         ref_r = rotor_lc(sim(method="closed", grid_deg=0.0625))
         ref_n = last_cycle(*self.numba(cycles, REF_SPC), start)
-        refs = {"rotor": "closed, grid_deg 0.0625", "numpy": f"numba RK4, {REF_SPC} steps per cycle",
-                "numpy_vs_rotor_reference (physics difference)": error(ref_n, ref_r)}
+        refs = {
+            "rotor": "closed, grid_deg 0.0625",
+            "numpy": f"numba RK4, {REF_SPC} steps per cycle",
+            "numpy_vs_rotor_reference (physics difference)": error(ref_n, ref_r),
+        }
         if cycles <= 1000 and not q:
-            refs["rotor_angle_rtol1e-13_same_tables"] = error(rotor_lc(sim(method="angle", rtol=1e-13,
-                                                                            grid_deg=0.0625)), ref_r)
+            refs["rotor_angle_rtol1e-13_same_tables"] = error(
+                rotor_lc(sim(method="angle", rtol=1e-13, grid_deg=0.0625)), ref_r
+            )
         if not q:
             refs[f"numba_{REF_SPC // 2}_steps"] = error(last_cycle(*self.numba(cycles, REF_SPC // 2), start), ref_n)
         if cycles == self.first and not q:  # the DOP853 cross-checks: slow, short horizon only
             w, t = scipy_angle_reference(e, self.rpm0, cycles, self.c, theta, rtol=1e-12)
-            refs["scipy_dop853_exact_physics (benchmarks/reference.py)"] = error(last_cycle(theta, t, w, start),
-                                                                                ref_r)
-            refs["numpy_dop853_rtol1e-13_angle_domain"] = error(last_cycle(*numpy_dop853(
-                ph, self.omega0, self.c, cycles, theta), start), ref_n)
+            refs["scipy_dop853_exact_physics (benchmarks/reference.py)"] = error(last_cycle(theta, t, w, start), ref_r)
+            refs["numpy_dop853_rtol1e-13_angle_domain"] = error(
+                last_cycle(*numpy_dop853(ph, self.omega0, self.c, cycles, theta), start), ref_n
+            )
         refs["seconds"] = time.perf_counter() - t0
         res["references"] = refs
-        print(f"  {cycles:>6} references ({refs['seconds']:.1f} s): " + ", ".join(
-            f"{k.split(' ')[0]} {v['omega_rel']:.1e}" for k, v in refs.items() if isinstance(v, dict)))
+        print(
+            f"  {cycles:>6} references ({refs['seconds']:.1f} s): "
+            + ", ".join(f"{k.split(' ')[0]} {v['omega_rel']:.1e}" for k, v in refs.items() if isinstance(v, dict))
+        )
 
         def rotor_go(**kw):
             timing, r = measure(lambda: _block(sim(**kw)), q, compiled=True)
@@ -370,16 +431,26 @@ class Bench:
         grid_deg, rtol, spc = (lambda g: f"grid {g:g}°"), (lambda r: f"rtol {r:.0e}"), (lambda n: f"{n}/cycle")
         models = ("series", "coefficients", "constant") if cycles == self.first and not q else ()
         rows = []
-        for family, fmt, settings, kw in (
-                [("rotor closed", grid_deg, self.settings["closed"], lambda g: dict(method="closed", grid_deg=g)),
-                 ("rotor closed 4°", grid_deg, self.settings["closed"],
-                  lambda g: dict(method="closed", grid_deg=g, step_deg=4.0)),
-                 ("rotor grid", spc, self.settings["grid"],
-                  lambda n: dict(method="grid", steps_per_cycle=n, step_deg=max(1.0, 720 / n))),
-                 ("rotor angle", rtol, self.settings["angle"], lambda r: dict(method="angle", rtol=r)),
-                 ("rotor time", rtol, self.settings["time"], lambda r: dict(method="time", rtol=r))]
-                + [(f"model {f}", grid_deg, [0.25], lambda g, f=f: dict(method="closed", grid_deg=g, fidelity=f))
-                   for f in models]):
+        for family, fmt, settings, kw in [
+            ("rotor closed", grid_deg, self.settings["closed"], lambda g: dict(method="closed", grid_deg=g)),
+            (
+                "rotor closed 4°",
+                grid_deg,
+                self.settings["closed"],
+                lambda g: dict(method="closed", grid_deg=g, step_deg=4.0),
+            ),
+            (
+                "rotor grid",
+                spc,
+                self.settings["grid"],
+                lambda n: dict(method="grid", steps_per_cycle=n, step_deg=max(1.0, 720 / n)),
+            ),
+            ("rotor angle", rtol, self.settings["angle"], lambda r: dict(method="angle", rtol=r)),
+            ("rotor time", rtol, self.settings["time"], lambda r: dict(method="time", rtol=r)),
+        ] + [
+            (f"model {f}", grid_deg, [0.25], lambda g, f=f: dict(method="closed", grid_deg=g, fidelity=f))
+            for f in models
+        ]:
             if self.wanted(family):
                 rows += self.runs(family, fmt, settings, cycles, lambda x, kw=kw: rotor_go(**kw(x)))
 
@@ -390,14 +461,21 @@ class Bench:
         if self.wanted("numba RK4"):
             rows += self.runs("numba RK4", spc, self.settings["numba"], cycles, numba_go)
         for method in [m for m in SCIPY if self.wanted(f"scipy {m}")] if cycles <= self.scipy_max else ():
+
             def go(rtol, method=method):
                 t0 = time.perf_counter()
                 sol = scipy_time(ph, self.omega0, self.c, cycles, method, rtol, dense=True)
                 dense_s = time.perf_counter() - t0
-                timing, sol2 = measure(lambda: scipy_time(ph, self.omega0, self.c, cycles, method, rtol), q,
-                                       compiled=False, hint=dense_s)
-                return dict(timing, dense_run_s=dense_s, nfev=int(sol2.nfev),
-                            error=error(last_cycle(*scipy_last_cycle(sol, theta), start), ref_n))
+                timing, sol2 = measure(
+                    lambda: scipy_time(ph, self.omega0, self.c, cycles, method, rtol), q, compiled=False, hint=dense_s
+                )
+                return dict(
+                    timing,
+                    dense_run_s=dense_s,
+                    nfev=int(sol2.nfev),
+                    error=error(last_cycle(*scipy_last_cycle(sol, theta), start), ref_n),
+                )
+
             rows += self.runs(f"scipy {method}", rtol, self.settings["scipy"], cycles, go)
         res["runs"] = rows
         res["summary"] = summarize(rows)
@@ -417,9 +495,12 @@ def _block(r):
 
 def summarize(rows):
     """Fastest measured setting per group at error ω ≤ TARGET, and the ratios."""
-    groups = {"rotor": ("rotor closed", "rotor grid", "rotor angle", "rotor time"),
-              "rotor_4deg_samples": ("rotor closed 4°",),
-              "scipy": tuple(f"scipy {m}" for m in SCIPY), "numba": ("numba RK4",)}
+    groups = {
+        "rotor": ("rotor closed", "rotor grid", "rotor angle", "rotor time"),
+        "rotor_4deg_samples": ("rotor closed 4°",),
+        "scipy": tuple(f"scipy {m}" for m in SCIPY),
+        "numba": ("numba RK4",),
+    }
     out = {"target_omega_rel": TARGET}
     for g, fams in groups.items():
         ok = [r for r in rows if r["family"] in fams and "median_s" in r and r["error"]["omega_rel"] <= TARGET]
@@ -430,8 +511,10 @@ def summarize(rows):
     out["ratio_rotor_4deg_over_numba"] = r4 / n if r4 and n else None
     out["ratio_scipy_over_rotor"] = s / r if s and r else None
     out["ratio_rotor_over_numba"] = r / n if r and n else None
-    out["targets (at 1000 cycles)"] = {"scipy/rotor >= 30": s and r and s / r >= 30, "rotor/numba <= 3": r and n
-                                       and r / n <= 3}
+    out["targets (at 1000 cycles)"] = {
+        "scipy/rotor >= 30": s and r and s / r >= 30,
+        "rotor/numba <= 3": r and n and r / n <= 3,
+    }
     compile_s = [x["compile_s"] for x in rows if x["family"].startswith("rotor") and "compile_s" in x] or [0.0]
     out["rotor_compile_s"] = {"min": min(compile_s), "median": statistics.median(compile_s), "max": max(compile_s)}
     return out
@@ -444,8 +527,13 @@ def versions():
     import jaxlib
 
     mods = {m.__name__: m.__version__ for m in (rotor, jax, jaxlib, diffrax, equinox, np, scipy, numba)}
-    return dict(mods, python=platform.python_version(), platform=platform.platform(), cpu_count=os.cpu_count(),
-                jax_backend=jax.default_backend())
+    return dict(
+        mods,
+        python=platform.python_version(),
+        platform=platform.platform(),
+        cpu_count=os.cpu_count(),
+        jax_backend=jax.default_backend(),
+    )
 
 
 def import_time(repeats):
@@ -467,15 +555,23 @@ def plot(name, res, path):
     fams = list(dict.fromkeys(r["family"] for r in res["runs"]))
     markers = dict(zip(fams, "os^vDP*XhpH<>"))
     for i, fam in enumerate(fams):
-        pts = [(max(r["error"]["omega_rel"], 1e-16), r["median_s"]) for r in res["runs"]
-               if r["family"] == fam and "median_s" in r]
+        pts = [
+            (max(r["error"]["omega_rel"], 1e-16), r["median_s"])
+            for r in res["runs"]
+            if r["family"] == fam and "median_s" in r
+        ]
         if pts:
             x, y = zip(*pts)
             ls = ":" if fam.startswith("model") else "-"
             ax.plot(x, y, ls, marker=markers[fam], color=f"C{i % 10}", label=fam, ms=5)
     ax.axvline(TARGET, color="grey", lw=0.8, ls="--")
-    ax.set(xscale="log", yscale="log", xlabel="error ω: max|ω − ω_ref|/mean ω, last cycle",
-           ylabel="median wall time [s]", title=f"{name}, {res['cycles']} cycles (each against its own physics)")
+    ax.set(
+        xscale="log",
+        yscale="log",
+        xlabel="error ω: max|ω − ω_ref|/mean ω, last cycle",
+        ylabel="median wall time [s]",
+        title=f"{name}, {res['cycles']} cycles (each against its own physics)",
+    )
     ax.legend(fontsize=8)
     fig.tight_layout()
     with atomic_path(path) as tmp:
@@ -491,10 +587,12 @@ def print_summary(out):
             s = res["summary"]
             cell = lambda b: f"{b['family'].split()[-1]} {b['setting']} {b['median_s']:.3g}s" if b else "none"  # noqa
             ratio = lambda v: f"{v:11.1f}" if v else f"{'—':>11s}"  # noqa
-            print(f"{name:11s} {n:>6s}  {cell(s['rotor']):32s} {cell(s['scipy']):32s} {cell(s['numba']):28s}"
-                  f"{ratio(s['ratio_scipy_over_rotor'])} {ratio(s['ratio_rotor_over_numba'])} "
-                  f"{ratio(s.get('ratio_rotor_4deg_over_numba'))} (4° samples)   rotor compile "
-                  f"{s['rotor_compile_s']['min']:.1f}–{s['rotor_compile_s']['max']:.1f} s")
+            print(
+                f"{name:11s} {n:>6s}  {cell(s['rotor']):32s} {cell(s['scipy']):32s} {cell(s['numba']):28s}"
+                f"{ratio(s['ratio_scipy_over_rotor'])} {ratio(s['ratio_rotor_over_numba'])} "
+                f"{ratio(s.get('ratio_rotor_4deg_over_numba'))} (4° samples)   rotor compile "
+                f"{s['rotor_compile_s']['min']:.1f}–{s['rotor_compile_s']['max']:.1f} s"
+            )
     print(f"import rotor {out['import_rotor']['median_s']:.2f} s; numba compile {out['numba_compile_s']:.2f} s")
 
 
@@ -504,11 +602,16 @@ def main():
     ap.add_argument("--presets", help="comma-separated presets (default: all four)")
     ap.add_argument("--horizons", help="comma-separated cycle counts (default 10,100,1000,10000)")
     ap.add_argument("--cap", type=float, default=60.0, help="skip runs predicted to take longer [s]")
-    ap.add_argument("--families", help="comma-separated family prefixes to run (default all), e.g. "
-                    "'rotor closed,numba'")
+    ap.add_argument(
+        "--families", help="comma-separated family prefixes to run (default all), e.g. 'rotor closed,numba'"
+    )
     ap.add_argument("--stem", help="output name in benchmarks/results (default work_precision[_quick])")
-    ap.add_argument("--scipy-max-cycles", type=int, default=1000,
-                    help="longest horizon scipy runs at (default 1000: beyond, its runs are minutes long)")
+    ap.add_argument(
+        "--scipy-max-cycles",
+        type=int,
+        default=1000,
+        help="longest horizon scipy runs at (default 1000: beyond, its runs are minutes long)",
+    )
     args = ap.parse_args()
     presets = (args.presets or ("4chn15,tue-single" if args.quick else "tue-single,4chn15,mwm6,v8")).split(",")
     horizons = sorted(int(h) for h in (args.horizons or ("10,100" if args.quick else "10,100,1000,10000")).split(","))
@@ -516,15 +619,33 @@ def main():
     RESULTS.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
     notes = __doc__.split("\n\n", 1)[1].rsplit("\n\n", 2)[0]
-    out = {"quick": args.quick, "cap_s": args.cap, "scipy_max_cycles": args.scipy_max_cycles, "versions": versions(),
-           "import_rotor": import_time(1 if args.quick else 3), "notes": notes, "presets": {}}
+    out = {
+        "quick": args.quick,
+        "cap_s": args.cap,
+        "scipy_max_cycles": args.scipy_max_cycles,
+        "versions": versions(),
+        "import_rotor": import_time(1 if args.quick else 3),
+        "notes": notes,
+        "presets": {},
+    }
     print(f"import rotor: {out['import_rotor']['median_s']:.2f} s")
     for name in presets:
-        b = Bench(name, args.quick, args.cap, horizons[0], args.scipy_max_cycles,
-                  args.families.split(",") if args.families else None)
+        b = Bench(
+            name,
+            args.quick,
+            args.cap,
+            horizons[0],
+            args.scipy_max_cycles,
+            args.families.split(",") if args.families else None,
+        )
         load = f"PropellerLoad({b.torque:.6g} N·m, {b.rpm:g} rpm), c = {b.c:.6g} N·m·s²"
-        p = out["presets"][name] = {"rpm_operating": b.rpm, "rpm_start": b.rpm0, "load": load, "physics": b.checks,
-                                    "horizons": {}}
+        p = out["presets"][name] = {
+            "rpm_operating": b.rpm,
+            "rpm_start": b.rpm0,
+            "load": load,
+            "physics": b.checks,
+            "horizons": {},
+        }
         out.setdefault("numba_compile_s", b.numba_first_call_s)  # nb_rk4's first call, one cycle
         p["numba_first_call_s"] = b.numba_first_call_s
         print(f"\n{name}: {p['load']}; numpy physics: {b.checks}; numba first call {b.numba_first_call_s:.2f} s")

@@ -12,8 +12,50 @@ from .cache import enable_compilation_cache  # noqa: E402
 
 enable_compilation_cache()
 
-from .checks import EngineError, LogError  # noqa: E402
-from .engine.model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
+from .design.flywheel import (  # noqa: E402
+    DiscFlywheel,
+    FlywheelDesign,
+    OperatingPoint,
+    TextbookFlywheel,
+    design_flywheel,
+    inertia_for_delta,
+    lightest_disc,
+    textbook_flywheel,
+)
+from .diagnostics.calibration import (  # noqa: E402
+    Calibration,
+    calibrate,
+    cylinder_torques,
+    diagnose,
+    measured_imep,
+    preset_calibration,
+)
+from .diagnostics.identification import Identification, identify  # noqa: E402
+from .diagnostics.inverse import (  # noqa: E402
+    HarmonicTorque,
+    IndicatedTorque,
+    TorqueOrders,
+    harmonic_response,
+    harmonic_torque,
+    indicated_torque,
+)
+from .diagnostics.misfire import contribution_index  # noqa: E402
+from .diagnostics.synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
+from .dynamics.combustion import combustion_pattern  # noqa: E402
+from .dynamics.crank_train import CrankTrain, crank_train  # noqa: E402
+from .dynamics.loads import (  # noqa: E402
+    ConstantLoad,
+    Governor,
+    Load,
+    LoadStep,
+    PolynomialLoad,
+    PropellerLoad,
+    TableLoad,
+    parse_load,
+)
+from .dynamics.result import Orders, SpeedResult  # noqa: E402
+from .dynamics.steady import steady_state  # noqa: E402
+from .dynamics.transient import simulate  # noqa: E402
 from .engine.file import engine_from_dict, load_engine, preset_names  # noqa: E402
 from .engine.forces import (  # noqa: E402
     crank_forces,
@@ -26,6 +68,7 @@ from .engine.forces import (  # noqa: E402
     reciprocating_inertia_torque,
     total_torque,
 )
+from .engine.friction import Friction  # noqa: E402
 from .engine.inertia import (  # noqa: E402
     cylinder_inertia,
     inertia_coefficients,
@@ -35,28 +78,18 @@ from .engine.inertia import (  # noqa: E402
 )
 from .engine.kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
 from .engine.mechanism import engine_piston_motion  # noqa: E402
+from .engine.model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
 from .engine.pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle, periodic_pchip  # noqa: E402
-from .engine.friction import Friction  # noqa: E402
-from .dynamics.loads import (  # noqa: E402
-    ConstantLoad,
-    Governor,
-    Load,
-    LoadStep,
-    PolynomialLoad,
-    PropellerLoad,
-    TableLoad,
-    parse_load,
-)
-from .dynamics.combustion import combustion_pattern  # noqa: E402
-from .dynamics.crank_train import CrankTrain, crank_train  # noqa: E402
-from .dynamics.result import Orders, SpeedResult  # noqa: E402
-from .dynamics.steady import NoSteadyStateError, steady_state  # noqa: E402
-from .dynamics.transient import simulate  # noqa: E402
-from . import summary  # noqa: E402
 from .engine.summary import engine_summary  # noqa: E402
 from .engine.table import CrankTable, crank_table  # noqa: E402
-from .logs.reader import Log, read_log  # noqa: E402
+from .errors import (  # noqa: E402
+    EngineError,
+    LogError,
+    NoSteadyStateError,  # noqa: E402
+)
+from .logs.analysis import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
 from .logs.edges import Edges, find_edges  # noqa: E402
+from .logs.reader import Log, read_log  # noqa: E402
 from .logs.wheel import (  # noqa: E402
     ToothErrors,
     ToothTrack,
@@ -65,36 +98,6 @@ from .logs.wheel import (  # noqa: E402
     firing_orders,
     locate_teeth,
     parse_wheel,
-)
-from .logs.analysis import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
-from .diagnostics.inverse import (  # noqa: E402
-    HarmonicTorque,
-    IndicatedTorque,
-    TorqueOrders,
-    harmonic_response,
-    harmonic_torque,
-    indicated_torque,
-)
-from .diagnostics.identification import Identification, identify  # noqa: E402
-from .diagnostics.misfire import contribution_index  # noqa: E402
-from .diagnostics.calibration import (  # noqa: E402
-    Calibration,
-    calibrate,
-    cylinder_torques,
-    diagnose,
-    measured_imep,
-    preset_calibration,
-)
-from .diagnostics.synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
-from .design.flywheel import (  # noqa: E402
-    DiscFlywheel,
-    FlywheelDesign,
-    OperatingPoint,
-    TextbookFlywheel,
-    design_flywheel,
-    inertia_for_delta,
-    lightest_disc,
-    textbook_flywheel,
 )
 
 __version__ = "0.1.0"

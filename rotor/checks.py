@@ -6,13 +6,11 @@ tracers and were already checked when the object was first built from numbers.
 
 from __future__ import annotations
 
-import numpy as np
 import jax
 import jax.numpy as jnp
+import numpy as np
 
-
-class EngineError(ValueError):
-    """An engine description that cannot be built: names the key and the problem."""
+from .errors import EngineError
 
 
 def as_f64(x):
@@ -68,13 +66,10 @@ def arrays_only(tree):
     ``eqx.tree_at(..., engine, 12.0)`` puts a Python float into a module; ``eqx.filter_jit``
     would treat it as a constant and compile again for every new value.
     """
+
     def leaf(x):
         if isinstance(x, (float, int, np.floating, np.integer)) and not isinstance(x, (bool, np.bool_)):
             return jnp.asarray(x, dtype=jnp.float64)
         return x
 
     return jax.tree_util.tree_map(leaf, tree)
-
-
-class LogError(ValueError):
-    """A recording that cannot be analysed: names the file, row, column or time and the problem."""

@@ -1,4 +1,3 @@
-import os
 from pathlib import Path
 
 import matplotlib
@@ -18,8 +17,19 @@ def diesel():
     return rotor.load_engine("4chn15")
 
 
-def two_mass_engine(lam=0.267, R=0.1025, m_rec=9.72, m_rot=0.0, J=1e-6, cylinders=1, k=0.0,
-                    throws=None, firing=None, pressure=None, strokes=4):
+def two_mass_engine(
+    lam=0.267,
+    R=0.1025,
+    m_rec=9.72,
+    m_rot=0.0,
+    J=1e-6,
+    cylinders=1,
+    k=0.0,
+    throws=None,
+    firing=None,
+    pressure=None,
+    strokes=4,
+):
     """A small engine built in Python, for closed-form checks."""
     throws = [0.0] * cylinders if throws is None else throws
     firing = list(range(1, cylinders + 1)) if firing is None else firing

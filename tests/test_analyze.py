@@ -6,11 +6,11 @@ import re
 
 import numpy as np
 import pytest
+from conftest import SHARED_DATA
 
 import rotor
 from rotor import LogError
 from rotor.cli import main
-from conftest import SHARED_DATA
 
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
@@ -23,14 +23,16 @@ NAMES = ("No_load", "half_load", "full_load")
 def tue():
     out = {}
     for n in NAMES:
-        out[n] = (rotor.analyze_log(TUE / f"{n}.txt", "60-2", columns=COLS, **GEOM),
-                  rotor.analyze_log(TUE / f"{n}.txt", "60-2", columns=COLS, tooth_errors=None, **GEOM))
+        out[n] = (
+            rotor.analyze_log(TUE / f"{n}.txt", "60-2", columns=COLS, **GEOM),
+            rotor.analyze_log(TUE / f"{n}.txt", "60-2", columns=COLS, tooth_errors=None, **GEOM),
+        )
     return out
 
 
 @needs_data
 def test_real_every_revolution_found_and_speed(tue):
-    for n, (a, _) in tue.items():
+    for a, _ in tue.values():
         w = a.track
         assert np.all(np.bincount(w.rev[w.rev >= 0])[:-1] == 58)  # every complete revolution: 58 edges
         assert a.cycles >= 11
@@ -49,7 +51,7 @@ def test_real_half_order_ranks_with_load(tue):
 @needs_data
 def test_real_tooth_correction_matters_and_agrees_across_recordings(tue):
     errs = []
-    for n, (a, raw) in tue.items():
+    for a, raw in tue.values():
         assert raw.delta.mean() > 2 * a.delta.mean()  # the gap's distorted edges dominate uncorrected δ
         errs.append(a.tooth_errors.errors_deg)
     errs = np.array(errs)
@@ -87,9 +89,25 @@ def test_real_other_column_order_gain_and_offset(tmp_path):
 
 @needs_data
 def test_cli_analyze_json_and_plot(tmp_path, capsys):
-    rc = main(["analyze", str(TUE / "full_load.txt"), "--wheel", "60-2", "--columns", COLS, "--json",
-               "--compression-ratio", "8.5", "--rod-ratio", "0.3266", "--plot", str(tmp_path),
-               "--save-tooth-errors", str(tmp_path / "teeth.json")])
+    rc = main(
+        [
+            "analyze",
+            str(TUE / "full_load.txt"),
+            "--wheel",
+            "60-2",
+            "--columns",
+            COLS,
+            "--json",
+            "--compression-ratio",
+            "8.5",
+            "--rod-ratio",
+            "0.3266",
+            "--plot",
+            str(tmp_path),
+            "--save-tooth-errors",
+            str(tmp_path / "teeth.json"),
+        ]
+    )
     assert rc == 0
     d = json.loads(capsys.readouterr().out)
     assert d["wheel"]["teeth_per_rev"] == 60 and d["wheel"]["edges_per_rev"] == 58
@@ -99,8 +117,20 @@ def test_cli_analyze_json_and_plot(tmp_path, capsys):
     assert len(d["tooth_error_correction"]["errors_rad"]) == 58
     assert (tmp_path / "full_load_analysis.png").stat().st_size > 10000
     # reuse the saved correction on another recording
-    rc = main(["analyze", str(TUE / "No_load.txt"), "--wheel", "60-2", "--columns", COLS,
-               "--tooth-errors", str(tmp_path / "teeth.json"), "--tdc-deg", "29"])
+    rc = main(
+        [
+            "analyze",
+            str(TUE / "No_load.txt"),
+            "--wheel",
+            "60-2",
+            "--columns",
+            COLS,
+            "--tooth-errors",
+            str(tmp_path / "teeth.json"),
+            "--tdc-deg",
+            "29",
+        ]
+    )
     assert rc == 0
     out = capsys.readouterr().out
     assert "TDC 29.00° after the gap (given)" in out
@@ -115,8 +145,12 @@ def write(tmp_path, text, name="log.csv"):
 
 def test_reader_delimiters_header_and_skip(tmp_path):
     for sep in (",", "\t", ";", "  "):
-        p = write(tmp_path, f"# a comment\ntime{sep}x{sep}rpm\n0{sep}9{sep}1000\n0.1{sep}9{sep}1001\n"
-                            f"\n0.2{sep}9{sep}1002\n".replace("time", "t0" if sep == "  " else "time"))
+        p = write(
+            tmp_path,
+            f"# a comment\ntime{sep}x{sep}rpm\n0{sep}9{sep}1000\n0.1{sep}9{sep}1001\n\n0.2{sep}9{sep}1002\n".replace(
+                "time", "t0" if sep == "  " else "time"
+            ),
+        )
         log = rotor.read_log(p, "time,-,rpm")
         np.testing.assert_array_equal(log["rpm"], [1000, 1001, 1002])
         np.testing.assert_array_equal(log.lines, [3, 4, 6])
@@ -126,15 +160,18 @@ def test_reader_delimiters_header_and_skip(tmp_path):
     assert rotor.read_log(p).kind == "teeth"
 
 
-@pytest.mark.parametrize("text,spec,match", [
-    ("0,1\n0.1,2\n0.1,3\n0.3,4\n", "time,rpm", r"line 3, column 'time': 0.1 s is not after"),
-    ("0,1\n0.1,nan\n0.2,3\n", "time,rpm", r"line 2, column 'rpm': nan is not a finite number"),
-    ("0,1\n0.1,abc\n0.2,3\n", "time,rpm", r"line 2, column 2: 'abc' is not a number"),
-    ("0,1\n0.1,2\n0.2,3\n", "time,rpm,encoder_v", r"line 1 has 2 columns.*no column for 'encoder_v'"),
-    ("0,1\n0.1,2\n0.2,3\n", "time,speed", r"column 2 is named 'speed'"),
-    ("0,1\n0.1,2\n0.2,3\n", "time,pressure_v", r"name a 'tooth_time_s', 'encoder_v'"),
-    ("0,1,2\n0.1,2\n0.2,3,4\n", "time,-,rpm", r"line 2: 2 columns where the first line has 3"),
-])
+@pytest.mark.parametrize(
+    "text,spec,match",
+    [
+        ("0,1\n0.1,2\n0.1,3\n0.3,4\n", "time,rpm", r"line 3, column 'time': 0.1 s is not after"),
+        ("0,1\n0.1,nan\n0.2,3\n", "time,rpm", r"line 2, column 'rpm': nan is not a finite number"),
+        ("0,1\n0.1,abc\n0.2,3\n", "time,rpm", r"line 2, column 2: 'abc' is not a number"),
+        ("0,1\n0.1,2\n0.2,3\n", "time,rpm,encoder_v", r"line 1 has 2 columns.*no column for 'encoder_v'"),
+        ("0,1\n0.1,2\n0.2,3\n", "time,speed", r"column 2 is named 'speed'"),
+        ("0,1\n0.1,2\n0.2,3\n", "time,pressure_v", r"name a 'tooth_time_s', 'encoder_v'"),
+        ("0,1,2\n0.1,2\n0.2,3,4\n", "time,-,rpm", r"line 2: 2 columns where the first line has 3"),
+    ],
+)
 def test_reader_errors_name_row_and_column(tmp_path, text, spec, match):
     p = write(tmp_path, text)
     with pytest.raises(LogError, match=match):
@@ -186,8 +223,24 @@ def _wheel_csv(tmp_path, teeth=36, missing=0, revs=3.3, rpm=1500.0, fs=100e3, na
 
 def test_cli_json_index_wheel_has_no_nan(tmp_path, capsys):
     p = _wheel_csv(tmp_path)
-    assert main(["analyze", str(p), "--wheel", "36", "--columns", "time,encoder_v,index_v", "--json",
-                 "--strokes", "2", "--tooth-errors", "none"]) == 0
+    assert (
+        main(
+            [
+                "analyze",
+                str(p),
+                "--wheel",
+                "36",
+                "--columns",
+                "time,encoder_v,index_v",
+                "--json",
+                "--strokes",
+                "2",
+                "--tooth-errors",
+                "none",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
 
     def no_constants(c):
@@ -201,18 +254,26 @@ def test_cli_columns_value_starting_with_a_dash(tmp_path, capsys):
     raw = np.loadtxt(_wheel_csv(tmp_path, teeth=60, missing=2, revs=4.5), delimiter=",")
     p = tmp_path / "skip_first.csv"
     np.savetxt(p, np.column_stack([raw[:, 2], raw[:, 1], raw[:, 0]]), fmt="%.7g", delimiter=",")
-    assert main(["analyze", str(p), "--wheel", "60-2", "--columns", "-,encoder_v,time", "--tdc-deg", "0",
-                 "--firing", "0"]) == 0
+    assert (
+        main(["analyze", str(p), "--wheel", "60-2", "--columns", "-,encoder_v,time", "--tdc-deg", "0", "--firing", "0"])
+        == 0
+    )
     assert "complete 4-stroke cycles" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("extra,match", [
-    (["--tdc-deg", "nan"], r"tdc_deg = nan: need a finite angle"),
-    (["--max-order", "40"], r"max_order = 40: a 60-2 wheel resolves orders below 30"),
-    (["--max-order", "20", "--points-per-cycle", "100"], r"points_per_cycle = 100: orders up to 20 need at least "
-                                                         r"320 \(--points-per-cycle\)"),
-    (["--save-tooth-errors", "/nonexistent/dir/t.json"], r"^rotor: error: /nonexistent/dir/t.json: cannot write"),
-])
+@pytest.mark.parametrize(
+    "extra,match",
+    [
+        (["--tdc-deg", "nan"], r"tdc_deg = nan: need a finite angle"),
+        (["--max-order", "40"], r"max_order = 40: a 60-2 wheel resolves orders below 30"),
+        (
+            ["--max-order", "20", "--points-per-cycle", "100"],
+            r"points_per_cycle = 100: orders up to 20 need at least "
+            r"320 \(--points-per-cycle\)",
+        ),
+        (["--save-tooth-errors", "/nonexistent/dir/t.json"], r"^rotor: error: /nonexistent/dir/t.json: cannot write"),
+    ],
+)
 def test_cli_messages(tmp_path, capsys, extra, match):
     p = _wheel_csv(tmp_path, teeth=60, missing=2, revs=4.5)
     assert main(["analyze", str(p), "--wheel", "60-2", "--columns", "time,encoder_v"] + extra) == 2
@@ -254,12 +315,17 @@ def test_real_decimated_to_50_khz(tue):
     for n in NAMES:
         raw = np.loadtxt(TUE / f"{n}.txt")
         a = tue[n][0]
-        b = rotor.analyze_log(rotor.Log.from_arrays(time=raw[::2, 0], pressure_v=raw[::2, 1],
-                                                    encoder_v=raw[::2, 2]), "60-2", **GEOM)
+        b = rotor.analyze_log(
+            rotor.Log.from_arrays(time=raw[::2, 0], pressure_v=raw[::2, 1], encoder_v=raw[::2, 2]), "60-2", **GEOM
+        )
         assert b.cycles == a.cycles
         assert abs(b.delta.mean() / a.delta.mean() - 1) < 0.11
         assert abs(b.amplitude_of(0.5).mean() / a.amplitude_of(0.5).mean() - 1) < 0.02
     raw = np.loadtxt(TUE / "No_load.txt")
-    c = rotor.analyze_log(rotor.Log.from_arrays(time=raw[::2, 0], pressure_v=raw[::2, 1], encoder_v=raw[::2, 2]),
-                          "60-2", denoise=False, **GEOM)
+    c = rotor.analyze_log(
+        rotor.Log.from_arrays(time=raw[::2, 0], pressure_v=raw[::2, 1], encoder_v=raw[::2, 2]),
+        "60-2",
+        denoise=False,
+        **GEOM,
+    )
     assert c.delta.mean() / tue["No_load"][0].delta.mean() > 1.3  # unweighted, the jitter inflates δ

@@ -20,12 +20,11 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from scipy.interpolate import CubicSpline
 
 import rotor
 from rotor.logs.wheel import TWO_PI
-
-from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import synthetic_wheel  # noqa: E402
@@ -66,20 +65,35 @@ def engine_run():
     steady = rotor.steady_state(e)
     load = float(steady.info["load_torque_Nm"])
     rpm0 = float(steady.omega[0]) * 30 / np.pi
-    res = rotor.simulate(e, rpm=rpm0, cycles=8, load=rotor.ConstantLoad(load), method="grid", step_deg=0.25,
-                         steps_per_cycle=2880, progress=False)
+    res = rotor.simulate(
+        e,
+        rpm=rpm0,
+        cycles=8,
+        load=rotor.ConstantLoad(load),
+        method="grid",
+        step_deg=0.25,
+        steps_per_cycle=2880,
+        progress=False,
+    )
     return res
 
 
 def _analyse(res, tooth_errors, jitter_s=JITTER_S, firing=None, **kw):
     theta, t = np.asarray(res.theta), np.asarray(res.t)
-    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(2),
-                        jitter_s)
+    edges = tooth_times(
+        CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(2), jitter_s
+    )
     # the first reference edge: TDC lies 60° after every gap; the firing TDC (crank 360°) in revolution …
     first_ref = np.deg2rad(GAP_DEG) + TWO_PI * np.ceil((theta[0] - np.deg2rad(GAP_DEG)) / TWO_PI)
     parity = int(np.floor((TWO_PI - first_ref) / TWO_PI)) % 2
-    return rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=edges), WHEEL, tdc_deg=-GAP_DEG,
-                             firing=parity if firing is None else firing, tooth_errors=tooth_errors, **kw)
+    return rotor.analyze_log(
+        rotor.Log.from_arrays(tooth_time_s=edges),
+        WHEEL,
+        tdc_deg=-GAP_DEG,
+        firing=parity if firing is None else firing,
+        tooth_errors=tooth_errors,
+        **kw,
+    )
 
 
 def _match(res, an):
@@ -189,8 +203,17 @@ def unequal_run():
     load = float(steady.info["load_torque_Nm"])
     rpm0 = float(steady.omega[0]) * 30 / np.pi
     comb = rotor.combustion_pattern(8, 4, imep_scale=[1, 1.1, 0.9, 1])
-    return rotor.simulate(e, rpm=rpm0, cycles=8, load=rotor.ConstantLoad(load), method="grid", step_deg=0.25,
-                          steps_per_cycle=2880, progress=False, combustion=comb)
+    return rotor.simulate(
+        e,
+        rpm=rpm0,
+        cycles=8,
+        load=rotor.ConstantLoad(load),
+        method="grid",
+        step_deg=0.25,
+        steps_per_cycle=2880,
+        progress=False,
+        combustion=comb,
+    )
 
 
 def test_unequal_cylinders_half_orders(unequal_run, calibration):

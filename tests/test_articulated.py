@@ -21,8 +21,14 @@ def v2(r1=0.04, knuckle=60.0, bank=60.0, rod=L1):
         masses=rotor.Masses(reciprocating_kg=0.6, rotating_kg=0.3),
         crankshaft=rotor.Crankshaft(inertia_kgm2=0.05),
         layout=rotor.Layout(throw_angles_deg=[0, 0], bank_angles_deg=[0, bank], firing_order=[1, 2]),
-        articulated=rotor.Articulated(slaves=[2], masters=[1], knuckle_radius_m=r1, knuckle_angle_deg=knuckle,
-                                      rod_length_m=rod, rod_knuckle_kg=0.2),
+        articulated=rotor.Articulated(
+            slaves=[2],
+            masters=[1],
+            knuckle_radius_m=r1,
+            knuckle_angle_deg=knuckle,
+            rod_length_m=rod,
+            rod_knuckle_kg=0.2,
+        ),
     )
 
 
@@ -66,13 +72,18 @@ def test_engine_inertia_and_torque_with_a_slave():
     # with r1 -> 0 and zero knuckle mass the slave adds what an ordinary cylinder adds
     e0 = v2(r1=0.0, rod=L)
     plain = rotor.Engine(
-        name="V2", strokes=4, cylinders=2, geometry=e0.geometry,
-        masses=rotor.Masses(reciprocating_kg=0.6, rotating_kg=0.3), crankshaft=e0.crankshaft,
+        name="V2",
+        strokes=4,
+        cylinders=2,
+        geometry=e0.geometry,
+        masses=rotor.Masses(reciprocating_kg=0.6, rotating_kg=0.3),
+        crankshaft=e0.crankshaft,
         layout=e0.layout,
     )
     knuckle = 0.2 * R**2  # the knuckle mass then rides on the crank pin
-    assert np.allclose(rotor.reduced_inertia(e0, TH), rotor.reduced_inertia(plain, TH) - 0.3 * R**2 + knuckle,
-                       rtol=1e-11)
+    assert np.allclose(
+        rotor.reduced_inertia(e0, TH), rotor.reduced_inertia(plain, TH) - 0.3 * R**2 + knuckle, rtol=1e-11
+    )
     # the virtual-work torque of the slave's reciprocating inertia is -1/2 dI_rec/dtheta w^2
     w = 300.0
     tq = rotor.reciprocating_inertia_torque(e, TH, w)
@@ -105,13 +116,16 @@ def test_articulated_validation(kwargs, key):
 def test_slave_must_share_the_master_throw():
     with pytest.raises(rotor.EngineError, match="share the crank throw"):
         rotor.Engine(
-            name="bad", strokes=4, cylinders=2,
+            name="bad",
+            strokes=4,
+            cylinders=2,
             geometry=rotor.Geometry(bore_m=0.1, stroke_m=2 * R, rod_length_m=L),
             masses=rotor.Masses(reciprocating_kg=0.6),
             crankshaft=rotor.Crankshaft(inertia_kgm2=0.05),
             layout=rotor.Layout(throw_angles_deg=[0, 180], bank_angles_deg=[0, 60], firing_order=[1, 2]),
-            articulated=rotor.Articulated(slaves=[2], masters=[1], knuckle_radius_m=0.04, knuckle_angle_deg=60,
-                                          rod_length_m=L1),
+            articulated=rotor.Articulated(
+                slaves=[2], masters=[1], knuckle_radius_m=0.04, knuckle_angle_deg=60, rod_length_m=L1
+            ),
         )
 
 

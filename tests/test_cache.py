@@ -28,8 +28,10 @@ def test_cache_default_path_env_path_and_off(tmp_path):
 
 
 def test_a_compiled_kernel_is_reused_by_the_next_process(tmp_path):
-    code = ("import jax, rotor; e = rotor.load_engine('4chn15'); "
-            "jax.block_until_ready(rotor.steady_state(e, grid_deg=2.0).omega)")
+    code = (
+        "import jax, rotor; e = rotor.load_engine('4chn15'); "
+        "jax.block_until_ready(rotor.steady_state(e, grid_deg=2.0).omega)"
+    )
     env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"))
     subprocess.run([sys.executable, "-c", code], env=env, check=True)
     written = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "c").glob("*-cache")}

@@ -19,10 +19,10 @@ import json
 import equinox as eqx
 import numpy as np
 import pytest
+from conftest import SHARED_DATA
 
 import rotor
 from rotor.logs.analysis import LogAnalysis
-from conftest import SHARED_DATA
 
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
@@ -49,11 +49,26 @@ def simulated():
     phi = np.arange(0, cyc, np.deg2rad(0.2))
     sig = (np.asarray(eng.pressure(phi, eng.geometry, 4)) - OFFSET) / GAIN
     z = np.zeros((C, 1))
-    a = LogAnalysis(source="simulated", kind="teeth", strokes=4, cycle_rad=cyc, order=np.array([0.5]),
-                    t_start_s=np.asarray(run.t)[: C * Pn : Pn], mean_omega=omega.mean(1), delta=np.zeros(C),
-                    amplitude_rad_s=z, phase_rad=z, omega=omega, cycle_start_rad=np.arange(C) * cyc, tdc_rad=0.0,
-                    tdc_method="given", firing_parity=0, firing_method="given", max_order=12.0,
-                    pressure=(np.tile(phi, C), np.tile(sig, C), np.repeat(np.arange(C), phi.size)))
+    a = LogAnalysis(
+        source="simulated",
+        kind="teeth",
+        strokes=4,
+        cycle_rad=cyc,
+        order=np.array([0.5]),
+        t_start_s=np.asarray(run.t)[: C * Pn : Pn],
+        mean_omega=omega.mean(1),
+        delta=np.zeros(C),
+        amplitude_rad_s=z,
+        phase_rad=z,
+        omega=omega,
+        cycle_start_rad=np.arange(C) * cyc,
+        tdc_rad=0.0,
+        tdc_method="given",
+        firing_parity=0,
+        firing_method="given",
+        max_order=12.0,
+        pressure=(np.tile(phi, C), np.tile(sig, C), np.repeat(np.arange(C), phi.size)),
+    )
     return a, load
 
 
@@ -87,9 +102,20 @@ def test_refused_input(simulated):
 
 def _calibration(**kw):
     te = rotor.ToothErrors(wheel="60-2", errors_rad=np.linspace(-1e-3, 1e-3, 58))
-    d = dict(engine="e", inertia_kgm2=0.016, tdc_after_gap_deg=29.4, pressure_gain_pa=5e6, pressure_offset_pa=-3e6,
-             loss_torque_Nm=8.0, scaling="charge", charge_scale=0.98, wheel="60-2", tooth_errors=te, source="x",
-             fit={"energy_balance_inertia_kgm2": 0.0172, "cycles": 11, "list": [1.0, 2.0]})
+    d = dict(
+        engine="e",
+        inertia_kgm2=0.016,
+        tdc_after_gap_deg=29.4,
+        pressure_gain_pa=5e6,
+        pressure_offset_pa=-3e6,
+        loss_torque_Nm=8.0,
+        scaling="charge",
+        charge_scale=0.98,
+        wheel="60-2",
+        tooth_errors=te,
+        source="x",
+        fit={"energy_balance_inertia_kgm2": 0.0172, "cycles": 11, "list": [1.0, 2.0]},
+    )
     d.update(kw)
     return rotor.Calibration(**d)
 
@@ -99,8 +125,19 @@ def test_json_round_trip(tmp_path):
     p = tmp_path / "cal.json"
     cal.save(p)
     back = rotor.Calibration.load(p)
-    for k in ("engine", "inertia_kgm2", "tdc_after_gap_deg", "pressure_gain_pa", "pressure_offset_pa",
-              "loss_torque_Nm", "scaling", "charge_scale", "wheel", "source", "fit"):
+    for k in (
+        "engine",
+        "inertia_kgm2",
+        "tdc_after_gap_deg",
+        "pressure_gain_pa",
+        "pressure_offset_pa",
+        "loss_torque_Nm",
+        "scaling",
+        "charge_scale",
+        "wheel",
+        "source",
+        "fit",
+    ):
         assert getattr(back, k) == getattr(cal, k), k
     np.testing.assert_allclose(back.tooth_errors.errors_rad, cal.tooth_errors.errors_rad, rtol=0, atol=1e-15)
     eng = back.apply(rotor.load_engine("tue-single"))
@@ -110,17 +147,20 @@ def test_json_round_trip(tmp_path):
     assert rotor.Calibration.load(p).tooth_errors is None
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda d: d.pop("inertia_kgm2"), "missing key 'inertia_kgm2'"),
-    (lambda d: d.update(inertia_kgm2=-1), "key 'inertia_kgm2' = -1: must be a positive"),
-    (lambda d: d.update(tdc_after_gap_deg="29"), "key 'tdc_after_gap_deg'"),
-    (lambda d: d.update(format="rotor-engine"), "key 'format'"),
-    (lambda d: d.update(version=7), "key 'version'"),
-    (lambda d: d.update(scaling="diesel"), "key 'scaling'"),
-    (lambda d: d.update(tooth_errors={"wheel": "60-2", "errors_rad": [0.0] * 3}), "tooth_errors"),
-    (lambda d: d.update(tooth_errors=[1, 2]), "key 'tooth_errors'"),
-    (lambda d: d.update(fit=3), "key 'fit'"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda d: d.pop("inertia_kgm2"), "missing key 'inertia_kgm2'"),
+        (lambda d: d.update(inertia_kgm2=-1), "key 'inertia_kgm2' = -1: must be a positive"),
+        (lambda d: d.update(tdc_after_gap_deg="29"), "key 'tdc_after_gap_deg'"),
+        (lambda d: d.update(format="rotor-engine"), "key 'format'"),
+        (lambda d: d.update(version=7), "key 'version'"),
+        (lambda d: d.update(scaling="diesel"), "key 'scaling'"),
+        (lambda d: d.update(tooth_errors={"wheel": "60-2", "errors_rad": [0.0] * 3}), "tooth_errors"),
+        (lambda d: d.update(tooth_errors=[1, 2]), "key 'tooth_errors'"),
+        (lambda d: d.update(fit=3), "key 'fit'"),
+    ],
+)
 def test_malformed_file_names_the_key(tmp_path, change, message):
     d = _calibration().to_json_dict()
     change(d)
@@ -145,8 +185,13 @@ def test_not_json(tmp_path):
 def real_calibration():
     if not TUE.is_dir():
         pytest.skip(f"shared data not found at {TUE}")
-    return rotor.calibrate(rotor.load_engine("tue-single"), TUE / "full_load.txt", wheel="60-2",
-                           columns="time,pressure_v,encoder_v", pressure_gain=README_GAIN)
+    return rotor.calibrate(
+        rotor.load_engine("tue-single"),
+        TUE / "full_load.txt",
+        wheel="60-2",
+        columns="time,pressure_v,encoder_v",
+        pressure_gain=README_GAIN,
+    )
 
 
 @needs_data
@@ -170,8 +215,13 @@ def test_real_imep_from_speed_alone(real_calibration, name, mean_tol, rms_tol):
     ident = rotor.diagnose(eng, TUE / f"{name}.txt", cal, columns="time,-,encoder_v")
     assert ident.info["analysis"].pressure is None  # speed alone
     assert ident.info["analysis"].tdc_method == "given"
-    pressure = rotor.analyze_log(TUE / f"{name}.txt", "60-2", columns="time,pressure_v,encoder_v",
-                                 tdc_deg=cal.tdc_after_gap_deg, tooth_errors=cal.tooth_errors)
+    pressure = rotor.analyze_log(
+        TUE / f"{name}.txt",
+        "60-2",
+        columns="time,pressure_v,encoder_v",
+        tdc_deg=cal.tdc_after_gap_deg,
+        tooth_errors=cal.tooth_errors,
+    )
     np.testing.assert_allclose(pressure.t_start_s, ident.t_start_s, atol=1e-9)  # the same cycles
     measured = rotor.measured_imep(eng, pressure, cal.pressure_gain_pa)
     err = ident.imep_pa[:, 0] - measured
@@ -185,8 +235,12 @@ def test_engine_identity_is_stored_and_checked(tmp_path):
     older file without them is checked by the name alone."""
     eng = rotor.load_engine("tue-single")
     d = _calibration().to_json_dict()
-    d.update(engine=eng.name, cylinders=1, strokes=4,
-             geometry={k: float(getattr(eng.geometry, k)) for k in ("bore_m", "stroke_m", "rod_length_m")})
+    d.update(
+        engine=eng.name,
+        cylinders=1,
+        strokes=4,
+        geometry={k: float(getattr(eng.geometry, k)) for k in ("bore_m", "stroke_m", "rod_length_m")},
+    )
     cal = rotor.Calibration.from_json_dict(d)
     cal.check_engine(eng)
     p = tmp_path / "c.json"

@@ -1,7 +1,6 @@
 """The command line: table formats, info, plots, demo, presets."""
 
 import json
-import os
 
 import numpy as np
 import pytest
@@ -26,8 +25,9 @@ def test_table_exact_and_rpm_and_output_file(tmp_path, capsys):
     assert not list(tmp_path.glob(".rotor-*"))  # no temporary file left behind
 
 
-@pytest.mark.parametrize("args", [["--step", "7"], ["--step", "-1"], ["--rpm", "0"], ["--cylinder", "9"],
-                                  ["--format", "xml"]])
+@pytest.mark.parametrize(
+    "args", [["--step", "7"], ["--step", "-1"], ["--rpm", "0"], ["--cylinder", "9"], ["--format", "xml"]]
+)
 def test_table_bad_arguments_exit_2(args, capsys):
     with pytest.raises(SystemExit) as exc:
         rc = main(["table", "4chn15", *args])
@@ -50,8 +50,16 @@ def test_plot_and_demo_write_pngs(tmp_path, capsys):
     assert main(["demo", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "IMEP" in text and "irregularity" in text and "load step" in text
-    for name in ("kinematics.png", "forces.png", "torque.png", "inertia.png", "steady_cycle.png",
-                 "steady_orders.png", "load_step_time.png", "load_step_cycle.png"):
+    for name in (
+        "kinematics.png",
+        "forces.png",
+        "torque.png",
+        "inertia.png",
+        "steady_cycle.png",
+        "steady_orders.png",
+        "load_step_time.png",
+        "load_step_cycle.png",
+    ):
         p = out / name
         assert p.is_file() and p.stat().st_size > 10_000
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

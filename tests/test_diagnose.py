@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SHARED_DATA
 
 import rotor
 from rotor.cli import main
-from conftest import SHARED_DATA
 
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
@@ -33,9 +33,25 @@ def saved(tmp_path_factory):
     folder = tmp_path_factory.mktemp("diagnose")
     cal = folder / "tue.json"
     plots = folder / "plots"
-    rc = main(["diagnose", str(TUE / "full_load.txt"), "--engine", "tue-single", "--wheel", "60-2", "--columns",
-               "time,pressure_v,encoder_v", "--save-calibration", str(cal), "--pressure-gain", GAIN, "--json",
-               "--plot", str(plots)])
+    rc = main(
+        [
+            "diagnose",
+            str(TUE / "full_load.txt"),
+            "--engine",
+            "tue-single",
+            "--wheel",
+            "60-2",
+            "--columns",
+            "time,pressure_v,encoder_v",
+            "--save-calibration",
+            str(cal),
+            "--pressure-gain",
+            GAIN,
+            "--json",
+            "--plot",
+            str(plots),
+        ]
+    )
     assert rc == 0
     return cal, plots
 
@@ -47,8 +63,18 @@ def test_calibrate_and_diagnose_json(saved, capsys):
     c = rotor.Calibration.load(cal)
     assert c.wheel == "60-2" and c.tooth_errors is not None and c.source == "full_load.txt"
     # speed only, with the saved calibration (the pressure column skipped)
-    rc, out, err = _run(capsys, "diagnose", str(TUE / "full_load.txt"), "--engine", "tue-single", "--columns",
-                        "time,-,encoder_v", "--calibration", str(cal), "--json")
+    rc, out, err = _run(
+        capsys,
+        "diagnose",
+        str(TUE / "full_load.txt"),
+        "--engine",
+        "tue-single",
+        "--columns",
+        "time,-,encoder_v",
+        "--calibration",
+        str(cal),
+        "--json",
+    )
     assert rc == 0, err
     d = json.loads(out)
     assert len(d["cycles"]) == 11 and d["cylinders"] == 1
@@ -67,16 +93,36 @@ def test_calibrate_and_diagnose_json(saved, capsys):
 @needs_data
 def test_text_output_compares_with_the_pressure(saved, capsys):
     cal, _ = saved
-    rc, out, err = _run(capsys, "diagnose", str(TUE / "full_load.txt"), "--engine", "tue-single", "--columns",
-                        "time,pressure_v,encoder_v", "--calibration", str(cal))
+    rc, out, err = _run(
+        capsys,
+        "diagnose",
+        str(TUE / "full_load.txt"),
+        "--engine",
+        "tue-single",
+        "--columns",
+        "time,pressure_v,encoder_v",
+        "--calibration",
+        str(cal),
+    )
     assert rc == 0, err
     assert "IMEP from the pressure channel" in out and "identified − measured" in out
 
 
 @needs_data
 def test_speed_only_needs_tdc(capsys):
-    rc, out, err = _run(capsys, "diagnose", str(TUE / "No_load.txt"), "--engine", "tue-single", "--wheel", "60-2",
-                        "--columns", "time,-,encoder_v", "--no-calibration", "--json")
+    rc, out, err = _run(
+        capsys,
+        "diagnose",
+        str(TUE / "No_load.txt"),
+        "--engine",
+        "tue-single",
+        "--wheel",
+        "60-2",
+        "--columns",
+        "time,-,encoder_v",
+        "--no-calibration",
+        "--json",
+    )
     assert rc == 2 and out == ""
     assert err.count("\n") == 1 and "TDC is not known" in err
 
@@ -91,8 +137,10 @@ def test_one_line_errors(tmp_path, capsys):
         (["diagnose", str(log), "--engine", "tue-single", "--calibration", str(bad)], "inertia_kgm2"),
         (["diagnose", str(log), "--engine", "tue-single", "--calibration", str(tmp_path / "none.json")], "none.json"),
         (["diagnose", str(log), "--engine", "no-such-engine"], "no-such-engine"),
-        (["diagnose", str(log), "--engine", "tue-single", "--save-calibration", str(tmp_path / "x" / "c.json")],
-         "no folder"),
+        (
+            ["diagnose", str(log), "--engine", "tue-single", "--save-calibration", str(tmp_path / "x" / "c.json")],
+            "no folder",
+        ),
     ]
     for argv, needle in cases:
         rc, out, err = _run(capsys, *argv)
@@ -138,8 +186,15 @@ def _tue_coast_teeth(tmp_path):
     w, gap = rotor.Wheel(60, 2), np.deg2rad(-29.4)
     e = rotor.Calibration.load(PRESET_CAL).apply(rotor.load_engine("tue-single"))
     load = 0.5 * float(rotor.steady_state(e, rpm=3000).info["load_torque_Nm"])
-    res = rotor.simulate(e, rpm=3000, cycles=12, load=rotor.ConstantLoad(load), step_deg=0.5,
-                         combustion=np.zeros((12, 1)), progress=False)
+    res = rotor.simulate(
+        e,
+        rpm=3000,
+        cycles=12,
+        load=rotor.ConstantLoad(load),
+        step_deg=0.5,
+        combustion=np.zeros((12, 1)),
+        progress=False,
+    )
     th, t = np.asarray(res.theta), np.asarray(res.t)
     r0, r1 = int(np.floor((th[0] - gap) / TWO_PI)) - 1, int(np.ceil((th[-1] - gap) / TWO_PI)) + 1
     ang = (gap + TWO_PI * np.arange(r0, r1)[:, None] + w.pitch_rad * np.arange(w.edges_per_rev)[None]).ravel()
@@ -163,8 +218,18 @@ def test_coast_down_through_diagnose(tmp_path, capsys):
     assert ident.misfire.all()
     assert np.all(np.isfinite(ident.imep_pa)) and np.abs(ident.imep_pa - motored).max() < 0.1e5
     assert any("no firing" in n for n in ident.notes)
-    rc, out, err = _run(capsys, "diagnose", str(path), "--engine", "tue-single", "--wheel", "60-2", "--calibration",
-                        PRESET_CAL, "--json")
+    rc, out, err = _run(
+        capsys,
+        "diagnose",
+        str(path),
+        "--engine",
+        "tue-single",
+        "--wheel",
+        "60-2",
+        "--calibration",
+        PRESET_CAL,
+        "--json",
+    )
     assert rc == 0, err
     d = json.loads(out)
     assert 0.5 < d["charge_scale"] < 2
@@ -195,8 +260,9 @@ def test_calibration_of_another_engine_is_refused(tmp_path, capsys):
     cal = rotor.Calibration.load(PRESET_CAL)
     log = tmp_path / "log.csv"
     log.write_text("0.0\n")
-    rc, out, err = _run(capsys, "diagnose", str(log), "--engine", "mwm6", "--calibration", PRESET_CAL, "--scaling",
-                        "none", "--json")
+    rc, out, err = _run(
+        capsys, "diagnose", str(log), "--engine", "mwm6", "--calibration", PRESET_CAL, "--scaling", "none", "--json"
+    )
     assert rc == 2 and out == "" and err.count("\n") == 1 and "another engine" in err and "MWM" in err
     with pytest.raises(rotor.EngineError, match="another engine"):
         rotor.diagnose(rotor.load_engine("mwm6"), log, cal, scaling="none")
@@ -234,15 +300,30 @@ def test_shipped_preset_calibration():
 def test_half_load_from_speed_with_the_preset_calibration(capsys):
     """No --calibration: the preset's own; half load's IMEP within the README's 0.10 bar of its pressure
     channel (measured −0.058 bar)."""
-    rc, out, err = _run(capsys, "diagnose", str(TUE / "half_load.txt"), "--engine", "tue-single", "--wheel", "60-2",
-                        "--columns", "time,-,encoder_v", "--json")
+    rc, out, err = _run(
+        capsys,
+        "diagnose",
+        str(TUE / "half_load.txt"),
+        "--engine",
+        "tue-single",
+        "--wheel",
+        "60-2",
+        "--columns",
+        "time,-,encoder_v",
+        "--json",
+    )
     assert rc == 0, err
     d = json.loads(out)
     assert d["calibration_source"].startswith("preset") and d["calibration"]["loaded_from"].startswith("preset")
     assert any("preset's own" in n for n in d["notes"]) and d["ambiguous_pairs"] == []
     cal = rotor.Calibration.load(PRESET_CAL)
-    pressure = rotor.analyze_log(TUE / "half_load.txt", "60-2", columns="time,pressure_v,encoder_v",
-                                 tdc_deg=cal.tdc_after_gap_deg, tooth_errors=cal.tooth_errors)
+    pressure = rotor.analyze_log(
+        TUE / "half_load.txt",
+        "60-2",
+        columns="time,pressure_v,encoder_v",
+        tdc_deg=cal.tdc_after_gap_deg,
+        tooth_errors=cal.tooth_errors,
+    )
     meas = rotor.measured_imep(rotor.load_engine("tue-single"), pressure, cal.pressure_gain_pa)
     ident = np.array([c["imep_pa"][0] for c in d["cycles"]])
     assert ident.size == meas.size

@@ -6,16 +6,15 @@ periodicity 1e-10, steady state vs a settled run 1e-6, gradients 1e-5.
 
 import sys
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
-import equinox as eqx
 import numpy as np
 import pytest
+from conftest import ROOT
 
 import rotor
 from rotor.dynamics.equation import TRACES
-
-from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from reference import scipy_angle_reference  # noqa: E402
@@ -68,8 +67,10 @@ def test_formulations_agree_with_scipy_dop853(preset, propeller):
     cycles = 4
     load = propeller if preset == "4chn15" else rotor.PropellerLoad(400.0, 2200.0)
     rpm = 0.95 * float(engine.operating.rpm)
-    results = {m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m)
-               for m in ("closed", "grid", "angle", "time")}
+    results = {
+        m: rotor.simulate(engine, rpm=rpm, cycles=cycles, load=load, method=m)
+        for m in ("closed", "grid", "angle", "time")
+    }
     P = results["closed"].points_per_cycle
     last = slice((cycles - 1) * P, cycles * P)
     theta = np.asarray(results["closed"].theta[last])
@@ -112,7 +113,6 @@ def test_fidelity_levels_differ_by_the_pinned_amounts(diesel):
     assert float(v.info["textbook_delta"] / v.delta) - 1 == pytest.approx(0.0043, abs=5e-4)
 
 
-
 def test_series_fidelity_is_the_lambda_series_and_converges_as_lambda_cubed(diesel):
     """``fidelity="series"``: I(θ) = J + Σ(m_rot·R² + m_rec·s′²) with the λ-series s′ (closed
     form, checked on the table), and its δ error against exact kinematics shrinks as λ³."""
@@ -139,6 +139,7 @@ def test_series_fidelity_is_the_lambda_series_and_converges_as_lambda_cubed(dies
     assert 1e-4 < g1 < 2e-2  # a real model error at λ = 0.3 …
     assert 4 < g1 / g2 < 16  # … that halving λ divides by about 2³
 
+
 # ----------------------------------------------------------------------------- steady state
 def test_steady_state_is_periodic_and_methods_agree(diesel):
     closed = rotor.steady_state(diesel)
@@ -161,8 +162,9 @@ def test_steady_state_is_periodic_and_methods_agree(diesel):
 def test_steady_state_matches_a_settled_run(diesel, propeller):
     ss = rotor.steady_state(diesel, rpm=1250.0, load=propeller)
     fuel = float(ss.info["fuel_scale"])
-    run = rotor.simulate(diesel, rpm=1150.0, cycles=300, load=propeller,
-                         combustion=np.full((300, diesel.cylinders), fuel))
+    run = rotor.simulate(
+        diesel, rpm=1150.0, cycles=300, load=propeller, combustion=np.full((300, diesel.cylinders), fuel)
+    )
     assert float(run.cycle_mean_omega[-1]) * RPM == pytest.approx(1250.0, rel=1e-9)
     assert float(run.delta_per_cycle[-1]) == pytest.approx(float(ss.delta), rel=1e-6)
 
@@ -194,8 +196,9 @@ def test_steady_state_rejects_a_time_dependent_load(diesel):
 # ----------------------------------------------------------------------------- stall, start
 def test_stall_ends_cleanly_and_methods_agree(diesel):
     load = rotor.ConstantLoad(3000.0)  # far above the engine's 1132 N·m
-    runs = [rotor.simulate(diesel, rpm=1250.0, cycles=50, load=load, method=m)
-            for m in ("closed", "grid", "angle", "time")]
+    runs = [
+        rotor.simulate(diesel, rpm=1250.0, cycles=50, load=load, method=m) for m in ("closed", "grid", "angle", "time")
+    ]
     for r in runs:
         assert r.stalled
         assert np.all(np.isfinite(np.asarray(r.omega)))

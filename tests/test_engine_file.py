@@ -27,6 +27,7 @@ def _variant(tmp_path, mutate):
 
 def _dump(data):
     """A minimal TOML writer for the test variants (numbers, strings, lists, tables)."""
+
     def val(v):
         if isinstance(v, bool):
             return "true" if v else "false"
@@ -99,9 +100,13 @@ BAD = [
     ("wrong length", lambda d: d["layout"].update(firing_order=[1, 3, 2]), "firing_order"),
     ("impossible order", lambda d: d["layout"].update(firing_order=[1, 4, 2, 3]), "firing_order"),
     ("throws wrong length", lambda d: d["layout"].update(throw_angles_deg=[0, 180, 180]), "throw_angles_deg"),
-    ("table not covering", lambda d: d["pressure"].update(angle_deg=d["pressure"]["angle_deg"][19:54],
-                                                          pressure_pa=d["pressure"]["pressure_pa"][19:54]),
-     "does not cover"),
+    (
+        "table not covering",
+        lambda d: d["pressure"].update(
+            angle_deg=d["pressure"]["angle_deg"][19:54], pressure_pa=d["pressure"]["pressure_pa"][19:54]
+        ),
+        "does not cover",
+    ),
     ("angles not increasing", lambda d: d["pressure"]["angle_deg"].__setitem__(5, 60), "angles must increase"),
     ("lengths differ", lambda d: d["pressure"]["pressure_pa"].pop(), "same length"),
     ("unknown key", lambda d: d["geometry"].update(bore=0.15), r"bore: unknown key \(did you mean 'bore_m'\?\)"),
@@ -117,8 +122,11 @@ BAD = [
     ("half a full rod", lambda d: d["masses"].update(rod_kg=3.0), "rod_cg_from_big_end_m"),
     ("negative friction", lambda d: d.update(friction={"fmep_pa": -1.0}), "fmep_pa"),
     ("friction typo", lambda d: d.update(friction={"fmep": 1.0}), "did you mean 'fmep_pa'"),
-    ("720 point that differs", lambda d: (d["pressure"]["angle_deg"].append(720),
-                                          d["pressure"]["pressure_pa"].append(140000.0)), "720"),
+    (
+        "720 point that differs",
+        lambda d: (d["pressure"]["angle_deg"].append(720), d["pressure"]["pressure_pa"].append(140000.0)),
+        "720",
+    ),
 ]
 
 
@@ -143,8 +151,13 @@ def test_bad_input_in_the_cli_exits_2_with_one_line(tmp_path, capsys, label, mut
 
 
 def test_closing_point_equal_to_the_first_is_accepted(tmp_path):
-    data = _variant(tmp_path, lambda d: (d["pressure"]["angle_deg"].append(720),
-                                         d["pressure"]["pressure_pa"].append(d["pressure"]["pressure_pa"][0])))
+    data = _variant(
+        tmp_path,
+        lambda d: (
+            d["pressure"]["angle_deg"].append(720),
+            d["pressure"]["pressure_pa"].append(d["pressure"]["pressure_pa"][0]),
+        ),
+    )
     path = tmp_path / "ok.toml"
     path.write_text(_dump(data))
     e = rotor.load_engine(path)

@@ -81,8 +81,11 @@ def _inline(n):
     """tue-single's cylinder as an inline n-cylinder engine firing every 720/n degrees."""
     data = tomllib.loads(preset_path("tue-single").read_text())
     data["name"], data["cylinders"] = f"inline {n}", n
-    data["layout"] = {"throw_angles_deg": [(k * 720.0 / n) % 360.0 for k in range(n)],
-                      "bank_angles_deg": [0.0] * n, "firing_order": list(range(1, n + 1))}
+    data["layout"] = {
+        "throw_angles_deg": [(k * 720.0 / n) % 360.0 for k in range(n)],
+        "bank_angles_deg": [0.0] * n,
+        "firing_order": list(range(1, n + 1)),
+    }
     data["crankshaft"]["inertia_kgm2"] = 0.015 * n
     return rotor.engine_from_dict(data)
 
@@ -91,8 +94,13 @@ def _inline(n):
 def test_one_to_sixteen_cylinders(n):
     engine = _inline(n)
     ss = rotor.steady_state(engine)
-    run = rotor.simulate(engine, rpm=float(ss.omega[0]) * RPM, cycles=2,
-                         load=rotor.ConstantLoad(ss.info["load_torque_Nm"]), step_deg=0.25)
+    run = rotor.simulate(
+        engine,
+        rpm=float(ss.omega[0]) * RPM,
+        cycles=2,
+        load=rotor.ConstantLoad(ss.info["load_torque_Nm"]),
+        step_deg=0.25,
+    )
     P = run.points_per_cycle
     np.testing.assert_allclose(np.asarray(run.omega[P : 2 * P]), np.asarray(ss.omega), rtol=1e-10)
     o = ss.orders(max_order=n / 2 + 0.5)
@@ -107,15 +115,15 @@ def test_a_hundred_thousand_cycles_keep_the_phase(diesel):
     ss = rotor.steady_state(diesel, grid_deg=2.0)
     load = rotor.ConstantLoad(ss.info["load_torque_Nm"])
     cycles = 100_000
-    run = rotor.simulate(diesel, rpm=float(ss.omega[0]) * RPM, cycles=cycles, load=load, grid_deg=2.0,
-                         step_deg=90.0)
+    run = rotor.simulate(diesel, rpm=float(ss.omega[0]) * RPM, cycles=cycles, load=load, grid_deg=2.0, step_deg=90.0)
     assert float(run.t[-1]) == pytest.approx(cycles * float(ss.info["period_s"]), rel=1e-10)
     assert float(run.omega[-1]) == pytest.approx(float(ss.omega[0]), rel=1e-10)
 
 
 def test_reversal_runs_on_through_zero_speed(diesel):
-    run = rotor.simulate(diesel, rpm=300.0, cycles=3, load=rotor.ConstantLoad(3000.0), stop_at_stall=False,
-                         max_time_s=1.0)
+    run = rotor.simulate(
+        diesel, rpm=300.0, cycles=3, load=rotor.ConstantLoad(3000.0), stop_at_stall=False, max_time_s=1.0
+    )
     w = np.asarray(run.omega)
     assert _finite(run) and not run.stalled
     assert w.min() < 0  # the load drives it backwards

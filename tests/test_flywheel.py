@@ -20,9 +20,13 @@ def six():
 def _bisect(engine, point, delta, lo, hi, rel=1e-5):
     """[crankshaft] inertia with δ = delta at one point by bisection on δ(J), δ from the
     shooting method (RK4 cycle map + Newton), not the closed form the design uses."""
+
     def d(J):
-        return float(rotor.steady_state(_with_inertia(engine, J), point.rpm, point.load, imep_scale=point.imep_scale,
-                                        method="shooting").delta)
+        return float(
+            rotor.steady_state(
+                _with_inertia(engine, J), point.rpm, point.load, imep_scale=point.imep_scale, method="shooting"
+            ).delta
+        )
 
     assert d(lo) > delta > d(hi), "the bracket must hold the root"
     while hi / lo - 1 > rel:
@@ -43,13 +47,17 @@ def test_textbook_formulas(diesel):
     # J₀ less the pistons' mean inertia, 4·m·R²·(½ + λ²/8) to O(λ⁴) (two-mass, no rotating mass)
     R, lam = 0.1025, 0.1025 / 0.3839
     assert tb.total_inertia_kgm2 - tb.crankshaft_inertia_kgm2 == pytest.approx(
-        4 * 9.72 * R**2 * (0.5 + lam**2 / 8), rel=2e-3)
+        4 * 9.72 * R**2 * (0.5 + lam**2 / 8), rel=2e-3
+    )
 
 
-@pytest.mark.parametrize("preset, points", [
-    ("4chn15", [OperatingPoint(600, 0.25), OperatingPoint(900, 0.6), 1250]),
-    ("mwm6", [1000, 1600, 2200]),
-])
+@pytest.mark.parametrize(
+    "preset, points",
+    [
+        ("4chn15", [OperatingPoint(600, 0.25), OperatingPoint(900, 0.6), 1250]),
+        ("mwm6", [1000, 1600, 2200]),
+    ],
+)
 def test_design_meets_target_and_agrees_with_bisection(preset, points):
     engine = rotor.load_engine(preset)
     target = 0.01
@@ -59,15 +67,22 @@ def test_design_meets_target_and_agrees_with_bisection(preset, points):
     assert all(p.delta <= target * (1 + 1e-6) for p in design.points)
     assert design.delta_achieved == pytest.approx(target, rel=1e-6)
     assert J == max(p.inertia_kgm2 for p in design.points)
-    binding = next(p for p in points if (p if isinstance(p, OperatingPoint) else OperatingPoint(p)).rpm
-                   == design.binding_rpm)
+    binding = next(
+        p for p in points if (p if isinstance(p, OperatingPoint) else OperatingPoint(p)).rpm == design.binding_rpm
+    )
     binding = binding if isinstance(binding, OperatingPoint) else OperatingPoint(binding)
     # δ at the design by another method (shooting on the RK4 cycle map) and in the time domain
     r = rotor.steady_state(_with_inertia(engine, J), binding.rpm, imep_scale=binding.imep_scale, method="shooting")
     assert float(r.delta) == pytest.approx(target, rel=1e-3)
-    run = rotor.simulate(_with_inertia(engine, J), rpm=float(r.omega[0]) * 30 / np.pi, cycles=2, method="time",
-                         load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])), combustion=np.full(
-                             (2, engine.cylinders), binding.imep_scale), progress=False)
+    run = rotor.simulate(
+        _with_inertia(engine, J),
+        rpm=float(r.omega[0]) * 30 / np.pi,
+        cycles=2,
+        method="time",
+        load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])),
+        combustion=np.full((2, engine.cylinders), binding.imep_scale),
+        progress=False,
+    )
     assert float(run.delta_per_cycle[-1]) == pytest.approx(target, rel=1e-3)
     # the inertia agrees with a bisection on the simulator (the issue asks 1 %; it is far closer)
     J_bis = _bisect(engine, binding, target, 0.5 * J, 2 * J)
@@ -96,8 +111,15 @@ def test_lightest_disc_matches_a_general_optimiser():
     from scipy.optimize import minimize
 
     J, rho, bore, peak, vmax, bmax = 1.0, 7200.0, 0.05, 2300.0, 40.0, 0.15
-    disc = rotor.lightest_disc(J, peak_rpm=peak, density_kg_m3=rho, bore_m=bore, max_rim_speed_m_s=vmax,
-                               max_width_m=bmax, max_outer_diameter_m=0.5)
+    disc = rotor.lightest_disc(
+        J,
+        peak_rpm=peak,
+        density_kg_m3=rho,
+        bore_m=bore,
+        max_rim_speed_m_s=vmax,
+        max_width_m=bmax,
+        max_outer_diameter_m=0.5,
+    )
     assert disc.limited_by == "rim speed"
     assert disc.rim_speed_m_s == pytest.approx(vmax)
     assert disc.inertia_kgm2 == pytest.approx(rho * math.pi * disc.width_m * (disc.outer_diameter_m**4 - bore**4) / 32)
@@ -107,12 +129,20 @@ def test_lightest_disc_matches_a_general_optimiser():
         D, b = x
         return rho * math.pi * b * (D**2 - bore**2) / 4
 
-    cons = [{"type": "eq", "fun": lambda x: rho * math.pi * x[1] * (x[0]**4 - bore**4) / 32 / J - 1},
-            {"type": "ineq", "fun": lambda x: vmax - omega * x[0] / 2},
-            {"type": "ineq", "fun": lambda x: 0.5 - x[0]},
-            {"type": "ineq", "fun": lambda x: bmax - x[1]}]
-    best = minimize(mass, [0.25, 0.1], constraints=cons, method="SLSQP", bounds=[(0.06, 1.0), (1e-3, 1.0)],
-                    options={"ftol": 1e-12, "maxiter": 500})
+    cons = [
+        {"type": "eq", "fun": lambda x: rho * math.pi * x[1] * (x[0] ** 4 - bore**4) / 32 / J - 1},
+        {"type": "ineq", "fun": lambda x: vmax - omega * x[0] / 2},
+        {"type": "ineq", "fun": lambda x: 0.5 - x[0]},
+        {"type": "ineq", "fun": lambda x: bmax - x[1]},
+    ]
+    best = minimize(
+        mass,
+        [0.25, 0.1],
+        constraints=cons,
+        method="SLSQP",
+        bounds=[(0.06, 1.0), (1e-3, 1.0)],
+        options={"ftol": 1e-12, "maxiter": 500},
+    )
     assert best.success
     assert disc.mass_kg == pytest.approx(best.fun, rel=1e-5)
     assert disc.outer_diameter_m == pytest.approx(best.x[0], rel=1e-4)
@@ -135,13 +165,16 @@ def test_design_with_disc_and_shaft(diesel):
     assert "lightest disc" in d.report()
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(delta=0.0), "must lie in"),
-    (dict(delta=float("nan")), "must lie in"),
-    (dict(delta=0.01, points=[-5.0]), "positive, finite speed"),
-    (dict(delta=0.01, points=[]), "no operating points"),
-    (dict(delta=0.01, points=[OperatingPoint(1000, -1.0)]), "imep_scale"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(delta=0.0), "must lie in"),
+        (dict(delta=float("nan")), "must lie in"),
+        (dict(delta=0.01, points=[-5.0]), "positive, finite speed"),
+        (dict(delta=0.01, points=[]), "no operating points"),
+        (dict(delta=0.01, points=[OperatingPoint(1000, -1.0)]), "imep_scale"),
+    ],
+)
 def test_bad_input(diesel, kwargs, match):
     with pytest.raises(rotor.EngineError, match=match):
         rotor.design_flywheel(diesel, **kwargs)
@@ -150,8 +183,24 @@ def test_bad_input(diesel, kwargs, match):
 def test_cli_json_and_errors(capsys, tmp_path):
     from rotor.cli import main
 
-    assert main(["flywheel", "4chn15", "--delta", "0.01", "--rpm", "800,1250", "--imep-scale", "0.4,1", "--json",
-                 "--plot", str(tmp_path)]) == 0
+    assert (
+        main(
+            [
+                "flywheel",
+                "4chn15",
+                "--delta",
+                "0.01",
+                "--rpm",
+                "800,1250",
+                "--imep-scale",
+                "0.4,1",
+                "--json",
+                "--plot",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     for key in ("crankshaft_inertia_kgm2", "textbook_inertia_kgm2", "binding_rpm", "delta_achieved"):
         assert key in out
@@ -176,8 +225,10 @@ def test_per_point_targets(diesel):
     """Each point may carry its own target (looser at idle); the binding point meets its own."""
     pts = [OperatingPoint(600, 0.25, None, 0.04), OperatingPoint(1250, 1.0, None, 0.005)]
     d = rotor.design_flywheel(diesel, None, pts)
-    alone = [rotor.design_flywheel(diesel, p.delta, [OperatingPoint(p.rpm, p.imep_scale)]).crankshaft_inertia_kgm2
-             for p in pts]
+    alone = [
+        rotor.design_flywheel(diesel, p.delta, [OperatingPoint(p.rpm, p.imep_scale)]).crankshaft_inertia_kgm2
+        for p in pts
+    ]
     assert d.crankshaft_inertia_kgm2 == pytest.approx(max(alone), rel=1e-9)
     for p, target in zip(d.points, (0.04, 0.005)):
         assert p.delta_target == target and p.delta <= target * (1 + 1e-6)
@@ -197,7 +248,8 @@ def test_plot_and_report(diesel):
     assert "binding" in text and "a shaft of" not in text  # no shaft line when none was given
     mech = float(rotor.mean_reduced_inertia(diesel)) - float(diesel.crankshaft.inertia_kgm2)
     assert d.textbook_total_ratio == pytest.approx(
-        d.textbook.total_inertia_kgm2 / (d.crankshaft_inertia_kgm2 + mech), rel=1e-6)
+        d.textbook.total_inertia_kgm2 / (d.crankshaft_inertia_kgm2 + mech), rel=1e-6
+    )
 
 
 def _excess_work(engine, scales, rpm, n=2880):
@@ -211,7 +263,8 @@ def _excess_work(engine, scales, rpm, n=2880):
     fired = np.asarray(rotor.cylinder_gas_torques(engine, th))
     mot = np.asarray(rotor.cylinder_gas_torques(motored, th))
     total = (mot + np.asarray(scales) * (fired - mot)).sum(-1) + np.asarray(
-        rotor.reciprocating_inertia_torque(engine, th, rpm * np.pi / 30))
+        rotor.reciprocating_inertia_torque(engine, th, rpm * np.pi / 30)
+    )
     W = np.cumsum(total - total.mean()) * engine.cycle_rad / n
     return W.max() - W.min()
 
@@ -239,30 +292,35 @@ def test_rim_speed_at_the_highest_speed(diesel):
     assert d.disc.rim_speed_m_s == pytest.approx(50.0) and omega * d.disc.outer_diameter_m / 2 == pytest.approx(50.0)
     d2 = rotor.design_flywheel(diesel, 0.03, [OperatingPoint(600, 0.25)], max_rim_speed_m_s=50, max_rpm=2000)
     assert d2.disc.peak_rpm == 2000 and d2.disc.outer_diameter_m == pytest.approx(
-        d.disc.outer_diameter_m * d.disc.peak_rpm / 2000)
+        d.disc.outer_diameter_m * d.disc.peak_rpm / 2000
+    )
 
 
 def test_no_flywheel_needed_and_shaft_alone(diesel):
     with pytest.raises(rotor.EngineError, match="no flywheel is needed"):
         rotor.design_flywheel(rotor.load_engine("v8"), 0.2)
     # a point that needs none next to one that does: the design follows the other
-    d = rotor.design_flywheel(rotor.load_engine("v8"), None, [OperatingPoint(3000, 1.0, None, 0.2),
-                                                                OperatingPoint(3000, 1.0, None, 0.01)])
+    d = rotor.design_flywheel(
+        rotor.load_engine("v8"), None, [OperatingPoint(3000, 1.0, None, 0.2), OperatingPoint(3000, 1.0, None, 0.01)]
+    )
     assert d.points[0].inertia_kgm2 == 0.0 and d.binding_index == 1
     big = rotor.design_flywheel(diesel, 0.01, shaft_inertia_kgm2=100.0)
     assert big.flywheel_kgm2 < 0 and "alone meets the target" in big.report()
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(max_width_m=0.1), "outer-diameter or a rim-speed limit"),
-    (dict(shaft_inertia_kgm2=-1.0), "shaft_inertia_kgm2"),
-    (dict(diameter_strokes=0.0), "diameter_strokes"),
-    (dict(grid_deg=0.0), "grid_deg"),
-    (dict(points=[OperatingPoint(1250, [1.0, 1.0])]), "one per cylinder"),
-    (dict(points=[OperatingPoint(1250, 1.0, "propeller")]), "propeller"),
-    (dict(points=[OperatingPoint(1250, 1.0, 42)]), "is not a load"),
-    (dict(max_outer_diameter_m=1e-300), "not larger than the bore"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(max_width_m=0.1), "outer-diameter or a rim-speed limit"),
+        (dict(shaft_inertia_kgm2=-1.0), "shaft_inertia_kgm2"),
+        (dict(diameter_strokes=0.0), "diameter_strokes"),
+        (dict(grid_deg=0.0), "grid_deg"),
+        (dict(points=[OperatingPoint(1250, [1.0, 1.0])]), "one per cylinder"),
+        (dict(points=[OperatingPoint(1250, 1.0, "propeller")]), "propeller"),
+        (dict(points=[OperatingPoint(1250, 1.0, 42)]), "is not a load"),
+        (dict(max_outer_diameter_m=1e-300), "not larger than the bore"),
+    ],
+)
 def test_bad_design_arguments(diesel, kwargs, match):
     with pytest.raises(rotor.EngineError, match=match):
         rotor.design_flywheel(diesel, 0.01, **kwargs)

@@ -14,13 +14,12 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from scipy.interpolate import CubicSpline
 
 import rotor
 from rotor.diagnostics.identification import symmetric_pairs
 from rotor.logs.wheel import TWO_PI
-
-from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import synthetic_wheel  # noqa: E402
@@ -44,29 +43,46 @@ def tooth_errors():
     return rotor.estimate_tooth_errors(rotor.locate_teeth(edges, WHEEL), engine_orders=())
 
 
-def simulate(name, load_frac, cycles=CYCLES, misfires=None, rpm=None, step_deg=0.25, misfire_rate=0.0, seed=0,
-             **kw):
+def simulate(name, load_frac, cycles=CYCLES, misfires=None, rpm=None, step_deg=0.25, misfire_rate=0.0, seed=0, **kw):
     e = rotor.load_engine(name)
     s = load_frac * np.asarray(SPREAD[name])
     st = rotor.steady_state(e, rpm=rpm, imep_scale=s)
-    comb = rotor.combustion_pattern(cycles, e.cylinders, imep_scale=s,
-                                    misfires=MISFIRES[name] if misfires is None else misfires,
-                                    misfire_rate=misfire_rate, seed=seed)
-    res = rotor.simulate(e, rpm=float(st.omega[0]) * 30 / np.pi, cycles=cycles,
-                         load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])), step_deg=step_deg,
-                         combustion=comb, progress=False, **kw)
+    comb = rotor.combustion_pattern(
+        cycles,
+        e.cylinders,
+        imep_scale=s,
+        misfires=MISFIRES[name] if misfires is None else misfires,
+        misfire_rate=misfire_rate,
+        seed=seed,
+    )
+    res = rotor.simulate(
+        e,
+        rpm=float(st.omega[0]) * 30 / np.pi,
+        cycles=cycles,
+        load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])),
+        step_deg=step_deg,
+        combustion=comb,
+        progress=False,
+        **kw,
+    )
     return e, res, comb
 
 
 def analyse(res, tooth_errors, firing=None, seed=2, jitter_s=JITTER_S):
     """The run as 60-2 tooth times, analysed; returns the analysis and the simulator cycle of each cycle."""
     theta, t = np.asarray(res.theta), np.asarray(res.t)
-    edges = tooth_times(CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(seed),
-                        jitter_s)
+    edges = tooth_times(
+        CubicSpline(theta, t), theta[0], theta[-1], np.deg2rad(GAP_DEG), np.random.default_rng(seed), jitter_s
+    )
     first_ref = np.deg2rad(GAP_DEG) + TWO_PI * np.ceil((theta[0] - np.deg2rad(GAP_DEG)) / TWO_PI)
     parity = int(np.floor((TWO_PI - first_ref) / TWO_PI)) % 2
-    an = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=edges), WHEEL, tdc_deg=-GAP_DEG,
-                           firing=parity if firing is None else firing, tooth_errors=tooth_errors)
+    an = rotor.analyze_log(
+        rotor.Log.from_arrays(tooth_time_s=edges),
+        WHEEL,
+        tdc_deg=-GAP_DEG,
+        firing=parity if firing is None else firing,
+        tooth_errors=tooth_errors,
+    )
     P = res.points_per_cycle
     off = 0 if firing is None else P // 2  # a parity given 360° off: the cycles start half a cycle later
     t_sim = np.asarray(res.t)[off : res.uniform_cycles * P : P]
@@ -106,7 +122,10 @@ def test_direct_speed_exact():
     assert idf.covariance.shape == (10, 5, 5)
     assert "misfires (cycle, cylinder): [(3, 2), (5, 4), (8, 1)]" in idf.summary()
     assert idf.to_json_dict()["misfires"] == [[3, 2], [5, 4], [8, 1]] or idf.to_json_dict()["misfires"] == [
-        (3, 2), (5, 4), (8, 1)]
+        (3, 2),
+        (5, 4),
+        (8, 1),
+    ]
 
 
 def test_blocks_match_one_fit():
@@ -114,8 +133,9 @@ def test_blocks_match_one_fit():
     edges: as exact as one fit over the whole record (scales within 1e-5 of the truth)."""
     e = rotor.load_engine("4chn15")
     comb = rotor.combustion_pattern(26, 4, imep_scale=SPREAD["4chn15"], misfires=[(7, 1), (8, 3), (15, 4), (16, 2)])
-    res = rotor.simulate(e, rpm=1250, cycles=26, load=rotor.ConstantLoad(1000.0), combustion=comb, step_deg=3.0,
-                         progress=False)
+    res = rotor.simulate(
+        e, rpm=1250, cycles=26, load=rotor.ConstantLoad(1000.0), combustion=comb, step_deg=3.0, progress=False
+    )
     blocked = rotor.identify(e, res, block_cycles=8, overlap=2)
     assert blocked.info["blocks"] == 4
     assert np.abs(blocked.scale - comb).max() < 1e-5
@@ -146,8 +166,7 @@ def test_speed_dependent_load_and_friction():
     fr = rotor.Friction(fmep_pa=1.0e5, fmep_per_speed2_pa_s2_per_m2=800.0)
     prop = rotor.PropellerLoad(900.0, 1250.0)
     comb = rotor.combustion_pattern(10, 4, imep_scale=SPREAD["4chn15"], misfires=[(4, 3)])
-    res = rotor.simulate(e, rpm=1250, cycles=10, load=prop, friction=fr, combustion=comb, step_deg=3.0,
-                         progress=False)
+    res = rotor.simulate(e, rpm=1250, cycles=10, load=prop, friction=fr, combustion=comb, step_deg=3.0, progress=False)
     idf = rotor.identify(e, res, load=prop, friction=fr)
     assert np.abs(idf.scale - comb).max() < 1e-6
     w2 = np.mean(idf.omega**2, axis=1)
@@ -172,8 +191,10 @@ def test_wheel_imep_and_misfires(name, load, tooth_errors):
     truth = comb[k]
     print(f"{name}: {int(np.sum(truth == 0))} misfires in the {an.cycles} cycles analysed")
     err = imep_error(res, k, idf)
-    print(f"{name} load {load:.0%}: IMEP error max {np.abs(err).max():.3%}, rms {np.sqrt(np.mean(err**2)):.3%}; "
-          f"index normal ≥ {idf.contribution[truth > 0].min():.3f}, misfire ≤ {idf.contribution[truth == 0].max():.3f}")
+    print(
+        f"{name} load {load:.0%}: IMEP error max {np.abs(err).max():.3%}, rms {np.sqrt(np.mean(err**2)):.3%}; "
+        f"index normal ≥ {idf.contribution[truth > 0].min():.3f}, misfire ≤ {idf.contribution[truth == 0].max():.3f}"
+    )
     assert idf.identified.all()
     assert np.abs(err).max() < 0.015
     assert idf.misfires() == true_misfires(truth)
@@ -203,8 +224,9 @@ def test_coast_down_every_firing_a_misfire(tooth_errors):
     firing a misfire, every scale within ±0.01 of 0 (measured 0.001), and the load found."""
     e = rotor.load_engine("4chn15")
     comb = np.zeros((CYCLES, 4))
-    res = rotor.simulate(e, rpm=1250, cycles=CYCLES, load=rotor.ConstantLoad(450.0), step_deg=0.25,
-                         combustion=comb, progress=False)
+    res = rotor.simulate(
+        e, rpm=1250, cycles=CYCLES, load=rotor.ConstantLoad(450.0), step_deg=0.25, combustion=comb, progress=False
+    )
     an, k = analyse(res, tooth_errors)
     assert an.mean_rpm[-1] < 0.7 * an.mean_rpm[0]
     idf = rotor.identify(e, an)
@@ -271,7 +293,9 @@ def test_phase_ambiguity(tooth_errors):
     # the shifted record starts 360° later: its cycle i holds firings of cylinders 1, 3 of
     # cycle kw[i] and 4, 2 of the next; swap the labels back and compare
     perm = [3, 2, 1, 0]
-    truth_shift = np.where(np.array([True, False, True, False])[None, :], comb[kw], comb[np.minimum(kw + 1, CYCLES - 1)])
+    truth_shift = np.where(
+        np.array([True, False, True, False])[None, :], comb[kw], comb[np.minimum(kw + 1, CYCLES - 1)]
+    )
     err = np.abs(swapped.scale[:, perm] - truth_shift)
     print("360° off, labels swapped: scale error", err.max())
     assert err.max() < 0.02
@@ -289,14 +313,21 @@ def test_phase_ambiguity(tooth_errors):
         ({}, np.array([[100.0] * 39 + [np.nan]]), "not finite"),
         ({}, np.array([[100.0] * 39 + [-1.0]]), "positive"),
         ({}, "fast", "LogAnalysis, a SpeedResult or an array"),
-        ({"parameters": "wiebe"}, np.full((2, 240), 100.0), "only 'imep_scale' .* is implemented; Wiebe start, "
-         "Wiebe duration and a pressure scale are not"),
+        (
+            {"parameters": "wiebe"},
+            np.full((2, 240), 100.0),
+            "only 'imep_scale' .* is implemented; Wiebe start, Wiebe duration and a pressure scale are not",
+        ),
         ({"block_cycles": 0}, np.full((2, 240), 100.0), "block_cycles"),
         ({"threshold": 1.5}, np.full((2, 240), 100.0), "threshold"),
         ({"load_per": "second"}, np.full((2, 240), 100.0), "load_per"),
         ({"cycle_rad": 2 * np.pi}, np.full((2, 240), 100.0), "does not fit"),
         ({"friction": rotor.Friction(1e5, 100.0)}, np.full((2, 240), 100.0), "speed-linear"),
-        ({"load": rotor.LoadStep(rotor.ConstantLoad(100.0), rotor.ConstantLoad(200.0), 0.1)}, np.full((2, 240), 100.0), "a \\+ c·ω²"),
+        (
+            {"load": rotor.LoadStep(rotor.ConstantLoad(100.0), rotor.ConstantLoad(200.0), 0.1)},
+            np.full((2, 240), 100.0),
+            "a \\+ c·ω²",
+        ),
         ({"load": "heavy"}, np.full((2, 240), 100.0), "load = 'heavy'"),
     ],
 )

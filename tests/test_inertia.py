@@ -6,9 +6,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from conftest import two_mass_engine
 
 import rotor
-from conftest import two_mass_engine
 
 TH = jnp.linspace(0, 2 * np.pi, 512, endpoint=False)
 
@@ -45,8 +45,9 @@ def test_full_rod_equivalent_to_two_mass_split():
     full = eqx.tree_at(
         lambda e: e.masses,
         base,
-        rotor.Masses(reciprocating_kg=0.5, rotating_kg=0.2, rod_kg=m, rod_cg_from_big_end_m=a,
-                     rod_inertia_kgm2=m * a * (L - a)),
+        rotor.Masses(
+            reciprocating_kg=0.5, rotating_kg=0.2, rod_kg=m, rod_cg_from_big_end_m=a, rod_inertia_kgm2=m * a * (L - a)
+        ),
     )
     split = eqx.tree_at(
         lambda e: e.masses, base, rotor.Masses(reciprocating_kg=0.5 + m * a / L, rotating_kg=0.2 + m * (L - a) / L)
@@ -58,8 +59,11 @@ def test_full_rod_against_finite_difference_kinetic_energy():
     """Independent check: velocities of the rod's centre of mass by finite differences of positions."""
     R, L, k, m, a, Ig = 0.05, 0.17, 0.008, 0.8, 0.06, 0.003
     e = two_mass_engine(lam=R / L, R=R, m_rec=0.5, m_rot=0.0, J=1e-9, k=k)
-    e = eqx.tree_at(lambda e: e.masses, e, rotor.Masses(reciprocating_kg=0.5, rod_kg=m,
-                                                        rod_cg_from_big_end_m=a, rod_inertia_kgm2=Ig))
+    e = eqx.tree_at(
+        lambda e: e.masses,
+        e,
+        rotor.Masses(reciprocating_kg=0.5, rod_kg=m, rod_cg_from_big_end_m=a, rod_inertia_kgm2=Ig),
+    )
     th = np.linspace(0, 2 * np.pi, 97)
     h = 1e-5
 
@@ -122,6 +126,7 @@ def test_mean_model_is_constant(diesel):
 
 def test_grad_over_engine_fields(diesel):
     """jax.grad through any numeric field, against central finite differences."""
+
     def mean_I(m):
         e = eqx.tree_at(lambda e: e.masses.reciprocating_kg, diesel, m)
         return rotor.mean_reduced_inertia(e)

@@ -8,10 +8,10 @@ friction plus load, so M_gas = d(½Iω²)/dθ + load_torque holds exactly on its
 
 import numpy as np
 import pytest
+from conftest import two_mass_engine
 
 import rotor
-from conftest import two_mass_engine
-from rotor import inverse
+from rotor.diagnostics import inverse
 
 LOAD = rotor.PropellerLoad(1132.0, 1250.0)
 
@@ -40,8 +40,9 @@ def test_round_trip_recovers_the_engine_torque(diesel, run):
     assert err.max() < 0.85, err.max()  # ~3× the measured error
     assert err[0].max() < 0.85 and err[-1].max() < 0.85
     # the loss terms are the simulator's own
-    np.testing.assert_allclose(res.friction_torque + res.load_torque,
-                               np.asarray(r.load_torque)[: 6 * 720].reshape(6, 720), rtol=1e-9)
+    np.testing.assert_allclose(
+        res.friction_torque + res.load_torque, np.asarray(r.load_torque)[: 6 * 720].reshape(6, 720), rtol=1e-9
+    )
     # steady combustion: every cycle's mean gas torque is the same 1131.95 N·m
     np.testing.assert_allclose(res.mean_torque_Nm, np.mean(truth, axis=1), atol=0.05)
     # the bare array (no end sample) is as good

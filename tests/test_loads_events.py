@@ -30,17 +30,24 @@ def test_load_torques():
 
 @pytest.mark.parametrize(
     "spec, kind",
-    [("none", type(None)), ("500", rotor.ConstantLoad), ("constant:500", rotor.ConstantLoad),
-     ("poly:1,2,3", rotor.PolynomialLoad), ("propeller:1100,1250", rotor.PropellerLoad),
-     ("table:800=300,1250=500", rotor.TableLoad), ("step:300,600,0.5", rotor.LoadStep),
-     ("step:300,600,0.5,0.1", rotor.LoadStep)],
+    [
+        ("none", type(None)),
+        ("500", rotor.ConstantLoad),
+        ("constant:500", rotor.ConstantLoad),
+        ("poly:1,2,3", rotor.PolynomialLoad),
+        ("propeller:1100,1250", rotor.PropellerLoad),
+        ("table:800=300,1250=500", rotor.TableLoad),
+        ("step:300,600,0.5", rotor.LoadStep),
+        ("step:300,600,0.5,0.1", rotor.LoadStep),
+    ],
 )
 def test_parse_load(spec, kind):
     assert isinstance(rotor.parse_load(spec), kind)
 
 
-@pytest.mark.parametrize("spec", ["abc", "poly:1,2", "propeller:x,1", "table:1,2", "gear:3", "propeller:100,-5",
-                                  "table:2000=1,1000=2"])
+@pytest.mark.parametrize(
+    "spec", ["abc", "poly:1,2", "propeller:x,1", "table:1,2", "gear:3", "propeller:100,-5", "table:2000=1,1000=2"]
+)
 def test_parse_load_errors_say_what_is_wrong(spec):
     with pytest.raises(rotor.EngineError, match="load"):
         rotor.parse_load(spec)
@@ -70,8 +77,9 @@ def test_governor_holds_the_speed_after_a_load_step(diesel):
     ss = rotor.steady_state(diesel)
     load = float(ss.info["load_torque_Nm"])
     step = rotor.LoadStep(rotor.ConstantLoad(load), rotor.ConstantLoad(1.2 * load), time_s=0.3)
-    res = rotor.simulate(diesel, rpm=float(ss.omega[0]) * RPM, cycles=40, load=step,
-                         governor=rotor.Governor(1250.0, kp=5.0, ki=10.0))
+    res = rotor.simulate(
+        diesel, rpm=float(ss.omega[0]) * RPM, cycles=40, load=step, governor=rotor.Governor(1250.0, kp=5.0, ki=10.0)
+    )
     assert res.method == "grid"
     rpm = np.asarray(res.cycle_mean_omega) * RPM
     assert rpm.min() < 1240  # the step pulls the speed down ...
@@ -83,8 +91,9 @@ def test_governor_holds_the_speed_after_a_load_step(diesel):
 def test_combustion_pattern():
     s = rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0], misfires=[(3, 2)], cov=0.02, seed=7)
     assert s.shape == (50, 4) and s[3, 1] == 0.0
-    np.testing.assert_array_equal(s, rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0],
-                                                              misfires=[(3, 2)], cov=0.02, seed=7))
+    np.testing.assert_array_equal(
+        s, rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0], misfires=[(3, 2)], cov=0.02, seed=7)
+    )
     assert np.mean(s[:, 1] > 0) > 0.9 and abs(np.mean(s[s[:, 1] > 0, 1]) - 1.1) < 0.02
     rate = rotor.combustion_pattern(2000, 4, misfire_rate=0.05, seed=1)
     assert np.mean(rate == 0) == pytest.approx(0.05, abs=0.01)
@@ -138,8 +147,10 @@ def test_cli_steady_json(capsys):
 
 
 def test_cli_simulate_json_and_plots(capsys, tmp_path):
-    out = _json(capsys, ["simulate", "tue-single", "--cycles", "5", "--load", "propeller:20,3000", "--json",
-                         "--plot", str(tmp_path)])
+    out = _json(
+        capsys,
+        ["simulate", "tue-single", "--cycles", "5", "--load", "propeller:20,3000", "--json", "--plot", str(tmp_path)],
+    )
     assert out["cycles"] == 5 and not out["stalled"] and out["fidelity"] == "variable"
     for kind in ("cycle", "time", "torque", "orders"):
         assert (tmp_path / f"simulate_{kind}.png").stat().st_size > 10_000
@@ -150,12 +161,15 @@ def test_cli_simulate_stall(capsys):
     assert out["stalled"] and out["stall_time_s"] > 0
 
 
-@pytest.mark.parametrize("argv, pattern", [
-    (["steady", "4chn15", "--load", "gear:1"], "unknown kind"),
-    (["steady", "4chn15", "--rpm", "300", "--load", "none"], None),
-    (["simulate", "4chn15", "--misfire", "x"], "CYCLE:CYLINDER"),
-    (["simulate", "4chn15", "--cycles", "0"], "1 or more"),
-])
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["steady", "4chn15", "--load", "gear:1"], "unknown kind"),
+        (["steady", "4chn15", "--rpm", "300", "--load", "none"], None),
+        (["simulate", "4chn15", "--misfire", "x"], "CYCLE:CYLINDER"),
+        (["simulate", "4chn15", "--cycles", "0"], "1 or more"),
+    ],
+)
 def test_cli_errors_are_one_line(capsys, argv, pattern, tmp_path):
     if argv[1] == "4chn15" and "--rpm" in argv:
         # a light flywheel: no steady state at low speed

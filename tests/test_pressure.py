@@ -55,8 +55,17 @@ def test_pchip_is_c1_across_the_cycle_end(diesel):
 
 
 def _wiebe(**kw):
-    args = dict(compression_ratio=14.5, intake_pa=127800.0, exhaust_pa=140000.0, imep_pa=1.0e6, start_deg=355.0,
-                duration_deg=80.0, form_factor=0.5, compression_exponent=1.33, expansion_exponent=1.28)
+    args = dict(
+        compression_ratio=14.5,
+        intake_pa=127800.0,
+        exhaust_pa=140000.0,
+        imep_pa=1.0e6,
+        start_deg=355.0,
+        duration_deg=80.0,
+        form_factor=0.5,
+        compression_exponent=1.33,
+        expansion_exponent=1.28,
+    )
     args.update(kw)
     return rotor.WiebeCycle(**args)
 
@@ -92,8 +101,11 @@ def test_motored_is_the_wiebe_cycle_without_fuel(diesel):
     phi = jnp.deg2rad(jnp.linspace(0, 719, 720))
     pm = np.asarray(m(phi, e.geometry))
     # a reversible polytrope: symmetric about firing TDC
-    assert np.allclose(m(jnp.deg2rad(jnp.array([300.0, 330.0])), e.geometry),
-                       m(jnp.deg2rad(jnp.array([420.0, 390.0])), e.geometry), rtol=1e-12)
+    assert np.allclose(
+        m(jnp.deg2rad(jnp.array([300.0, 330.0])), e.geometry),
+        m(jnp.deg2rad(jnp.array([420.0, 390.0])), e.geometry),
+        rtol=1e-12,
+    )
     assert abs(np.rad2deg(phi[np.argmax(pm)]) - 360) <= 1
     # no fuel: negative work (exhaust above intake pressure, blowdown before BDC)
     assert rotor.imep_pa(e) < 0
@@ -143,9 +155,16 @@ def test_wiebe_validation(kw, key):
 
 def test_wiebe_is_four_stroke_only(diesel):
     with pytest.raises(rotor.EngineError, match="four-stroke"):
-        rotor.Engine(name="2s", strokes=2, cylinders=1, geometry=diesel.geometry, masses=diesel.masses,
-                     crankshaft=diesel.crankshaft, layout=rotor.Layout(throw_angles_deg=[0], firing_order=[1]),
-                     pressure=_wiebe())
+        rotor.Engine(
+            name="2s",
+            strokes=2,
+            cylinders=1,
+            geometry=diesel.geometry,
+            masses=diesel.masses,
+            crankshaft=diesel.crankshaft,
+            layout=rotor.Layout(throw_angles_deg=[0], firing_order=[1]),
+            pressure=_wiebe(),
+        )
 
 
 @pytest.mark.parametrize("field", ["start_deg", "duration_deg", "form_factor", "imep_pa"])

@@ -19,8 +19,12 @@ LAYOUTS = {  # cylinders: (throws, firing order)
     3: ([0.0, 240.0, 120.0], [1, 3, 2]),
     4: ([0.0, 180.0, 180.0, 0.0], [1, 3, 4, 2]),
 }
-SETTINGS = settings(max_examples=6, deadline=None, derandomize=True,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+SETTINGS = settings(
+    max_examples=6,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 
 
 @st.composite
@@ -46,9 +50,12 @@ def engines(draw):
         form_factor=draw(st.floats(1.0, 3.0)),
     )
     engine = rotor.Engine(
-        name=f"random {n}", strokes=4, cylinders=n,
-        geometry=rotor.Geometry(bore_m=bore, stroke_m=2 * R, rod_length_m=R / lam,
-                                pin_offset_m=draw(st.floats(0.0, 0.1)) * R),
+        name=f"random {n}",
+        strokes=4,
+        cylinders=n,
+        geometry=rotor.Geometry(
+            bore_m=bore, stroke_m=2 * R, rod_length_m=R / lam, pin_offset_m=draw(st.floats(0.0, 0.1)) * R
+        ),
         masses=rotor.Masses(reciprocating_kg=m_rec, rotating_kg=m_rot),
         crankshaft=rotor.Crankshaft(inertia_kgm2=J),
         layout=rotor.Layout(throw_angles_deg=throws, firing_order=order),
@@ -85,10 +92,15 @@ def test_steady_state_is_periodic(case):
     engine, fidelity = case
     ss = rotor.steady_state(engine, fidelity=fidelity)
     assert float(ss.mean_rpm) == pytest.approx(float(engine.operating.rpm), rel=1e-12)
-    run = rotor.simulate(engine, rpm=float(ss.omega[0]) * RPM, cycles=1, fidelity=fidelity, step_deg=0.25,
-                         load=rotor.ConstantLoad(ss.info["load_torque_Nm"]))
-    np.testing.assert_allclose(np.asarray(run.omega), np.append(np.asarray(ss.omega), float(ss.omega[0])),
-                               rtol=1e-10)
+    run = rotor.simulate(
+        engine,
+        rpm=float(ss.omega[0]) * RPM,
+        cycles=1,
+        fidelity=fidelity,
+        step_deg=0.25,
+        load=rotor.ConstantLoad(ss.info["load_torque_Nm"]),
+    )
+    np.testing.assert_allclose(np.asarray(run.omega), np.append(np.asarray(ss.omega), float(ss.omega[0])), rtol=1e-10)
 
 
 @SETTINGS
@@ -97,8 +109,10 @@ def test_formulations_agree(case):
     engine, fidelity = case
     rpm = float(engine.operating.rpm)
     load = rotor.PropellerLoad(float(rotor.mean_gas_torque(engine)), rpm)
-    runs = [rotor.simulate(engine, rpm=0.95 * rpm, cycles=2, load=load, method=m, fidelity=fidelity)
-            for m in ("closed", "grid", "angle")]
+    runs = [
+        rotor.simulate(engine, rpm=0.95 * rpm, cycles=2, load=load, method=m, fidelity=fidelity)
+        for m in ("closed", "grid", "angle")
+    ]
     for r in runs[1:]:
         assert float(jnp.max(jnp.abs(r.omega / runs[0].omega - 1))) < 1e-6
         assert float(r.t[-1] / runs[0].t[-1] - 1) < 1e-6

@@ -6,9 +6,9 @@ import io
 
 import numpy as np
 import pytest
+from conftest import DATA
 
 from rotor.cli import main
-from conftest import DATA
 
 TOL = 0.005  # of each column's largest magnitude, as the issue asks
 
@@ -51,8 +51,15 @@ def test_kinematics_columns(table, col):
 
 @pytest.mark.parametrize(
     "ours,theirs",
-    [("pg_N", "pg_kN"), ("pj_N", "pj_kN"), ("psum_N", "psum_kN"), ("n_N", "n_kN"),
-     ("k_N", "k_kN"), ("z_N", "z_kN"), ("t_N", "t_kN")],
+    [
+        ("pg_N", "pg_kN"),
+        ("pj_N", "pj_kN"),
+        ("psum_N", "psum_kN"),
+        ("n_N", "n_kN"),
+        ("k_N", "k_kN"),
+        ("z_N", "z_kN"),
+        ("t_N", "t_kN"),
+    ],
 )
 def test_dynamics_columns(table, ours, theirs):
     seed = _read("seed004_dynamics.csv")
@@ -80,6 +87,7 @@ def test_total_torque_is_the_sum_of_the_cylinder_tables(diesel):
     """Seed 004 §3.2.3: T_sum is the cylinder-1 table shifted by each cylinder's firing
     interval and summed; rotor's total torque over the engine must equal that."""
     import jax.numpy as jnp
+
     import rotor
 
     t = rotor.crank_table(diesel, step_deg=1, kinematics="exact")

@@ -1,14 +1,14 @@
 """The result object: δ, orders, tables, plots, progress; chunked runs equal one-shot runs."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
-import equinox as eqx
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
 import rotor
-from rotor import transient
+from rotor.dynamics import transient
 
 
 @pytest.fixture(scope="module")
@@ -21,8 +21,8 @@ def test_orders_reconstruct_the_speed(steady):
     o = steady.orders(max_order=1e9)
     theta = np.asarray(steady.theta)
     w = float(jnp.mean(steady.omega)) + sum(
-        a * np.cos(k * theta + p) for k, a, p in zip(o.order, np.asarray(o.speed_amplitude_rad_s),
-                                                     np.asarray(o.speed_phase_rad))
+        a * np.cos(k * theta + p)
+        for k, a, p in zip(o.order, np.asarray(o.speed_amplitude_rad_s), np.asarray(o.speed_phase_rad))
     )
     assert np.max(np.abs(w - np.asarray(steady.omega))) < 1e-9 * float(steady.omega[0])
     assert o.order[0] == 0.5 and np.allclose(np.diff(o.order), 0.5)
@@ -73,8 +73,9 @@ def test_vmap_over_a_transient(diesel):
     load = rotor.PropellerLoad(1100.0, 1250.0)
 
     def delta(J):
-        return rotor.simulate(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, J), rpm=1200.0, cycles=3,
-                              load=load).delta
+        return rotor.simulate(
+            eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, J), rpm=1200.0, cycles=3, load=load
+        ).delta
 
     Js = jnp.array([8.0, 12.0])
     batch = jax.vmap(delta)(Js)

@@ -7,11 +7,15 @@ import os
 import equinox as eqx
 import numpy as np
 import pytest
+from conftest import SHARED_DATA
 
 import rotor
-from rotor.diagnostics.synthetic import BENCH_GAIN_PA_PER_V, DEFAULT_GAP_DEG, simulated_recording, simulated_tooth_errors
-
-from conftest import SHARED_DATA
+from rotor.diagnostics.synthetic import (
+    BENCH_GAIN_PA_PER_V,
+    DEFAULT_GAP_DEG,
+    simulated_recording,
+    simulated_tooth_errors,
+)
 
 COLUMNS = "time,pressure_v,encoder_v"  # the real files' column spec
 ENGINE = rotor.load_engine("tue-single")
@@ -20,8 +24,11 @@ FIT = dict(columns=COLUMNS, compression_ratio=8.5, rod_ratio=ROD_RATIO)
 
 
 def _charge_scaled(engine, s):
-    return eqx.tree_at(lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), engine,
-                       (engine.pressure.intake_pa * s, engine.pressure.imep_pa * s))
+    return eqx.tree_at(
+        lambda e: (e.pressure.intake_pa, e.pressure.imep_pa),
+        engine,
+        (engine.pressure.intake_pa * s, engine.pressure.imep_pa * s),
+    )
 
 
 @pytest.fixture(scope="module")
@@ -106,8 +113,9 @@ def test_other_speed_load_and_a_clean_wheel(tmp_path):
     """rpm and imep_scale are honoured: a clean wheel without noise (tooth_error_deg=0,
     noise_v=0) at 2400 rpm and 60 % charge gives the steady state's δ within 0.5 % with
     no correction at all, and the mean speed to 1e-5."""
-    p = simulated_recording(tmp_path / "r.txt", rpm=2400, cycles=4, imep_scale=0.6, tooth_error_deg=0.0,
-                            noise_v=0.0, seed=3)
+    p = simulated_recording(
+        tmp_path / "r.txt", rpm=2400, cycles=4, imep_scale=0.6, tooth_error_deg=0.0, noise_v=0.0, seed=3
+    )
     a = rotor.analyze_log(p, "60-2", tooth_errors=None, **FIT)
     assert a.cycles == 4
     assert abs(np.mean(a.mean_rpm) / 2400 - 1) < 1e-5
@@ -144,23 +152,26 @@ def test_deterministic_and_one_wheel_for_every_seed(tmp_path):
     assert np.rad2deg(np.max(np.abs(ta - tc))) < 0.02
 
 
-@pytest.mark.parametrize("kw, words", [
-    (dict(cycles=1), "cycles = 1"),
-    (dict(cycles=2.5), "cycles = 2.5"),
-    (dict(rpm=0), "rpm = 0"),
-    (dict(rpm=-3000), "rpm = -3000"),
-    (dict(rpm=float("nan")), "rpm = nan"),
-    (dict(imep_scale=0.0), "imep_scale = 0"),
-    (dict(imep_scale=0.01), "imep_scale = 0.01"),
-    (dict(sample_rate_hz=20_000), "sample_rate_hz = 20000"),
-    (dict(wheel="60"), "wheel = '60'"),
-    (dict(wheel="sixty"), "wheel = 'sixty'"),
-    (dict(tooth_error_deg=2.0), "tooth_error_deg = 2"),
-    (dict(noise_v=-0.1), "noise_v = -0.1"),
-    (dict(engine="no-such-engine"), "no-such-engine"),
-    (dict(engine=3), "engine = 3"),
-    (dict(seed=0.5), "seed = 0.5"),
-])
+@pytest.mark.parametrize(
+    "kw, words",
+    [
+        (dict(cycles=1), "cycles = 1"),
+        (dict(cycles=2.5), "cycles = 2.5"),
+        (dict(rpm=0), "rpm = 0"),
+        (dict(rpm=-3000), "rpm = -3000"),
+        (dict(rpm=float("nan")), "rpm = nan"),
+        (dict(imep_scale=0.0), "imep_scale = 0"),
+        (dict(imep_scale=0.01), "imep_scale = 0.01"),
+        (dict(sample_rate_hz=20_000), "sample_rate_hz = 20000"),
+        (dict(wheel="60"), "wheel = '60'"),
+        (dict(wheel="sixty"), "wheel = 'sixty'"),
+        (dict(tooth_error_deg=2.0), "tooth_error_deg = 2"),
+        (dict(noise_v=-0.1), "noise_v = -0.1"),
+        (dict(engine="no-such-engine"), "no-such-engine"),
+        (dict(engine=3), "engine = 3"),
+        (dict(seed=0.5), "seed = 0.5"),
+    ],
+)
 def test_bad_arguments_are_clear_errors(tmp_path, kw, words):
     path = tmp_path / "r.txt"
     path.write_text("old\n")

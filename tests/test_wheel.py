@@ -76,7 +76,9 @@ def test_index_wheel():
 def test_missed_and_extra_edges_and_wrong_wheel_are_errors():
     t_of, end = coastdown_t_of_theta(revs=10, w1=2500 / 30 * np.pi)
     t, _ = teeth("60-2", t_of, end)
-    with pytest.raises(LogError, match=r"between the gaps at t = .* tooth edges where a 60-2 wheel gives 58 \(a missed or extra edge"):
+    with pytest.raises(
+        LogError, match=r"between the gaps at t = .* tooth edges where a 60-2 wheel gives 58 \(a missed or extra edge"
+    ):
         rotor.locate_teeth(np.delete(t, 300), "60-2")
     extra = np.sort(np.append(t, 0.5 * (t[300] + t[301])))
     with pytest.raises(LogError, match="60-2"):
@@ -147,8 +149,9 @@ def test_log_starting_right_at_the_gap():
     np.testing.assert_array_equal(earlier.rev[5:], at_gap.rev)
     np.testing.assert_array_equal(earlier.tooth[5:], at_gap.tooth)
     a = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=t[k:]), "60-2", tdc_deg=10, firing=0, tooth_errors=None)
-    b = rotor.analyze_log(rotor.Log.from_arrays(tooth_time_s=t[k - 5 :]), "60-2", tdc_deg=10, firing=0,
-                          tooth_errors=None)
+    b = rotor.analyze_log(
+        rotor.Log.from_arrays(tooth_time_s=t[k - 5 :]), "60-2", tdc_deg=10, firing=0, tooth_errors=None
+    )
     np.testing.assert_allclose(a.t_start_s, b.t_start_s[: a.cycles], rtol=0, atol=1e-6)  # --firing 0 means one thing
 
 
@@ -164,14 +167,19 @@ def test_firing_orders():
         firing_orders(0, 4, 60)
 
 
-@pytest.mark.parametrize("content,match", [
-    ('{"wheel": "60-2", "errors_rad": "x"}', r"t\.json: 'errors_rad' must be a list of finite numbers"),
-    ('{"wheel": "60-2", "errors_rad": [0.0, 0.1]}', r"t\.json: 'errors_rad' has 2 values; a 60-2 wheel has 58"),
-    ('{"wheel": "sixty", "errors_rad": []}', r"t\.json: 'wheel'"),
-    ('{"wheel": "60-2", "errors_rad": [' + ",".join(["0"] * 57) + ', NaN]}', r"t\.json: 'errors_rad'"),
-    ('{"wheel": "60-2", "errors_rad": [' + ",".join(["0"] * 58) + '], "revolutions": "many"}',
-     r"t\.json: 'revolutions'"),
-])
+@pytest.mark.parametrize(
+    "content,match",
+    [
+        ('{"wheel": "60-2", "errors_rad": "x"}', r"t\.json: 'errors_rad' must be a list of finite numbers"),
+        ('{"wheel": "60-2", "errors_rad": [0.0, 0.1]}', r"t\.json: 'errors_rad' has 2 values; a 60-2 wheel has 58"),
+        ('{"wheel": "sixty", "errors_rad": []}', r"t\.json: 'wheel'"),
+        ('{"wheel": "60-2", "errors_rad": [' + ",".join(["0"] * 57) + ", NaN]}", r"t\.json: 'errors_rad'"),
+        (
+            '{"wheel": "60-2", "errors_rad": [' + ",".join(["0"] * 58) + '], "revolutions": "many"}',
+            r"t\.json: 'revolutions'",
+        ),
+    ],
+)
 def test_tooth_error_file_errors_name_file_and_key(tmp_path, content, match):
     (tmp_path / "t.json").write_text(content)
     with pytest.raises(LogError, match=match):

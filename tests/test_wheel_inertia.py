@@ -6,10 +6,10 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from scipy.interpolate import CubicSpline
 
 import rotor
-from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import synthetic_wheel  # noqa: E402
@@ -30,8 +30,15 @@ def _worst_deg(errors):
 @pytest.fixture(scope="module")
 def fuel_cut():
     engine = rotor.load_engine("4chn15")
-    run = rotor.simulate(engine, rpm=1250, cycles=12, load=rotor.ConstantLoad(450.0),
-                         combustion=np.zeros((12, engine.cylinders)), step_deg=0.25, progress=False)
+    run = rotor.simulate(
+        engine,
+        rpm=1250,
+        cycles=12,
+        load=rotor.ConstantLoad(450.0),
+        combustion=np.zeros((12, engine.cylinders)),
+        step_deg=0.25,
+        progress=False,
+    )
     track = rotor.locate_teeth(_edges(np.asarray(run.theta), np.asarray(run.t), np.random.default_rng(3)), WHEEL)
     return engine, track
 
@@ -41,7 +48,7 @@ def test_fuel_cut_coast_down_calibrates_with_the_engine(fuel_cut):
     plain = rotor.estimate_tooth_errors(track, engine_orders=())
     fixed = rotor.estimate_tooth_errors(track, engine_orders=(), engine=engine, tdc_deg=-GAP_DEG)
     assert "coast-down regression" in plain.method and "inertia ripple removed" in fixed.method
-    assert _worst_deg(plain.errors_rad) > 0.2   # the ripple of 4 × 9.72 kg taken for the wheel's
+    assert _worst_deg(plain.errors_rad) > 0.2  # the ripple of 4 × 9.72 kg taken for the wheel's
     assert _worst_deg(fixed.errors_rad) < 0.02  # measured 0.0095°
 
 
@@ -72,9 +79,28 @@ def test_analyze_log_and_cli_take_the_engine(fuel_cut, tmp_path, capsys):
     path = tmp_path / "coast.csv"
     np.savetxt(path, track.t, header="tooth_time_s", comments="")
     out = tmp_path / "wheel.json"
-    assert main(["analyze", str(path), "--wheel", "60-2", "--columns", "tooth_time_s", "--engine", "4chn15",
-                 "--tdc-deg", str(-GAP_DEG), "--engine-orders", "none", "--save-tooth-errors", str(out),
-                 "--json"]) == 0
+    assert (
+        main(
+            [
+                "analyze",
+                str(path),
+                "--wheel",
+                "60-2",
+                "--columns",
+                "tooth_time_s",
+                "--engine",
+                "4chn15",
+                "--tdc-deg",
+                str(-GAP_DEG),
+                "--engine-orders",
+                "none",
+                "--save-tooth-errors",
+                str(out),
+                "--json",
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     saved = json.loads(out.read_text())
     assert _worst_deg(saved["errors_rad"]) < 0.02 and "inertia ripple removed" in saved["method"]

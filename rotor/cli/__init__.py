@@ -11,9 +11,12 @@ import json
 import os
 import sys
 
+from ..errors import SolverError
+
 __all__ = ["main"]
 
 EXIT_USAGE = 2
+EXIT_SOLVER = 1
 
 
 class _Parser(argparse.ArgumentParser):
@@ -84,11 +87,15 @@ def _whole(text):
 
 
 def _dynamics_args(p):
-    from ..dynamics.loads import _LOAD_HELP
+    from ..dynamics.loads import LOAD_HELP
 
-    p.add_argument("--load", default="none", metavar="SPEC", help=_LOAD_HELP + " (default none)")
-    p.add_argument("--fidelity", choices=("variable", "series", "coefficients", "constant"), default="variable",
-                   help="inertia model: exact I(θ) (default), seed 003 coefficients, or constant + textbook torque")
+    p.add_argument("--load", default="none", metavar="SPEC", help=LOAD_HELP + " (default none)")
+    p.add_argument(
+        "--fidelity",
+        choices=("variable", "series", "coefficients", "constant"),
+        default="variable",
+        help="inertia model: exact I(θ) (default), seed 003 coefficients, or constant + textbook torque",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write plots to DIR")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -103,8 +110,12 @@ def _build_parser():
     _engine_arg(p)
     p.add_argument("--step", type=_positive_float, default=10.0, help="angle step [deg] (default 10)")
     p.add_argument("--format", choices=("text", "csv"), default="text")
-    p.add_argument("--kinematics", choices=("series", "exact"), default="series",
-                   help="piston kinematics: the textbook lambda series (default, as in seed 004) or exact")
+    p.add_argument(
+        "--kinematics",
+        choices=("series", "exact"),
+        default="series",
+        help="piston kinematics: the textbook lambda series (default, as in seed 004) or exact",
+    )
     p.add_argument("--cylinder", type=int, default=1, help="cylinder number (default 1)")
     p.add_argument("--output", "-o", metavar="FILE", help="write to FILE instead of standard output")
 
@@ -129,103 +140,221 @@ def _build_parser():
     p.add_argument("--method", choices=("auto", "closed", "grid", "angle", "time"), default="auto")
     p.add_argument("--rtol", type=_positive_float, help="relative tolerance of the adaptive solvers (default 1e-9)")
     p.add_argument("--steps-per-cycle", type=_whole, help="RK4 steps per cycle of --method grid (default 2 per degree)")
-    p.add_argument("--misfire", metavar="CYCLE:CYL,...", default="",
-                   help="misfiring firings, e.g. 3:1,7:2 (cycle from 0, cylinder from 1)")
+    p.add_argument(
+        "--misfire",
+        metavar="CYCLE:CYL,...",
+        default="",
+        help="misfiring firings, e.g. 3:1,7:2 (cycle from 0, cylinder from 1)",
+    )
     p.add_argument("--governor", type=_positive_float, metavar="RPM", help="PI speed governor set to RPM")
 
     p = sub.add_parser("analyze", help="logged crank speed: per-cycle mean speed, δ and orders from a wheel signal")
     p.add_argument("log", metavar="LOG", help="CSV/TSV log: tooth times, a sampled wheel signal, or time and rpm")
-    p.add_argument("--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2, 36-1, 36-2 (N alone: with an index_v column)")
-    p.add_argument("--columns", metavar="NAMES",
-                   help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, tooth_time_s, rpm, "
-                        "- (skip), e.g. time,pressure_v,encoder_v")
+    p.add_argument(
+        "--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2, 36-1, 36-2 (N alone: with an index_v column)"
+    )
+    p.add_argument(
+        "--columns",
+        metavar="NAMES",
+        help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, tooth_time_s, rpm, "
+        "- (skip), e.g. time,pressure_v,encoder_v",
+    )
     p.add_argument("--strokes", type=int, choices=(2, 4), default=4)
-    p.add_argument("--cylinders", type=_whole, default=1, metavar="N",
-                   help="cylinders of the (evenly firing) engine, default 1: a tooth-error estimate from the log "
-                        "leaves the multiples of the firing order to the engine")
-    p.add_argument("--tdc-deg", type=float, metavar="DEG", help="angle from the gap to TDC of cylinder 1 [deg] "
-                   "(default: from the pressure channel, else 0)")
-    p.add_argument("--firing", default="auto", choices=("auto", "pressure", "cam", "speed", "0", "1"),
-                   help="which revolution fires (4-stroke; default auto: pressure, cam, else speed)")
-    p.add_argument("--compression-ratio", type=_positive_float, metavar="R",
-                   help="for TDC from the pressure by a polytropic fit (with --rod-ratio)")
+    p.add_argument(
+        "--cylinders",
+        type=_whole,
+        default=1,
+        metavar="N",
+        help="cylinders of the (evenly firing) engine, default 1: a tooth-error estimate from the log "
+        "leaves the multiples of the firing order to the engine",
+    )
+    p.add_argument(
+        "--tdc-deg",
+        type=float,
+        metavar="DEG",
+        help="angle from the gap to TDC of cylinder 1 [deg] (default: from the pressure channel, else 0)",
+    )
+    p.add_argument(
+        "--firing",
+        default="auto",
+        choices=("auto", "pressure", "cam", "speed", "0", "1"),
+        help="which revolution fires (4-stroke; default auto: pressure, cam, else speed)",
+    )
+    p.add_argument(
+        "--compression-ratio",
+        type=_positive_float,
+        metavar="R",
+        help="for TDC from the pressure by a polytropic fit (with --rod-ratio)",
+    )
     p.add_argument("--rod-ratio", type=_positive_float, metavar="LAMBDA", help="crank radius / rod length")
-    p.add_argument("--tooth-errors", default="estimate", metavar="estimate|none|FILE",
-                   help="tooth-spacing correction: estimate from this log (default), none, or a JSON file")
-    p.add_argument("--engine-orders", default="auto", metavar="auto|none|K,K",
-                   help="orders of the per-revolution pattern left to the engine when estimating (default auto)")
-    p.add_argument("--engine", metavar="ENGINE", help="engine file or preset on the wheel: its inertia ripple is taken "
-                   "out of the tooth-error estimate (needs --tdc-deg), so its own fuel-cut coast-down calibrates the "
-                   "wheel")
+    p.add_argument(
+        "--tooth-errors",
+        default="estimate",
+        metavar="estimate|none|FILE",
+        help="tooth-spacing correction: estimate from this log (default), none, or a JSON file",
+    )
+    p.add_argument(
+        "--engine-orders",
+        default="auto",
+        metavar="auto|none|K,K",
+        help="orders of the per-revolution pattern left to the engine when estimating (default auto)",
+    )
+    p.add_argument(
+        "--engine",
+        metavar="ENGINE",
+        help="engine file or preset on the wheel: its inertia ripple is taken "
+        "out of the tooth-error estimate (needs --tdc-deg), so its own fuel-cut coast-down calibrates the "
+        "wheel",
+    )
     p.add_argument("--save-tooth-errors", metavar="FILE", help="write the tooth errors applied as JSON")
-    p.add_argument("--max-order", type=_positive_float, help="highest order reported and used for δ "
-                   "(default teeth/4)")
-    p.add_argument("--points-per-cycle", type=_whole, metavar="P",
-                   help="points of the uniform angle grid per cycle (default 2 per tooth pitch, more if --max-order "
-                        "needs them)")
-    p.add_argument("--no-denoise", action="store_true",
-                   help="δ from all orders up to --max-order, not weighted by their signal-to-noise ratio")
+    p.add_argument("--max-order", type=_positive_float, help="highest order reported and used for δ (default teeth/4)")
+    p.add_argument(
+        "--points-per-cycle",
+        type=_whole,
+        metavar="P",
+        help="points of the uniform angle grid per cycle (default 2 per tooth pitch, more if --max-order needs them)",
+    )
+    p.add_argument(
+        "--no-denoise",
+        action="store_true",
+        help="δ from all orders up to --max-order, not weighted by their signal-to-noise ratio",
+    )
     p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write the combined plot to DIR")
 
     p = sub.add_parser("diagnose", help="per-cylinder IMEP, load and misfires of a recording from its crank speed")
-    p.add_argument("log", metavar="LOG", help="CSV/TSV log: a sampled wheel signal or tooth times (a pressure channel "
-                   "is optional: used for --save-calibration and compared with when a calibration is given)")
+    p.add_argument(
+        "log",
+        metavar="LOG",
+        help="CSV/TSV log: a sampled wheel signal or tooth times (a pressure channel "
+        "is optional: used for --save-calibration and compared with when a calibration is given)",
+    )
     p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
     p.add_argument("--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2 (default: the calibration's)")
-    p.add_argument("--columns", metavar="NAMES",
-                   help="column names in file order, as for analyze; - skips a column (time,-,encoder_v: speed only)")
-    p.add_argument("--calibration", metavar="FILE", help="a saved calibration (inertia, TDC, tooth errors, pressure "
-                   "scale) to use (default: the preset's own where it ships one, e.g. tue-single; a calibration of "
-                   "another engine is refused)")
-    p.add_argument("--no-calibration", action="store_true",
-                   help="not even the preset's own calibration: the engine file as it is")
-    p.add_argument("--save-calibration", metavar="FILE", help="calibrate from this log's pressure channel, write the "
-                   "calibration as JSON and use it (unless --calibration is given)")
-    p.add_argument("--pressure-gain", type=_positive_float, metavar="PA_PER_UNIT",
-                   help="pressure sensor gain for --save-calibration [Pa per signal unit] (default: the gain "
-                        "that gives the log's mean IMEP the engine file's)")
-    p.add_argument("--tdc-deg", type=float, metavar="DEG", help="angle from the gap to TDC of cylinder 1 [deg] "
-                   "(default: the calibration's, else from the pressure channel)")
-    p.add_argument("--load-per", choices=("block", "cycle"), default="block",
-                   help="an unknown load torque per block of cycles (default: a steady load) or per cycle")
-    p.add_argument("--scaling", choices=("charge", "none"),
-                   help="scale the engine file's whole cycle with the load (charge: SI) or only its combustion (none); "
-                        "default: the calibration's, else none")
-    p.add_argument("--threshold", type=_positive_float, default=0.5,
-                   help="misfire threshold of the contribution index (default 0.5)")
+    p.add_argument(
+        "--columns",
+        metavar="NAMES",
+        help="column names in file order, as for analyze; - skips a column (time,-,encoder_v: speed only)",
+    )
+    p.add_argument(
+        "--calibration",
+        metavar="FILE",
+        help="a saved calibration (inertia, TDC, tooth errors, pressure "
+        "scale) to use (default: the preset's own where it ships one, e.g. tue-single; a calibration of "
+        "another engine is refused)",
+    )
+    p.add_argument(
+        "--no-calibration", action="store_true", help="not even the preset's own calibration: the engine file as it is"
+    )
+    p.add_argument(
+        "--save-calibration",
+        metavar="FILE",
+        help="calibrate from this log's pressure channel, write the "
+        "calibration as JSON and use it (unless --calibration is given)",
+    )
+    p.add_argument(
+        "--pressure-gain",
+        type=_positive_float,
+        metavar="PA_PER_UNIT",
+        help="pressure sensor gain for --save-calibration [Pa per signal unit] (default: the gain "
+        "that gives the log's mean IMEP the engine file's)",
+    )
+    p.add_argument(
+        "--tdc-deg",
+        type=float,
+        metavar="DEG",
+        help="angle from the gap to TDC of cylinder 1 [deg] "
+        "(default: the calibration's, else from the pressure channel)",
+    )
+    p.add_argument(
+        "--load-per",
+        choices=("block", "cycle"),
+        default="block",
+        help="an unknown load torque per block of cycles (default: a steady load) or per cycle",
+    )
+    p.add_argument(
+        "--scaling",
+        choices=("charge", "none"),
+        help="scale the engine file's whole cycle with the load (charge: SI) or only its combustion (none); "
+        "default: the calibration's, else none",
+    )
+    p.add_argument(
+        "--threshold",
+        type=_positive_float,
+        default=0.5,
+        help="misfire threshold of the contribution index (default 0.5)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write the diagnosis plot to DIR")
 
-    p = sub.add_parser("flywheel", help="the smallest flywheel keeping δ ≤ --delta at every operating point, "
-                       "against the textbook (seed 004 §3.2.12)")
+    p = sub.add_parser(
+        "flywheel",
+        help="the smallest flywheel keeping δ ≤ --delta at every operating point, "
+        "against the textbook (seed 004 §3.2.12)",
+    )
     p.add_argument("engine", metavar="ENGINE", help="engine file (.toml) or preset name (see `rotor presets`)")
-    p.add_argument("--delta", type=_delta_list, required=True, metavar="D,...",
-                   help="target irregularity δ = (ω_max − ω_min)/ω_mean, e.g. 0.01; one for all or one per --rpm "
-                        "(e.g. 0.03,0.01,0.005: looser at idle)")
-    p.add_argument("--rpm", type=_speed_list, metavar="RPM,...",
-                   help="operating speeds [rev/min], e.g. 800,1250,2000 (default: the file's [operating] rpm)")
-    p.add_argument("--imep-scale", type=_scale_list, default=[1.0], metavar="S,...",
-                   help="fuelling of each operating point (combustion scale, 1 = the engine file's), one for all or "
-                        "one per --rpm, e.g. 0.3,1,1 for idle to rated (default 1)")
-    p.add_argument("--load", default="none", metavar="SPEC",
-                   help="load at every point: none (default: the load balances the engine), or a speed-dependent "
-                        "load such as propeller:TORQUE_NM,RPM (that torque at that speed, ∝ speed²; the fuelling is "
-                        "then scaled to carry it)")
-    p.add_argument("--max-rpm", type=_positive_float, metavar="RPM",
-                   help="highest crank speed the flywheel must stand, for --max-rim-speed (default: the larger of the "
-                        "file's [operating] rpm and the highest speed at the points)")
-    p.add_argument("--shaft-inertia", type=_nonnegative_float, default=0.0, metavar="KGM2",
-                   help="the crankshaft's own inertia without the flywheel [kg·m²] (default 0)")
+    p.add_argument(
+        "--delta",
+        type=_delta_list,
+        required=True,
+        metavar="D,...",
+        help="target irregularity δ = (ω_max − ω_min)/ω_mean, e.g. 0.01; one for all or one per --rpm "
+        "(e.g. 0.03,0.01,0.005: looser at idle)",
+    )
+    p.add_argument(
+        "--rpm",
+        type=_speed_list,
+        metavar="RPM,...",
+        help="operating speeds [rev/min], e.g. 800,1250,2000 (default: the file's [operating] rpm)",
+    )
+    p.add_argument(
+        "--imep-scale",
+        type=_scale_list,
+        default=[1.0],
+        metavar="S,...",
+        help="fuelling of each operating point (combustion scale, 1 = the engine file's), one for all or "
+        "one per --rpm, e.g. 0.3,1,1 for idle to rated (default 1)",
+    )
+    p.add_argument(
+        "--load",
+        default="none",
+        metavar="SPEC",
+        help="load at every point: none (default: the load balances the engine), or a speed-dependent "
+        "load such as propeller:TORQUE_NM,RPM (that torque at that speed, ∝ speed²; the fuelling is "
+        "then scaled to carry it)",
+    )
+    p.add_argument(
+        "--max-rpm",
+        type=_positive_float,
+        metavar="RPM",
+        help="highest crank speed the flywheel must stand, for --max-rim-speed (default: the larger of the "
+        "file's [operating] rpm and the highest speed at the points)",
+    )
+    p.add_argument(
+        "--shaft-inertia",
+        type=_nonnegative_float,
+        default=0.0,
+        metavar="KGM2",
+        help="the crankshaft's own inertia without the flywheel [kg·m²] (default 0)",
+    )
     p.add_argument("--max-diameter", type=_positive_float, metavar="M", help="outer diameter limit of the disc [m]")
     p.add_argument("--max-width", type=_positive_float, metavar="M", help="width limit of the disc [m]")
     p.add_argument("--max-rim-speed", type=_positive_float, metavar="M_S", help="rim speed limit [m/s]")
-    p.add_argument("--density", type=_positive_float, default=7200.0, metavar="KG_M3",
-                   help="flywheel material density [kg/m³] (default 7200, cast iron)")
+    p.add_argument(
+        "--density",
+        type=_positive_float,
+        default=7200.0,
+        metavar="KG_M3",
+        help="flywheel material density [kg/m³] (default 7200, cast iron)",
+    )
     p.add_argument("--bore", type=_nonnegative_float, default=0.0, metavar="M", help="bore of the disc [m] (default 0)")
-    p.add_argument("--fidelity", choices=("variable", "series", "coefficients", "constant"), default="variable",
-                   help="inertia model of the steady state (default variable: the exact I(θ))")
+    p.add_argument(
+        "--fidelity",
+        choices=("variable", "series", "coefficients", "constant"),
+        default="variable",
+        help="inertia model of the steady state (default variable: the exact I(θ))",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="DIR", help="write the design plot to DIR")
 
@@ -245,11 +374,13 @@ def _version():
 
 def _cmd_table(args):
     import rotor
+
     from ..fileio import write_text_atomic
 
     engine = rotor.load_engine(args.engine)
-    table = rotor.crank_table(engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics,
-                              cylinder=args.cylinder)
+    table = rotor.crank_table(
+        engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics, cylinder=args.cylinder
+    )
     text = table.to_csv() if args.format == "csv" else table.to_text()
     if args.output:
         write_text_atomic(args.output, text)
@@ -259,6 +390,7 @@ def _cmd_table(args):
 
 def _cmd_info(args):
     import rotor
+
     from ..engine.summary import format_summary
 
     engine = rotor.load_engine(args.engine)
@@ -274,6 +406,7 @@ def _write_plots(engine, rpm, out):
 
     matplotlib.use("Agg")
     import rotor
+
     from ..plotting import plot_inertia, plot_torque, save_figure
 
     os.makedirs(out, exist_ok=True)
@@ -308,8 +441,10 @@ def _format_result(res) -> str:
     if s["delta"] is not None:
         lines.append(f"  irregularity δ  {s['delta']:10.5f}      (1/δ = {1 / s['delta']:.1f})")
     if "textbook_delta" in s:
-        lines.append(f"  textbook δ      {s['textbook_delta']:10.5f}      (seed 004: L_excess / (J·ω²), "
-                     f"L_excess = {s['excess_work_J']:.1f} J)")
+        lines.append(
+            f"  textbook δ      {s['textbook_delta']:10.5f}      (seed 004: L_excess / (J·ω²), "
+            f"L_excess = {s['excess_work_J']:.1f} J)"
+        )
     if "load_torque_Nm" in s:
         lines.append(f"  load torque     {s['load_torque_Nm']:10.2f} N·m (balances the mean engine torque)")
     if "fuel_scale" in s:
@@ -360,13 +495,14 @@ def _cmd_steady(args):
     import rotor
 
     engine = rotor.load_engine(args.engine)
-    res = rotor.steady_state(engine, rpm=args.rpm, load=rotor.parse_load(args.load), fidelity=args.fidelity,
-                             method=args.method)
+    res = rotor.steady_state(
+        engine, rpm=args.rpm, load=rotor.parse_load(args.load), fidelity=args.fidelity, method=args.method
+    )
     _report(res, args, "steady")
 
 
 def _parse_misfires(text):
-    from ..checks import EngineError
+    from ..errors import EngineError
 
     pairs = []
     for item in filter(None, (t.strip() for t in text.split(","))):
@@ -383,13 +519,22 @@ def _cmd_simulate(args):
 
     engine = rotor.load_engine(args.engine)
     pairs = _parse_misfires(args.misfire)
-    combustion = (rotor.combustion_pattern(args.cycles, engine.cylinders, misfires=pairs) if pairs else None)
+    combustion = rotor.combustion_pattern(args.cycles, engine.cylinders, misfires=pairs) if pairs else None
     governor = rotor.Governor(args.governor) if args.governor else None
     progress = False if (args.json or args.quiet) else None
-    res = rotor.simulate(engine, rpm=args.rpm, cycles=args.cycles, load=rotor.parse_load(args.load),
-                         method=args.method, fidelity=args.fidelity, rtol=args.rtol, combustion=combustion,
-                         steps_per_cycle=args.steps_per_cycle,
-                         governor=governor, progress=progress)
+    res = rotor.simulate(
+        engine,
+        rpm=args.rpm,
+        cycles=args.cycles,
+        load=rotor.parse_load(args.load),
+        method=args.method,
+        fidelity=args.fidelity,
+        rtol=args.rtol,
+        combustion=combustion,
+        steps_per_cycle=args.steps_per_cycle,
+        governor=governor,
+        progress=progress,
+    )
     _report(res, args, "simulate")
 
 
@@ -408,8 +553,8 @@ def _plot_log(make_figure, args, kind):
 
 
 def _cmd_analyze(args):
-    from ..checks import LogError
     from ..engine.file import load_engine
+    from ..errors import LogError
     from ..logs.analysis import analyze_log
 
     if args.engine_orders == "auto":
@@ -420,16 +565,31 @@ def _cmd_analyze(args):
         try:
             eo = tuple(int(k) for k in args.engine_orders.split(","))
         except ValueError:
-            raise LogError(f"--engine-orders {args.engine_orders!r}: auto, none, or whole orders such as 1,2,3") from None
+            raise LogError(
+                f"--engine-orders {args.engine_orders!r}: auto, none, or whole orders such as 1,2,3"
+            ) from None
     te = {"estimate": "estimate", "none": None}.get(args.tooth_errors, args.tooth_errors)
     firing = int(args.firing) if args.firing in ("0", "1") else args.firing
     if (args.compression_ratio is None) != (args.rod_ratio is None):
         raise LogError("--compression-ratio and --rod-ratio go together")
-    res = analyze_log(args.log, args.wheel, columns=args.columns, strokes=args.strokes, cylinders=args.cylinders,
-                      tdc_deg=args.tdc_deg, firing=firing, tooth_errors=te, engine_orders=eo,
-                      max_order=args.max_order, points_per_cycle=args.points_per_cycle, edge=args.edge,
-                      compression_ratio=args.compression_ratio, rod_ratio=args.rod_ratio,
-                      denoise=not args.no_denoise, engine=load_engine(args.engine) if args.engine else None)
+    res = analyze_log(
+        args.log,
+        args.wheel,
+        columns=args.columns,
+        strokes=args.strokes,
+        cylinders=args.cylinders,
+        tdc_deg=args.tdc_deg,
+        firing=firing,
+        tooth_errors=te,
+        engine_orders=eo,
+        max_order=args.max_order,
+        points_per_cycle=args.points_per_cycle,
+        edge=args.edge,
+        compression_ratio=args.compression_ratio,
+        rod_ratio=args.rod_ratio,
+        denoise=not args.no_denoise,
+        engine=load_engine(args.engine) if args.engine else None,
+    )
     written = []
     if args.save_tooth_errors:
         if res.tooth_errors is None:
@@ -448,22 +608,35 @@ def _cmd_analyze(args):
 
 def _cmd_flywheel(args):
     import rotor
+
     from ..design.flywheel import OperatingPoint, design_flywheel
 
     engine = rotor.load_engine(args.engine)
     rpms = args.rpm if args.rpm else [float(engine.operating.rpm)]
+
     def per_point(values, option):
         if len(values) not in (1, len(rpms)):
-            raise rotor.EngineError(f"{option} gives {len(values)} values for {len(rpms)} speeds: give one for all "
-                                    "or one per --rpm")
+            raise rotor.EngineError(
+                f"{option} gives {len(values)} values for {len(rpms)} speeds: give one for all or one per --rpm"
+            )
         return values * len(rpms) if len(values) == 1 else values
 
     scales, deltas = per_point(args.imep_scale, "--imep-scale"), per_point(args.delta, "--delta")
     load = rotor.parse_load(args.load)
     points = [OperatingPoint(r, s, load, d) for r, s, d in zip(rpms, scales, deltas)]
-    design = design_flywheel(engine, None, points, shaft_inertia_kgm2=args.shaft_inertia, density_kg_m3=args.density,
-                             bore_m=args.bore, max_outer_diameter_m=args.max_diameter, max_width_m=args.max_width,
-                             max_rim_speed_m_s=args.max_rim_speed, max_rpm=args.max_rpm, fidelity=args.fidelity)
+    design = design_flywheel(
+        engine,
+        None,
+        points,
+        shaft_inertia_kgm2=args.shaft_inertia,
+        density_kg_m3=args.density,
+        bore_m=args.bore,
+        max_outer_diameter_m=args.max_diameter,
+        max_width_m=args.max_width,
+        max_rim_speed_m_s=args.max_rim_speed,
+        max_rpm=args.max_rpm,
+        fidelity=args.fidelity,
+    )
     written = []
     if args.plot:
         from ..plotting import plot_flywheel_design, save_figure
@@ -486,6 +659,7 @@ def _cmd_diagnose(args):
     import numpy as np
 
     import rotor
+
     from ..diagnostics.calibration import Calibration, calibrate, diagnose, measured_imep
 
     engine = rotor.load_engine(args.engine)
@@ -505,8 +679,17 @@ def _cmd_diagnose(args):
             cal, cal_source = new, f"saved from this log to {args.save_calibration}"
     try:
         use = cal if cal is not None or args.no_calibration else "preset"  # the preset's own, if it ships one
-        ident = diagnose(engine, args.log, use, wheel=args.wheel, columns=args.columns, tdc_deg=args.tdc_deg,
-                         load_per=args.load_per, scaling=args.scaling, threshold=args.threshold)
+        ident = diagnose(
+            engine,
+            args.log,
+            use,
+            wheel=args.wheel,
+            columns=args.columns,
+            tdc_deg=args.tdc_deg,
+            load_per=args.load_per,
+            scaling=args.scaling,
+            threshold=args.threshold,
+        )
     except ArithmeticError as e:  # a one-line error, not a traceback
         raise rotor.EngineError(f"{args.log}: the diagnosis failed ({e})") from None
     if cal is None and ident.info.get("calibration") is not None:  # the preset's own
@@ -519,6 +702,7 @@ def _cmd_diagnose(args):
     if args.plot:
         written.append(_plot_log(ident.plot, args, "diagnosis"))
     if args.json:
+
         def num(x):
             x = float(x)
             return x if np.isfinite(x) else None
@@ -526,28 +710,38 @@ def _cmd_diagnose(args):
         t0 = ident.t_start_s
         cycles = []
         for k in range(ident.cycles):
-            row = {"t_start_s": None if t0 is None else num(t0[k]),
-                   "mean_rpm": num(ident.mean_omega[k] * 30 / np.pi),
-                   "imep_pa": [num(v) for v in ident.imep_pa[k]],
-                   "imep_std_pa": [num(v) for v in ident.imep_std_pa[k]],
-                   "misfire": [bool(v) for v in ident.misfire[k]],
-                   "contribution": [num(v) for v in ident.contribution[k]],
-                   "load_torque_Nm": num(ident.load_torque_Nm[k])}
+            row = {
+                "t_start_s": None if t0 is None else num(t0[k]),
+                "mean_rpm": num(ident.mean_omega[k] * 30 / np.pi),
+                "imep_pa": [num(v) for v in ident.imep_pa[k]],
+                "imep_std_pa": [num(v) for v in ident.imep_std_pa[k]],
+                "misfire": [bool(v) for v in ident.misfire[k]],
+                "contribution": [num(v) for v in ident.contribution[k]],
+                "load_torque_Nm": num(ident.load_torque_Nm[k]),
+            }
             if measured is not None:
                 row["measured_imep_pa"] = [num(measured[k])]
             cycles.append(row)
-        out = {"engine": ident.engine_name, "source": analysis.source if analysis is not None else args.log,
-               "cylinders": ident.cylinders, "cycles": cycles, "misfires": ident.misfires(),
-               "calibration": None if cal is None else {**cal.to_json_dict(), "loaded_from": cal_source},
-               "calibration_source": cal_source,
-               "ambiguous_pairs": [list(p) for p in ident.ambiguous_pairs],
-               "scaling": ident.info.get("scaling"), "charge_scale": num(ident.info.get("charge_scale", 1.0)),
-               "tdc_after_gap_deg": None if analysis is None else num(np.rad2deg(analysis.tdc_rad)),
-               "tdc_method": None if analysis is None else analysis.tdc_method,
-               "firing_method": None if analysis is None else analysis.firing_method,
-               "rms_residual_rad_s": num(ident.rms_residual), "r2": num(ident.fit_r2),
-               "threshold": ident.threshold, "notes": list(ident.notes) + (list(analysis.notes) if analysis else []),
-               "written": written}
+        out = {
+            "engine": ident.engine_name,
+            "source": analysis.source if analysis is not None else args.log,
+            "cylinders": ident.cylinders,
+            "cycles": cycles,
+            "misfires": ident.misfires(),
+            "calibration": None if cal is None else {**cal.to_json_dict(), "loaded_from": cal_source},
+            "calibration_source": cal_source,
+            "ambiguous_pairs": [list(p) for p in ident.ambiguous_pairs],
+            "scaling": ident.info.get("scaling"),
+            "charge_scale": num(ident.info.get("charge_scale", 1.0)),
+            "tdc_after_gap_deg": None if analysis is None else num(np.rad2deg(analysis.tdc_rad)),
+            "tdc_method": None if analysis is None else analysis.tdc_method,
+            "firing_method": None if analysis is None else analysis.firing_method,
+            "rms_residual_rad_s": num(ident.rms_residual),
+            "r2": num(ident.fit_r2),
+            "threshold": ident.threshold,
+            "notes": list(ident.notes) + (list(analysis.notes) if analysis else []),
+            "written": written,
+        }
         print(json.dumps(out, indent=1, allow_nan=False))
     else:
         if cal is not None:
@@ -556,8 +750,10 @@ def _cmd_diagnose(args):
         sys.stdout.write(ident.summary())
         if measured is not None:
             err = ident.imep_pa[:, 0] - measured
-            print(f"  IMEP from the pressure channel {np.mean(measured) / 1e5:.3f} bar; identified − measured: mean "
-                  f"{np.mean(err) / 1e5:+.3f} bar, rms {np.sqrt(np.mean(err**2)) / 1e5:.3f} bar")
+            print(
+                f"  IMEP from the pressure channel {np.mean(measured) / 1e5:.3f} bar; identified − measured: mean "
+                f"{np.mean(err) / 1e5:+.3f} bar, rms {np.sqrt(np.mean(err**2)) / 1e5:.3f} bar"
+            )
         for p in written:
             print(f"wrote {p}")
 
@@ -571,6 +767,7 @@ def _cmd_presets(args):
 
 def _cmd_demo(args):
     import rotor
+
     from ..engine.summary import format_summary
 
     engine = rotor.load_engine(args.engine)
@@ -598,8 +795,12 @@ def _cmd_demo(args):
     os.makedirs(args.out, exist_ok=True)
     fly = os.path.join(args.out, "flywheel.png")
     save_figure(plot_flywheel_design(design, engine), fly)
-    for path in (_write_plots(engine, None, args.out) + _plot_result(steady, args.out, "steady")
-                 + _plot_result(trans, args.out, "load_step") + [fly]):
+    for path in (
+        _write_plots(engine, None, args.out)
+        + _plot_result(steady, args.out, "steady")
+        + _plot_result(trans, args.out, "load_step")
+        + [fly]
+    ):
         print(f"wrote {path}")
 
 
@@ -637,6 +838,9 @@ def main(argv=None) -> int:
         _COMMANDS[args.command](args)
     except BrokenPipeError:  # e.g. `rotor table ... | head`
         return 0
+    except SolverError as e:  # valid input, no answer: not a usage error
+        print(f"rotor: {str(e).replace(chr(10), ' ')}", file=sys.stderr)
+        return EXIT_SOLVER
     except (ValueError, OSError) as e:  # EngineError is a ValueError
         msg = str(e).replace("\n", " ")
         if isinstance(e, OSError) and e.filename:

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import NamedTuple, Optional
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
@@ -34,10 +34,10 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from ..checks import EngineError
-from ..engine.inertia import mean_reduced_inertia
-from ..dynamics.steady import NoSteadyStateError, steady_state
 from ..dynamics.result import RPM_PER_RAD_S
+from ..dynamics.steady import steady_state
+from ..engine.inertia import mean_reduced_inertia
+from ..errors import EngineError, NoSteadyStateError
 
 __all__ = [
     "OperatingPoint",
@@ -64,7 +64,7 @@ class OperatingPoint(NamedTuple):
     rpm: float
     imep_scale: float = 1.0
     load: object = None
-    delta: Optional[float] = None
+    delta: float | None = None
 
 
 def _points(points, engine) -> list[OperatingPoint]:
@@ -83,16 +83,20 @@ def _points(points, engine) -> list[OperatingPoint]:
         except (TypeError, ValueError):
             scale = np.array(np.nan)
         if not (np.all(np.isfinite(scale)) and np.all(scale >= 0)) or scale.shape not in ((), (engine.cylinders,)):
-            raise EngineError(f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be one number ≥ 0 "
-                              f"or one per cylinder ({engine.cylinders})")
+            raise EngineError(
+                f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be one number ≥ 0 "
+                f"or one per cylinder ({engine.cylinders})"
+            )
         load = p.load
         if isinstance(load, str):
             from ..dynamics.loads import parse_load
 
             load = parse_load(load)
         if load is not None and not hasattr(load, "torque"):
-            raise EngineError(f"operating point at {rpm:g} rpm: load = {p.load!r} is not a load (a rotor.ConstantLoad, "
-                              "rotor.PropellerLoad, … or a spec such as 'propeller:3000,1250')")
+            raise EngineError(
+                f"operating point at {rpm:g} rpm: load = {p.load!r} is not a load (a rotor.ConstantLoad, "
+                "rotor.PropellerLoad, … or a spec such as 'propeller:3000,1250')"
+            )
         if p.delta is not None:
             _check_delta(p.delta)
         out.append(OperatingPoint(rpm, p.imep_scale, load, p.delta))
@@ -104,8 +108,9 @@ def _points(points, engine) -> list[OperatingPoint]:
 def _check_delta(delta):
     d = float(delta)
     if not (math.isfinite(d) and 0 < d < 1):
-        raise EngineError(f"delta = {delta!r}: the target irregularity (ω_max − ω_min)/ω_mean must lie in (0, 1), "
-                          "e.g. 0.01 for 1 %")
+        raise EngineError(
+            f"delta = {delta!r}: the target irregularity (ω_max − ω_min)/ω_mean must lie in (0, 1), e.g. 0.01 for 1 %"
+        )
     return d
 
 
@@ -134,14 +139,30 @@ def _textbook(engine, delta, point, excess_work, mechanism_inertia, diameter_str
     j0 = excess_work / (delta * omega**2)
     jf = TEXTBOOK_SHARE * j0
     dm = diameter_strokes * float(engine.geometry.stroke_m)
-    return TextbookFlywheel(rpm=point.rpm, delta=delta, excess_work_J=excess_work, total_inertia_kgm2=j0,
-                            crankshaft_inertia_kgm2=j0 - mechanism_inertia, flywheel_kgm2=jf,
-                            mean_diameter_m=dm, mass_kg=4 * jf / dm**2)
+    return TextbookFlywheel(
+        rpm=point.rpm,
+        delta=delta,
+        excess_work_J=excess_work,
+        total_inertia_kgm2=j0,
+        crankshaft_inertia_kgm2=j0 - mechanism_inertia,
+        flywheel_kgm2=jf,
+        mean_diameter_m=dm,
+        mass_kg=4 * jf / dm**2,
+    )
 
 
-def textbook_flywheel(engine, delta: float, rpm=None, *, imep_scale=1.0, load=None,
-                      diameter_strokes: float = 2.5, fidelity: str = "variable", friction=None,
-                      grid_deg: float = 0.25) -> TextbookFlywheel:
+def textbook_flywheel(
+    engine,
+    delta: float,
+    rpm=None,
+    *,
+    imep_scale=1.0,
+    load=None,
+    diameter_strokes: float = 2.5,
+    fidelity: str = "variable",
+    friction=None,
+    grid_deg: float = 0.25,
+) -> TextbookFlywheel:
     """The textbook flywheel of seed 004 §3.2.12 at one operating point.
 
     **Arguments:** ``engine`` (a :class:`rotor.Engine`); ``delta``, the target irregularity
@@ -167,8 +188,15 @@ def _with_inertia(engine, inertia):
 def _state(engine, inertia, rpm, scale, load, fidelity, friction, grid_deg):
     """δ (NaN where the crankshaft nearly stops) and the textbook excess work [J] of the
     steady state with ``[crankshaft] inertia_kgm2 = inertia``."""
-    r = steady_state(_with_inertia(engine, inertia), rpm, load, fidelity=fidelity, friction=friction,
-                     imep_scale=scale, grid_deg=grid_deg)
+    r = steady_state(
+        _with_inertia(engine, inertia),
+        rpm,
+        load,
+        fidelity=fidelity,
+        friction=friction,
+        imep_scale=scale,
+        grid_deg=grid_deg,
+    )
     ok = jnp.min(r.omega) > 0.01 * r.mean_omega
     return jnp.where(ok, r.delta, jnp.nan), r.info["excess_work_J"]
 
@@ -197,24 +225,54 @@ class _Evaluator:
         return rpm, scale, point.load
 
     def state(self, inertia, point):
-        out = _state(self.engine, jnp.asarray(inertia, dtype=jnp.float64), *self._args(point), self.fidelity,
-                     self.friction, self.grid_deg)
+        out = _state(
+            self.engine,
+            jnp.asarray(inertia, dtype=jnp.float64),
+            *self._args(point),
+            self.fidelity,
+            self.friction,
+            self.grid_deg,
+        )
         return tuple(float(v) for v in jax.device_get(out))
 
     def root(self, u0, log_target, point, rtol):
-        u, ok, steps = _root(self.engine, jnp.asarray(u0, dtype=jnp.float64), jnp.asarray(log_target),
-                             *self._args(point), self.fidelity, self.friction, self.grid_deg, rtol)
+        u, ok, steps = _root(
+            self.engine,
+            jnp.asarray(u0, dtype=jnp.float64),
+            jnp.asarray(log_target),
+            *self._args(point),
+            self.fidelity,
+            self.friction,
+            self.grid_deg,
+            rtol,
+        )
         return float(u), bool(ok), int(steps)
 
 
-def inertia_for_delta(engine, delta: float, rpm=None, *, imep_scale=1.0, load=None, fidelity: str = "variable",
-                      friction=None, grid_deg: float = 0.25, rtol: float = 1e-10) -> float:
+def inertia_for_delta(
+    engine,
+    delta: float,
+    rpm=None,
+    *,
+    imep_scale=1.0,
+    load=None,
+    fidelity: str = "variable",
+    friction=None,
+    grid_deg: float = 0.25,
+    rtol: float = 1e-10,
+) -> float:
     """The ``[crankshaft] inertia_kgm2`` [kg·m²] at which the steady state at one operating
     point has exactly δ = ``delta`` (Newton's method through :func:`rotor.steady_state`).
     Arguments as in :func:`design_flywheel`, for one point."""
-    design = design_flywheel(engine, delta, [OperatingPoint(engine.operating.rpm if rpm is None else rpm,
-                                                            imep_scale, load)],
-                             fidelity=fidelity, friction=friction, grid_deg=grid_deg, rtol=rtol)
+    design = design_flywheel(
+        engine,
+        delta,
+        [OperatingPoint(engine.operating.rpm if rpm is None else rpm, imep_scale, load)],
+        fidelity=fidelity,
+        friction=friction,
+        grid_deg=grid_deg,
+        rtol=rtol,
+    )
     return design.crankshaft_inertia_kgm2
 
 
@@ -235,9 +293,16 @@ class DiscFlywheel:
     limited_by: str
 
 
-def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float = CAST_IRON_KG_M3,
-                  bore_m: float = 0.0, max_outer_diameter_m: Optional[float] = None,
-                  max_width_m: Optional[float] = None, max_rim_speed_m_s: Optional[float] = None) -> DiscFlywheel:
+def lightest_disc(
+    inertia_kgm2: float,
+    *,
+    peak_rpm: float,
+    density_kg_m3: float = CAST_IRON_KG_M3,
+    bore_m: float = 0.0,
+    max_outer_diameter_m: float | None = None,
+    max_width_m: float | None = None,
+    max_rim_speed_m_s: float | None = None,
+) -> DiscFlywheel:
     """The lightest disc with inertia ``inertia_kgm2`` [kg·m²] under the limits.
 
     A disc of outer diameter D, bore d and width b has J = ρπb(D⁴ − d⁴)/32 and mass
@@ -249,13 +314,18 @@ def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float 
     """
     J = float(inertia_kgm2)
     if not (math.isfinite(J) and J > 0):
-        raise EngineError(f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
-                          "the target: no flywheel is needed)")
+        raise EngineError(
+            f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
+            "the target: no flywheel is needed)"
+        )
     for name, v in (("density_kg_m3", density_kg_m3), ("peak_rpm", peak_rpm)):
         if not (math.isfinite(float(v)) and float(v) > 0):
             raise EngineError(f"{name} = {v!r}: must be positive")
-    for name, v in (("max_outer_diameter_m", max_outer_diameter_m), ("max_width_m", max_width_m),
-                    ("max_rim_speed_m_s", max_rim_speed_m_s)):
+    for name, v in (
+        ("max_outer_diameter_m", max_outer_diameter_m),
+        ("max_width_m", max_width_m),
+        ("max_rim_speed_m_s", max_rim_speed_m_s),
+    ):
         if v is not None and not (math.isfinite(float(v)) and float(v) > 0):
             raise EngineError(f"{name} = {v!r}: a limit must be positive (or left out)")
     try:
@@ -271,27 +341,43 @@ def lightest_disc(inertia_kgm2: float, *, peak_rpm: float, density_kg_m3: float 
     if max_rim_speed_m_s is not None:
         bounds["rim speed"] = 2 * float(max_rim_speed_m_s) / omega
     if not bounds:
-        raise EngineError("the lightest disc is as large as allowed: give max_outer_diameter_m or max_rim_speed_m_s "
-                          "(or use the textbook's mean diameter of 2…3 strokes)")
+        raise EngineError(
+            "the lightest disc is as large as allowed: give max_outer_diameter_m or max_rim_speed_m_s "
+            "(or use the textbook's mean diameter of 2…3 strokes)"
+        )
     limited_by = min(bounds, key=bounds.get)
     D = bounds[limited_by]
     if not D**4 - bore_m**4 > 0 or D <= bore_m:
-        raise EngineError(f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the "
-                          f"bore {bore_m:.4g} m")
+        raise EngineError(
+            f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the "
+            f"bore {bore_m:.4g} m"
+        )
     rho = float(density_kg_m3)
     width = 32 * J / (rho * math.pi * (D**4 - bore_m**4))
     if max_width_m is not None and width > max_width_m:
         need_D = (32 * J / (rho * math.pi * max_width_m) + bore_m**4) ** 0.25
-        larger = (f"an outer diameter of {need_D:.4g} m" if limited_by == "outer diameter"
-                  else f"a rim speed of {need_D * omega / 2:.4g} m/s")
+        larger = (
+            f"an outer diameter of {need_D:.4g} m"
+            if limited_by == "outer diameter"
+            else f"a rim speed of {need_D * omega / 2:.4g} m/s"
+        )
         raise EngineError(
             f"no disc meets the limits: {J:.4g} kg·m² at an outer diameter of {D:.4g} m ({limited_by} limit) needs a "
             f"width of {width * 1e3:.1f} mm, more than the {max_width_m * 1e3:.1f} mm allowed; allow a width of "
-            f"{width * 1e3:.1f} mm, {larger}, or a looser δ target")
+            f"{width * 1e3:.1f} mm, {larger}, or a looser δ target"
+        )
     mass = rho * math.pi * width * (D**2 - bore_m**2) / 4
-    return DiscFlywheel(outer_diameter_m=D, bore_m=float(bore_m), width_m=width, density_kg_m3=rho,
-                        inertia_kgm2=J, mass_kg=mass, rim_speed_m_s=omega * D / 2, peak_rpm=float(peak_rpm),
-                        limited_by=limited_by)
+    return DiscFlywheel(
+        outer_diameter_m=D,
+        bore_m=float(bore_m),
+        width_m=width,
+        density_kg_m3=rho,
+        inertia_kgm2=J,
+        mass_kg=mass,
+        rim_speed_m_s=omega * D / 2,
+        peak_rpm=float(peak_rpm),
+        limited_by=limited_by,
+    )
 
 
 # ----------------------------------------------------------------------------- the design
@@ -309,7 +395,7 @@ class PointResult:
     peak_rpm: float
     newton_steps: int
     textbook: TextbookFlywheel
-    fuel_scale: Optional[float] = None  # the fuelling solved for a speed-dependent load [-]
+    fuel_scale: float | None = None  # the fuelling solved for a speed-dependent load [-]
 
 
 @dataclass(frozen=True)
@@ -339,7 +425,7 @@ class FlywheelDesign:
     flywheel_kgm2: float
     textbook: TextbookFlywheel
     points: tuple
-    disc: Optional[DiscFlywheel] = None
+    disc: DiscFlywheel | None = None
     fidelity: str = "variable"
     settings: dict = field(default_factory=dict)
     friction: object = None  # as given to design_flywheel (for plots); not in to_dict
@@ -395,13 +481,17 @@ class FlywheelDesign:
             mark = "  ← binding" if i == self.binding_index else ""
             scale = f"{p.imep_scale:g}" if isinstance(p.imep_scale, (int, float)) else "per cyl."
             if p.fuel_scale is not None:  # solved for a speed-dependent load
-                scale = f"×{p.fuel_scale:.3g}" if isinstance(p.imep_scale, (int, float)) and p.imep_scale == 1 else \
-                    f"{scale} ×{p.fuel_scale:.3g}"
+                scale = (
+                    f"×{p.fuel_scale:.3g}"
+                    if isinstance(p.imep_scale, (int, float)) and p.imep_scale == 1
+                    else f"{scale} ×{p.fuel_scale:.3g}"
+                )
             need = f"{p.inertia_kgm2:13.4f}" if p.inertia_kgm2 > 0 else f"{'none':>13}"
             tb = p.textbook.crankshaft_inertia_kgm2
             tb = f"{tb:11.4f}" if tb > 0 else f"{'n/a':>11}"
-            lines.append(f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {need} {p.delta:11.5f} "
-                         f"{tb}{mark}")
+            lines.append(
+                f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {need} {p.delta:11.5f} {tb}{mark}"
+            )
         lines += [
             "",
             f"  designed [crankshaft] inertia_kgm2   {self.crankshaft_inertia_kgm2:10.4f} kg·m²  (binding at "
@@ -413,29 +503,39 @@ class FlywheelDesign:
             lines.append(
                 f"    as [crankshaft] inertia_kgm2 (J₀ less rods and pistons) {t.crankshaft_inertia_kgm2:10.4f} kg·m²  "
                 f"= {self.textbook_ratio:.3f} × the design ({100 * (self.textbook_ratio - 1):+.1f} %; as total "
-                f"inertias {100 * (self.textbook_total_ratio - 1):+.1f} %)")
+                f"inertias {100 * (self.textbook_total_ratio - 1):+.1f} %)"
+            )
         else:
-            lines.append("    not applicable: J₀ is smaller than the rods' and pistons' own mean inertia "
-                         f"({t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2:.4g} kg·m²)")
+            lines.append(
+                "    not applicable: J₀ is smaller than the rods' and pistons' own mean inertia "
+                f"({t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2:.4g} kg·m²)"
+            )
         if t.delta > 0.2:
             lines.append(f"    (δ = {t.delta:g} is not small: the textbook's first-order theory does not hold)")
         mech = t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2
-        lines.append(f"    the seed's flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean "
-                     f"diameter {t.mean_diameter_m:.3f} m; its 0.85 assumes the shaft, rods and pistons make "
-                     f"0.15·J₀ = {0.15 * t.total_inertia_kgm2:.4g} kg·m² (rods and pistons here: {mech:.4g})")
+        lines.append(
+            f"    the seed's flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean "
+            f"diameter {t.mean_diameter_m:.3f} m; its 0.85 assumes the shaft, rods and pistons make "
+            f"0.15·J₀ = {0.15 * t.total_inertia_kgm2:.4g} kg·m² (rods and pistons here: {mech:.4g})"
+        )
         if self.shaft_inertia_kgm2:
             if self.flywheel_kgm2 > 0:
                 r = t.flywheel_kgm2 / self.flywheel_kgm2
-                lines.append(f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: "
-                             f"{self.flywheel_kgm2:.4f} kg·m² (the seed's 0.85·J₀ is {r:.3f} × it, {100 * (r - 1):+.1f} %)")
+                lines.append(
+                    f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: "
+                    f"{self.flywheel_kgm2:.4f} kg·m² (the seed's 0.85·J₀ is {r:.3f} × it, {100 * (r - 1):+.1f} %)"
+                )
             else:
-                lines.append(f"  a shaft of {self.shaft_inertia_kgm2:g} kg·m² alone meets the target: no flywheel "
-                             "is needed")
+                lines.append(
+                    f"  a shaft of {self.shaft_inertia_kgm2:g} kg·m² alone meets the target: no flywheel is needed"
+                )
         if self.disc is not None:
             d = self.disc
-            lines.append(f"  lightest disc: D = {d.outer_diameter_m:.3f} m ({d.limited_by} limit), bore "
-                         f"{d.bore_m:.3f} m, width {d.width_m * 1e3:.1f} mm, {d.mass_kg:.1f} kg, rim speed "
-                         f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm (the highest speed it must stand)")
+            lines.append(
+                f"  lightest disc: D = {d.outer_diameter_m:.3f} m ({d.limited_by} limit), bore "
+                f"{d.bore_m:.3f} m, width {d.width_m * 1e3:.1f} mm, {d.mass_kg:.1f} kg, rim speed "
+                f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm (the highest speed it must stand)"
+            )
         return "\n".join(lines)
 
     def plot(self, engine, axes=None, rpm_range=None, n: int = 25):
@@ -451,17 +551,17 @@ def _load_name(load):
 
 def design_flywheel(
     engine,
-    delta: Optional[float],
+    delta: float | None,
     points=None,
     *,
     shaft_inertia_kgm2: float = 0.0,
     diameter_strokes: float = 2.5,
     density_kg_m3: float = CAST_IRON_KG_M3,
     bore_m: float = 0.0,
-    max_outer_diameter_m: Optional[float] = None,
-    max_width_m: Optional[float] = None,
-    max_rim_speed_m_s: Optional[float] = None,
-    max_rpm: Optional[float] = None,
+    max_outer_diameter_m: float | None = None,
+    max_width_m: float | None = None,
+    max_rim_speed_m_s: float | None = None,
+    max_rpm: float | None = None,
     fidelity: str = "variable",
     friction=None,
     grid_deg: float = 0.25,
@@ -498,8 +598,15 @@ def design_flywheel(
     if delta is None and any(p.delta is None for p in pts):
         raise EngineError("no δ target: give delta, or one in every OperatingPoint")
     default = None if delta is None else _check_delta(delta)
-    _check_design_args(shaft_inertia_kgm2, diameter_strokes, grid_deg, max_rpm,
-                       max_outer_diameter_m is not None or max_rim_speed_m_s is not None, max_width_m, bore_m)
+    _check_design_args(
+        shaft_inertia_kgm2,
+        diameter_strokes,
+        grid_deg,
+        max_rpm,
+        max_outer_diameter_m is not None or max_rim_speed_m_s is not None,
+        max_width_m,
+        bore_m,
+    )
     ev = _Evaluator(engine, fidelity, friction, grid_deg)
     j_start = float(engine.crankshaft.inertia_kgm2)
     results = []
@@ -510,37 +617,73 @@ def design_flywheel(
     i_bind = int(np.argmax([r[1] for r in results]))
     J_design = results[i_bind][1]
     if J_design <= 0:
-        raise EngineError("no flywheel is needed: δ stays below the target at every point even with (almost) no "
-                          "crankshaft inertia; the rods and pistons alone are enough (a [crankshaft] inertia_kgm2 "
-                          "must still be > 0)")
+        raise EngineError(
+            "no flywheel is needed: δ stays below the target at every point even with (almost) no "
+            "crankshaft inertia; the rods and pistons alone are enough (a [crankshaft] inertia_kgm2 "
+            "must still be > 0)"
+        )
     point_results = []
     peak = float(engine.operating.rpm) if max_rpm is None else float(max_rpm)
     for p, J, steps, tb, target in results:
         try:  # the eager steady state: every check of rotor.steady_state applies to the design
-            r = steady_state(_with_inertia(engine, J_design), p.rpm, p.load, fidelity=fidelity, friction=friction,
-                             imep_scale=p.imep_scale, grid_deg=grid_deg)
+            r = steady_state(
+                _with_inertia(engine, J_design),
+                p.rpm,
+                p.load,
+                fidelity=fidelity,
+                friction=friction,
+                imep_scale=p.imep_scale,
+                grid_deg=grid_deg,
+            )
         except NoSteadyStateError as e:
-            raise EngineError(f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}")
+            raise EngineError(
+                f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}"
+            ) from e
         if max_rpm is None:
             peak = max(peak, float(r.max_rpm))
         fuel = r.info.get("fuel_scale")
-        point_results.append(PointResult(
-            rpm=p.rpm, imep_scale=_jsonable(p.imep_scale), load=_load_name(p.load), delta_target=target,
-            inertia_kgm2=J, delta=float(r.delta), peak_rpm=float(r.max_rpm), newton_steps=steps, textbook=tb,
-            fuel_scale=None if fuel is None else float(fuel)))
+        point_results.append(
+            PointResult(
+                rpm=p.rpm,
+                imep_scale=_jsonable(p.imep_scale),
+                load=_load_name(p.load),
+                delta_target=target,
+                inertia_kgm2=J,
+                delta=float(r.delta),
+                peak_rpm=float(r.max_rpm),
+                newton_steps=steps,
+                textbook=tb,
+                fuel_scale=None if fuel is None else float(fuel),
+            )
+        )
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
     flywheel = J_design - float(shaft_inertia_kgm2)
     disc = None
     if (max_outer_diameter_m is not None or max_rim_speed_m_s is not None) and flywheel > 0:
-        disc = lightest_disc(flywheel, peak_rpm=peak, density_kg_m3=density_kg_m3, bore_m=bore_m,
-                             max_outer_diameter_m=max_outer_diameter_m, max_width_m=max_width_m,
-                             max_rim_speed_m_s=max_rim_speed_m_s)
+        disc = lightest_disc(
+            flywheel,
+            peak_rpm=peak,
+            density_kg_m3=density_kg_m3,
+            bore_m=bore_m,
+            max_outer_diameter_m=max_outer_diameter_m,
+            max_width_m=max_width_m,
+            max_rim_speed_m_s=max_rim_speed_m_s,
+        )
     return FlywheelDesign(
-        engine_name=engine.name, delta_target=results[i_bind][4], crankshaft_inertia_kgm2=J_design,
-        binding_rpm=pts[i_bind].rpm, delta_achieved=point_results[i_bind].delta,
-        shaft_inertia_kgm2=float(shaft_inertia_kgm2), flywheel_kgm2=flywheel, textbook=tb_worst,
-        points=tuple(point_results), disc=disc, fidelity=fidelity, binding_index=i_bind,
-        settings={"grid_deg": grid_deg, "diameter_strokes": diameter_strokes}, friction=friction,
+        engine_name=engine.name,
+        delta_target=results[i_bind][4],
+        crankshaft_inertia_kgm2=J_design,
+        binding_rpm=pts[i_bind].rpm,
+        delta_achieved=point_results[i_bind].delta,
+        shaft_inertia_kgm2=float(shaft_inertia_kgm2),
+        flywheel_kgm2=flywheel,
+        textbook=tb_worst,
+        points=tuple(point_results),
+        disc=disc,
+        fidelity=fidelity,
+        binding_index=i_bind,
+        settings={"grid_deg": grid_deg, "diameter_strokes": diameter_strokes},
+        friction=friction,
         loads=tuple(p.load for p in pts),
     )
 
@@ -562,8 +705,10 @@ def _check_design_args(shaft, diameter_strokes, grid_deg, max_rpm, disc, max_wid
     if max_rpm is not None:
         _number("max_rpm", max_rpm, 0.0)
     if not disc and (max_width_m is not None or bore_m):
-        raise EngineError("a width limit or a bore shapes the lightest disc, which needs an outer-diameter or a "
-                          "rim-speed limit as well (max_outer_diameter_m or max_rim_speed_m_s)")
+        raise EngineError(
+            "a width limit or a bore shapes the lightest disc, which needs an outer-diameter or a "
+            "rim-speed limit as well (max_outer_diameter_m or max_rim_speed_m_s)"
+        )
 
 
 def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
@@ -576,8 +721,10 @@ def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
             break
         j_try *= 10
     else:
-        raise EngineError(f"no steady state at {p.rpm:g} rpm even with a {j_try / 10:g} kg·m² crankshaft: the engine "
-                          "cannot run at this point (check its fuelling and load)")
+        raise EngineError(
+            f"no steady state at {p.rpm:g} rpm even with a {j_try / 10:g} kg·m² crankshaft: the engine "
+            "cannot run at this point (check its fuelling and load)"
+        )
     mech = ev.mechanism
     tb = _textbook(engine, target, p, excess, mech, diameter_strokes)
     # start from this point's own δ/J slope (δ ∝ 1/(J + mech))
@@ -595,7 +742,8 @@ def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
     raise EngineError(
         f"at {p.rpm:g} rpm Newton's method found no crankshaft inertia with δ = {target:g} (it stopped at "
         f"{J:.4g} kg·m², δ = {d_check:.4g}; with a {j_try:g} kg·m² crankshaft δ = {d0:.4g}): check the target "
-        "(too tight for float64 below about 1e-8?), the tolerance rtol, and rotor.steady_state at this point")
+        "(too tight for float64 below about 1e-8?), the tolerance rtol, and rotor.steady_state at this point"
+    )
 
 
 def _jsonable(x):

@@ -1,1 +1,10 @@
-"""TODO"""
+"""From measured speed back to the cylinders: torque, IMEP and misfires.
+
+Holds inverse dynamics (:mod:`.inverse`), model-based identification of each firing's
+combustion scale (:mod:`.identification`), the misfire index (:mod:`.misfire`),
+calibration against a pressure channel and the diagnose workflow
+(:mod:`.calibration`), and simulated bench recordings (:mod:`.synthetic`).
+
+May import: :mod:`rotor.dynamics`, :mod:`rotor.logs`, :mod:`rotor.engine` and the
+ground floor. Never :mod:`rotor.design`, :mod:`rotor.plotting` or :mod:`rotor.cli`.
+"""

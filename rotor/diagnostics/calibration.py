@@ -69,15 +69,21 @@ import dataclasses
 import json
 import math
 import os
-from typing import Optional
 
 import equinox as eqx
 import numpy as np
 
-from ..checks import EngineError
+from ..errors import EngineError
 
-__all__ = ["Calibration", "calibrate", "diagnose", "measured_imep", "cylinder_torques", "preset_calibration",
-           "CALIBRATION_FORMAT"]
+__all__ = [
+    "Calibration",
+    "calibrate",
+    "diagnose",
+    "measured_imep",
+    "cylinder_torques",
+    "preset_calibration",
+    "CALIBRATION_FORMAT",
+]
 
 CALIBRATION_FORMAT = "rotor-calibration"
 CALIBRATION_VERSION = 1
@@ -148,8 +154,10 @@ class Calibration:
             if not math.isclose(float(v), have, rel_tol=1e-6, abs_tol=1e-12):
                 diffs.append(f"{key} {float(v):g}, not {have:g}")
         if diffs:
-            raise EngineError(f"{where}: calibrated on another engine ({'; '.join(diffs)}): its inertia and TDC do "
-                              f"not apply; calibrate this engine (rotor diagnose --save-calibration)")
+            raise EngineError(
+                f"{where}: calibrated on another engine ({'; '.join(diffs)}): its inertia and TDC do "
+                f"not apply; calibrate this engine (rotor diagnose --save-calibration)"
+            )
 
     def apply(self, engine):
         """The engine with the calibrated crankshaft inertia."""
@@ -177,7 +185,7 @@ class Calibration:
         }
 
     @classmethod
-    def from_json_dict(cls, d, where: str = "calibration") -> "Calibration":
+    def from_json_dict(cls, d, where: str = "calibration") -> Calibration:
         """Build from :meth:`to_json_dict`'s dict; errors name ``where`` and the key."""
         from ..logs.wheel import ToothErrors
 
@@ -186,16 +194,18 @@ class Calibration:
         if d.get("format") != CALIBRATION_FORMAT:
             raise EngineError(f"{where}: key 'format' must be {CALIBRATION_FORMAT!r} (not a rotor calibration file)")
         if d.get("version") != CALIBRATION_VERSION:
-            raise EngineError(f"{where}: key 'version' = {d.get('version')!r}: this rotor reads version "
-                              f"{CALIBRATION_VERSION}")
+            raise EngineError(
+                f"{where}: key 'version' = {d.get('version')!r}: this rotor reads version {CALIBRATION_VERSION}"
+            )
 
         def num(key, positive=False):
             if key not in d:
                 raise EngineError(f"{where}: missing key {key!r}")
             v = d[key]
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
-                raise EngineError(f"{where}: key {key!r} = {v!r}: must be a {'positive' if positive else 'finite'} "
-                                  f"number")
+                raise EngineError(
+                    f"{where}: key {key!r} = {v!r}: must be a {'positive' if positive else 'finite'} number"
+                )
             return float(v)
 
         def text(key):
@@ -210,13 +220,18 @@ class Calibration:
         te = d.get("tooth_errors")
         if te is not None:
             if not isinstance(te, dict) or "wheel" not in te or "errors_rad" not in te:
-                raise EngineError(f"{where}: key 'tooth_errors' must be null or an object with 'wheel' and "
-                                  f"'errors_rad'")
+                raise EngineError(
+                    f"{where}: key 'tooth_errors' must be null or an object with 'wheel' and 'errors_rad'"
+                )
             try:
-                te = ToothErrors(wheel=te["wheel"], errors_rad=np.asarray(te["errors_rad"], dtype=np.float64),
-                                 method=str(te.get("method", "given")), revolutions=int(te.get("revolutions", 0)),
-                                 engine_orders=tuple(float(k) for k in te.get("engine_orders", ())),
-                                 source=str(te.get("source", "")))
+                te = ToothErrors(
+                    wheel=te["wheel"],
+                    errors_rad=np.asarray(te["errors_rad"], dtype=np.float64),
+                    method=str(te.get("method", "given")),
+                    revolutions=int(te.get("revolutions", 0)),
+                    engine_orders=tuple(float(k) for k in te.get("engine_orders", ())),
+                    source=str(te.get("source", "")),
+                )
             except (TypeError, ValueError) as e:
                 raise EngineError(f"{where}: key 'tooth_errors': {e}") from None
         fit = d.get("fit", {})
@@ -231,15 +246,31 @@ class Calibration:
 
         geo = d.get("geometry", {})
         if not isinstance(geo, dict) or not all(
-                k in _GEOMETRY_KEYS and isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                and v >= 0 for k, v in geo.items()):
+            k in _GEOMETRY_KEYS
+            and isinstance(v, (int, float))
+            and not isinstance(v, bool)
+            and math.isfinite(v)
+            and v >= 0
+            for k, v in geo.items()
+        ):
             raise EngineError(f"{where}: key 'geometry' must be an object of numbers ({', '.join(_GEOMETRY_KEYS)})")
-        return cls(engine=text("engine"), inertia_kgm2=num("inertia_kgm2", True),
-                   tdc_after_gap_deg=num("tdc_after_gap_deg"), pressure_gain_pa=num("pressure_gain_pa", True),
-                   pressure_offset_pa=num("pressure_offset_pa"), loss_torque_Nm=num("loss_torque_Nm"),
-                   scaling=scaling, charge_scale=num("charge_scale", True) if "charge_scale" in d else 1.0,
-                   wheel=text("wheel"), tooth_errors=te, source=text("source"), fit=fit,
-                   cylinders=whole("cylinders"), strokes=whole("strokes"), geometry=dict(geo))
+        return cls(
+            engine=text("engine"),
+            inertia_kgm2=num("inertia_kgm2", True),
+            tdc_after_gap_deg=num("tdc_after_gap_deg"),
+            pressure_gain_pa=num("pressure_gain_pa", True),
+            pressure_offset_pa=num("pressure_offset_pa"),
+            loss_torque_Nm=num("loss_torque_Nm"),
+            scaling=scaling,
+            charge_scale=num("charge_scale", True) if "charge_scale" in d else 1.0,
+            wheel=text("wheel"),
+            tooth_errors=te,
+            source=text("source"),
+            fit=fit,
+            cylinders=whole("cylinders"),
+            strokes=whole("strokes"),
+            geometry=dict(geo),
+        )
 
     def save(self, path) -> None:
         """Write as JSON, whole or not at all."""
@@ -252,7 +283,7 @@ class Calibration:
         write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1, allow_nan=False) + "\n")
 
     @classmethod
-    def load(cls, path) -> "Calibration":
+    def load(cls, path) -> Calibration:
         """Read a file written by :meth:`save`; a malformed file raises
         :class:`rotor.EngineError` naming the file and the key."""
         path = os.fspath(path)
@@ -267,12 +298,14 @@ class Calibration:
         j_e = self.fit.get("energy_balance_inertia_kgm2", float("nan"))
         imep = self.fit.get("imep_measured_pa", float("nan"))
         sign = "+" if self.pressure_offset_pa >= 0 else "−"
-        lines = [f"calibration of {self.engine} from {self.source or 'a recording'}:",
-                 f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {j_e:.5f})",
-                 f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = "
-                 f"{self.pressure_gain_pa / 1e5:.4g} bar × signal {sign} {abs(self.pressure_offset_pa) / 1e5:.4g} bar",
-                 f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / 1e5:.3f} bar; "
-                 f"scaling {self.scaling} (σ {self.charge_scale:.4f})"]
+        lines = [
+            f"calibration of {self.engine} from {self.source or 'a recording'}:",
+            f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {j_e:.5f})",
+            f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = "
+            f"{self.pressure_gain_pa / 1e5:.4g} bar × signal {sign} {abs(self.pressure_offset_pa) / 1e5:.4g} bar",
+            f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / 1e5:.3f} bar; "
+            f"scaling {self.scaling} (σ {self.charge_scale:.4f})",
+        ]
         return "\n".join(lines) + "\n"
 
 
@@ -316,9 +349,11 @@ def _plain(x):
 # ----------------------------------------------------------------------------- pieces
 def _check_single(engine, what):
     if engine.cylinders != 1:
-        raise EngineError(f"{what}: engine {engine.name!r} has {engine.cylinders} cylinders; a calibration from a "
-                          f"pressure channel needs every cylinder's pressure, which a log of one channel has only "
-                          f"for a single-cylinder engine (not yet: several cylinders)")
+        raise EngineError(
+            f"{what}: engine {engine.name!r} has {engine.cylinders} cylinders; a calibration from a "
+            f"pressure channel needs every cylinder's pressure, which a log of one channel has only "
+            f"for a single-cylinder engine (not yet: several cylinders)"
+        )
 
 
 def _binned_pressure(analysis, step_deg=BIN_DEG):
@@ -336,8 +371,10 @@ def _binned_pressure(analysis, step_deg=BIN_DEG):
         m = cyc == k
         n = np.bincount(b_all[m], minlength=nb)
         if np.count_nonzero(n) < nb // 2:
-            raise EngineError(f"{analysis.source}: cycle {k} has pressure samples in only {np.count_nonzero(n)} of "
-                              f"{nb} bins of {step_deg:g}°: sample the pressure faster")
+            raise EngineError(
+                f"{analysis.source}: cycle {k} has pressure samples in only {np.count_nonzero(n)} of "
+                f"{nb} bins of {step_deg:g}°: sample the pressure faster"
+            )
         s = np.bincount(b_all[m], weights=pv[m], minlength=nb)
         ok = n > 0
         out[k] = np.interp(centres, centres[ok], s[ok] / n[ok], period=analysis.cycle_rad)
@@ -405,7 +442,7 @@ def _energy_balance(engine, analysis, gain, max_order):
     Wc = np.empty(C * P)
     acc = 0.0
     for k in range(C):
-        Wc[k * P:(k + 1) * P] = acc + Wu[k, :P]
+        Wc[k * P : (k + 1) * P] = acc + Wu[k, :P]
         acc += Wu[k, -1]
     Wc *= gain
     w2 = analysis.omega.reshape(-1) ** 2
@@ -424,24 +461,32 @@ def _energy_balance(engine, analysis, gain, max_order):
     r = yk - Xk @ sol
     u = sol[0]
     if not u > 0:
-        raise EngineError(f"{analysis.source}: the energy balance gives no positive inertia (the speed does not follow "
-                          f"the pressure's torque: check the columns and TDC)")
+        raise EngineError(
+            f"{analysis.source}: the energy balance gives no positive inertia (the speed does not follow "
+            f"the pressure's torque: check the columns and TDC)"
+        )
     J = 1.0 / u
     b_rel = sol[1] / u
     a_k = -sol[3:] / u
     fluct = yk - Xk[:, 2:] @ sol[2:]
     w_mean = float(np.mean(analysis.omega))
-    return J, b_rel, a_k, {
-        "energy_balance_r2": float(1 - np.sum(r**2) / np.sum((fluct - fluct.mean()) ** 2)),
-        "energy_balance_rms_rad_s": float(np.sqrt(np.mean(r**2)) / w_mean),
-    }
+    return (
+        J,
+        b_rel,
+        a_k,
+        {
+            "energy_balance_r2": float(1 - np.sum(r**2) / np.sum((fluct - fluct.mean()) ** 2)),
+            "energy_balance_rms_rad_s": float(np.sqrt(np.mean(r**2)) / w_mean),
+        },
+    )
 
 
 def _scaled(engine, sigma):
     """The engine's Wiebe cycle scaled as a whole: intake pressure and IMEP × σ."""
     p = engine.pressure
-    return eqx.tree_at(lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), engine,
-                       (p.intake_pa * sigma, p.imep_pa * sigma))
+    return eqx.tree_at(
+        lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), engine, (p.intake_pa * sigma, p.imep_pa * sigma)
+    )
 
 
 def _can_scale(engine):
@@ -456,9 +501,19 @@ def _mean_scale(ident):
 
 
 # ----------------------------------------------------------------------------- calibrate
-def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[float] = None,
-              max_order: float = DEFAULT_MAX_ORDER, scaling: str = "charge", refine: bool = True,
-              tooth_errors="estimate", load_per: str = "block") -> Calibration:
+def calibrate(
+    engine,
+    log,
+    *,
+    wheel=None,
+    columns=None,
+    pressure_gain: float | None = None,
+    max_order: float = DEFAULT_MAX_ORDER,
+    scaling: str = "charge",
+    refine: bool = True,
+    tooth_errors="estimate",
+    load_per: str = "block",
+) -> Calibration:
     """Calibrate inertia, losses, TDC, tooth errors and the pressure offset from a recording
     with a cylinder-pressure channel (see the module doc).
 
@@ -483,8 +538,10 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     if scaling not in SCALINGS:
         raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
     if scaling == "charge" and not _can_scale(engine):
-        raise EngineError(f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
-                          f"{type(engine.pressure).__name__}: use scaling='none'")
+        raise EngineError(
+            f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
+            f"{type(engine.pressure).__name__}: use scaling='none'"
+        )
     if pressure_gain is not None and not (np.isfinite(pressure_gain) and pressure_gain > 0):
         raise EngineError(f"pressure_gain = {pressure_gain!r}: must be a positive number [Pa per signal unit]")
     rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
@@ -492,12 +549,21 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
         a = log
     else:
         cr = getattr(engine.pressure, "compression_ratio", None)
-        a = analyze_log(log, wheel, columns=columns, strokes=engine.strokes, cylinders=engine.cylinders,
-                        tooth_errors=tooth_errors, compression_ratio=None if cr is None else float(cr),
-                        rod_ratio=None if cr is None else rod_ratio)
+        a = analyze_log(
+            log,
+            wheel,
+            columns=columns,
+            strokes=engine.strokes,
+            cylinders=engine.cylinders,
+            tooth_errors=tooth_errors,
+            compression_ratio=None if cr is None else float(cr),
+            rod_ratio=None if cr is None else rod_ratio,
+        )
     if a.pressure is None:
-        raise EngineError(f"{a.source}: no pressure channel (a column pressure_v): a speed-only recording cannot be "
-                          f"calibrated; diagnose it with a saved calibration")
+        raise EngineError(
+            f"{a.source}: no pressure channel (a column pressure_v): a speed-only recording cannot be "
+            f"calibrated; diagnose it with a saved calibration"
+        )
     if not str(a.tdc_method).startswith(("pressure", "given")):
         raise EngineError(f"{a.source}: TDC is not known ({a.tdc_method})")
     vh = float(engine.geometry.displacement_m3)
@@ -516,20 +582,27 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
     offset = b_rel + float(engine.pressure.crankcase_pa)
     imep_mean = float(np.mean(imep_cycles))
     sigma = imep_mean / nominal if scaling == "charge" else 1.0
-    fit = {"energy_balance_inertia_kgm2": J_e, "max_order": float(max_order), "cycles": int(a.cycles),
-           "imep_measured_pa": imep_mean, "imep_measured_cycles_pa": imep_cycles.tolist(),
-           "loss_torque_cycles_Nm": a_k.tolist(), "pressure_gain_from": gain_from,
-           "mean_rpm": float(np.mean(a.mean_rpm)),
-           "loss_mep_pa": float(np.mean(a_k)) * float(engine.cycle_rad) / vh,  # friction + load as a mean pressure
-           **figs}
+    fit = {
+        "energy_balance_inertia_kgm2": J_e,
+        "max_order": float(max_order),
+        "cycles": int(a.cycles),
+        "imep_measured_pa": imep_mean,
+        "imep_measured_cycles_pa": imep_cycles.tolist(),
+        "loss_torque_cycles_Nm": a_k.tolist(),
+        "pressure_gain_from": gain_from,
+        "mean_rpm": float(np.mean(a.mean_rpm)),
+        "loss_mep_pa": float(np.mean(a_k)) * float(engine.cycle_rad) / vh,  # friction + load as a mean pressure
+        **figs,
+    }
     J = J_e
     if refine:
         eng_s = _scaled(engine, sigma) if scaling == "charge" else engine
         from .identification import identify
 
         def g(logJ):
-            ident = identify(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, eng_s, float(np.exp(logJ))), a,
-                             load_per=load_per)
+            ident = identify(
+                eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, eng_s, float(np.exp(logJ))), a, load_per=load_per
+            )
             ident_mean = float(np.mean(ident.imep_pa[:, 0]))
             return math.log(max(ident_mean, 1.0)) - math.log(max(imep_mean, 1.0)), ident_mean
 
@@ -546,18 +619,40 @@ def calibrate(engine, log, *, wheel=None, columns=None, pressure_gain: Optional[
         J = float(np.exp(x1))
         fit["refine_steps"] = steps
         fit["identified_imep_mismatch"] = float(math.expm1(g1))
-    return Calibration(engine=engine.name, inertia_kgm2=float(J), tdc_after_gap_deg=float(np.rad2deg(a.tdc_rad)),
-                       pressure_gain_pa=float(gain), pressure_offset_pa=float(offset),
-                       loss_torque_Nm=float(np.mean(a_k)), scaling=scaling, charge_scale=float(sigma),
-                       wheel=a.track.wheel.spec if a.track is not None else "", tooth_errors=a.tooth_errors,
-                       source=a.source, fit=fit, cylinders=int(engine.cylinders), strokes=int(engine.strokes),
-                       geometry=_engine_geometry(engine))
+    return Calibration(
+        engine=engine.name,
+        inertia_kgm2=float(J),
+        tdc_after_gap_deg=float(np.rad2deg(a.tdc_rad)),
+        pressure_gain_pa=float(gain),
+        pressure_offset_pa=float(offset),
+        loss_torque_Nm=float(np.mean(a_k)),
+        scaling=scaling,
+        charge_scale=float(sigma),
+        wheel=a.track.wheel.spec if a.track is not None else "",
+        tooth_errors=a.tooth_errors,
+        source=a.source,
+        fit=fit,
+        cylinders=int(engine.cylinders),
+        strokes=int(engine.strokes),
+        geometry=_engine_geometry(engine),
+    )
 
 
 # ----------------------------------------------------------------------------- diagnose
-def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
-             tdc_deg: Optional[float] = None, firing="auto", load_per: str = "block", scaling: Optional[str] = None,
-             max_iterations: int = 8, **identify_kwargs):
+def diagnose(
+    engine,
+    log,
+    calibration="preset",
+    *,
+    wheel=None,
+    columns=None,
+    tdc_deg: float | None = None,
+    firing="auto",
+    load_per: str = "block",
+    scaling: str | None = None,
+    max_iterations: int = 8,
+    **identify_kwargs,
+):
     """Per-firing IMEP, load and misfires of a recording from its crank speed alone, with a
     calibration (see the module doc).
 
@@ -586,9 +681,8 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
     (σ stays the calibration's), every firing is a misfire, and a note says so. σ is kept
     within :data:`SIGMA_RANGE`.
     """
-    from .identification import identify
     from ..logs.analysis import analyze_log
-
+    from .identification import identify
     from .misfire import FLOOR_SCALE
 
     cal_source = None
@@ -607,8 +701,10 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
     if scaling not in SCALINGS:
         raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
     if scaling == "charge" and not _can_scale(engine):
-        raise EngineError(f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
-                          f"{type(engine.pressure).__name__}")
+        raise EngineError(
+            f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
+            f"{type(engine.pressure).__name__}"
+        )
     analysis = None
     if isinstance(log, (str, os.PathLike)):
         if tdc_deg is None and calibration is not None:
@@ -617,13 +713,23 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
         te = "estimate" if calibration is None or calibration.tooth_errors is None else calibration.tooth_errors
         rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
         cr = getattr(engine.pressure, "compression_ratio", None)
-        analysis = analyze_log(log, w, columns=columns, strokes=engine.strokes, cylinders=engine.cylinders,
-                               tdc_deg=tdc_deg, firing=firing, tooth_errors=te,
-                               compression_ratio=None if cr is None else float(cr),
-                               rod_ratio=None if cr is None else rod_ratio)
+        analysis = analyze_log(
+            log,
+            w,
+            columns=columns,
+            strokes=engine.strokes,
+            cylinders=engine.cylinders,
+            tdc_deg=tdc_deg,
+            firing=firing,
+            tooth_errors=te,
+            compression_ratio=None if cr is None else float(cr),
+            rod_ratio=None if cr is None else rod_ratio,
+        )
         if str(analysis.tdc_method).startswith("unknown"):
-            raise EngineError(f"{analysis.source}: TDC is not known: give a calibration (--calibration), tdc_deg "
-                              f"(--tdc-deg) or a pressure channel")
+            raise EngineError(
+                f"{analysis.source}: TDC is not known: give a calibration (--calibration), tdc_deg "
+                f"(--tdc-deg) or a pressure channel"
+            )
         speed = analysis
     else:
         speed = log
@@ -643,8 +749,10 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
             ma = _mean_scale(ident)
             if not (math.isfinite(ma) and ma > FLOOR_SCALE):
                 no_firing = True
-                extra.append(f"charge scaling stopped: no firing (mean combustion scale {ma:.3f}, below the misfire "
-                             f"floor {FLOOR_SCALE:g}): every firing a misfire, σ kept at {sigma:.4g}")
+                extra.append(
+                    f"charge scaling stopped: no firing (mean combustion scale {ma:.3f}, below the misfire "
+                    f"floor {FLOOR_SCALE:g}): every firing a misfire, σ kept at {sigma:.4g}"
+                )
             else:
                 ga = math.log(ma)
                 xb = min(max(xa + ga, lo), hi)
@@ -662,8 +770,10 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
                 settled = abs(ga) <= 1e-3
                 if not settled:
                     at = " (at the bound of its range)" if xb in (lo, hi) or xa in (lo, hi) else ""
-                    extra.append(f"the charge scale did not settle in {iters} identifications{at} (σ {sigma:.4g}, "
-                                 f"mean combustion scale {math.exp(ga):.3f})")
+                    extra.append(
+                        f"the charge scale did not settle in {iters} identifications{at} (σ {sigma:.4g}, "
+                        f"mean combustion scale {math.exp(ga):.3f})"
+                    )
         except ArithmeticError as e:
             raise EngineError(f"diagnose: the charge-scale iteration failed ({e}); try scaling='none'") from None
     else:
@@ -671,15 +781,22 @@ def diagnose(engine, log, calibration="preset", *, wheel=None, columns=None,
         if ident.identified.any() and not _mean_scale(ident) > FLOOR_SCALE:
             no_firing = True
             if not any("does not fire" in n for n in ident.notes):
-                extra.append(f"no firing (mean combustion scale below the misfire floor {FLOOR_SCALE:g}): every "
-                             f"firing a misfire")
+                extra.append(
+                    f"no firing (mean combustion scale below the misfire floor {FLOOR_SCALE:g}): every firing a misfire"
+                )
     info = dict(ident.info)
-    info.update(charge_scale=float(sigma), charge_iterations=iters, scaling=scaling,
-                calibration=None if calibration is None else calibration.to_json_dict(), analysis=analysis,
-                engine=_scaled(eng, sigma) if scaling == "charge" else eng, calibration_source=cal_source,
-                no_firing=no_firing)
+    info.update(
+        charge_scale=float(sigma),
+        charge_iterations=iters,
+        scaling=scaling,
+        calibration=None if calibration is None else calibration.to_json_dict(),
+        analysis=analysis,
+        engine=_scaled(eng, sigma) if scaling == "charge" else eng,
+        calibration_source=cal_source,
+        no_firing=no_firing,
+    )
     if cal_source is not None and cal_source.startswith("preset"):
-        extra.append(f"calibration: the preset's own ({cal_source[len('preset '):]})")
+        extra.append(f"calibration: the preset's own ({cal_source[len('preset ') :]})")
     notes = ident.notes + tuple(extra)
     if no_firing:
         return dataclasses.replace(ident, info=info, notes=notes, misfire=ident.misfire | ident.identified)

@@ -73,7 +73,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Optional
 
 import equinox as eqx
 import jax
@@ -83,10 +82,18 @@ import lineax as lx
 import numpy as np
 import optimistix as optx
 
-from ..checks import EngineError
-from ..dynamics.crank_train import _DM, _I, _K, _MM, train_from_engine, check_fidelity, grid_points
-from ..dynamics.equation import _cumulative, _wrap, friction_coefficients, node_offsets
+from ..dynamics.crank_train import (
+    COL_COMBUSTION,
+    COL_I,
+    COL_K,
+    COL_MOTORED,
+    check_fidelity,
+    grid_points,
+    train_from_engine,
+)
+from ..dynamics.equation import friction_coefficients, hermite_cumulative, node_offsets, wrap_periodic
 from ..dynamics.loads import ConstantLoad, Load
+from ..errors import EngineError
 from .misfire import FLOOR_SCALE, MISFIRE_THRESHOLD, contribution_index
 
 __all__ = ["Identification", "identify", "PARAMETERS"]
@@ -147,7 +154,7 @@ class Identification:
     imep_nominal_pa: np.ndarray
     threshold: float
     ambiguous_pairs: tuple = ()
-    t_start_s: Optional[np.ndarray] = None
+    t_start_s: np.ndarray | None = None
     notes: tuple = ()
     engine_name: str = ""
     wall_s: float = float("nan")
@@ -167,18 +174,24 @@ class Identification:
 
     def summary(self) -> str:
         """A few lines for a terminal."""
-        lines = [f"{self.engine_name}: {self.cycles} cycles identified, rms residual {self.rms_residual:.3g} rad/s "
-                 f"({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})"]
+        lines = [
+            f"{self.engine_name}: {self.cycles} cycles identified, rms residual {self.rms_residual:.3g} rad/s "
+            f"({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})"
+        ]
         lines.append("  cylinder  IMEP mean [bar]  ± std   scale mean   misfires")
         for c in range(self.cylinders):
             ok = self.identified[:, c] & ~self.misfire[:, c]
             imep = f"{np.mean(self.imep_pa[ok, c]) / 1e5:15.3f}" if ok.any() else f"{'—':>15}"
             scale = f"{np.mean(self.scale[ok, c]):10.4f}" if ok.any() else f"{'—':>10}"
-            lines.append(f"  {c + 1:8d}  {imep}  {np.median(self.imep_std_pa[:, c]) / 1e5:6.3f}   {scale}   "
-                         f"{int(np.sum(self.misfire[:, c]))}")
+            lines.append(
+                f"  {c + 1:8d}  {imep}  {np.median(self.imep_std_pa[:, c]) / 1e5:6.3f}   {scale}   "
+                f"{int(np.sum(self.misfire[:, c]))}"
+            )
         lines[1] = "  cylinder  IMEP mean [bar]  ± std   scale mean   misfires   (mean over the normal firings)"
-        lines.append(f"  load torque {np.mean(self.load_torque_Nm):.2f} N·m (cycles {np.min(self.load_torque_Nm):.2f} … "
-                     f"{np.max(self.load_torque_Nm):.2f})")
+        lines.append(
+            f"  load torque {np.mean(self.load_torque_Nm):.2f} N·m (cycles {np.min(self.load_torque_Nm):.2f} … "
+            f"{np.max(self.load_torque_Nm):.2f})"
+        )
         m = self.misfires()
         lines.append(f"  misfires (cycle, cylinder): {m if m else 'none'}")
         for n in self.notes:
@@ -194,6 +207,7 @@ class Identification:
 
     def to_json_dict(self) -> dict:
         """Plain numbers for JSON."""
+
         def f(x):
             return np.where(np.isfinite(x), x, np.nan).tolist()
 
@@ -239,27 +253,35 @@ class _Bases(eqx.Module):
 
 @eqx.filter_jit
 def _make_bases(train, c_loss, stride: int):
-    v, d = _wrap(train.values), _wrap(train.slopes)
+    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
     h = train.step_rad
-    inertia, dinertia, k, dk = v[:, _I], d[:, _I], v[:, _K], d[:, _K]
+    inertia, dinertia, k, dk = v[:, COL_I], d[:, COL_I], v[:, COL_K], d[:, COL_K]
     G = 2 * (c_loss - k) / inertia
     dG = 2 * (-dk * inertia - (c_loss - k) * dinertia) / inertia**2
-    phi = jnp.exp(-_cumulative(G, dG, h))
+    phi = jnp.exp(-hermite_cumulative(G, dG, h))
 
     def basis(f, df):
-        return _cumulative(f / phi, (df + f * G) / phi, h)
+        return hermite_cumulative(f / phi, (df + f * G) / phi, h)
 
     off = node_offsets(train)  # (N+1, n)
     left = off == off[0][None, :]
-    dm, ddm = v[:, _DM:], d[:, _DM:]
+    dm, ddm = v[:, COL_COMBUSTION:], d[:, COL_COMBUSTION:]
     cols = jax.vmap(basis, in_axes=(1, 1), out_axes=1)
     BL = cols(jnp.where(left, dm, 0.0), jnp.where(left, ddm, 0.0))
     BR = cols(jnp.where(left, 0.0, dm), jnp.where(left, 0.0, ddm))
     absw = jnp.abs(dm[:-1]) * h
     s = slice(None, None, stride)
-    return _Bases(phi[s], basis(v[:, _MM], d[:, _MM])[s], basis(jnp.ones_like(G), jnp.zeros_like(G))[s], BL[s],
-                  BR[s], inertia[:-1][s], jnp.sum(jnp.where(left[:-1], absw, 0.0), axis=0),
-                  jnp.sum(jnp.where(left[:-1], 0.0, absw), axis=0), off[0])
+    return _Bases(
+        phi[s],
+        basis(v[:, COL_MOTORED], d[:, COL_MOTORED])[s],
+        basis(jnp.ones_like(G), jnp.zeros_like(G))[s],
+        BL[s],
+        BR[s],
+        inertia[:-1][s],
+        jnp.sum(jnp.where(left[:-1], absw, 0.0), axis=0),
+        jnp.sum(jnp.where(left[:-1], 0.0, absw), axis=0),
+        off[0],
+    )
 
 
 def _layout(work_L, work_R, offset_L, L: int):
@@ -390,15 +412,17 @@ def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, na: int, 
 
 # ----------------------------------------------------------------------------- inputs
 def _speed(engine, speed, cycle_rad):
-    from ..logs.analysis import LogAnalysis
     from ..dynamics.result import SpeedResult
+    from ..logs.analysis import LogAnalysis
 
     t_start = None
     phase = None
     if isinstance(speed, SpeedResult):
         if not math.isclose(float(speed.cycle_rad), float(engine.cycle_rad), rel_tol=1e-9):
-            raise EngineError(f"speed (a SpeedResult): its {math.degrees(speed.cycle_rad):g}° cycle does not fit the "
-                              f"{engine.strokes}-stroke engine {engine.name!r}")
+            raise EngineError(
+                f"speed (a SpeedResult): its {math.degrees(speed.cycle_rad):g}° cycle does not fit the "
+                f"{engine.strokes}-stroke engine {engine.name!r}"
+            )
         C, P = speed.uniform_cycles, speed.points_per_cycle
         if C < 1:
             raise EngineError("speed (a SpeedResult) holds no complete cycle sampled in the angle domain")
@@ -407,14 +431,18 @@ def _speed(engine, speed, cycle_rad):
         phase = True
     elif isinstance(speed, LogAnalysis):
         if not math.isclose(float(speed.cycle_rad), float(engine.cycle_rad), rel_tol=1e-9):
-            raise EngineError(f"speed (a LogAnalysis): its {math.degrees(speed.cycle_rad):g}° cycle does not fit the "
-                              f"{engine.strokes}-stroke engine {engine.name!r}")
+            raise EngineError(
+                f"speed (a LogAnalysis): its {math.degrees(speed.cycle_rad):g}° cycle does not fit the "
+                f"{engine.strokes}-stroke engine {engine.name!r}"
+            )
         starts = np.asarray(speed.cycle_start_rad)
         if starts.size > 1 and not np.allclose(np.diff(starts), speed.cycle_rad, rtol=0, atol=1e-9):
             raise EngineError("speed (a LogAnalysis): its cycles are not consecutive")
         if str(speed.tdc_method).startswith("unknown"):
-            raise EngineError("speed (a LogAnalysis): its cycles do not start at TDC (TDC unknown); give tdc_deg or a "
-                              "pressure channel to analyze_log")
+            raise EngineError(
+                "speed (a LogAnalysis): its cycles do not start at TDC (TDC unknown); give tdc_deg or a "
+                "pressure channel to analyze_log"
+            )
         omega = np.asarray(speed.omega, dtype=np.float64)
         t_start = np.asarray(speed.t_start_s)
         phase = not str(speed.firing_method).startswith("speed")
@@ -426,41 +454,51 @@ def _speed(engine, speed, cycle_rad):
         try:
             omega = np.asarray(speed, dtype=np.float64)
         except (TypeError, ValueError):
-            raise EngineError(f"speed: a LogAnalysis, a SpeedResult or an array (cycles, points), not "
-                              f"{type(speed).__name__}") from None
+            raise EngineError(
+                f"speed: a LogAnalysis, a SpeedResult or an array (cycles, points), not {type(speed).__name__}"
+            ) from None
         if omega.ndim == 1:
             omega = omega[None, :]
         if omega.ndim != 2:
-            raise EngineError(f"speed has shape {np.shape(speed)}: needs (cycles, points) on the uniform cycle-angle "
-                              f"grid of consecutive cycles (0 = TDC of cylinder 1 before intake)")
+            raise EngineError(
+                f"speed has shape {np.shape(speed)}: needs (cycles, points) on the uniform cycle-angle "
+                f"grid of consecutive cycles (0 = TDC of cylinder 1 before intake)"
+            )
     if omega.shape[0] < 1 or omega.shape[1] < 16:
         raise EngineError(f"speed has shape {omega.shape}: needs at least one cycle of 16 or more points")
     if not np.all(np.isfinite(omega)):
         bad = np.argwhere(~np.isfinite(omega))[0]
         raise EngineError(f"speed is not finite (NaN or inf) at cycle {bad[0]}, point {bad[1]}")
     if np.any(omega <= 0):
-        raise EngineError(f"speed must be positive everywhere (the crankshaft turning forwards); its minimum is "
-                          f"{omega.min():g} rad/s")
+        raise EngineError(
+            f"speed must be positive everywhere (the crankshaft turning forwards); its minimum is {omega.min():g} rad/s"
+        )
     return omega, t_start, phase
 
 
 def _losses(engine, friction, load):
     fa, fb, fc = (float(x) for x in np.asarray(friction_coefficients(engine, friction)))
     if fb != 0:
-        raise EngineError("identify needs friction of the form a + c·ω² (its closed form); this friction has a "
-                          "speed-linear term: give friction=rotor.Friction(...) without fmep_per_speed, or False")
+        raise EngineError(
+            "identify needs friction of the form a + c·ω² (its closed form); this friction has a "
+            "speed-linear term: give friction=rotor.Friction(...) without fmep_per_speed, or False"
+        )
     c_load = 0.0
     if load is not None:
         if not isinstance(load, Load):
             try:
                 load = ConstantLoad(float(load))
             except (TypeError, ValueError):
-                raise EngineError(f"load = {load!r}: None (an unknown constant per cycle) or a rotor load model "
-                                  f"(ConstantLoad, PolynomialLoad, PropellerLoad)") from None
+                raise EngineError(
+                    f"load = {load!r}: None (an unknown constant per cycle) or a rotor load model "
+                    f"(ConstantLoad, PolynomialLoad, PropellerLoad)"
+                ) from None
         poly = None if load.time_dependent else load.polynomial()
         if poly is None or (poly[1] is not None and float(poly[1]) != 0):
-            raise EngineError(f"load = {type(load).__name__}: identify takes a load of the form a + c·ω² (ConstantLoad, "
-                              f"PolynomialLoad with b = 0, PropellerLoad); its constant part is fitted per cycle")
+            raise EngineError(
+                f"load = {type(load).__name__}: identify takes a load of the form a + c·ω² (ConstantLoad, "
+                f"PolynomialLoad with b = 0, PropellerLoad); its constant part is fitted per cycle"
+            )
         c_load = 0.0 if poly[2] is None else float(poly[2])
     return fa, fc, c_load
 
@@ -476,8 +514,13 @@ def symmetric_pairs(engine):
     n = tdc.size
     partner = []
     for c in range(n):
-        m = [j for j in range(n) if j != c and abs((np.mod(tdc[j] - tdc[c] + 180, 360)) - 180) < 1e-6
-             and abs(np.mod(fire[j] - fire[c], 720) - 360) < 1e-6]
+        m = [
+            j
+            for j in range(n)
+            if j != c
+            and abs((np.mod(tdc[j] - tdc[c] + 180, 360)) - 180) < 1e-6
+            and abs(np.mod(fire[j] - fire[c], 720) - 360) < 1e-6
+        ]
         if not m:
             return ()
         partner.append(m[0])
@@ -499,8 +542,8 @@ def identify(
     load_per: str = "cycle",
     threshold: float = MISFIRE_THRESHOLD,
     misfire_floor: float = FLOOR_SCALE,
-    phase_reference: Optional[bool] = None,
-    cycle_rad: Optional[float] = None,
+    phase_reference: bool | None = None,
+    cycle_rad: float | None = None,
     rtol: float = 1e-6,
     max_steps: int = 50,
 ) -> Identification:
@@ -540,8 +583,10 @@ def identify(
     """
     wall = time.perf_counter()
     if parameters not in PARAMETERS:
-        raise EngineError(f"parameters = {parameters!r}: only 'imep_scale' (one combustion scale per firing) is "
-                          f"implemented; Wiebe start, Wiebe duration and a pressure scale are not")
+        raise EngineError(
+            f"parameters = {parameters!r}: only 'imep_scale' (one combustion scale per firing) is "
+            f"implemented; Wiebe start, Wiebe duration and a pressure scale are not"
+        )
     check_fidelity(fidelity, engine)
     for name, v, lo in (("block_cycles", block_cycles, 1), ("overlap", overlap, 0), ("max_steps", max_steps, 1)):
         if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= lo):
@@ -563,8 +608,10 @@ def identify(
     n = train.cylinders
     comb = np.asarray(train.imep_combustion_pa)
     if not np.all(comb > 0):
-        raise EngineError(f"engine {engine.name!r}: cylinder(s) {list(np.flatnonzero(~(comb > 0)) + 1)} have no "
-                          f"combustion in the engine's pressure (fired = motored): nothing to identify")
+        raise EngineError(
+            f"engine {engine.name!r}: cylinder(s) {list(np.flatnonzero(~(comb > 0)) + 1)} have no "
+            f"combustion in the engine's pressure (fired = motored): nothing to identify"
+        )
     bases = _make_bases(train, jnp.asarray(fc + c_load), N // P)
     work_L, work_R, offset_L = (np.asarray(x) for x in (bases.work_L, bases.work_R, bases.offset_L))
 
@@ -583,8 +630,18 @@ def identify(
     vh = float(engine.geometry.displacement_m3)
     a_ref = float(np.sum(comb)) * vh / float(engine.cycle_rad)  # the engine file's mean combustion torque
     p, cov, res, steps, e_ref, ok = jax.device_get(
-        _fit_blocks(bases, jnp.asarray(blocks), jnp.asarray(pos), jnp.asarray(offset_L), jnp.asarray(a_ref), rtol, nscale,
-                    na, max_steps))  # a_ref traced: a new combustion does not recompile
+        _fit_blocks(
+            bases,
+            jnp.asarray(blocks),
+            jnp.asarray(pos),
+            jnp.asarray(offset_L),
+            jnp.asarray(a_ref),
+            rtol,
+            nscale,
+            na,
+            max_steps,
+        )
+    )  # a_ref traced: a new combustion does not recompile
 
     scale = np.zeros((C, n))
     scale_std = np.zeros((C, n))
@@ -615,38 +672,66 @@ def identify(
     load_t = load_a - fa + c_load * mean_w2
     fluct = omega - omega.mean(axis=1, keepdims=True)
     ss_res, ss_tot = np.sum(resid**2, axis=1), np.sum(fluct**2, axis=1)
-    index, misfire, ref = contribution_index(scale, scale_std, threshold=threshold, floor=misfire_floor,
-                                             valid=ident)
+    index, misfire, ref = contribution_index(scale, scale_std, threshold=threshold, floor=misfire_floor, valid=ident)
     notes = []
     if not ident.all():
         cut = [(int(k), int(c) + 1) for k, c in np.argwhere(~ident)]
-        notes.append(f"firings {cut} (cycle, cylinder) lie mostly outside the record: each shares the scale of the "
-                     f"nearest firing of its cylinder (not identified on its own)")
+        notes.append(
+            f"firings {cut} (cycle, cylinder) lie mostly outside the record: each shares the scale of the "
+            f"nearest firing of its cylinder (not identified on its own)"
+        )
     if not np.all(ok):
-        notes.append("the Levenberg–Marquardt iteration did not converge in every block (max_steps); the linear "
-                     "start stands there")
+        notes.append(
+            "the Levenberg–Marquardt iteration did not converge in every block (max_steps); the linear "
+            "start stands there"
+        )
     if phase_reference is None:
         phase_reference = True if phase_known is None else phase_known
     pairs = () if phase_reference else symmetric_pairs(engine)
     if pairs:
         names = ", ".join(f"{a} and {b}" for a, b in pairs)
-        notes.append(f"the firing revolution is not known from a phase reference (pressure, cam or given), and this "
-                     f"engine is symmetric under 360°: cylinders {names} cannot be told apart from the crank speed "
-                     f"alone; a result for one of a pair may belong to the other (give a cam or pressure channel, "
-                     f"firing=0/1 to analyze_log, or phase_reference=True)")
+        notes.append(
+            f"the firing revolution is not known from a phase reference (pressure, cam or given), and this "
+            f"engine is symmetric under 360°: cylinders {names} cannot be told apart from the crank speed "
+            f"alone; a result for one of a pair may belong to the other (give a cam or pressure channel, "
+            f"firing=0/1 to analyze_log, or phase_reference=True)"
+        )
     if np.all(misfire[ident]) and ident.any():
         notes.append("no firing found: the engine does not fire in this record (a coast-down or motored run)")
     return Identification(
-        scale=scale, scale_std=scale_std, imep_pa=imep, imep_std_pa=scale_std * comb[None, :], identified=ident,
-        contribution=index, misfire=misfire, reference_scale=ref, load_torque_Nm=load_t, load_std_Nm=load_sd,
-        loss_torque_Nm=loss, mean_omega=omega.mean(axis=1), covariance=covs,
-        rms_residual_rad_s=np.sqrt(np.mean(resid**2, axis=1)), r2=1 - ss_res / ss_tot, omega=omega,
-        omega_model=model, rms_residual=float(np.sqrt(np.mean(resid**2))),
+        scale=scale,
+        scale_std=scale_std,
+        imep_pa=imep,
+        imep_std_pa=scale_std * comb[None, :],
+        identified=ident,
+        contribution=index,
+        misfire=misfire,
+        reference_scale=ref,
+        load_torque_Nm=load_t,
+        load_std_Nm=load_sd,
+        loss_torque_Nm=loss,
+        mean_omega=omega.mean(axis=1),
+        covariance=covs,
+        rms_residual_rad_s=np.sqrt(np.mean(resid**2, axis=1)),
+        r2=1 - ss_res / ss_tot,
+        omega=omega,
+        omega_model=model,
+        rms_residual=float(np.sqrt(np.mean(resid**2))),
         fit_r2=float(1 - ss_res.sum() / ss_tot.sum()),
-        relative_residual=float(np.sqrt(ss_res.sum() / ss_tot.sum())), imep_nominal_pa=imep_m + comb,
-        threshold=float(threshold), ambiguous_pairs=pairs, t_start_s=t_start, notes=tuple(notes),
-        engine_name=engine.name, wall_s=time.perf_counter() - wall,
-        info={"blocks": int(nb), "block_cycles": int(L), "block_starts": starts.tolist(),
-              "iterations": np.asarray(steps).tolist(),
-              "table_points": int(N), "load_per": load_per},
+        relative_residual=float(np.sqrt(ss_res.sum() / ss_tot.sum())),
+        imep_nominal_pa=imep_m + comb,
+        threshold=float(threshold),
+        ambiguous_pairs=pairs,
+        t_start_s=t_start,
+        notes=tuple(notes),
+        engine_name=engine.name,
+        wall_s=time.perf_counter() - wall,
+        info={
+            "blocks": int(nb),
+            "block_cycles": int(L),
+            "block_starts": starts.tolist(),
+            "iterations": np.asarray(steps).tolist(),
+            "table_points": int(N),
+            "load_per": load_per,
+        },
     )

@@ -46,17 +46,17 @@ and phase of A·cos(νθ + φ) with θ from the start of the cycle.
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..checks import EngineError, arrays_only
-from ..dynamics.crank_train import _I, _K, crank_train
+from ..checks import arrays_only
+from ..dynamics.crank_train import COL_I, COL_K, crank_train
 from ..dynamics.equation import friction_coefficients
 from ..dynamics.loads import ConstantLoad, Load
+from ..errors import EngineError
 
 __all__ = [
     "IndicatedTorque",
@@ -130,9 +130,9 @@ class IndicatedTorque(eqx.Module):
     cycle_rad: float = eqx.field(static=True)
     strokes: int = eqx.field(static=True)
     fidelity: str = eqx.field(static=True)
-    regularisation: Optional[str] = eqx.field(static=True)
-    max_order: Optional[float] = eqx.field(static=True)
-    tikhonov_weight: Optional[float] = eqx.field(static=True)
+    regularisation: str | None = eqx.field(static=True)
+    max_order: float | None = eqx.field(static=True)
+    tikhonov_weight: float | None = eqx.field(static=True)
 
     @property
     def cycles(self) -> int:
@@ -196,8 +196,8 @@ def _check_cycle(engine, cycle_rad, what):
 
 def _speed_input(engine, speed, cycle_rad, t_start_s, periodic):
     """(ω (C, P), end sample or None, t (C, P) or None, t0, periodic) from any accepted input."""
-    from ..logs.analysis import LogAnalysis
     from ..dynamics.result import SpeedResult
+    from ..logs.analysis import LogAnalysis
 
     end = None
     t = None
@@ -240,8 +240,9 @@ def _speed_input(engine, speed, cycle_rad, t_start_s, periodic):
         bad = np.argwhere(~np.isfinite(omega))[0]
         raise EngineError(f"speed is not finite (NaN or inf) at cycle {bad[0]}, point {bad[1]}")
     if np.any(omega <= 0):
-        raise EngineError("speed must be positive everywhere (the crankshaft turning forwards); "
-                          f"its minimum is {omega.min():g} rad/s")
+        raise EngineError(
+            f"speed must be positive everywhere (the crankshaft turning forwards); its minimum is {omega.min():g} rad/s"
+        )
     return omega, end, t, t0, bool(periodic) if periodic is not None else False
 
 
@@ -316,7 +317,7 @@ def _record_derivative(x, h, end, periodic, gain_of_order, fit):
         window = min(window, N // 2)
         degree = min(degree, window - 1)
         start = _end_derivatives(x[:window], h, degree, 0.0)
-        tail = x[N - window:] if end is None else np.append(x[N - window + 1:], end)
+        tail = x[N - window :] if end is None else np.append(x[N - window + 1 :], end)
         at = window if end is None else window - 1
         stop = _end_derivatives(tail, h, degree, at)
         # a derivative as high as the fit's degree is one noisy number: its jump is left out
@@ -354,14 +355,14 @@ def indicated_torque(
     *,
     load=None,
     friction=None,
-    regularisation: Optional[str] = None,
-    max_order: Optional[float] = None,
-    tikhonov_weight: Optional[float] = None,
+    regularisation: str | None = None,
+    max_order: float | None = None,
+    tikhonov_weight: float | None = None,
     fidelity: str = "variable",
     grid_deg: float = 0.25,
-    cycle_rad: Optional[float] = None,
-    t_start_s: Optional[float] = None,
-    periodic: Optional[bool] = None,
+    cycle_rad: float | None = None,
+    t_start_s: float | None = None,
+    periodic: bool | None = None,
 ) -> IndicatedTorque:
     """The engine's indicated torque from its crankshaft speed, by inverse dynamics.
 
@@ -421,7 +422,7 @@ def indicated_torque(
     theta = np.arange(P) * h
     train = crank_train(engine, fidelity, grid_deg)
     val, der = train.at(jnp.asarray(theta))
-    inertia, dinertia, k = (np.asarray(a) for a in (val[:, _I], der[:, _I], val[:, _K]))
+    inertia, dinertia, k = (np.asarray(a) for a in (val[:, COL_I], der[:, COL_I], val[:, COL_K]))
     net = inertia * w * dw + 0.5 * dinertia * w**2
     explicit = k * w**2
     fa, fb, fc = (np.asarray(v, dtype=np.float64) for v in friction_coefficients(engine, friction))
@@ -429,9 +430,22 @@ def indicated_torque(
     m_l = np.zeros_like(w) if load_m is None else np.asarray(load_m.torque(jnp.asarray(w), jnp.asarray(t)))
     torque = net - explicit + m_f + m_l
     return IndicatedTorque(
-        theta=theta, omega=w, domega_dtheta=dw, t=t, torque=torque, net_torque=net, inertia_torque=explicit,
-        friction_torque=m_f, load_torque=m_l, end_jumps=jumps, cycle_rad=cyc, strokes=int(engine.strokes),
-        fidelity=fidelity, regularisation=regularisation, max_order=K, tikhonov_weight=lam,
+        theta=theta,
+        omega=w,
+        domega_dtheta=dw,
+        t=t,
+        torque=torque,
+        net_torque=net,
+        inertia_torque=explicit,
+        friction_torque=m_f,
+        load_torque=m_l,
+        end_jumps=jumps,
+        cycle_rad=cyc,
+        strokes=int(engine.strokes),
+        fidelity=fidelity,
+        regularisation=regularisation,
+        max_order=K,
+        tikhonov_weight=lam,
     )
 
 
@@ -441,13 +455,14 @@ def _two_sided(X, n):
     mean, pos = X
     c = np.zeros(X[1].shape[:-1] + (2 * n + 1,), complex)
     c[..., n] = mean
-    c[..., n + 1:] = pos[..., :n] / 2
+    c[..., n + 1 :] = pos[..., :n] / 2
     c[..., :n] = np.conj(pos[..., :n][..., ::-1]) / 2
     return c
 
 
-def harmonic_response(inertia_coefficients, mean_omega, revs, out_orders: int, explicit_coefficients=None,
-                      loss_slope=0.0):
+def harmonic_response(
+    inertia_coefficients, mean_omega, revs, out_orders: int, explicit_coefficients=None, loss_slope=0.0
+):
     """The linearised response of the crank train: gas-torque harmonics from speed harmonics.
 
     **Arguments** (two-sided complex Fourier coefficients over one cycle, index n for
@@ -498,12 +513,12 @@ def harmonic_torque(
     speed,
     *,
     max_order: float = 6.0,
-    speed_max_order: Optional[float] = None,
+    speed_max_order: float | None = None,
     load=None,
     friction=None,
     fidelity: str = "variable",
     grid_deg: float = 0.25,
-    cycle_rad: Optional[float] = None,
+    cycle_rad: float | None = None,
 ) -> HarmonicTorque:
     """Gas-torque harmonics from the low orders of speed (the harmonic method).
 
@@ -548,15 +563,19 @@ def harmonic_torque(
     nyq = (P - 1) // 2
     n_out = int(np.floor(float(max_order) * revs + 1e-9))
     if not (np.isfinite(max_order) and 1 <= n_out <= nyq):
-        raise EngineError(f"max_order = {max_order!r}: must be at least {1 / revs:g} and below the grid's Nyquist "
-                          f"order {nyq / revs:g}")
+        raise EngineError(
+            f"max_order = {max_order!r}: must be at least {1 / revs:g} and below the grid's Nyquist "
+            f"order {nyq / revs:g}"
+        )
     if speed_max_order is None:
         n_s = min(n_out + 2 * engine.cylinders, nyq)  # the firing order is `cylinders` cycle harmonics
     else:
         n_s = int(np.floor(float(speed_max_order) * revs + 1e-9))
         if not (n_out <= n_s <= nyq):
-            raise EngineError(f"speed_max_order = {speed_max_order!r}: must lie between max_order and the grid's "
-                              f"Nyquist order {nyq / revs:g}")
+            raise EngineError(
+                f"speed_max_order = {speed_max_order!r}: must lie between max_order and the grid's "
+                f"Nyquist order {nyq / revs:g}"
+            )
     load_m = _load_module(load)
     cyc = _engine_cycle(engine)
     h = cyc / P
@@ -572,8 +591,8 @@ def harmonic_torque(
     N = n_s + n_out
     if N > nyq:
         N = nyq
-    ci = np.fft.fft(np.asarray(val[:, _I])) / P
-    ck = np.fft.fft(np.asarray(val[:, _K])) / P
+    ci = np.fft.fft(np.asarray(val[:, COL_I])) / P
+    ck = np.fft.fft(np.asarray(val[:, COL_K])) / P
     idx = np.arange(-N, N + 1) % P
     ci, ck = ci[idx], ck[idx]
     fa, fb, fc = (float(v) for v in friction_coefficients(engine, friction))
@@ -599,6 +618,9 @@ def harmonic_torque(
     rel = np.max(np.abs(wfl), axis=1) / wbar
     return HarmonicTorque(
         torque=TorqueOrders(np.arange(1, n_out + 1) / revs, mean, out),
-        speed_orders=np.arange(1, n_s + 1) / revs, speed_complex=speed_c, mean_omega=wbar, trend=slope,
+        speed_orders=np.arange(1, n_s + 1) / revs,
+        speed_complex=speed_c,
+        mean_omega=wbar,
+        trend=slope,
         relative_speed_amplitude=rel,
     )

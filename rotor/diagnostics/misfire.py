@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..checks import EngineError
+from ..errors import EngineError
 
 __all__ = ["contribution_index", "MISFIRE_THRESHOLD", "FLOOR_SCALE"]
 
@@ -49,8 +49,15 @@ FLOOR_SCALE = 0.05
 REFERENCE_CYCLES = 5  # w: the reference is the median over the cycles k − w … k + w
 
 
-def contribution_index(scale, scale_std=None, *, threshold: float = MISFIRE_THRESHOLD, floor: float = FLOOR_SCALE,
-                       window: int = REFERENCE_CYCLES, valid=None):
+def contribution_index(
+    scale,
+    scale_std=None,
+    *,
+    threshold: float = MISFIRE_THRESHOLD,
+    floor: float = FLOOR_SCALE,
+    window: int = REFERENCE_CYCLES,
+    valid=None,
+):
     """Contribution index and misfire flags of identified combustion scales.
 
     **Arguments:**

@@ -47,8 +47,8 @@ import pathlib
 
 import numpy as np
 
-from ..checks import EngineError
 from ..engine.forces import cylinder_pressure  # compiled once per shape
+from ..errors import EngineError
 
 __all__ = ["simulated_recording", "simulated_tooth_errors", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
 
@@ -101,9 +101,20 @@ def _number(name, x, *, positive=False, nonnegative=False):
     return x
 
 
-def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12, imep_scale: float = 1.0,
-                        sample_rate_hz: float = 100_000.0, wheel=None, gap_deg: float = DEFAULT_GAP_DEG,
-                        tooth_error_deg: float = 0.1, noise_v: float = 0.01, seed: int = 0) -> pathlib.Path:
+def simulated_recording(
+    path,
+    engine="tue-single",
+    rpm=None,
+    *,
+    cycles: int = 12,
+    imep_scale: float = 1.0,
+    sample_rate_hz: float = 100_000.0,
+    wheel=None,
+    gap_deg: float = DEFAULT_GAP_DEG,
+    tooth_error_deg: float = 0.1,
+    noise_v: float = 0.01,
+    seed: int = 0,
+) -> pathlib.Path:
     """Write a simulated raw bench recording (time, pressure voltage, encoder voltage) to ``path``.
 
     **Arguments:**
@@ -141,12 +152,12 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     import equinox as eqx
     from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
-    from ..fileio import atomic_path
-    from ..engine.model import Engine
-    from .calibration import SIGMA_RANGE
-    from ..engine.file import load_engine
     from ..dynamics.steady import steady_state
+    from ..engine.file import load_engine
+    from ..engine.model import Engine
+    from ..fileio import atomic_path
     from ..logs.wheel import Wheel, parse_wheel
+    from .calibration import SIGMA_RANGE
 
     # ---------------------------------------------------------------- arguments
     path = pathlib.Path(path)
@@ -174,12 +185,16 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     except ValueError as e:
         raise EngineError(f"wheel = {wheel!r}: {e}") from None
     if w.missing < 1:
-        raise EngineError(f"wheel = {w.spec!r}: a simulated recording needs a wheel with a gap (e.g. 60-2); an "
-                          f"index channel is not simulated")
+        raise EngineError(
+            f"wheel = {w.spec!r}: a simulated recording needs a wheel with a gap (e.g. 60-2); an "
+            f"index channel is not simulated"
+        )
     pitch_deg = 360.0 / w.teeth
     if tooth_error_deg >= pitch_deg / 4:
-        raise EngineError(f"tooth_error_deg = {tooth_error_deg:g}: must be below a quarter of the {w.spec} wheel's "
-                          f"pitch ({pitch_deg / 4:g}°)")
+        raise EngineError(
+            f"tooth_error_deg = {tooth_error_deg:g}: must be below a quarter of the {w.spec} wheel's "
+            f"pitch ({pitch_deg / 4:g}°)"
+        )
     if w.missing > w.teeth - 3:
         raise EngineError(f"wheel = {w.spec!r}: too few teeth for a simulated recording")
 
@@ -188,10 +203,15 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     if all(hasattr(pressure, k) for k in ("intake_pa", "imep_pa")):  # a Wiebe cycle: the whole charge scaled
         lo, hi = SIGMA_RANGE
         if not lo <= imep_scale <= hi:
-            raise EngineError(f"imep_scale = {imep_scale:g}: scales this engine's Wiebe cycle whole (intake pressure "
-                              f"with the IMEP); the physical range is {lo:g} … {hi:g}")
-        eng = eqx.tree_at(lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), eng,
-                          (pressure.intake_pa * imep_scale, pressure.imep_pa * imep_scale))
+            raise EngineError(
+                f"imep_scale = {imep_scale:g}: scales this engine's Wiebe cycle whole (intake pressure "
+                f"with the IMEP); the physical range is {lo:g} … {hi:g}"
+            )
+        eng = eqx.tree_at(
+            lambda e: (e.pressure.intake_pa, e.pressure.imep_pa),
+            eng,
+            (pressure.intake_pa * imep_scale, pressure.imep_pa * imep_scale),
+        )
         comb_scale = 1.0
     else:
         comb_scale = imep_scale
@@ -204,9 +224,11 @@ def simulated_recording(path, engine="tue-single", rpm=None, *, cycles: int = 12
     w_max = float(omega1.max())
     pitch_s = (2 * np.pi / w.teeth) / w_max
     if pitch_s * fs < MIN_SAMPLES_PER_PITCH:
-        raise EngineError(f"sample_rate_hz = {fs:g}: {pitch_s * fs:.1f} samples per tooth pitch at the "
-                          f"fastest point ({w_max * 30 / np.pi:.0f} rpm) of a {w.spec} wheel; need at least "
-                          f"{MIN_SAMPLES_PER_PITCH} (raise the sampling rate or lower rpm)")
+        raise EngineError(
+            f"sample_rate_hz = {fs:g}: {pitch_s * fs:.1f} samples per tooth pitch at the "
+            f"fastest point ({w_max * 30 / np.pi:.0f} rpm) of a {w.spec} wheel; need at least "
+            f"{MIN_SAMPLES_PER_PITCH} (raise the sampling rate or lower rpm)"
+        )
 
     rng = np.random.default_rng(seed)
     revs = round(cycle_rad / (2 * np.pi))

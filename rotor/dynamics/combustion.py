@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..checks import EngineError
+from ..errors import EngineError
 
 __all__ = ["combustion_pattern"]
 

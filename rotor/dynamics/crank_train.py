@@ -31,15 +31,19 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..checks import EngineError, arrays_only
+from ..checks import arrays_only
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
-from ..engine.inertia import _ordinary_cylinder_inertia, inertia_coefficients, mean_reduced_inertia, reduced_inertia
+from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
+from ..errors import EngineError
 
-__all__ = ["CrankTrain", "crank_train", "FIDELITIES"]
+__all__ = ["CrankTrain", "crank_train", "FIDELITIES", "COL_I", "COL_K", "COL_MOTORED", "COL_COMBUSTION"]
 
 FIDELITIES = ("variable", "series", "coefficients", "constant")
-_I, _K, _MM, _DM = 0, 1, 2, 3
+# the columns of CrankTrain.values and .slopes: I(θ) [kg·m²]; k(θ), the coefficient of ω² in
+# the engine torque [kg·m²]; the motored torque [N·m]; the first of one combustion-torque
+# column per cylinder [N·m]
+COL_I, COL_K, COL_MOTORED, COL_COMBUSTION = 0, 1, 2, 3
 
 
 def check_fidelity(fidelity, engine=None):
@@ -88,7 +92,7 @@ class CrankTrain(eqx.Module):
 
     @property
     def cylinders(self) -> int:
-        return self.values.shape[1] - _DM
+        return self.values.shape[1] - COL_COMBUSTION
 
     @property
     def step_rad(self):
@@ -130,7 +134,7 @@ def _columns(engine, fidelity, theta):
     m_fired = cylinder_gas_torques(engine, theta)
     cols = [inertia[..., None], k[..., None], jnp.sum(m_mot, axis=-1, keepdims=True), m_fired - m_mot]
     out = jnp.concatenate(cols, axis=-1)
-    assert out.shape[-1] == _DM + n
+    assert out.shape[-1] == COL_COMBUSTION + n
     return out, m_mot
 
 
@@ -154,8 +158,14 @@ def _shifted(values, slopes, offset, period):
     j = jnp.floor(u)
     tau = 1.0 - (u - j)  # evaluation point: node (i − j − 1) plus tau
     j = j.astype(jnp.int32)
-    return _hermite(jnp.roll(values, j + 1, axis=0), jnp.roll(values, j, axis=0),
-                    jnp.roll(slopes, j + 1, axis=0), jnp.roll(slopes, j, axis=0), tau, h)
+    return _hermite(
+        jnp.roll(values, j + 1, axis=0),
+        jnp.roll(values, j, axis=0),
+        jnp.roll(slopes, j + 1, axis=0),
+        jnp.roll(slopes, j, axis=0),
+        tau,
+        h,
+    )
 
 
 def _one_cylinder(engine, fidelity, phi):
@@ -174,7 +184,7 @@ def _one_cylinder(engine, fidelity, phi):
         inertia = jnp.zeros_like(phi)
         k = -m_rec * pm.d2s * pm.ds
     elif fidelity == "variable":
-        inertia = _ordinary_cylinder_inertia(phi, g, engine.masses)
+        inertia = ordinary_cylinder_inertia(phi, g, engine.masses)
         k = jnp.zeros_like(phi)
     else:
         A, B, C = inertia_coefficients(engine)
@@ -229,9 +239,9 @@ def _build(engine, fidelity, points):
         work_m = jnp.sum(m_mot, axis=0) * w
         textbook_k = reciprocating_inertia_torque(engine, theta, 1.0)
     vh = engine.geometry.displacement_m3
-    imep_c = jnp.sum(values[:, _DM:], axis=0) * w / vh
+    imep_c = jnp.sum(values[:, COL_COMBUSTION:], axis=0) * w / vh
     firing = jnp.mod(engine.firing_angles_rad, cycle)
-    return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, _I]), firing, textbook_k
+    return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, COL_I]), firing, textbook_k
 
 
 def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
@@ -250,5 +260,6 @@ def train_from_engine(engine, fidelity: str, points: int) -> CrankTrain:
     """:func:`crank_train` with the node count given (usable inside jit)."""
     engine = arrays_only(engine)
     values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)
-    return CrankTrain(values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes,
-                      fidelity)
+    return CrankTrain(
+        values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes, fidelity
+    )

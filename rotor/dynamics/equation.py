@@ -26,8 +26,6 @@ time domain, which ends the run where ω reaches zero (a stall).
 
 from __future__ import annotations
 
-from typing import Optional
-
 import diffrax as dfx
 import equinox as eqx
 import jax
@@ -35,13 +33,13 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .crank_train import _DM, _I, _K, _MM, CrankTrain
+from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain
 from .loads import Governor, Load
 
 TRACES = {"count": 0}  # incremented each time a kernel is traced (compiled): tests check it
 
 
-def _traced():
+def count_trace():
     TRACES["count"] += 1
 
 
@@ -56,8 +54,8 @@ class Scene(eqx.Module):
     train: CrankTrain
     scales: jnp.ndarray
     friction: jnp.ndarray
-    load: Optional[Load] = None
-    governor: Optional[Governor] = None
+    load: Load | None = None
+    governor: Governor | None = None
 
     def scale_at(self, theta):
         idx = self.train.scale_index(theta, self.scales.shape[0])
@@ -87,8 +85,8 @@ class Scene(eqx.Module):
         return val, der, self.scale_at(theta)
 
     def engine_torque(self, val, s, omega, z):
-        comb = jnp.sum(s * val[..., _DM:], axis=-1)
-        return val[..., _MM] + self.fuel(omega, z) * comb + val[..., _K] * omega**2
+        comb = jnp.sum(s * val[..., COL_COMBUSTION:], axis=-1)
+        return val[..., COL_MOTORED] + self.fuel(omega, z) * comb + val[..., COL_K] * omega**2
 
 
 def _omega(E, inertia):
@@ -96,13 +94,13 @@ def _omega(E, inertia):
 
 
 # ----------------------------------------------------------------------------- closed form
-def _cumulative(f, df, h):
+def hermite_cumulative(f, df, h):
     """∫ from node 0 to each node by the Hermite rule: h/2·(f₀+f₁) + h²/12·(f₀′−f₁′)."""
     seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
     return jnp.concatenate([jnp.zeros(1), jnp.cumsum(seg)])
 
 
-def _wrap(x):
+def wrap_periodic(x):
     """Node values 0…N−1 → 0…N (the periodic table's node N is node 0)."""
     return jnp.concatenate([x, x[:1]], axis=0)
 
@@ -119,13 +117,13 @@ def linear_parts(train: CrankTrain, s_nodes, a, c):
     Returns (I, I', F, F', G, G', ΔM-sum, its slope): F = M_motored + Σ s·ΔM − a,
     G = 2(c − k)/I.
     """
-    v, d = _wrap(train.values), _wrap(train.slopes)
-    inertia, dinertia = v[:, _I], d[:, _I]
-    k, dk = v[:, _K], d[:, _K]
-    comb = jnp.sum(s_nodes * v[:, _DM:], axis=1)
-    dcomb = jnp.sum(s_nodes * d[:, _DM:], axis=1)
-    F = v[:, _MM] + comb - a
-    dF = d[:, _MM] + dcomb
+    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
+    inertia, dinertia = v[:, COL_I], d[:, COL_I]
+    k, dk = v[:, COL_K], d[:, COL_K]
+    comb = jnp.sum(s_nodes * v[:, COL_COMBUSTION:], axis=1)
+    dcomb = jnp.sum(s_nodes * d[:, COL_COMBUSTION:], axis=1)
+    F = v[:, COL_MOTORED] + comb - a
+    dF = d[:, COL_MOTORED] + dcomb
     G = 2 * (c - k) / inertia
     dG = 2 * (-dk * inertia - (c - k) * dinertia) / inertia**2
     return inertia, dinertia, F, dF, G, dG
@@ -135,16 +133,16 @@ def linear_cycle(train: CrankTrain, parts, E0, t0):
     """E, ω, t on the nodes 0…N of one cycle from E(0) = E0, t(0) = t0 (closed form)."""
     inertia, dinertia, F, dF, G, dG = parts
     h = train.step_rad
-    cumG = _cumulative(G, dG, h)
+    cumG = hermite_cumulative(G, dG, h)
     phi = jnp.exp(-cumG)
     q = F / phi
     dq = (dF + F * G) / phi
-    E = phi * (E0 + _cumulative(q, dq, h))
+    E = phi * (E0 + hermite_cumulative(q, dq, h))
     omega = _omega(E, inertia)
     dE = F - G * E
     domega = 0.5 * omega * (dE / jnp.maximum(E, 1e-300) - dinertia / inertia)
     r, dr = 1.0 / omega, -domega / omega**2
-    t = t0 + _cumulative(r, dr, h)
+    t = t0 + hermite_cumulative(r, dr, h)
     return E, omega, t, dE
 
 
@@ -154,7 +152,7 @@ def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int
     ``scene.scales[first_cycle + k]``. Returns per cycle the node values every ``stride``
     nodes (E, ω, t) of shape (cycles, N/stride), the end state, and the first cycle in
     which E reached zero (or ``cycles``)."""
-    _traced()
+    count_trace()
     train = scene.train
     offsets = node_offsets(train)
     n_total = scene.scales.shape[0]
@@ -174,9 +172,7 @@ def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int
         out = (E[:-1:stride], t[:-1:stride])
         return (E_end, t_end, stalled_at), out
 
-    (E_end, t_end, stalled_at), (E, t) = jax.lax.scan(
-        body, (E0, t0, jnp.asarray(cycles)), jnp.arange(cycles)
-    )
+    (E_end, t_end, stalled_at), (E, t) = jax.lax.scan(body, (E0, t0, jnp.asarray(cycles)), jnp.arange(cycles))
     return E, t, E_end, t_end, stalled_at
 
 
@@ -187,7 +183,7 @@ def _angle_field(theta, y, args):
     E = e * e_ref
     t = tau / w_ref
     val, der, s = scene.terms(theta)
-    omega = _omega(E, val[_I])
+    omega = _omega(E, val[COL_I])
     m_eng = scene.engine_torque(val, s, omega, z)
     m_loss = scene.loss(omega, t)
     dz = scene.governor.error(omega) / omega if scene.governor is not None else jnp.zeros_like(omega)
@@ -215,7 +211,7 @@ def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: in
 
     Ends early (a stall hand-over) where E falls to ``e_switch``. Returns the saved
     (E, t, z), the final θ and state, and whether it ended early."""
-    _traced()
+    count_trace()
     E0, t0, z0 = y0
     e_ref = E0
     w_ref = jnp.sqrt(2 * E0 / scene.train.mean_inertia)
@@ -249,7 +245,7 @@ def _time_field(t, y, args):
     theta, w, z = y
     omega = w * w_ref
     val, der, s = scene.terms(theta)
-    inertia, dinertia = val[_I], der[_I]
+    inertia, dinertia = val[COL_I], der[COL_I]
     m_eng = scene.engine_torque(val, s, omega, z)
     m_loss = scene.loss(omega, t, signed=True)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
@@ -261,7 +257,7 @@ def _time_field(t, y, args):
 def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool, max_steps: int):
     """Adaptive solve in time from (θ, ω, z) = y0 until θ reaches ``theta_end``, ω falls to
     zero (if ``stop_at_stall``) or t reaches ``t_end``. Returns every accepted step."""
-    _traced()
+    count_trace()
     conds = [lambda t, y, args, **kw: y[0] - theta_end]
     dirs = [True]
     if stop_at_stall:
@@ -292,7 +288,7 @@ def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_st
 def dense_at_angles(sol, t_guess, theta_q, omega_ref):
     """(t, ω, z) where the time-domain solution passes the angles ``theta_q``: Newton on
     θ(t) = θ_q with the solver's dense output, from the guesses ``t_guess``."""
-    _traced()
+    count_trace()
 
     def one(t, th_q):
         for _ in range(4):
@@ -351,13 +347,13 @@ def grid_run(scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride
 
     Returns the states (E, t, z) every ``stride`` steps (cycles, steps_per_cycle/stride),
     the end state and the first cycle where E fell to ``e_switch`` (or ``cycles``)."""
-    _traced()
+    count_trace()
     h = scene.train.cycle_rad / steps_per_cycle
 
     def field(theta, y):
         E, t, z = y
         val, der, s = scene.terms(theta)
-        omega = _omega(E, val[_I])
+        omega = _omega(E, val[COL_I])
         dz = scene.governor.error(omega) / omega if scene.governor is not None else jnp.zeros_like(omega)
         return jnp.stack([scene.engine_torque(val, s, omega, z) - scene.loss(omega, t), 1.0 / omega, dz])
 

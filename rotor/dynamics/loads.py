@@ -18,13 +18,14 @@ cylinder's gas torque) by a PI law on the speed error.
 
 from __future__ import annotations
 
-from typing import ClassVar, Optional
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from ..checks import EngineError, as_f64, check_finite, check_positive, concrete
+from ..checks import as_f64, check_finite, check_positive, concrete
+from ..errors import EngineError
 
 __all__ = [
     "Load",
@@ -218,14 +219,14 @@ def _numbers(text, n, spec):
     return vals
 
 
-_LOAD_HELP = (
+LOAD_HELP = (
     "a load is one of: none; constant:TORQUE_NM (or just TORQUE_NM); poly:A,B,C (A + B·ω + C·ω², ω in rad/s); "
     "propeller:TORQUE_NM,RPM; table:RPM=TORQUE_NM,RPM=TORQUE_NM,...; "
     "step:TORQUE_BEFORE,TORQUE_AFTER,TIME_S[,RAMP_S]"
 )
 
 
-def parse_load(spec: str) -> Optional[Load]:
+def parse_load(spec: str) -> Load | None:
     """A load from its command-line spec (see ``rotor simulate --help``)."""
     s = spec.strip()
     kind, _, rest = s.partition(":")
@@ -237,7 +238,7 @@ def parse_load(spec: str) -> Optional[Load]:
             try:
                 return ConstantLoad(float(s))
             except ValueError:
-                raise EngineError(f"--load {spec!r}: not understood; {_LOAD_HELP}") from None
+                raise EngineError(f"--load {spec!r}: not understood; {LOAD_HELP}") from None
         if kind == "constant":
             return ConstantLoad(*_numbers(rest, 1, spec))
         if kind == "poly":
@@ -257,5 +258,5 @@ def parse_load(spec: str) -> Optional[Load]:
     except ValueError as e:
         if isinstance(e, EngineError):
             raise
-        raise EngineError(f"--load {spec!r}: {e}; {_LOAD_HELP}") from None
-    raise EngineError(f"--load {spec!r}: unknown kind {kind!r}; {_LOAD_HELP}")
+        raise EngineError(f"--load {spec!r}: {e}; {LOAD_HELP}") from None
+    raise EngineError(f"--load {spec!r}: unknown kind {kind!r}; {LOAD_HELP}")

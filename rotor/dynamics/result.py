@@ -7,8 +7,6 @@ Arrays are JAX float64 arrays, so ``jax.grad`` flows through ``.delta`` and
 from __future__ import annotations
 
 import dataclasses
-from typing import Optional
-
 import functools
 
 import jax
@@ -112,8 +110,8 @@ class SpeedResult:
     points_per_cycle: int
     uniform_cycles: int
     stalled: bool = False
-    stall_time_s: Optional[float] = None
-    stall_angle_rad: Optional[float] = None
+    stall_time_s: float | None = None
+    stall_angle_rad: float | None = None
     engine_name: str = ""
     wall_s: float = float("nan")
     info: dict = dataclasses.field(default_factory=dict)
@@ -224,8 +222,13 @@ class SpeedResult:
             "stall_angle_deg": None if self.stall_angle_rad is None else float(np.rad2deg(self.stall_angle_rad)),
             "wall_s": float(self.wall_s),
         }
-        out.update({k: (float(v) if np.ndim(v) == 0 else np.asarray(v).tolist()) for k, v in self.info.items()
-                    if k in ("load_torque_Nm", "fuel_scale", "periodicity_error", "excess_work_J", "textbook_delta")})
+        out.update(
+            {
+                k: (float(v) if np.ndim(v) == 0 else np.asarray(v).tolist())
+                for k, v in self.info.items()
+                if k in ("load_torque_Nm", "fuel_scale", "periodicity_error", "excess_work_J", "textbook_delta")
+            }
+        )
         if self.uniform_cycles:
             o = self.orders(max_order=max_order)
             out["orders"] = [

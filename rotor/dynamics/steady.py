@@ -32,29 +32,26 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from ..checks import EngineError, arrays_only, concrete
-from .crank_train import _DM, _MM, check_fidelity, grid_points, train_from_engine
+from ..checks import arrays_only, concrete
+from ..errors import EngineError, NoSteadyStateError
+from .crank_train import COL_COMBUSTION, COL_MOTORED, check_fidelity, grid_points, train_from_engine
 from .equation import (
     Scene,
-    _cumulative,
-    _wrap,
-    _traced,
-    grid_run,
+    count_trace,
     friction_coefficients,
+    grid_run,
+    hermite_cumulative,
     linear_cycle,
     linear_losses,
     linear_parts,
+    wrap_periodic,
 )
 from .loads import ConstantLoad
 from .result import RPM_PER_RAD_S, SpeedResult
 
-__all__ = ["steady_state", "NoSteadyStateError"]
+__all__ = ["steady_state"]
 
 STOP_FRACTION = 1e-4  # E_min / E_mean below which the crankshaft is taken to stop
-
-
-class NoSteadyStateError(EngineError):
-    """No usable periodic solution: the kinetic energy reaches zero inside the cycle."""
 
 
 def _check_rpm(rpm, what="rpm"):
@@ -67,17 +64,17 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
     """E on the nodes 0…N, t on the nodes, x (load or fuel), Newton result."""
     parts0 = linear_parts(train, s_nodes, a, c)
     inertia, dinertia, F, dF, G, dG = parts0
-    v, d = _wrap(train.values), _wrap(train.slopes)
-    comb = jnp.sum(s_nodes * v[:, _DM:], axis=1)
-    dcomb = jnp.sum(s_nodes * d[:, _DM:], axis=1)
+    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
+    comb = jnp.sum(s_nodes * v[:, COL_COMBUSTION:], axis=1)
+    dcomb = jnp.sum(s_nodes * d[:, COL_COMBUSTION:], axis=1)
     if balance == "load":
         F0, dF0, F1, dF1 = F, dF, -jnp.ones_like(F), jnp.zeros_like(F)
     else:
         F0, dF0, F1, dF1 = F - comb, dF - dcomb, comb, dcomb
     h = train.step_rad
-    phi = jnp.exp(-_cumulative(G, dG, h))
-    Q0 = _cumulative(F0 / phi, (dF0 + F0 * G) / phi, h)
-    Q1 = _cumulative(F1 / phi, (dF1 + F1 * G) / phi, h)
+    phi = jnp.exp(-hermite_cumulative(G, dG, h))
+    Q0 = hermite_cumulative(F0 / phi, (dF0 + F0 * G) / phi, h)
+    Q1 = hermite_cumulative(F1 / phi, (dF1 + F1 * G) / phi, h)
     # periodicity: Φ_N·(E0 + Q0_N + x·Q1_N) = E0  →  x = (E0·(1/Φ_N − 1) − Q0_N)/Q1_N
     p = 1.0 / phi[-1] - 1.0
     alpha = phi * (1.0 + p * Q1 / Q1[-1])
@@ -97,7 +94,7 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
         omega = jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
         r = 1.0 / omega
         dr = -0.5 * r * ((dE_a * E0 + dE_b) / jnp.maximum(E, 1e-300) - i_ratio)
-        return _cumulative(r, dr, h)[-1]
+        return hermite_cumulative(r, dr, h)[-1]
 
     def residual(eta, _):
         return jnp.log(period_of(e_star + e_ref * jnp.exp(eta)) / period)
@@ -113,7 +110,7 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
 
 @eqx.filter_jit
 def _closed_kernel(train, s, a, c, omega_m, balance):
-    _traced()
+    count_trace()
     s_nodes = jnp.broadcast_to(s, (train.points + 1, train.cylinders))
     return _closed_solution(train, s_nodes, a, c, omega_m, balance)
 
@@ -121,7 +118,7 @@ def _closed_kernel(train, s, a, c, omega_m, balance):
 @eqx.filter_jit
 def _closed_steady(engine, fidelity, points, s, fr, load, a, c, omega_m, balance):
     """The whole closed-form steady state in one compiled call: tables, solution, arrays."""
-    _traced()
+    count_trace()
     train = train_from_engine(engine, fidelity, points)
     E, t, x, ok, _ = _closed_kernel(train, s, a, c, omega_m, balance)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
@@ -153,9 +150,7 @@ def newton(residual, u0, tol=1e-13, max_iter=30):
         du = jnp.linalg.solve(jac(u), residual(u))
         return i + 1, u - du, jnp.max(jnp.abs(du))
 
-    u_conv = jax.lax.stop_gradient(
-        jax.lax.while_loop(cond, body, (0, jax.lax.stop_gradient(u0), jnp.inf))[1]
-    )
+    u_conv = jax.lax.stop_gradient(jax.lax.while_loop(cond, body, (0, jax.lax.stop_gradient(u0), jnp.inf))[1])
     J = jax.lax.stop_gradient(jac(u_conv))
     r = residual(u_conv)
     u = u_conv - jnp.linalg.solve(J, r)
@@ -170,7 +165,7 @@ def _shooting_kernel(engine, scene, omega_m, guess_E0, guess_x, balance):
     The cycle map is RK4 with one step per table node, so it is a smooth function of
     (E0, x) (no adaptive step choices) and Newton converges to rounding. Returns the
     arrays of the result as well."""
-    _traced()
+    count_trace()
     train = scene.train
     period = train.cycle_rad / omega_m
     e_ref = jax.lax.stop_gradient(guess_E0)
@@ -179,8 +174,9 @@ def _shooting_kernel(engine, scene, omega_m, guess_E0, guess_x, balance):
     def cycle(u):
         E0 = e_ref * (1 + u[0])
         x = x_ref * u[1]
-        (E, t, _), y_end, _ = grid_run(_balanced_scene(scene, x, balance), jnp.asarray(0.0), (E0, 0.0, 0.0), 1,
-                                       train.points, 1, jnp.asarray(0.0))
+        (E, t, _), y_end, _ = grid_run(
+            _balanced_scene(scene, x, balance), jnp.asarray(0.0), (E0, 0.0, 0.0), 1, train.points, 1, jnp.asarray(0.0)
+        )
         return E0, x, E[0], t[0], y_end
 
     def residual(u):
@@ -233,7 +229,9 @@ def steady_state(
     rpm = engine.operating.rpm if rpm is None else rpm
     _check_rpm(rpm)
     if load is not None and load.time_dependent:
-        raise EngineError("a steady state needs a load that does not change in time; use rotor.simulate for a load step")
+        raise EngineError(
+            "a steady state needs a load that does not change in time; use rotor.simulate for a load step"
+        )
     if method not in ("auto", "closed", "shooting"):
         raise EngineError(f"method = {method!r}: a steady state is found by 'auto', 'closed' or 'shooting'")
     check_fidelity(fidelity, engine)
@@ -253,8 +251,9 @@ def steady_state(
             "use method='auto' or 'shooting'"
         )
     if lin is not None and method != "shooting":
-        train, scene, E, t, x, ok, arrays = _closed_steady(engine, fidelity, points, s, fr, speed_load, *lin,
-                                                            omega_m, balance)
+        train, scene, E, t, x, ok, arrays = _closed_steady(
+            engine, fidelity, points, s, fr, speed_load, *lin, omega_m, balance
+        )
         _check_combustion(train, balance)
         return _finish(engine, train, scene, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
     train = train_from_engine(engine, fidelity, points)
@@ -284,7 +283,7 @@ def _check_combustion(train, balance):
 
 @eqx.filter_jit
 def _finish_arrays(engine, scene, E, t, omega_m):
-    _traced()
+    count_trace()
     train = scene.train
     theta = train.nodes()
     val, der, sc = train.values, train.slopes, scene.scales[0]  # the result lies on the table nodes
@@ -295,23 +294,33 @@ def _finish_arrays(engine, scene, E, t, omega_m):
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
     # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
     # the gas torque at this point's fuelling plus the reciprocating inertia torque
-    gas = val[:, _MM] + jnp.sum(sc * val[:, _DM:], axis=1)
+    gas = val[:, COL_MOTORED] + jnp.sum(sc * val[:, COL_COMBUSTION:], axis=1)
     total = gas + train.textbook_k * omega_m**2
     work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
     excess = jnp.max(work) - jnp.min(work)
     return {
-        "theta": theta, "omega": omega, "torque": m_eng, "load_torque": m_loss, "accel": accel,
+        "theta": theta,
+        "omega": omega,
+        "torque": m_eng,
+        "load_torque": m_loss,
+        "accel": accel,
         "imep_pa": (train.imep_motored_pa + sc * train.imep_combustion_pa)[None, :],
-        "period_s": train.cycle_rad / omega_m, "excess_work_J": excess,
+        "period_s": train.cycle_rad / omega_m,
+        "excess_work_J": excess,
         "textbook_delta": excess / (train.mean_inertia * omega_m**2),
-        "e_ratio": jnp.min(E) / jnp.mean(E), "i_min": jnp.argmin(E),
+        "e_ratio": jnp.min(E) / jnp.mean(E),
+        "i_min": jnp.argmin(E),
     }
 
 
 def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
     a = arrays
-    info = {"period_s": a["period_s"], ("load_torque_Nm" if balance == "load" else "fuel_scale"): x,
-            "excess_work_J": a["excess_work_J"], "textbook_delta": a["textbook_delta"]}
+    info = {
+        "period_s": a["period_s"],
+        ("load_torque_Nm" if balance == "load" else "fuel_scale"): x,
+        "excess_work_J": a["excess_work_J"],
+        "textbook_delta": a["textbook_delta"],
+    }
     if E_end is not None:
         info["periodicity_error"] = jnp.abs(E_end - E[0]) / E[0]
     if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
@@ -324,8 +333,21 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
                 "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
             )
     return SpeedResult(
-        t=t, theta=a["theta"], omega=a["omega"], accel=a["accel"], torque=a["torque"], load_torque=a["load_torque"],
-        imep_pa=a["imep_pa"], method=method, fidelity=fidelity, kind="steady", strokes=engine.strokes, cycle_rad=train.cycle_rad,
-        points_per_cycle=train.points, uniform_cycles=1, engine_name=engine.name,
-        wall_s=time.perf_counter() - start, info=info,
+        t=t,
+        theta=a["theta"],
+        omega=a["omega"],
+        accel=a["accel"],
+        torque=a["torque"],
+        load_torque=a["load_torque"],
+        imep_pa=a["imep_pa"],
+        method=method,
+        fidelity=fidelity,
+        kind="steady",
+        strokes=engine.strokes,
+        cycle_rad=train.cycle_rad,
+        points_per_cycle=train.points,
+        uniform_cycles=1,
+        engine_name=engine.name,
+        wall_s=time.perf_counter() - start,
+        info=info,
     )

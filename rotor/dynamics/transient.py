@@ -19,16 +19,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..checks import EngineError, arrays_only, concrete
+from ..checks import arrays_only, concrete
+from ..errors import EngineError
 from .crank_train import crank_train
 from .equation import (
     Scene,
-    _traced,
     angle_run,
     closed_run,
+    count_trace,
     dense_at_angles,
-    grid_run,
     friction_coefficients,
+    grid_run,
     linear_losses,
     time_run,
 )
@@ -182,8 +183,10 @@ def simulate(
             "use method='angle' (or 'auto')"
         )
     if method in ("closed", "grid", "angle") and at_rest:
-        raise EngineError(f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
-                          "a start from rest needs method='time' (or 'auto')")
+        raise EngineError(
+            f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
+            "a start from rest needs method='time' (or 'auto')"
+        )
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
     omega0, E0, e_switch = _start(train, rpm)
     theta_step = train.cycle_rad / P
@@ -218,8 +221,9 @@ def simulate(
             )
         for size in _chunks(cycles, bar.enabled):
             th0 = done * train.cycle_rad
-            (E, t, z), y_end, stalled_at = grid_run(scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc,
-                                                     spc // P, e_switch)
+            (E, t, z), y_end, stalled_at = grid_run(
+                scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc, spc // P, e_switch
+            )
             k = int(_known(stalled_at, size))
             pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, z, k))
             done += k
@@ -289,9 +293,18 @@ def simulate(
         else:
             t_max = float(t_h) + float(max_time_s)
         ts, (th, w, z), mask, ok, sol = time_run(
-            scene, jnp.asarray(t_h, dtype=jnp.float64),
-            (jnp.asarray(th_h, dtype=jnp.float64), jnp.asarray(w_h, dtype=jnp.float64), jnp.asarray(z_h, dtype=jnp.float64)),
-            jnp.asarray(theta_end), jnp.asarray(t_max), rtol_a, jnp.asarray(w_ref, dtype=jnp.float64), stop_at_stall,
+            scene,
+            jnp.asarray(t_h, dtype=jnp.float64),
+            (
+                jnp.asarray(th_h, dtype=jnp.float64),
+                jnp.asarray(w_h, dtype=jnp.float64),
+                jnp.asarray(z_h, dtype=jnp.float64),
+            ),
+            jnp.asarray(theta_end),
+            jnp.asarray(t_max),
+            rtol_a,
+            jnp.asarray(w_ref, dtype=jnp.float64),
+            stop_at_stall,
             TIME_DOMAIN_STEPS,
         )
         keep = np.isfinite(np.asarray(ts))
@@ -310,14 +323,15 @@ def simulate(
             method = "time"
         else:
             method = f"{method}+time"
-    return _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th,
-                     wall, info, cycles)
+    return _assemble(
+        engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, info, cycles
+    )
 
 
 @eqx.filter_jit
 def _samples(scene, theta, t, E, omega, z):
     """ω (from E where given), engine and load torque, dω/dt and fuel at the samples."""
-    _traced()
+    count_trace()
     val, der, s = scene.terms(theta)
     inertia, dinertia = val[:, 0], der[:, 0]
     if E is not None:
@@ -363,6 +377,7 @@ def _omega_at(train, theta, E):
 def _gather(scene, pieces):
     """All pieces (θ, t, E or None, ω or None, z or None, rows kept or None) as the flat
     sample arrays (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled call."""
+
     def flat(a, keep):
         a = jnp.asarray(a, dtype=jnp.float64)
         return jnp.reshape(a if keep is None else a[:keep], (-1,))
@@ -376,13 +391,13 @@ def _gather(scene, pieces):
     return tuple(jnp.concatenate(a) for a in zip(*parts))
 
 
-def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall,
-              info, cycles):
+def _assemble(
+    engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, info, cycles
+):
     pieces = [p for p in pieces if np.shape(p[0])[0] > 0 and p[5] != 0]
     # the whole cycles of P samples (a single end sample adds none); ``keep`` counts the
     # rows kept of a (cycles, P) piece or the samples kept of a flat one
-    uniform = sum((np.shape(p[0])[0] if p[5] is None else p[5]) * (P if np.ndim(p[0]) == 2 else 1) // P
-                  for p in pieces)
+    uniform = sum((np.shape(p[0])[0] if p[5] is None else p[5]) * (P if np.ndim(p[0]) == 2 else 1) // P for p in pieces)
     if time_domain is not None:
         for th, t, w, z, whole in _resample(scene, time_domain, P):
             pieces.append((th, t, None, w, z, None))
@@ -392,10 +407,26 @@ def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, st
     if scene.governor is not None:
         info["fuel"] = fuel
     return SpeedResult(
-        t=t, theta=theta, omega=omega, accel=accel, torque=m_eng, load_torque=m_loss, imep_pa=imep,
-        method=method, fidelity=fidelity, kind="transient", strokes=engine.strokes, cycle_rad=train.cycle_rad,
-        points_per_cycle=P, uniform_cycles=uniform, stalled=stalled, stall_time_s=stall_t,
-        stall_angle_rad=stall_th, engine_name=engine.name, wall_s=time.perf_counter() - wall, info=info,
+        t=t,
+        theta=theta,
+        omega=omega,
+        accel=accel,
+        torque=m_eng,
+        load_torque=m_loss,
+        imep_pa=imep,
+        method=method,
+        fidelity=fidelity,
+        kind="transient",
+        strokes=engine.strokes,
+        cycle_rad=train.cycle_rad,
+        points_per_cycle=P,
+        uniform_cycles=uniform,
+        stalled=stalled,
+        stall_time_s=stall_t,
+        stall_angle_rad=stall_th,
+        engine_name=engine.name,
+        wall_s=time.perf_counter() - wall,
+        info=info,
     )
 
 
@@ -432,8 +463,10 @@ def _resample(scene, time_domain, P):
     # where the crank turns: Newton on θ(t) = θ_q with the solver's own dense output; at a
     # start from rest (ω = 0 at the step's start) the linear values stay
     moving = w[j] > 0
-    t_n, w_n, z_n = (np.asarray(a) for a in dense_at_angles(sol, jnp.asarray(t_q), jnp.asarray(tq),
-                                                              jnp.asarray(w_ref, dtype=jnp.float64)))
+    t_n, w_n, z_n = (
+        np.asarray(a)
+        for a in dense_at_angles(sol, jnp.asarray(t_q), jnp.asarray(tq), jnp.asarray(w_ref, dtype=jnp.float64))
+    )
     t_q, w_q, z_q = (np.where(moving, a, b) for a, b in ((t_n, t_q), (w_n, w_q), (z_n, z_q)))
     tail = (th > tq[-1] + 1e-12) & (not ends_whole)
     return [

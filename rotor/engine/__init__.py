@@ -1,1 +1,12 @@
-"""TODO"""
+"""The engine: its description and file, and everything computed from its geometry alone.
+
+Holds the engine model (:mod:`.model`) and its TOML file (:mod:`.file`), piston and rod
+kinematics (:mod:`.kinematics`, :mod:`.articulated`, :mod:`.mechanism`), the reduced
+inertia I(θ) (:mod:`.inertia`), cylinder pressure sources (:mod:`.pressure`), forces and
+torques at a given speed (:mod:`.forces`), friction (:mod:`.friction`), the textbook
+one-cylinder table (:mod:`.table`) and the one-screen engine summary (:mod:`.summary`).
+
+May import: the ground floor (:mod:`rotor.units`, :mod:`rotor.errors`,
+:mod:`rotor.checks`, :mod:`rotor.fileio`, :mod:`rotor.results`). Nothing here integrates
+an equation of motion.
+"""

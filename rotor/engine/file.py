@@ -17,14 +17,20 @@ from pathlib import Path
 
 import numpy as np
 
-from ..checks import EngineError
-from .model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
+from ..errors import EngineError
 from .friction import Friction
+from .model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
 from .pressure import PRESSURE_KINDS
 
 __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path"]
 
-_NUM, _NUMS, _INTS, _STR, _INT = "a number", "a list of numbers", "a list of whole numbers", "a string", "a whole number"
+_NUM, _NUMS, _INTS, _STR, _INT = (
+    "a number",
+    "a list of numbers",
+    "a list of whole numbers",
+    "a string",
+    "a whole number",
+)
 
 _TOP = {"name": _STR, "strokes": _INT, "cylinders": _INT}
 _TABLES = {
@@ -95,9 +101,7 @@ def _build(table, cls, data):
     kwargs = {}
     for key, value in data.items():
         if key not in fields:
-            raise EngineError(
-                f"[{table}] {key}: unknown key{_suggest(key, fields)}; known keys: {', '.join(fields)}"
-            )
+            raise EngineError(f"[{table}] {key}: unknown key{_suggest(key, fields)}; known keys: {', '.join(fields)}")
         kwargs[key] = _typed(table, key, value, _LIST_KEYS.get(key, _NUM))
     for key, required in fields.items():
         if required and key not in kwargs:
@@ -111,14 +115,24 @@ def _build_pressure(data, strokes):
     if kind is None:
         raise EngineError(f"[pressure] kind is missing: one of {', '.join(map(repr, PRESSURE_KINDS))}")
     if kind not in PRESSURE_KINDS:
-        raise EngineError(f"[pressure] kind = {kind!r}: unknown{_suggest(str(kind), PRESSURE_KINDS)}; "
-                          f"one of {', '.join(map(repr, PRESSURE_KINDS))}")
+        raise EngineError(
+            f"[pressure] kind = {kind!r}: unknown{_suggest(str(kind), PRESSURE_KINDS)}; "
+            f"one of {', '.join(map(repr, PRESSURE_KINDS))}"
+        )
     if kind == "table":
         a, p = data.get("angle_deg"), data.get("pressure_pa")
         cycle = 360 * strokes / 2 if strokes in (2, 4) else None
         # a closing point at the full cycle that repeats the 0° point is redundant: drop it
-        if (cycle is not None and isinstance(a, list) and isinstance(p, list) and len(a) == len(p) and len(a) > 1
-                and a[0] == 0 and a[-1] == cycle and p[-1] == p[0]):
+        if (
+            cycle is not None
+            and isinstance(a, list)
+            and isinstance(p, list)
+            and len(a) == len(p)
+            and len(a) > 1
+            and a[0] == 0
+            and a[-1] == cycle
+            and p[-1] == p[0]
+        ):
             data["angle_deg"], data["pressure_pa"] = a[:-1], p[:-1]
     return _build("pressure", PRESSURE_KINDS[kind], data)
 
@@ -183,9 +197,7 @@ def load_engine(path_or_name) -> Engine:
         text_source = path
         label = str(path)
     else:
-        raise EngineError(
-            f"{name}: neither an engine file nor a preset; presets: {', '.join(preset_names())}"
-        )
+        raise EngineError(f"{name}: neither an engine file nor a preset; presets: {', '.join(preset_names())}")
     try:
         raw = text_source.read_bytes()
         data = tomllib.loads(raw.decode("utf-8"))

@@ -46,7 +46,7 @@ _MODELS = ("exact", "coefficients", "mean")
 _FOURIER_POINTS = 256
 
 
-def _ordinary_cylinder_inertia(alpha, geometry, masses):
+def ordinary_cylinder_inertia(alpha, geometry, masses):
     R, L, k = geometry.crank_radius_m, geometry.rod_length_m, geometry.pin_offset_m
     ds = piston_motion(alpha, R, L, k).ds
     if not masses.full_rod:
@@ -70,7 +70,7 @@ def cylinder_inertia(engine, theta):
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
     """
     alpha = engine.mechanical_angles(theta)
-    out = _ordinary_cylinder_inertia(alpha, engine.geometry, engine.masses)
+    out = ordinary_cylinder_inertia(alpha, engine.geometry, engine.masses)
     for s, m in engine.slave_index().items():
         sg = slave_geometry(engine, s, m)
         a_master = alpha[..., s] + sg.bank_rad

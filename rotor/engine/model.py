@@ -16,13 +16,14 @@ when throw 1 and bank 1 are zero: θ = 0 is cylinder 1's TDC at the start of int
 from __future__ import annotations
 
 import dataclasses
-from typing import ClassVar, Optional, Union
+from typing import ClassVar
 
-import numpy as np
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 
-from ..checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
+from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
+from ..errors import EngineError
 from .friction import Friction
 from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle
 
@@ -37,7 +38,7 @@ __all__ = [
     "PressureSource",
 ]
 
-PressureSource = Union[PressureTable, WiebeCycle, MotoredCycle, NoPressure]
+PressureSource = PressureTable | WiebeCycle | MotoredCycle | NoPressure
 
 
 def _tuple_of_ints(x):
@@ -105,13 +106,11 @@ class Masses(eqx.Module):
 
     reciprocating_kg: jnp.ndarray = eqx.field(converter=as_f64)
     rotating_kg: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
-    rod_kg: Optional[jnp.ndarray] = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
-    rod_cg_from_big_end_m: Optional[jnp.ndarray] = eqx.field(
+    rod_kg: jnp.ndarray | None = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
+    rod_cg_from_big_end_m: jnp.ndarray | None = eqx.field(
         converter=lambda x: None if x is None else as_f64(x), default=None
     )
-    rod_inertia_kgm2: Optional[jnp.ndarray] = eqx.field(
-        converter=lambda x: None if x is None else as_f64(x), default=None
-    )
+    rod_inertia_kgm2: jnp.ndarray | None = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
     table: ClassVar[str] = "masses"
 
     def __check_init__(self):
@@ -171,9 +170,7 @@ class Layout(eqx.Module):
 
     throw_angles_deg: jnp.ndarray = eqx.field(converter=as_f64)
     firing_order: tuple = eqx.field(static=True, converter=_tuple_of_ints)
-    bank_angles_deg: Optional[jnp.ndarray] = eqx.field(
-        converter=lambda x: None if x is None else as_f64(x), default=None
-    )
+    bank_angles_deg: jnp.ndarray | None = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
     table: ClassVar[str] = "layout"
 
     def __check_init__(self):
@@ -279,8 +276,8 @@ class Engine(eqx.Module):
     layout: Layout
     pressure: PressureSource = eqx.field(default_factory=NoPressure)
     operating: Operating = eqx.field(default_factory=lambda: Operating(rpm=1000.0))
-    articulated: Optional[Articulated] = None
-    friction: Optional[Friction] = None
+    articulated: Articulated | None = None
+    friction: Friction | None = None
 
     def __check_init__(self):
         if self.strokes not in (2, 4):
@@ -291,9 +288,7 @@ class Engine(eqx.Module):
         lay = self.layout
         for key, arr in (("throw_angles_deg", lay.throw_angles_deg), ("bank_angles_deg", lay.bank_angles_deg)):
             if arr is not None and (jnp.ndim(arr) != 1 or arr.shape[0] != n):
-                raise EngineError(
-                    f"{where('layout', key)}: needs one angle per cylinder ({n}), got {np.size(arr)}"
-                )
+                raise EngineError(f"{where('layout', key)}: needs one angle per cylinder ({n}), got {np.size(arr)}")
         fo = lay.firing_order
         if len(fo) != n or sorted(fo) != list(range(1, n + 1)):
             raise EngineError(
@@ -391,7 +386,7 @@ class Engine(eqx.Module):
             return {}
         return {s - 1: m - 1 for s, m in zip(self.articulated.slaves, self.articulated.masters)}
 
-    def replace(self, **changes) -> "Engine":
+    def replace(self, **changes) -> Engine:
         """A copy with some whole tables replaced, e.g. ``engine.replace(pressure=NoPressure())``."""
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         fields.update(changes)

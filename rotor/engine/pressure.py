@@ -16,11 +16,12 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import numpy as np
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 
-from ..checks import EngineError, as_f64, check_finite, check_positive, concrete, fmt, where
+from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
+from ..errors import EngineError
 from .kinematics import piston_motion
 
 __all__ = [
@@ -116,7 +117,7 @@ class _Source(eqx.Module):
     def validate_for(self, strokes: int) -> None:
         """Cross-checks that need the engine (cycle length)."""
 
-    def motored(self, strokes: int = 4) -> "_Source":
+    def motored(self, strokes: int = 4) -> _Source:
         """The trace of the same cylinder without combustion (a misfire)."""
         return self
 
@@ -176,7 +177,7 @@ class PressureTable(_Source):
         check_positive(t, "crankcase_pa", self.crankcase_pa, allow_zero=True)
 
     def validate_for(self, strokes: int) -> None:
-        a, p = concrete(self.angle_deg), concrete(self.pressure_pa)
+        a = concrete(self.angle_deg)
         if a is None:
             return
         t = self.table
@@ -199,7 +200,7 @@ class PressureTable(_Source):
         period = 2 * jnp.pi * strokes / 2
         return periodic_pchip(phi, jnp.deg2rad(self.angle_deg), self.pressure_pa, period)
 
-    def motored(self, strokes: int = 4) -> "PressureTable":
+    def motored(self, strokes: int = 4) -> PressureTable:
         """The table's motored trace: its compression stroke mirrored about firing TDC.
 
         Over the 180° after firing TDC (360° four-stroke, 0° two-stroke) the pressure is
@@ -254,7 +255,7 @@ class _SingleZone(_Source):
         if strokes != 4:
             raise EngineError(
                 f"[pressure] kind = {self.kind!r} is implemented for four-stroke engines only; "
-                "give a two-stroke engine a pressure table (kind = \"table\")"
+                'give a two-stroke engine a pressure table (kind = "table")'
             )
 
     # p(φ) is affine in the heat released: p = p0(φ) + heat·p1(φ)
@@ -309,9 +310,10 @@ class _SingleZone(_Source):
         """IMEP [Pa] of p0 and of p1 by the trapezoid rule on n points of the cycle."""
         phi = jnp.linspace(0.0, 4 * jnp.pi, n + 1)[:-1]
         p0, p1 = self._parts(phi, geometry, burn)
-        dv = geometry.piston_area_m2 * piston_motion(
-            phi, geometry.crank_radius_m, geometry.rod_length_m, geometry.pin_offset_m
-        ).ds
+        dv = (
+            geometry.piston_area_m2
+            * piston_motion(phi, geometry.crank_radius_m, geometry.rod_length_m, geometry.pin_offset_m).ds
+        )
         vh = geometry.piston_area_m2 * geometry.stroke_m
         w = 4 * jnp.pi / n
         return jnp.sum(p0 * dv) * w / vh, jnp.sum(p1 * dv) * w / vh
@@ -348,8 +350,14 @@ class _WiebeBurn(eqx.Module):
             return jnp.where(u > 0, jnp.cbrt(jnp.where(u > 0, u, 1.0)), 0.0)
 
         def f(s):
-            return 3 * _WIEBE_A * (self.m + 1) * s ** (k - 1) * jnp.exp(-_WIEBE_A * s**k) * V(
-                self.start + self.duration * s**3) ** (n - 1)
+            return (
+                3
+                * _WIEBE_A
+                * (self.m + 1)
+                * s ** (k - 1)
+                * jnp.exp(-_WIEBE_A * s**k)
+                * V(self.start + self.duration * s**3) ** (n - 1)
+            )
 
         xg, wg = np.polynomial.legendre.leggauss(self.nodes)
         s_lo = jnp.zeros(()) if lower is None else s_of(jnp.maximum(self.start, lower))
@@ -414,7 +422,7 @@ class WiebeCycle(_SingleZone):
         p0, p1 = self._parts(phi, geometry, burn)
         return p0 + self.heat_scale(geometry) * p1
 
-    def motored(self, strokes: int = 4) -> "MotoredCycle":
+    def motored(self, strokes: int = 4) -> MotoredCycle:
         """The same engine with the fuel cut: the trace of a misfiring cylinder."""
         return MotoredCycle(**{f: getattr(self, f) for f in _SINGLE_ZONE_FIELDS})
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import numpy as np
 import jax.numpy as jnp
+import numpy as np
 
 from .forces import imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
@@ -64,9 +64,14 @@ def format_summary(s: dict) -> str:
         ("indicated power", f"{s['indicated_power_w'] / 1e3:.1f} kW"),
         ("total torque (gas + inertia)", f"{s['total_torque_min_Nm']:.0f} ... {s['total_torque_max_Nm']:.0f} N*m"),
         ("excess work (seed 004, 3.2.12)", f"{s['excess_work_J']:.1f} J"),
-        ("reduced inertia I(theta)", f"mean {s['inertia_mean_kgm2']:.4f}, "
-                                     f"{s['inertia_min_kgm2']:.4f} ... {s['inertia_max_kgm2']:.4f} kg*m^2"),
-        ("seed 003 form, cylinder 1", "A = {A:.5f}, B = {B:.5f}, C = {C:.5f} kg*m^2".format(**s["inertia_coefficients_kgm2"])),
+        (
+            "reduced inertia I(theta)",
+            f"mean {s['inertia_mean_kgm2']:.4f}, {s['inertia_min_kgm2']:.4f} ... {s['inertia_max_kgm2']:.4f} kg*m^2",
+        ),
+        (
+            "seed 003 form, cylinder 1",
+            "A = {A:.5f}, B = {B:.5f}, C = {C:.5f} kg*m^2".format(**s["inertia_coefficients_kgm2"]),
+        ),
     ]
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"{k.ljust(w)}  {v}" for k, v in rows) + "\n"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass, field
 
-import numpy as np
 import jax.numpy as jnp
+import numpy as np
 
 from .forces import crank_forces, table_angles_deg
 

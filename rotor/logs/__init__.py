@@ -1,1 +1,10 @@
-"""TODO"""
+"""Logged signals: reading recordings and turning a trigger wheel into crank speed.
+
+Holds the log readers (:mod:`.reader`), edge finding in sampled wheel signals
+(:mod:`.edges`), trigger wheels, tooth location and tooth-error estimation
+(:mod:`.wheel`) and the logged-speed analysis: per-cycle speed, δ and orders
+(:mod:`.analysis`).
+
+May import: :mod:`rotor.engine` (the engine's inertia ripple) and the ground floor.
+Never :mod:`rotor.dynamics` or :mod:`rotor.diagnostics`.
+"""

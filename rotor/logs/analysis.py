@@ -28,11 +28,10 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Optional
 
 import numpy as np
 
-from ..checks import LogError
+from ..errors import LogError
 from .edges import Edges, find_edges
 from .reader import Log, read_log
 from .wheel import ToothErrors, ToothTrack, estimate_tooth_errors, locate_teeth, parse_wheel
@@ -80,16 +79,16 @@ class LogAnalysis:
     cycle_start_rad: np.ndarray
     tdc_rad: float
     tdc_method: str
-    firing_parity: Optional[int]
+    firing_parity: int | None
     firing_method: str
     max_order: float
-    track: Optional[ToothTrack] = None
-    tooth_errors: Optional[ToothErrors] = None
-    edges: Optional[Edges] = None
-    pressure: Optional[tuple] = None
+    track: ToothTrack | None = None
+    tooth_errors: ToothErrors | None = None
+    edges: Edges | None = None
+    pressure: tuple | None = None
     notes: tuple = ()
     cylinders: int = 1
-    delta_weight: Optional[np.ndarray] = None
+    delta_weight: np.ndarray | None = None
 
     # ------------------------------------------------------------------ numbers
     @property
@@ -121,26 +120,35 @@ class LogAnalysis:
         """Cycle-to-cycle statistics: mean, standard deviation and coefficient of variation
         of the mean speed [rpm] and δ, and the mean and standard deviation of each order's
         amplitude [rad/s]."""
+
         def stats(x):
             x = np.asarray(x, dtype=np.float64)
             m = float(np.mean(x))
             s = float(np.std(x, ddof=1)) if x.size > 1 else 0.0
-            return {"mean": m, "std": s, "cov": s / m if m else float("nan"), "min": float(x.min()),
-                    "max": float(x.max())}
+            return {
+                "mean": m,
+                "std": s,
+                "cov": s / m if m else float("nan"),
+                "min": float(x.min()),
+                "max": float(x.max()),
+            }
 
         return {
             "cycles": self.cycles,
             "mean_rpm": stats(self.mean_rpm),
             "delta": stats(self.delta),
             "orders": [
-                {"order": float(o), "amplitude_rad_s_mean": float(np.mean(a)),
-                 "amplitude_rad_s_std": float(np.std(a, ddof=1)) if a.size > 1 else 0.0}
+                {
+                    "order": float(o),
+                    "amplitude_rad_s_mean": float(np.mean(a)),
+                    "amplitude_rad_s_std": float(np.std(a, ddof=1)) if a.size > 1 else 0.0,
+                }
                 for o, a in zip(self.order, self.amplitude_rad_s.T)
             ],
         }
 
     # ------------------------------------------------------------------ people
-    def to_json_dict(self, max_order: Optional[float] = None) -> dict:
+    def to_json_dict(self, max_order: float | None = None) -> dict:
         """Plain numbers for JSON: the cycles, the wheel as found, the correction applied."""
         keep = self.order <= (self.max_order if max_order is None else max_order) + 1e-9
         cycles = [
@@ -148,31 +156,36 @@ class LogAnalysis:
                 "t_start_s": float(t0),
                 "mean_rpm": float(w * RPM_PER_RAD_S),
                 "delta": float(d),
-                "orders": [{"order": float(o), "amplitude_rad_s": float(a), "phase_rad": float(p)}
-                           for o, a, p in zip(self.order[keep], amp[keep], ph[keep])],
+                "orders": [
+                    {"order": float(o), "amplitude_rad_s": float(a), "phase_rad": float(p)}
+                    for o, a, p in zip(self.order[keep], amp[keep], ph[keep])
+                ],
             }
-            for t0, w, d, amp, ph in zip(self.t_start_s, self.mean_omega, self.delta, self.amplitude_rad_s,
-                                         self.phase_rad)
+            for t0, w, d, amp, ph in zip(
+                self.t_start_s, self.mean_omega, self.delta, self.amplitude_rad_s, self.phase_rad
+            )
         ]
         wheel = self.track.to_json_dict() if self.track is not None else None
         if wheel is not None and self.edges is not None:
             wheel["encoder"] = self.edges.to_json_dict()
-        return _finite_json({
-            "source": self.source,
-            "kind": self.kind,
-            "strokes": self.strokes,
-            "cylinders": self.cylinders,
-            "wheel": wheel,
-            "tooth_error_correction": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
-            "tdc_after_gap_deg": float(np.rad2deg(self.tdc_rad)),
-            "tdc_method": self.tdc_method,
-            "firing_revolution_parity": self.firing_parity,
-            "firing_method": self.firing_method,
-            "max_order": float(self.max_order),
-            "cycles": cycles,
-            "statistics": self.statistics(),
-            "notes": list(self.notes),
-        })
+        return _finite_json(
+            {
+                "source": self.source,
+                "kind": self.kind,
+                "strokes": self.strokes,
+                "cylinders": self.cylinders,
+                "wheel": wheel,
+                "tooth_error_correction": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
+                "tdc_after_gap_deg": float(np.rad2deg(self.tdc_rad)),
+                "tdc_method": self.tdc_method,
+                "firing_revolution_parity": self.firing_parity,
+                "firing_method": self.firing_method,
+                "max_order": float(self.max_order),
+                "cycles": cycles,
+                "statistics": self.statistics(),
+                "notes": list(self.notes),
+            }
+        )
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -180,21 +193,30 @@ class LogAnalysis:
         lines = [f"{self.source}: {self.cycles} complete {self.strokes}-stroke cycles ({self.kind} log)"]
         if self.track is not None:
             w = self.track.to_json_dict()
-            lines.append(f"  wheel {w['spec']}: {w['edges']} edges, {w['complete_revolutions']} complete revolutions, "
-                         f"{w['edges_per_rev']} per revolution, gap period ratio {w['gap_period_ratio']:.2f}")
+            lines.append(
+                f"  wheel {w['spec']}: {w['edges']} edges, {w['complete_revolutions']} complete revolutions, "
+                f"{w['edges_per_rev']} per revolution, gap period ratio {w['gap_period_ratio']:.2f}"
+            )
         if self.tooth_errors is not None:
             te = self.tooth_errors
-            lines.append(f"  tooth errors: {te.method}, rms {np.rad2deg(te.rms_rad):.3f}°, "
-                         f"max {np.max(np.abs(te.errors_deg)):.3f}°"
-                         + (f" (orders {', '.join(map(str, te.engine_orders))} left to the engine)"
-                            if te.engine_orders else ""))
+            lines.append(
+                f"  tooth errors: {te.method}, rms {np.rad2deg(te.rms_rad):.3f}°, "
+                f"max {np.max(np.abs(te.errors_deg)):.3f}°"
+                + (f" (orders {', '.join(map(str, te.engine_orders))} left to the engine)" if te.engine_orders else "")
+            )
         else:
             lines.append("  tooth errors: not corrected")
-        lines.append(f"  TDC {np.rad2deg(self.tdc_rad):.2f}° after the gap ({self.tdc_method}); "
-                     f"firing revolution parity {self.firing_parity} ({self.firing_method})")
+        lines.append(
+            f"  TDC {np.rad2deg(self.tdc_rad):.2f}° after the gap ({self.tdc_method}); "
+            f"firing revolution parity {self.firing_parity} ({self.firing_method})"
+        )
         m, d = s["mean_rpm"], s["delta"]
-        lines.append(f"  mean speed {m['mean']:10.2f} rpm  (cycles {m['min']:.2f} … {m['max']:.2f}, CoV {m['cov']:.2%})")
-        lines.append(f"  δ          {d['mean']:10.5f}      (cycles {d['min']:.5f} … {d['max']:.5f}, CoV {d['cov']:.1%})")
+        lines.append(
+            f"  mean speed {m['mean']:10.2f} rpm  (cycles {m['min']:.2f} … {m['max']:.2f}, CoV {m['cov']:.2%})"
+        )
+        lines.append(
+            f"  δ          {d['mean']:10.5f}      (cycles {d['min']:.5f} … {d['max']:.5f}, CoV {d['cov']:.1%})"
+        )
         lines.append("  order  amplitude [rad/s] mean ± std")
         for o in s["orders"]:
             if o["order"] <= min(self.max_order, 6.0) + 1e-9:
@@ -230,8 +252,9 @@ def _volume_ratio(x, compression_ratio, rod_ratio):
     return 1 + 0.5 * (compression_ratio - 1) * s
 
 
-def tdc_from_pressure(phi, p, *, compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None,
-                      window_deg=(-90.0, -10.0)) -> tuple[float, int, str]:
+def tdc_from_pressure(
+    phi, p, *, compression_ratio: float | None = None, rod_ratio: float | None = None, window_deg=(-90.0, -10.0)
+) -> tuple[float, int, str]:
     """TDC of the compression from a pressure signal sampled at wheel angles.
 
     **Arguments:** ``phi``: wheel angle of each sample [rad]; ``p``: the pressure signal
@@ -262,8 +285,13 @@ def tdc_from_pressure(phi, p, *, compression_ratio: Optional[float] = None, rod_
     win = np.floor((phi - centre + np.pi) / TWO_PI).astype(int)  # window k: centre + 2πk ± π
     ks = np.unique(win)
     peaks = np.array([p[win == k].max() for k in ks])
-    full = np.array([(phi[win == k].min() <= centre + TWO_PI * k - 0.9 * np.pi)
-                     and (phi[win == k].max() >= centre + TWO_PI * k + 0.9 * np.pi) for k in ks])
+    full = np.array(
+        [
+            (phi[win == k].min() <= centre + TWO_PI * k - 0.9 * np.pi)
+            and (phi[win == k].max() >= centre + TWO_PI * k + 0.9 * np.pi)
+            for k in ks
+        ]
+    )
     ks, peaks = ks[full], peaks[full]
     even, odd = peaks[ks % 2 == 0], peaks[ks % 2 == 1]
     if even.size == 0 or odd.size == 0:
@@ -291,8 +319,10 @@ def tdc_from_pressure(phi, p, *, compression_ratio: Optional[float] = None, rod_
         tdc_rel, method = peak, "pressure: the averaged firing cycle's peak (late by the combustion)"
     else:
         if not (compression_ratio > 1 and rod_ratio is not None and 0 < rod_ratio < 1):
-            raise LogError(f"compression_ratio = {compression_ratio!r}, rod_ratio = {rod_ratio!r}: need a "
-                           f"compression ratio > 1 and a rod ratio (crank radius / rod length) between 0 and 1")
+            raise LogError(
+                f"compression_ratio = {compression_ratio!r}, rod_ratio = {rod_ratio!r}: need a "
+                f"compression ratio > 1 and a rod ratio (crank radius / rod length) between 0 and 1"
+            )
         lo_w, hi_w = np.deg2rad(window_deg)
         tdc_rel = peak - np.deg2rad(10.0)
         for _ in range(10):
@@ -302,8 +332,9 @@ def tdc_from_pressure(phi, p, *, compression_ratio: Optional[float] = None, rod_
 
             def res(q):
                 t0, n, c, off = q
-                return np.log(avg[m] - floor + off * span) - (c - n * np.log(
-                    _volume_ratio(x[m] - t0, compression_ratio, rod_ratio)))
+                return np.log(avg[m] - floor + off * span) - (
+                    c - n * np.log(_volume_ratio(x[m] - t0, compression_ratio, rod_ratio))
+                )
 
             q0 = [tdc_rel, 1.3, np.log(span), 0.1]
             sol = least_squares(res, q0, bounds=([tdc_rel - 0.35, 1.0, -50, 1e-4], [tdc_rel + 0.35, 1.7, 50, 10.0]))
@@ -311,8 +342,10 @@ def tdc_from_pressure(phi, p, *, compression_ratio: Optional[float] = None, rod_
             tdc_rel = float(sol.x[0])
             if moved < np.deg2rad(0.01):
                 break
-        method = (f"pressure: polytropic fit of the compression ({window_deg[0]:g}…{window_deg[1]:g}° from TDC, "
-                  f"compression ratio {compression_ratio:g}, rod ratio {rod_ratio:.4g}, exponent {sol.x[1]:.3f})")
+        method = (
+            f"pressure: polytropic fit of the compression ({window_deg[0]:g}…{window_deg[1]:g}° from TDC, "
+            f"compression ratio {compression_ratio:g}, rod ratio {rod_ratio:.4g}, exponent {sol.x[1]:.3f})"
+        )
     tdc_abs = centre + TWO_PI * int(fire[0]) + tdc_rel
     parity = int(np.floor(tdc_abs / TWO_PI)) % 2
     return float(np.mod(tdc_abs, TWO_PI)), parity, method
@@ -361,29 +394,51 @@ def _firing_run_note(te, cylinders, strokes, max_order, teeth):
     ks = [k for k in te.engine_orders]
     if ks:
         shown = ", ".join(map(str, ks)) if len(ks) <= 6 else f"{ks[0]}, {ks[1]}, … {ks[-1]}"
-        s = (f"tooth errors estimated from this firing run: the wheel's errors at orders {shown} were left to the "
-             f"engine (a firing run cannot tell them from the engine's fluctuation) and stay in the speed")
+        s = (
+            f"tooth errors estimated from this firing run: the wheel's errors at orders {shown} were left to the "
+            f"engine (a firing run cannot tell them from the engine's fluctuation) and stay in the speed"
+        )
         if te.order_rms_rad is not None:
             kk = np.array([k for k in ks if k <= max_order + 1e-9], dtype=float)
             u = 2.0 * te.order_rms_rad * float(np.sqrt(np.sum(kk**2)))
-            s += (f"; at the other orders the wheel's errors are {np.rad2deg(te.order_rms_rad):.3f}° rms per order, "
-                  f"which at these would change δ by about ±{u:.2g}")
+            s += (
+                f"; at the other orders the wheel's errors are {np.rad2deg(te.order_rms_rad):.3f}° rms per order, "
+                f"which at these would change δ by about ±{u:.2g}"
+            )
     else:
         s = "tooth errors estimated from this firing run: no order stood out as the engine's, so none was left to it"
-    s += ("; a calibration saved from a coast-down or motored run (tooth_errors=FILE, --tooth-errors FILE) gives the "
-          "full wheel pattern")
+    s += (
+        "; a calibration saved from a coast-down or motored run (tooth_errors=FILE, --tooth-errors FILE) gives the "
+        "full wheel pattern"
+    )
     if cylinders == 1 and not (strokes == 4 and len(ks) > 0):
-        s += ("; for an engine of several cylinders give cylinders (--cylinders N), or its fluctuation at the firing "
-              "orders may be taken for the wheel's errors")
+        s += (
+            "; for an engine of several cylinders give cylinders (--cylinders N), or its fluctuation at the firing "
+            "orders may be taken for the wheel's errors"
+        )
     return s
 
 
 # ---------------------------------------------------------------------- analysis
-def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders: int = 1,
-                tdc_deg: Optional[float] = None, firing="auto", tooth_errors="estimate", engine_orders="auto",
-                max_order: Optional[float] = None, points_per_cycle: Optional[int] = None, edge: str = "rising",
-                compression_ratio: Optional[float] = None, rod_ratio: Optional[float] = None,
-                denoise: bool = True, engine=None) -> LogAnalysis:
+def analyze_log(
+    source,
+    wheel=None,
+    *,
+    columns=None,
+    strokes: int = 4,
+    cylinders: int = 1,
+    tdc_deg: float | None = None,
+    firing="auto",
+    tooth_errors="estimate",
+    engine_orders="auto",
+    max_order: float | None = None,
+    points_per_cycle: int | None = None,
+    edge: str = "rising",
+    compression_ratio: float | None = None,
+    rod_ratio: float | None = None,
+    denoise: bool = True,
+    engine=None,
+) -> LogAnalysis:
     """Per-cycle mean speed, δ and order spectrum of a logged recording.
 
     **Arguments:**
@@ -456,8 +511,10 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
             max_order = 12.0
         pitch_pts = 2 * 60  # grid default as for a 60-tooth wheel
         if phi_hi - phi_lo < TWO_PI:
-            raise LogError(f"{name}: the speed log covers {np.rad2deg(phi_hi - phi_lo) / 360:.2f} revolutions; "
-                           f"a cycle needs {revs}")
+            raise LogError(
+                f"{name}: the speed log covers {np.rad2deg(phi_hi - phi_lo) / 360:.2f} revolutions; "
+                f"a cycle needs {revs}"
+            )
         tooth_errors = None
     else:
         if wheel is None:
@@ -474,14 +531,25 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
         track = locate_teeth(times, w, index_times=index_times)
         span_rev = float((track.t.size - 1) / w.edges_per_rev)
         if span_rev < revs:
-            raise LogError(f"{name}: the {track.t.size} tooth edges span about {span_rev:.2f} revolutions; a "
-                           f"{strokes}-stroke cycle needs {revs} (a longer log)")
+            raise LogError(
+                f"{name}: the {track.t.size} tooth edges span about {span_rev:.2f} revolutions; a "
+                f"{strokes}-stroke cycle needs {revs} (a longer log)"
+            )
         if isinstance(tooth_errors, str) and tooth_errors == "estimate":
             if engine is not None and tdc_deg is None:
-                raise LogError("engine given to take its inertia ripple out of the tooth-error estimate: give tdc_deg "
-                               "as well (the angle from the gap to cylinder 1's TDC [deg])")
-            te = estimate_tooth_errors(track, engine_orders=engine_orders, strokes=strokes, cylinders=cylinders,
-                                       source=name, engine=engine, tdc_deg=tdc_deg)
+                raise LogError(
+                    "engine given to take its inertia ripple out of the tooth-error estimate: give tdc_deg "
+                    "as well (the angle from the gap to cylinder 1's TDC [deg])"
+                )
+            te = estimate_tooth_errors(
+                track,
+                engine_orders=engine_orders,
+                strokes=strokes,
+                cylinders=cylinders,
+                source=name,
+                engine=engine,
+                tdc_deg=tdc_deg,
+            )
         elif tooth_errors is None or (isinstance(tooth_errors, str) and tooth_errors == "none"):
             te = None
         elif isinstance(tooth_errors, ToothErrors):
@@ -500,15 +568,19 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
         if max_order is None:
             max_order = w.teeth / 4
         elif max_order >= w.teeth / 2:
-            raise LogError(f"max_order = {max_order:g}: a {w.spec} wheel resolves orders below {w.teeth / 2:g} "
-                           f"(half its teeth per revolution)")
+            raise LogError(
+                f"max_order = {max_order:g}: a {w.spec} wheel resolves orders below {w.teeth / 2:g} "
+                f"(half its teeth per revolution)"
+            )
         pitch_pts = 2 * w.teeth
     need = int(np.ceil(8 * max_order * revs))
     if points_per_cycle:
         P = int(points_per_cycle)
         if P < need:
-            raise LogError(f"points_per_cycle = {P}: orders up to {max_order:g} need at least {need} "
-                           f"(--points-per-cycle), or a lower max_order (--max-order)")
+            raise LogError(
+                f"points_per_cycle = {P}: orders up to {max_order:g} need at least {need} "
+                f"(--points-per-cycle), or a lower max_order (--max-order)"
+            )
     else:
         P = max(pitch_pts * revs, need + need % 2)
 
@@ -524,18 +596,24 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
         tdc = float(np.deg2rad(tdc_deg))
         tdc_method = "given"
     elif pressure is not None:
-        tdc, p_parity, tdc_method = tdc_from_pressure(*pressure, compression_ratio=compression_ratio,
-                                                      rod_ratio=rod_ratio)
+        tdc, p_parity, tdc_method = tdc_from_pressure(
+            *pressure, compression_ratio=compression_ratio, rod_ratio=rod_ratio
+        )
         if compression_ratio is None:
-            notes.append("TDC is the pressure peak, which combustion puts late (13–27° on the tue-4gb10 "
-                         "recordings): the orders' phases and the cycle start are late by as much; give the "
-                         "compression ratio and rod ratio (--compression-ratio, --rod-ratio) for a fit of the "
-                         "compression, or tdc_deg")
+            notes.append(
+                "TDC is the pressure peak, which combustion puts late (13–27° on the tue-4gb10 "
+                "recordings): the orders' phases and the cycle start are late by as much; give the "
+                "compression ratio and rod ratio (--compression-ratio, --rod-ratio) for a fit of the "
+                "compression, or tdc_deg"
+            )
     else:
         tdc = 0.0
-        tdc_method = "unknown: cycles start at the gap" if log.kind != "speed" else "unknown: cycles start at the first sample"
-        notes.append("TDC not known: the orders' phases are relative to the gap, not to TDC (give tdc_deg or a "
-                     "pressure channel)")
+        tdc_method = (
+            "unknown: cycles start at the gap" if log.kind != "speed" else "unknown: cycles start at the first sample"
+        )
+        notes.append(
+            "TDC not known: the orders' phases are relative to the gap, not to TDC (give tdc_deg or a pressure channel)"
+        )
     if strokes == 4:
         if firing in (0, 1):
             parity, parity_method = int(firing), "given"
@@ -554,18 +632,22 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
             r = np.ceil((cam_phi - tdc) / TWO_PI)
             parities = np.mod(r, 2).astype(int)
             if np.any(parities != parities[0]):
-                raise LogError(f"{name}: the cam edges do not fall once per cycle (their revolutions alternate "
-                               f"irregularly)")
+                raise LogError(
+                    f"{name}: the cam edges do not fall once per cycle (their revolutions alternate irregularly)"
+                )
             parity, parity_method = int(parities[0]), "cam: the first TDC after each cam edge"
         elif firing in ("auto", "speed"):
             parity, sep = _speed_parity(omega_of, phi_lo, phi_hi, tdc)
             parity_method = f"speed: the revolution that speeds up more after TDC (separation {sep:.1f} σ)"
             if sep < 1.0:
-                notes.append("the firing revolution is uncertain from the speed alone: the half orders' phases may "
-                             "be off by π")
+                notes.append(
+                    "the firing revolution is uncertain from the speed alone: the half orders' phases may be off by π"
+                )
         else:
-            raise LogError(f"firing = {firing!r}: 'auto', 'pressure', 'cam', 'speed', 0 or 1"
-                           + (" (no such channel in the log)" if firing in ("pressure", "cam") else ""))
+            raise LogError(
+                f"firing = {firing!r}: 'auto', 'pressure', 'cam', 'speed', 0 or 1"
+                + (" (no such channel in the log)" if firing in ("pressure", "cam") else "")
+            )
         # firing TDC at 2π·r + tdc for r of this parity; the cycle starts 2π before
         base = tdc + TWO_PI * parity - TWO_PI
     else:
@@ -574,8 +656,10 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
     k1 = int(np.floor((phi_hi - base) / cycle + 1e-12)) - 1
     if k1 < k0:
         span = (phi_hi - phi_lo) / TWO_PI
-        raise LogError(f"{name}: no complete {strokes}-stroke cycle: the edges span {span:.2f} revolutions and a "
-                       f"cycle ({revs} revolution{'s' if revs > 1 else ''}) starting at TDC must lie inside")
+        raise LogError(
+            f"{name}: no complete {strokes}-stroke cycle: the edges span {span:.2f} revolutions and a "
+            f"cycle ({revs} revolution{'s' if revs > 1 else ''}) starting at TDC must lie inside"
+        )
     starts = base + cycle * np.arange(k0, k1 + 1)
     C = starts.size
 
@@ -614,9 +698,28 @@ def analyze_log(source, wheel=None, *, columns=None, strokes: int = 4, cylinders
         inside = (rel >= 0) & (rel < cycle * C)
         press = (np.mod(rel[inside], cycle), pv[inside], np.floor(rel[inside] / cycle).astype(int))
     return LogAnalysis(
-        source=name, kind=log.kind, strokes=strokes, cycle_rad=cycle, order=orders, t_start_s=t_start,
-        mean_omega=mean_omega, delta=delta, amplitude_rad_s=amp, phase_rad=phase, omega=omega,
-        cycle_start_rad=starts, tdc_rad=float(tdc), tdc_method=tdc_method, firing_parity=parity,
-        firing_method=parity_method, max_order=float(max_order), track=track, tooth_errors=te, edges=edges,
-        pressure=press, notes=tuple(notes), cylinders=int(cylinders), delta_weight=gain[1:],
+        source=name,
+        kind=log.kind,
+        strokes=strokes,
+        cycle_rad=cycle,
+        order=orders,
+        t_start_s=t_start,
+        mean_omega=mean_omega,
+        delta=delta,
+        amplitude_rad_s=amp,
+        phase_rad=phase,
+        omega=omega,
+        cycle_start_rad=starts,
+        tdc_rad=float(tdc),
+        tdc_method=tdc_method,
+        firing_parity=parity,
+        firing_method=parity_method,
+        max_order=float(max_order),
+        track=track,
+        tooth_errors=te,
+        edges=edges,
+        pressure=press,
+        notes=tuple(notes),
+        cylinders=int(cylinders),
+        delta_weight=gain[1:],
     )

@@ -21,7 +21,7 @@ import dataclasses
 
 import numpy as np
 
-from ..checks import LogError
+from ..errors import LogError
 
 __all__ = ["Edges", "find_edges", "signal_levels"]
 
@@ -68,14 +68,18 @@ def signal_levels(v, name: str = "encoder_v") -> tuple[float, float]:
     core = v[(v >= p1) & (v <= p99)]
     lo_part, hi_part = core[core < mid], core[core >= mid]
     if lo_part.size < 0.005 * v.size or hi_part.size < 0.005 * v.size or not p99 > p1:
-        raise LogError(f"column {name!r}: no pulses found (the signal sits at one level, "
-                       f"{p1:.4g} … {p99:.4g} between its 1st and 99th percentiles)")
+        raise LogError(
+            f"column {name!r}: no pulses found (the signal sits at one level, "
+            f"{p1:.4g} … {p99:.4g} between its 1st and 99th percentiles)"
+        )
     low, high = float(np.median(lo_part)), float(np.median(hi_part))
     # a pulse train spends most of its time near its two levels; noise or a ramp does not
     near = np.mean((np.abs(v - low) < 0.15 * (high - low)) | (np.abs(v - high) < 0.15 * (high - low)))
     if not (high > low and near >= 0.6):
-        raise LogError(f"column {name!r}: no clear pulses (levels {low:.4g} and {high:.4g} V, but only "
-                       f"{near:.0%} of the samples lie near them)")
+        raise LogError(
+            f"column {name!r}: no clear pulses (levels {low:.4g} and {high:.4g} V, but only "
+            f"{near:.0%} of the samples lie near them)"
+        )
     return low, high
 
 
@@ -87,8 +91,9 @@ def _runs(s):
     return starts, lengths, s[starts]
 
 
-def find_edges(t, v, *, edge: str = "rising", band=(0.2, 0.45), level: float = 0.32, glitch: float = 0.2,
-               name: str = "encoder_v") -> Edges:
+def find_edges(
+    t, v, *, edge: str = "rising", band=(0.2, 0.45), level: float = 0.32, glitch: float = 0.2, name: str = "encoder_v"
+) -> Edges:
     """Times [s] of the tooth edges of a sampled wheel signal.
 
     **Arguments:**

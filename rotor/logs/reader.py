@@ -26,11 +26,10 @@ from __future__ import annotations
 import dataclasses
 import io
 import os
-from typing import Optional
 
 import numpy as np
 
-from ..checks import LogError
+from ..errors import LogError
 
 __all__ = ["COLUMN_NAMES", "Log", "parse_columns", "read_log"]
 
@@ -60,8 +59,10 @@ def parse_columns(spec) -> tuple[str, ...]:
     seen = set()
     for i, n in enumerate(names):
         if n not in COLUMN_NAMES:
-            raise LogError(f"columns {spec!r}: column {i + 1} is named {n!r}; known names: "
-                           f"{', '.join(COLUMN_NAMES)} ('-' skips a column)")
+            raise LogError(
+                f"columns {spec!r}: column {i + 1} is named {n!r}; known names: "
+                f"{', '.join(COLUMN_NAMES)} ('-' skips a column)"
+            )
         if n != "-" and n in seen:
             raise LogError(f"columns {spec!r}: {n!r} is named twice")
         seen.add(n)
@@ -78,14 +79,14 @@ class Log:
     """
 
     columns: dict
-    lines: Optional[np.ndarray] = None
+    lines: np.ndarray | None = None
     source: str = "arrays"
 
     def __post_init__(self):
         _check(self)
 
     @classmethod
-    def from_arrays(cls, **columns) -> "Log":
+    def from_arrays(cls, **columns) -> Log:
         """A log from arrays, e.g. ``Log.from_arrays(time=t, encoder_v=v)`` or
         ``Log.from_arrays(tooth_time_s=edges)``; the names are those of :data:`COLUMN_NAMES`."""
         parse_columns(list(columns))
@@ -145,34 +146,42 @@ def _check(log: Log) -> None:
         if {"encoder_v", "rpm"} <= names:
             raise LogError(f"{log.source}: 'encoder_v' and 'rpm' in one log; name one kind of signal")
     else:
-        raise LogError(f"{log.source}: name a 'tooth_time_s', 'encoder_v' (with 'time') or 'rpm' (with 'time') "
-                       f"column; the log has {', '.join(sorted(names))}")
+        raise LogError(
+            f"{log.source}: name a 'tooth_time_s', 'encoder_v' (with 'time') or 'rpm' (with 'time') "
+            f"column; the log has {', '.join(sorted(names))}"
+        )
     for k, v in cols.items():
         bad = np.flatnonzero(~np.isfinite(v))
         if bad.size:
             i = int(bad[0])
-            raise LogError(f"{log.where(i)}, column {k!r}: {float(v[i])} is not a finite number"
-                           + (f" ({bad.size} such rows)" if bad.size > 1 else ""))
+            raise LogError(
+                f"{log.where(i)}, column {k!r}: {float(v[i])} is not a finite number"
+                + (f" ({bad.size} such rows)" if bad.size > 1 else "")
+            )
     for k in ("time", "tooth_time_s"):
         if k in cols:
             d = np.diff(cols[k])
             bad = np.flatnonzero(d <= 0)
             if bad.size:
                 i = int(bad[0]) + 1
-                raise LogError(f"{log.where(i)}, column {k!r}: {cols[k][i]:.9g} s is not after the previous row's "
-                               f"{cols[k][i - 1]:.9g} s (time must increase)")
+                raise LogError(
+                    f"{log.where(i)}, column {k!r}: {cols[k][i]:.9g} s is not after the previous row's "
+                    f"{cols[k][i - 1]:.9g} s (time must increase)"
+                )
     if "rpm" in cols:
         bad = np.flatnonzero(cols["rpm"] <= 0)
         if bad.size:
             i = int(bad[0])
-            raise LogError(f"{log.where(i)}, column 'rpm': {cols['rpm'][i]:g} rpm; the speed must stay positive "
-                           f"(angle is its integral)")
+            raise LogError(
+                f"{log.where(i)}, column 'rpm': {cols['rpm'][i]:g} rpm; the speed must stay positive "
+                f"(angle is its integral)"
+            )
     n = log.rows
     if n < 3:
         raise LogError(f"{log.source}: {n} rows; far too short for one revolution")
 
 
-def _delimiter(line: str) -> Optional[str]:
+def _delimiter(line: str) -> str | None:
     for d in ("\t", ";", ","):
         if d in line:
             return d
@@ -195,7 +204,7 @@ def _data_lines(text: str):
             yield n, s
 
 
-def read_log(path, columns=None, *, delimiter: Optional[str] = None) -> Log:
+def read_log(path, columns=None, *, delimiter: str | None = None) -> Log:
     """Read a CSV/TSV/blank-separated log.
 
     **Arguments:**
@@ -212,7 +221,7 @@ def read_log(path, columns=None, *, delimiter: Optional[str] = None) -> Log:
     """
     path = os.fspath(path)
     try:
-        with open(path, "r", encoding="utf-8", errors="replace") as f:
+        with open(path, encoding="utf-8", errors="replace") as f:
             text = f.read()
     except IsADirectoryError:
         raise LogError(f"{path}: is a folder, not a log file") from None
@@ -232,13 +241,17 @@ def read_log(path, columns=None, *, delimiter: Optional[str] = None) -> Log:
         elif ncols == 1 and not header:
             columns = ["tooth_time_s"]
         else:
-            raise LogError(f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v' or "
-                           f"--columns time,encoder_v,pressure_v; '-' skips one)")
+            raise LogError(
+                f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v' or "
+                f"--columns time,encoder_v,pressure_v; '-' skips one)"
+            )
     names = parse_columns(columns)
     if len(names) > ncols:
         missing = [n for n in names[ncols:] if n != "-"]
-        raise LogError(f"{path}: line {first[0]} has {ncols} column{'s' if ncols != 1 else ''}, but the column spec "
-                       f"names {len(names)}; no column for {', '.join(map(repr, missing)) or 'the last names'}")
+        raise LogError(
+            f"{path}: line {first[0]} has {ncols} column{'s' if ncols != 1 else ''}, but the column spec "
+            f"names {len(names)}; no column for {', '.join(map(repr, missing)) or 'the last names'}"
+        )
     use = [i for i, n in enumerate(names) if n != "-"]
     data = _parse(path, text, sep, header, ncols, use)
     # line numbers of the data rows (only needed for messages, cheap enough)
@@ -253,8 +266,15 @@ def _parse(path, text, sep, header, ncols, use) -> np.ndarray:
     """The used columns as a float array; on failure, a LogError naming the first bad line."""
     import pandas as pd
 
-    kw = dict(header=None, skiprows=1 if header else 0, comment="#", skip_blank_lines=True, usecols=use,
-              dtype=np.float64, engine="c")
+    kw = dict(
+        header=None,
+        skiprows=1 if header else 0,
+        comment="#",
+        skip_blank_lines=True,
+        usecols=use,
+        dtype=np.float64,
+        engine="c",
+    )
     if sep is None:
         kw["sep"] = r"\s+"
     else:
@@ -295,8 +315,9 @@ def _find_bad_line(path, text, sep, header, ncols, use, err):
         first = False
         toks = [t.strip() for t in (s.split(sep) if sep else s.split())]
         if len(toks) < ncols and max(use) >= len(toks):
-            raise LogError(f"{path}: line {n}: {len(toks)} column{'s' if len(toks) != 1 else ''} where the first "
-                           f"line has {ncols}")
+            raise LogError(
+                f"{path}: line {n}: {len(toks)} column{'s' if len(toks) != 1 else ''} where the first line has {ncols}"
+            )
         for i in use:
             try:
                 float(toks[i])

@@ -37,13 +37,20 @@ import json
 import math
 import os
 import re
-from typing import Optional
 
 import numpy as np
 
-from ..checks import LogError
+from ..errors import LogError
 
-__all__ = ["Wheel", "parse_wheel", "ToothTrack", "locate_teeth", "ToothErrors", "estimate_tooth_errors", "firing_orders"]
+__all__ = [
+    "Wheel",
+    "parse_wheel",
+    "ToothTrack",
+    "locate_teeth",
+    "ToothErrors",
+    "estimate_tooth_errors",
+    "firing_orders",
+]
 
 TWO_PI = 2.0 * np.pi
 ENGINE_ORDER_FACTOR = 4.0  # an order is the engine's if its amplitude is this many times the floor
@@ -128,9 +135,9 @@ class ToothTrack:
             "edges_per_rev": self.wheel.edges_per_rev,
             "edges": int(self.t.size),
             "complete_revolutions": self.revolutions,
-            "gap_position": "after tooth position {} (edges 0 … {} per revolution; gap spans {} pitches)".format(
-                self.wheel.edges_per_rev - 1, self.wheel.edges_per_rev - 1, self.wheel.missing + 1)
-            if self.wheel.missing else "index signal",
+            "gap_position": f"after tooth position {self.wheel.edges_per_rev - 1} (edges 0 … {self.wheel.edges_per_rev - 1} per revolution; gap spans {self.wheel.missing + 1} pitches)"
+            if self.wheel.missing
+            else "index signal",
             "first_reference_time_s": float(self.t[np.argmax(self.tooth == 0)]),
             "gap_period_ratio": _finite_or_none(self.gap_ratio),  # none for an index wheel
             "max_tooth_period_ratio": _finite_or_none(self.tooth_ratio_max),
@@ -163,8 +170,10 @@ def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
     E = wheel.edges_per_rev
     n = t.size
     if n < E + 3:
-        raise LogError(f"{n} tooth edges: a {wheel.spec} wheel gives {E} per revolution; the log must hold more than "
-                       f"one revolution ({E + 3} edges or more) to find its reference")
+        raise LogError(
+            f"{n} tooth edges: a {wheel.spec} wheel gives {E} per revolution; the log must hold more than "
+            f"one revolution ({E + 3} edges or more) to find its reference"
+        )
     if np.any(np.diff(t) <= 0):
         i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise LogError(f"tooth edge {i}: time {t[i]:.9g} s is not after the previous edge's {t[i - 1]:.9g} s")
@@ -172,8 +181,10 @@ def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
     r = _ratios(dt)
     if wheel.needs_index:
         if index_times is None:
-            raise LogError(f"wheel {wheel.spec} has no gap: give a once-per-revolution index signal "
-                           f"(column 'index_v'), or the missing teeth (e.g. {wheel.teeth}-2)")
+            raise LogError(
+                f"wheel {wheel.spec} has no gap: give a once-per-revolution index signal "
+                f"(column 'index_v'), or the missing teeth (e.g. {wheel.teeth}-2)"
+            )
         idx = np.asarray(index_times, dtype=np.float64)
         ref = np.unique(np.searchsorted(t, idx, side="left"))
         ref = ref[ref < n]
@@ -183,32 +194,42 @@ def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
         bad = np.flatnonzero(sp != E)
         if bad.size:
             b = int(bad[0])
-            raise LogError(f"between the index pulses at t = {t[ref[b]]:.6f} s and {t[ref[b + 1]]:.6f} s: "
-                           f"{sp[b]} tooth edges where a {wheel.spec} wheel gives {E} (a missed or extra edge?)")
+            raise LogError(
+                f"between the index pulses at t = {t[ref[b]]:.6f} s and {t[ref[b + 1]]:.6f} s: "
+                f"{sp[b]} tooth edges where a {wheel.spec} wheel gives {E} (a missed or extra edge?)"
+            )
         first = int(ref[0])
         gap_ratio, tooth_max = float("nan"), float(np.nanmax(r))
     else:
         thr = math.sqrt(wheel.missing + 1)
         cand = np.flatnonzero(r > thr)
         if cand.size == 0:
-            raise LogError(f"no gap of a {wheel.spec} wheel found in {n} tooth edges (t = {t[0]:.6f} … {t[-1]:.6f} s): "
-                           f"the largest tooth period is {np.nanmax(r):.2f}× its neighbours', a gap gives "
-                           f"{wheel.missing + 1}× (is the wheel right?)")
+            raise LogError(
+                f"no gap of a {wheel.spec} wheel found in {n} tooth edges (t = {t[0]:.6f} … {t[-1]:.6f} s): "
+                f"the largest tooth period is {np.nanmax(r):.2f}× its neighbours', a gap gives "
+                f"{wheel.missing + 1}× (is the wheel right?)"
+            )
         sp = np.diff(cand)
         bad = np.flatnonzero(sp != E)
         if bad.size:
             b = int(bad[0])
-            raise LogError(f"between the gaps at t = {t[cand[b]]:.6f} s and {t[cand[b + 1]]:.6f} s: {sp[b]} tooth edges "
-                           f"where a {wheel.spec} wheel gives {E} (a missed or extra edge, or another wheel)")
+            raise LogError(
+                f"between the gaps at t = {t[cand[b]]:.6f} s and {t[cand[b + 1]]:.6f} s: {sp[b]} tooth edges "
+                f"where a {wheel.spec} wheel gives {E} (a missed or extra edge, or another wheel)"
+            )
         g0, g1 = int(cand[0]), int(cand[-1])
         if g0 - E >= 1:
             i = g0 - E
-            raise LogError(f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
-                           f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)")
+            raise LogError(
+                f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
+                f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)"
+            )
         if g1 + E <= dt.size - 2:
             i = g1 + E
-            raise LogError(f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
-                           f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)")
+            raise LogError(
+                f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
+                f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)"
+            )
         # the first edge after the first gap found; an earlier edge at the same position (the log starts right
         # at a gap, whose long period is then before the first edge) is the first reference
         first = (g0 + 1) % E
@@ -240,9 +261,9 @@ class ToothErrors:
     method: str = "given"
     revolutions: int = 0
     engine_orders: tuple = ()
-    standard_error_rad: Optional[np.ndarray] = None
+    standard_error_rad: np.ndarray | None = None
     source: str = ""
-    order_rms_rad: Optional[float] = None
+    order_rms_rad: float | None = None
 
     def __post_init__(self):
         w = parse_wheel(self.wheel)
@@ -252,8 +273,10 @@ class ToothErrors:
         if not np.all(np.isfinite(e)):
             raise LogError("tooth errors: not all finite")
         if np.max(np.abs(e)) >= 0.5 * w.pitch_rad:
-            raise LogError(f"tooth errors up to {np.rad2deg(np.max(np.abs(e))):.3f}°: half a pitch or more; "
-                           f"not the errors of a {w.spec} wheel")
+            raise LogError(
+                f"tooth errors up to {np.rad2deg(np.max(np.abs(e))):.3f}°: half a pitch or more; "
+                f"not the errors of a {w.spec} wheel"
+            )
         object.__setattr__(self, "wheel", w.spec)
         object.__setattr__(self, "errors_rad", e - e.mean())
 
@@ -302,7 +325,7 @@ class ToothErrors:
             raise LogError(f"{path}: cannot write the tooth errors: {e.strerror or e}") from None
 
     @classmethod
-    def load(cls, path) -> "ToothErrors":
+    def load(cls, path) -> ToothErrors:
         """Read a file written by :meth:`save`."""
         path = os.fspath(path)
         try:
@@ -331,8 +354,9 @@ class ToothErrors:
             raise LogError(f"{path}: 'wheel': {e}") from None
         errors = numbers("errors_rad")
         if errors.size != wheel.edges_per_rev:
-            raise LogError(f"{path}: 'errors_rad' has {errors.size} values; a {wheel.spec} wheel has "
-                           f"{wheel.edges_per_rev} edges")
+            raise LogError(
+                f"{path}: 'errors_rad' has {errors.size} values; a {wheel.spec} wheel has {wheel.edges_per_rev} edges"
+            )
         se = None if d.get("standard_error_rad") is None else numbers("standard_error_rad", errors.shape)
         orders = numbers("engine_orders") if d.get("engine_orders") else np.zeros(0)
         if np.any(orders != np.round(orders)):
@@ -344,9 +368,16 @@ class ToothErrors:
         if orms is not None and not (isinstance(orms, (int, float)) and math.isfinite(orms) and orms >= 0):
             raise LogError(f"{path}: 'order_rms_rad' must be a number ≥ 0, not {orms!r}")
         try:
-            return cls(wheel.spec, errors, str(d.get("method", "given")), int(rv),
-                       tuple(int(k) for k in orders), se, str(d.get("source", path)),
-                       None if orms is None else float(orms))
+            return cls(
+                wheel.spec,
+                errors,
+                str(d.get("method", "given")),
+                int(rv),
+                tuple(int(k) for k in orders),
+                se,
+                str(d.get("source", path)),
+                None if orms is None else float(orms),
+            )
         except LogError as e:
             raise LogError(f"{path}: {e}") from None
 
@@ -400,9 +431,17 @@ def _inertia_ripple(wheel, engine, tdc_deg):
     return d - d.mean()
 
 
-def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: int = 4, cylinders: int = 1,
-                          coastdown_ratio: float = 1.5, source: str = "", engine=None,
-                          tdc_deg: Optional[float] = None) -> ToothErrors:
+def estimate_tooth_errors(
+    track: ToothTrack,
+    *,
+    engine_orders="auto",
+    strokes: int = 4,
+    cylinders: int = 1,
+    coastdown_ratio: float = 1.5,
+    source: str = "",
+    engine=None,
+    tdc_deg: float | None = None,
+) -> ToothErrors:
     """Tooth-spacing errors of the wheel, from the log itself.
 
     **Arguments:**
@@ -446,8 +485,10 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
     d = (theta(tt) - TWO_PI * rev - w.pitch_rad * tooth).reshape(R, E)
     if engine is not None:
         if tdc_deg is None or not math.isfinite(float(tdc_deg)):
-            raise LogError("tooth errors with an engine's inertia ripple removed need tdc_deg: the angle from the "
-                           "first edge after the gap to cylinder 1's TDC [deg]")
+            raise LogError(
+                "tooth errors with an engine's inertia ripple removed need tdc_deg: the angle from the "
+                "first edge after the gap to cylinder 1's TDC [deg]"
+            )
         d = d - _inertia_ripple(w, engine, float(tdc_deg))[None, :]
     omega = TWO_PI / np.diff(t0)
     method = "revolution average"
@@ -487,8 +528,10 @@ def estimate_tooth_errors(track: ToothTrack, *, engine_orders="auto", strokes: i
         # be as small as the wheel's errors there, so the detection above cannot be trusted to see it
         keep = tuple(sorted(set(keep) | set(firing_orders(cylinders, strokes, w.teeth))))
         if len(keep) > (int(np.count_nonzero(clean)) - 1) // 2 - 2:
-            raise LogError(f"tooth errors: the engine's orders {keep[0]} … {keep[-1]} leave too few to estimate "
-                           f"from {E} teeth; give a calibration (tooth_errors=FILE) or engine_orders")
+            raise LogError(
+                f"tooth errors: the engine's orders {keep[0]} … {keep[-1]} leave too few to estimate "
+                f"from {E} teeth; give a calibration (tooth_errors=FILE) or engine_orders"
+            )
     else:
         keep = tuple(int(k) for k in engine_orders)
         if any(k < 1 or k >= w.teeth // 2 for k in keep):

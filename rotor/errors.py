@@ -1,0 +1,32 @@
+"""rotor's exceptions: input errors apart from solver outcomes.
+
+An *input error* (:class:`EngineError`, :class:`LogError`) names what is wrong with what
+the user gave and what to do; the command line exits with code 2 on it. A *solver
+outcome* (:class:`SolverError`) is valid input for which a solver could not reach an
+answer (no periodic steady state, a stall): the command line exits with code 1. Ground
+floor: imports nothing from rotor.
+"""
+
+from __future__ import annotations
+
+__all__ = ["RotorError", "EngineError", "LogError", "SolverError", "NoSteadyStateError"]
+
+
+class RotorError(Exception):
+    """Base of every error rotor raises on purpose."""
+
+
+class EngineError(RotorError, ValueError):
+    """An engine description or argument that cannot be used: names the key and the problem."""
+
+
+class LogError(RotorError, ValueError):
+    """A recording that cannot be analysed: names the file, row, column or time and the problem."""
+
+
+class SolverError(RotorError, RuntimeError):
+    """Valid input for which a solver could not reach an answer."""
+
+
+class NoSteadyStateError(SolverError):
+    """No usable periodic solution: the kinetic energy reaches zero inside the cycle."""

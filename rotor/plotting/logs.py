@@ -1,0 +1,73 @@
+"""The plot of a logged-speed analysis."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .common import angle_axis
+
+__all__ = ["plot_log_analysis"]
+
+
+def plot_log_analysis(analysis, axes=None):
+    """The combined plot of a :class:`rotor.LogAnalysis`: speed over the cycle (every
+    cycle and their mean), each cycle's mean speed and δ, the order spectrum (mean and
+    cycle-to-cycle spread), and the pressure signal over the cycle (or, without one,
+    the tooth errors applied).
+
+    **Returns:** the 2×2 array of Axes.
+    """
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(2, 2, figsize=(12, 8), layout="constrained")
+    axes = np.asarray(axes)
+    a = analysis
+    ax_w, ax_c, ax_o, ax_p = axes.ravel()[:4]
+    cycle_deg = np.rad2deg(a.cycle_rad)
+    ang = np.rad2deg(a.cycle_angle_rad)
+    rpm = a.omega * 30 / np.pi
+    for row in rpm:
+        ax_w.plot(ang, row, lw=0.6, color="0.6", alpha=0.6)
+    ax_w.plot(ang, rpm.mean(axis=0), lw=1.8, color="C0", label=f"mean of {a.cycles} cycles")
+    ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
+    ax_w.set_ylabel("speed [rpm]")
+    ax_w.legend(fontsize=8)
+    angle_axis(ax_w, cycle_deg)
+    ax_w.set_title(f"{a.source}: speed over the cycle")
+    k = np.arange(a.cycles)
+    ax_c.plot(k, a.mean_rpm, "o-", color="C0", ms=4)
+    ax_c.set_xlabel("cycle")
+    ax_c.set_ylabel("mean speed [rpm]", color="C0")
+    twin = ax_c.twinx()
+    twin.plot(k, a.delta, "s--", color="C3", ms=4)
+    twin.set_ylabel("δ [-]", color="C3")
+    ax_c.grid(True, alpha=0.3)
+    ax_c.set_title("cycle to cycle")
+    m, s = (
+        a.amplitude_rad_s.mean(axis=0),
+        (a.amplitude_rad_s.std(axis=0, ddof=1) if a.cycles > 1 else np.zeros(a.order.size)),
+    )
+    ax_o.bar(a.order, m, width=0.3, yerr=s, capsize=2, color="C0")
+    ax_o.set_xlabel("engine order [per revolution]")
+    ax_o.set_ylabel("speed amplitude [rad/s]")
+    ax_o.grid(True, alpha=0.3, axis="y")
+    ax_o.set_title("order spectrum (mean ± cycle-to-cycle std)")
+    if a.pressure is not None:
+        ph, pv, cyc = a.pressure
+        order = np.argsort(cyc * 10 + ph / a.cycle_rad, kind="stable")
+        ax_p.plot(np.rad2deg(ph[order]), pv[order], ",", color="C2", alpha=0.5)
+        ax_p.set_xlabel("cycle angle [deg]")
+        ax_p.set_ylabel("pressure signal [V]")
+        angle_axis(ax_p, cycle_deg)
+        ax_p.set_title(f"pressure; TDC {np.rad2deg(a.tdc_rad):.1f}° after the gap")
+    elif a.tooth_errors is not None:
+        te = a.tooth_errors
+        ax_p.bar(np.arange(te.errors_rad.size), te.errors_deg, color="C1")
+        ax_p.set_xlabel("tooth (0 = first after the gap)")
+        ax_p.set_ylabel("tooth error [deg]")
+        ax_p.grid(True, alpha=0.3, axis="y")
+        ax_p.set_title(f"tooth errors applied ({te.method})")
+    else:
+        ax_p.set_axis_off()
+    return axes

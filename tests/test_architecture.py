@@ -1,0 +1,137 @@
+"""The house rules that import-linter cannot see: no private name crosses a module
+boundary (in the package, its tests, benchmarks and notebooks), and every room says in its
+``__init__`` docstring what lives there and what it may import.
+
+The layer contracts themselves are in ``pyproject.toml`` (``[tool.importlinter]``) and run
+by ``make test`` as ``lint-imports``; ``test_layer_contracts_hold`` runs them here too."""
+
+import ast
+import json
+import shutil
+import subprocess
+
+import pytest
+from conftest import ROOT
+
+ROOMS = ["engine", "dynamics", "logs", "diagnostics", "design", "plotting", "cli"]
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _module_name(path):
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _absolute(node: ast.ImportFrom, here: str, is_package: bool) -> str:
+    if not node.level:
+        return node.module or ""
+    base = here.split(".") if is_package else here.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _violations(source: str, here: str, is_package: bool = False):
+    """Private names of rotor modules used from outside the module that defines them."""
+    tree = ast.parse(source)
+    aliases = {}  # local name -> rotor module it is bound to
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name == "rotor" or a.name.startswith("rotor."):
+                    aliases[a.asname or a.name.split(".")[0]] = a.asname and a.name or "rotor"
+                    if any(_private(p) for p in a.name.split(".")):
+                        found.append(f"line {node.lineno}: import {a.name}")
+        elif isinstance(node, ast.ImportFrom):
+            mod = _absolute(node, here, is_package)
+            if not (mod == "rotor" or mod.startswith("rotor.")):
+                continue
+            if any(_private(p) for p in mod.split(".")):
+                found.append(f"line {node.lineno}: from {mod} import ...")
+            for a in node.names:
+                if _private(a.name):
+                    found.append(f"line {node.lineno}: from {mod} import {a.name}")
+                else:
+                    aliases.setdefault(a.asname or a.name, f"{mod}.{a.name}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _private(node.attr):
+            chain, v = [node.attr], node.value
+            while isinstance(v, ast.Attribute):
+                chain.append(v.attr)
+                v = v.value
+            if isinstance(v, ast.Name) and v.id in aliases and v.id != "self":
+                found.append(f"line {node.lineno}: {v.id}.{'.'.join(reversed(chain))}")
+    return found
+
+
+def _python_files():
+    for folder in ("rotor", "tests", "benchmarks"):
+        yield from sorted((ROOT / folder).rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", list(_python_files()), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_private_name_crosses_a_module(path):
+    here = _module_name(path) if path.parts[len(ROOT.parts)] == "rotor" else "__outside__"
+    bad = _violations(path.read_text(encoding="utf-8"), here, path.name == "__init__.py")
+    assert not bad, f"{path.relative_to(ROOT)} uses private names of other modules: {bad}"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "notebooks").glob("*.ipynb")), ids=lambda p: p.name)
+def test_notebooks_use_no_private_names(path):
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    code = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
+    code = "\n".join(line for line in code.splitlines() if not line.lstrip().startswith(("%", "!")))
+    assert not _violations(code, "__outside__")
+
+
+def test_the_checker_sees_a_private_import():
+    """The rule above can fail: the forms it must catch are caught."""
+    assert _violations("from rotor.dynamics.equation import _wrap", "__outside__")
+    assert _violations("import rotor\nrotor.design.flywheel._state(1)", "__outside__")
+    assert _violations("from ..dynamics import crank_train\ncrank_train._I", "rotor.diagnostics.inverse")
+    assert _violations("from ._checks import x", "rotor.engine.model")
+    assert not _violations("from .crank_train import COL_I\nself._x = 1", "rotor.dynamics.equation")
+
+
+@pytest.mark.parametrize("room", ROOMS)
+def test_every_room_says_what_lives_there_and_what_it_may_import(room):
+    doc = ast.get_docstring(ast.parse((ROOT / "rotor" / room / "__init__.py").read_text(encoding="utf-8")))
+    assert doc and len(doc.splitlines()) >= 3, f"rotor/{room}/__init__.py needs a docstring"
+    assert "import" in doc, f"rotor/{room}/__init__.py must say what it may import"
+
+
+def test_ground_floor_imports_nothing_from_rotor():
+    for name in ("units", "errors", "checks", "fileio", "cache", "results"):
+        here = f"rotor.{name}"
+        tree = ast.parse((ROOT / "rotor" / f"{name}.py").read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                mod = _absolute(node, here, False)
+                assert not mod.startswith("rotor") or mod in {f"rotor.{g}" for g in ("errors", "units")}, (
+                    f"{name}: imports {mod}"
+                )
+
+
+@pytest.mark.skipif(
+    shutil.which("lint-imports") is None and not (ROOT / ".venv/bin/lint-imports").exists(),
+    reason="import-linter not installed",
+)
+def test_layer_contracts_hold():
+    exe = shutil.which("lint-imports") or str(ROOT / ".venv/bin/lint-imports")
+    r = subprocess.run([exe, "--no-cache"], cwd=ROOT, capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-2000:]
+
+
+def test_top_level_all_is_one_sorted_list():
+    import rotor
+
+    assert list(rotor.__all__) == sorted(rotor.__all__)
+    assert len(set(rotor.__all__)) == len(rotor.__all__)
+    for name in rotor.__all__:
+        assert hasattr(rotor, name), name
