@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/rotor demo --out out
+	$(VENV)/bin/rotor demo --plot out
 
 # the house rules first (seconds), then the suite
 lint: $(STAMP)

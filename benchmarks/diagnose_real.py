@@ -70,8 +70,8 @@ def compare(engine, folder, cal, name, **kw):
         "cycle_to_cycle_correlation": float(np.corrcoef(ident_imep, meas)[0, 1]) if ident.cycles > 2 else None,
         "measured_std_bar": float(np.std(meas) / 1e5),
         "misfires": ident.misfires(),
-        "charge_scale": float(ident.info["charge_scale"]),
-        "identifications": int(ident.info["charge_iterations"]),
+        "charge_scale": float(ident.charge_scale),
+        "identifications": int(ident.charge_iterations),
         "r2": float(ident.fit_r2),
         "wall_s": wall,
     }

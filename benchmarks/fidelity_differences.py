@@ -51,7 +51,7 @@ def _row(r):
     amp = dict(zip(np.round(o.order, 3), np.asarray(o.speed_amplitude_rad_s)))
     return {
         "delta": float(r.delta),
-        "textbook_delta": float(r.info["textbook_delta"]),
+        "textbook_delta": float(r.textbook_delta),
         "speed_amplitude_rad_s": {str(k): float(amp[k]) for k in ORDERS},
     }
 

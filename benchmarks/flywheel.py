@@ -18,7 +18,7 @@ part-load fuelling at the lower speeds):
   ``textbook_rated_ratio``: the same from the rated point alone (the seed's practice);
 - ``timing``: the design's first call (compile and run, in a process that has made no other
   design) and the median of ``--repeats`` later calls, and a bisection on the same jitted
-  closed-form δ(J) (``rotor.design.flywheel._state``) to the same tolerance as Newton's, for the ratio.
+  closed-form δ(J) (``rotor.design.flywheel.DeltaOfInertia``) to the same tolerance as Newton's, for the ratio.
 
 Writes ``benchmarks/results/flywheel.json`` and ``benchmarks/figures/flywheel_textbook.png``.
 """
@@ -37,8 +37,9 @@ from pathlib import Path
 import numpy as np
 
 import rotor
-from rotor.design.flywheel import OperatingPoint, _Evaluator, _with_inertia
+from rotor.design.flywheel import DeltaOfInertia, OperatingPoint, with_crankshaft_inertia
 from rotor.fileio import atomic_path
+from rotor.units import rad_s_to_rpm
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "flywheel.json"
@@ -58,7 +59,9 @@ POINTS = {
 
 def shooting_delta(engine, J, p):
     return float(
-        rotor.steady_state(_with_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale, method="shooting").delta
+        rotor.steady_state(
+            with_crankshaft_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale, method="shooting"
+        ).delta
     )
 
 
@@ -78,13 +81,13 @@ def case(engine, preset, label, points, delta):
     J = d.crankshaft_inertia_kgm2
     p = next(q for q in points if q.rpm == d.binding_rpm)
     J_bis, n_bis = bisect(lambda j: shooting_delta(engine, j, p), delta, 0.7 * J, 1.4 * J, 1e-9)
-    r = rotor.steady_state(_with_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale)
+    r = rotor.steady_state(with_crankshaft_inertia(engine, J), p.rpm, p.load, imep_scale=p.imep_scale)
     run = rotor.simulate(
-        _with_inertia(engine, J),
-        rpm=float(r.omega[0]) * 30 / np.pi,
+        with_crankshaft_inertia(engine, J),
+        rpm=rad_s_to_rpm(float(r.omega[0])),
         cycles=2,
         method="time",
-        load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])),
+        load=rotor.ConstantLoad(float(r.load_torque_Nm)),
         combustion=np.full((2, engine.cylinders), p.imep_scale),
         progress=False,
     )
@@ -127,15 +130,15 @@ def timing(engine, points, delta, repeats):
         d = rotor.design_flywheel(engine, delta, points)
         runs.append(time.perf_counter() - t)
     # the same problem by bisection on the same jitted closed-form δ(J), to Newton's tolerance
-    ev = _Evaluator(engine, "variable", None, 0.25)
+    ev = DeltaOfInertia(engine, "variable", None, 0.25)
     J = d.crankshaft_inertia_kgm2
     for p in points:  # compiled already by the design; warm the eager conversion too
-        ev.state(J, p)
+        ev.delta(J, p)
     bis = []
     for _ in range(repeats):
         t = time.perf_counter()
         for p in points:
-            bisect(lambda j: ev.state(j, p)[0], delta, 0.1 * J, 10 * J, 1e-10)
+            bisect(lambda j: ev.delta(j, p), delta, 0.1 * J, 10 * J, 1e-10)
         bis.append(time.perf_counter() - t)
     return {
         "first_call_s": first,

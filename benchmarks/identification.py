@@ -41,6 +41,7 @@ from scipy.interpolate import CubicSpline
 
 import rotor
 from rotor.logs.wheel import TWO_PI
+from rotor.units import RPM_PER_RAD_S
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import synthetic_wheel  # noqa: E402
@@ -89,9 +90,9 @@ def run_case(name, rpm, load, cycles, seed, te):
     )
     res = rotor.simulate(
         e,
-        rpm=float(st.omega[0]) * 30 / np.pi,
+        rpm=float(st.omega[0]) * RPM_PER_RAD_S,
         cycles=cycles,
-        load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])),
+        load=rotor.ConstantLoad(float(st.load_torque_Nm)),
         step_deg=0.25,
         combustion=comb,
         progress=False,
@@ -170,9 +171,9 @@ def timing(name, te, repeats):
     st = rotor.steady_state(e, imep_scale=np.linspace(0.9, 1.1, n))
     res = rotor.simulate(
         e,
-        rpm=float(st.omega[0]) * 30 / np.pi,
+        rpm=float(st.omega[0]) * RPM_PER_RAD_S,
         cycles=104,
-        load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])),
+        load=rotor.ConstantLoad(float(st.load_torque_Nm)),
         step_deg=0.25,
         combustion=comb,
         progress=False,
@@ -194,7 +195,7 @@ def timing(name, te, repeats):
         "engine": name,
         "cycles": idf.cycles,
         "points_per_cycle": an100.points_per_cycle,
-        "blocks": idf.info["blocks"],
+        "blocks": idf.blocks,
         "first_call_s": first,
         "median_s": statistics.median(walls),
         "runs_s": walls,

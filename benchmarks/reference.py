@@ -15,8 +15,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import rotor
-
-RPM = 30 / np.pi
+from rotor.units import RPM_PER_RAD_S as RPM
 
 
 def physics(engine):
@@ -26,7 +25,7 @@ def physics(engine):
         heat = src.heat_scale(g)
 
         def pressure(phi):
-            p0, p1 = src._parts(phi, g, src._burn())
+            p0, p1 = src.pressure_parts(phi, g)
             return p0 + heat * p1
     else:
 

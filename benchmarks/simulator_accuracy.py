@@ -32,8 +32,8 @@ import numpy as np
 from reference import scipy_angle_reference
 
 import rotor
+from rotor.units import RPM_PER_RAD_S as RPM
 
-RPM = 30 / np.pi
 OUT = Path(__file__).parent / "results"
 
 
@@ -80,10 +80,10 @@ def steady():
     shoot = rotor.steady_state(engine, method="shooting")
     prop = rotor.PropellerLoad(1100.0, 1250.0)
     ss = rotor.steady_state(engine, load=prop)
-    fuel = float(ss.info["fuel_scale"])
+    fuel = float(ss.fuel_scale)
     run = rotor.simulate(engine, rpm=1150.0, cycles=300, load=prop, combustion=np.full((300, 4), fuel))
     return {
-        "shooting_periodicity_error": float(shoot.info["periodicity_error"]),
+        "shooting_periodicity_error": float(shoot.periodicity_error),
         "closed_vs_shooting_omega": float(jnp.max(jnp.abs(shoot.omega / closed.omega - 1))),
         "delta_vs_settled_run": float(run.delta_per_cycle[-1] / ss.delta - 1),
         "mean_rpm_of_settled_run": float(run.cycle_mean_omega[-1] * RPM),
@@ -117,7 +117,7 @@ def rtol_sweep():
     for rtol in (1e-3, 1e-6, 1e-8, 1e-9, 1e-10, 1e-12, 1e-13):
         r = rotor.simulate(engine, rpm=1200.0, cycles=2, load=load, method="angle", rtol=rtol)
         err = float(jnp.max(jnp.abs(r.omega / ref.omega - 1)))
-        out[str(rtol)] = {"omega_error": err, "error_over_rtol": err / rtol, "steps": r.info["steps"]}
+        out[str(rtol)] = {"omega_error": err, "error_over_rtol": err / rtol, "steps": r.solver_steps}
     return out
 
 

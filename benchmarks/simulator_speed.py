@@ -48,6 +48,7 @@ from scipy.interpolate import PchipInterpolator
 
 import rotor
 from rotor.fileio import atomic_path, write_text_atomic
+from rotor.units import RAD_S_PER_RPM
 
 RESULTS = Path(__file__).resolve().parent / "results"
 RPM = 1250.0
@@ -185,7 +186,7 @@ def timed_rotor(fn, repeats):
 # --------------------------------------------------------------------------- benchmarks
 def bench_steady(engine, ne, repeats):
     rot, ss = timed_rotor(lambda: rotor.steady_state(engine), repeats)
-    omega0, m_load = float(ss.omega[0]), float(ss.info["load_torque_Nm"])
+    omega0, m_load = float(ss.omega[0]), float(ss.load_torque_Nm)
     sol = ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8)
     sp = median_time(lambda: ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8), repeats)
     sp.update(rtol=1e-8, atol=ATOL, nfev=int(sol.nfev), omega_end_over_start=float(sol.y[1, -1] / omega0))
@@ -210,7 +211,7 @@ def bench_steady(engine, ne, repeats):
 
 def bench_transient(engine, cycles, repeats, scipy_repeats):
     load = rotor.PropellerLoad(*PROPELLER)
-    w0, w_rated = RPM * np.pi / 30, PROPELLER[1] * np.pi / 30
+    w0, w_rated = RPM * RAD_S_PER_RPM, PROPELLER[1] * RAD_S_PER_RPM
 
     def user_load(w):
         return PROPELLER[0] * (w / w_rated) ** 2

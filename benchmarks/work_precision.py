@@ -73,6 +73,7 @@ from reference import scipy_angle_reference  # noqa: E402
 
 import rotor  # noqa: E402
 from rotor.fileio import atomic_path, write_text_atomic  # noqa: E402
+from rotor.units import RAD_S_PER_RPM  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 TARGET = 1e-6
@@ -311,7 +312,7 @@ class Bench:
         self.rpm, self.torque = float(e.operating.rpm), float(rotor.mean_gas_torque(e))
         self.load = rotor.PropellerLoad(self.torque, self.rpm)
         self.c, self.rpm0, self.ph = float(self.load.c), 0.95 * self.rpm, Physics(e)
-        self.omega0 = self.rpm0 * np.pi / 30
+        self.omega0 = self.rpm0 * RAD_S_PER_RPM
         self.history = {}  # key → (cycles, median_s) of the last measured run
         start = time.perf_counter()
         self.numba(1, 720)  # compiles nb_rk4 (and nb_terms) on the first preset; later ones reuse it

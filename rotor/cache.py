@@ -19,18 +19,20 @@ _OFF = ("0", "off", "no", "false", "")
 MAX_BYTES = 1 << 30
 
 
-def enable_compilation_cache(path=None):
+def enable_compilation_cache(path: str | os.PathLike[str] | None = None) -> str | None:
     """Use JAX's persistent compilation cache at ``path`` (see the module doc for the default).
 
-    Returns the directory in use, or None when the cache is off. Called once when rotor is
-    imported; call it again with another ``path`` to move the cache.
+    ``path``: a folder (created if missing). Returns the directory in use, or None when the
+    cache is off. Called once when rotor is imported; call it again with another ``path``
+    to move the cache.
     """
     env = os.environ.get("ROTOR_COMPILATION_CACHE")
     if path is None:
         if env is not None and env.strip().lower() in _OFF:
             return None
-        if jax.config.jax_compilation_cache_dir:  # the user's own choice wins
-            return jax.config.jax_compilation_cache_dir
+        own = getattr(jax.config, "jax_compilation_cache_dir", None)
+        if own:  # the user's own choice wins
+            return str(own)
         if env:
             path = env
         else:

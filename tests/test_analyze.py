@@ -11,6 +11,7 @@ from conftest import SHARED_DATA
 import rotor
 from rotor import LogError
 from rotor.cli import main
+from rotor.units import RPM_PER_RAD_S
 
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
@@ -200,7 +201,7 @@ def test_speed_log_analysis():
         w = w0 * (1 + 0.02 * np.cos(th[i - 1] / 2 + 0.3))
         th[i] = th[i - 1] + w * (t[i] - t[i - 1])
     omega = w0 * (1 + 0.02 * np.cos(th / 2 + 0.3))
-    a = rotor.analyze_log(rotor.Log.from_arrays(time=t, rpm=omega * 30 / np.pi), tdc_deg=0, firing=0)
+    a = rotor.analyze_log(rotor.Log.from_arrays(time=t, rpm=omega * RPM_PER_RAD_S), tdc_deg=0, firing=0)
     assert a.amplitude_of(0.5) == pytest.approx(np.full(a.cycles, 0.02 * w0), rel=2e-3)
     ph = a.phase_rad[:, 0]
     # cycles start at θ = 4πk (tdc 0, parity 0 → start one revolution before rev 0's TDC: θ = −2π + 4πk … )

@@ -25,6 +25,7 @@ from scipy.interpolate import CubicSpline
 
 import rotor
 from rotor.logs.wheel import TWO_PI
+from rotor.units import RPM_PER_RAD_S
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import synthetic_wheel  # noqa: E402
@@ -63,8 +64,8 @@ def test_tooth_errors_from_a_coastdown_within_002_deg(calibration):
 def engine_run():
     e = rotor.load_engine("4chn15")
     steady = rotor.steady_state(e)
-    load = float(steady.info["load_torque_Nm"])
-    rpm0 = float(steady.omega[0]) * 30 / np.pi
+    load = float(steady.load_torque_Nm)
+    rpm0 = float(steady.omega[0]) * RPM_PER_RAD_S
     res = rotor.simulate(
         e,
         rpm=rpm0,
@@ -152,13 +153,13 @@ def test_estimate_on_the_firing_run_with_cylinders(engine_run):
     (±0.2°, 0.03° per order) and this engine (δ = 0.0067, an inline four with a heavy
     flywheel) δ comes out at 0.029, 4.4× the simulator's — no data from a firing run can do
     better; the note says so and gives the size (±0.026), which covers the error."""
-    from rotor.logs.wheel import _order_fit_matrix
+    from rotor.logs.wheel import order_fit_matrix
 
     res = engine_run
     an = _analyse(res, "estimate", cylinders=4)
     te = an.tooth_errors
     assert te.engine_orders == tuple(range(2, 29, 2))
-    X = _order_fit_matrix(PITCH * np.arange(WHEEL.edges_per_rev), te.engine_orders)
+    X = order_fit_matrix(PITCH * np.arange(WHEEL.edges_per_rev), te.engine_orders)
     beta, *_ = np.linalg.lstsq(X, ERRORS, rcond=None)
     assert np.rad2deg(np.max(np.abs(te.errors_rad - (ERRORS - X @ beta)))) < 0.02
     k = _match(res, an)
@@ -200,8 +201,8 @@ def test_round_trip_with_200_ns_jitter(engine_run, calibration):
 def unequal_run():
     e = rotor.load_engine("4chn15")
     steady = rotor.steady_state(e)
-    load = float(steady.info["load_torque_Nm"])
-    rpm0 = float(steady.omega[0]) * 30 / np.pi
+    load = float(steady.load_torque_Nm)
+    rpm0 = float(steady.omega[0]) * RPM_PER_RAD_S
     comb = rotor.combustion_pattern(8, 4, imep_scale=[1, 1.1, 0.9, 1])
     return rotor.simulate(
         e,

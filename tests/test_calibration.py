@@ -23,6 +23,7 @@ from conftest import SHARED_DATA
 
 import rotor
 from rotor.logs.analysis import LogAnalysis
+from rotor.units import RPM_PER_RAD_S
 
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
@@ -41,8 +42,8 @@ def simulated():
     pressure channel (gain GAIN, offset OFFSET) on a 0.2° grid, as a LogAnalysis."""
     eng = _engine()
     ss = rotor.steady_state(eng, rpm=3000)
-    load = float(ss.info["load_torque_Nm"])
-    run = rotor.simulate(eng, rpm=float(ss.omega[0]) * 30 / np.pi, cycles=8, load=rotor.ConstantLoad(load))
+    load = float(ss.load_torque_Nm)
+    run = rotor.simulate(eng, rpm=float(ss.omega[0]) * RPM_PER_RAD_S, cycles=8, load=rotor.ConstantLoad(load))
     C, Pn = run.uniform_cycles, run.points_per_cycle
     omega = np.asarray(run.omega)[: C * Pn].reshape(C, Pn)[:, :: max(1, Pn // 240)]
     cyc = float(eng.cycle_rad)
@@ -213,8 +214,8 @@ def test_real_imep_from_speed_alone(real_calibration, name, mean_tol, rms_tol):
     eng = rotor.load_engine("tue-single")
     cal = real_calibration
     ident = rotor.diagnose(eng, TUE / f"{name}.txt", cal, columns="time,-,encoder_v")
-    assert ident.info["analysis"].pressure is None  # speed alone
-    assert ident.info["analysis"].tdc_method == "given"
+    assert ident.analysis.pressure is None  # speed alone
+    assert ident.analysis.tdc_method == "given"
     pressure = rotor.analyze_log(
         TUE / f"{name}.txt",
         "60-2",

@@ -47,7 +47,7 @@ def test_info_json(capsys):
 
 def test_plot_and_demo_write_pngs(tmp_path, capsys):
     out = tmp_path / "plots"
-    assert main(["demo", "--out", str(out)]) == 0
+    assert main(["demo", "--plot", str(out), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "IMEP" in text and "irregularity" in text and "load step" in text
     for name in (
@@ -73,3 +73,82 @@ def test_presets_lists_names(capsys):
 def test_unwritable_output_is_a_clean_error(tmp_path, capsys):
     assert main(["table", "4chn15", "-o", str(tmp_path / "missing" / "t.csv")]) == 2
     assert capsys.readouterr().err.startswith("rotor: error:")
+
+
+def _run(capsys, *argv):
+    try:
+        rc = main(list(argv))
+    except SystemExit as e:  # argparse's usage errors
+        rc = e.code
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def test_table_json_is_the_tables_json(capsys):
+    from rotor.engine.file import load_engine
+    from rotor.engine.table import crank_table
+
+    rc, out, _ = _run(capsys, "table", "4chn15", "--step", "30", "--json")
+    assert rc == 0
+    assert json.loads(out) == crank_table(load_engine("4chn15"), step_deg=30.0).to_json_dict()
+    rc, _, err = _run(capsys, "table", "4chn15", "--json", "--format", "csv")
+    assert rc == 2 and "not allowed with" in err
+
+
+def test_info_prints_the_results_summary(capsys):
+    from rotor.engine.file import load_engine
+    from rotor.engine.summary import engine_summary
+
+    rc, out, _ = _run(capsys, "info", "v8", "--rpm", "2000")
+    assert rc == 0 and out == engine_summary(load_engine("v8"), rpm=2000).summary()
+
+
+def test_steady_json_is_the_results_json(capsys):
+    from rotor.dynamics.steady import steady_state
+    from rotor.engine.file import load_engine
+
+    rc, out, _ = _run(capsys, "steady", "4chn15", "--json")
+    assert rc == 0
+    got, want = json.loads(out), steady_state(load_engine("4chn15")).to_json_dict()
+    got.pop("wall_s"), want.pop("wall_s")
+    assert got == want
+
+
+def test_presets_json(capsys):
+    rc, out, _ = _run(capsys, "presets", "--json")
+    names = {p["name"]: p["engine"] for p in json.loads(out)["presets"]}
+    assert rc == 0 and names["4chn15"] == "4ChN15/20.5 diesel" and "tue-single" in names
+
+
+def test_solver_error_exits_1_and_closed_pipe_0(monkeypatch, capsys):
+    import rotor.dynamics.steady
+    from rotor.errors import NoSteadyStateError
+
+    def no_answer(*a, **k):
+        raise NoSteadyStateError("no periodic solution\nat all")
+
+    monkeypatch.setattr(rotor.dynamics.steady, "steady_state", no_answer)
+    rc, out, err = _run(capsys, "steady", "4chn15")
+    assert rc == 1 and out == "" and err == "rotor: no periodic solution at all\n"
+
+    def closed(*a, **k):
+        raise BrokenPipeError
+
+    monkeypatch.setattr(rotor.dynamics.steady, "steady_state", closed)
+    assert _run(capsys, "steady", "4chn15")[0] == 0
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["steady", "nosuch"],
+        ["simulate", "4chn15", "--misfire", "3-1"],
+        ["analyze", "missing.csv", "--wheel", "60-2"],
+        ["analyze", "missing.csv", "--compression-ratio", "9"],
+        ["flywheel", "4chn15", "--delta", "0.01,0.02"],
+        ["plot", "4chn15", "--out", "x"],
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(argv, capsys):
+    rc, out, err = _run(capsys, *argv)
+    assert rc == 2 and out == "" and err.count("\n") == 1 and "error:" in err

@@ -10,10 +10,11 @@ from conftest import SHARED_DATA
 
 import rotor
 from rotor.cli import main
+from rotor.units import PA_PER_BAR, RPM_PER_RAD_S
 
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
-GAIN = str(1e5 / (5 * 0.00385))
+GAIN = str(PA_PER_BAR / (5 * 0.00385))
 
 
 def _run(capsys, *argv):
@@ -148,23 +149,23 @@ def test_one_line_errors(tmp_path, capsys):
         assert err.count("\n") == 1 and needle in err, (argv, err)
 
 
-def test_plot_identification_without_engine(tmp_path):
-    """The plot from a plain identify (simulated, direct speed): three panels, misfires marked."""
+def test_plot_identification(tmp_path):
+    """The plot from a plain identify (simulated, direct speed): three panels, the identified
+    engine's cylinder torques, misfires marked."""
     import matplotlib
 
     matplotlib.use("Agg")
     eng = rotor.load_engine("tue-single")
     ss = rotor.steady_state(eng)
-    load = rotor.ConstantLoad(float(ss.info["load_torque_Nm"]))
+    load = rotor.ConstantLoad(float(ss.load_torque_Nm))
     pattern = rotor.combustion_pattern(6, 1, misfires=[(3, 1)])
-    run = rotor.simulate(eng, rpm=float(ss.omega[0]) * 30 / np.pi, cycles=6, load=load, combustion=pattern)
+    run = rotor.simulate(eng, rpm=float(ss.omega[0]) * RPM_PER_RAD_S, cycles=6, load=load, combustion=pattern)
     ident = rotor.identify(eng, run)
     assert ident.misfires() == [(3, 1)]
     axes = ident.plot()
     assert len(axes) == 3 and "1 misfire" in axes[2].get_title()
-    axes = ident.plot(engine=eng)
     assert "per cylinder" in axes[1].get_title()
-    torque = rotor.cylinder_torques(eng, ident)
+    torque = ident.cylinder_torques()
     assert torque.shape == (ident.cycles, ident.omega.shape[1], 1)
     from rotor.plotting import save_figure
 
@@ -185,7 +186,7 @@ def _tue_coast_teeth(tmp_path):
 
     w, gap = rotor.Wheel(60, 2), np.deg2rad(-29.4)
     e = rotor.Calibration.load(PRESET_CAL).apply(rotor.load_engine("tue-single"))
-    load = 0.5 * float(rotor.steady_state(e, rpm=3000).info["load_torque_Nm"])
+    load = 0.5 * float(rotor.steady_state(e, rpm=3000).load_torque_Nm)
     res = rotor.simulate(
         e,
         rpm=3000,
@@ -214,7 +215,7 @@ def test_coast_down_through_diagnose(tmp_path, capsys):
     assert motored < 0
     cal = rotor.Calibration.load(PRESET_CAL)
     ident = rotor.diagnose(rotor.load_engine("tue-single"), path, cal, wheel="60-2")
-    assert ident.info["scaling"] == "charge" and 0.5 < ident.info["charge_scale"] < 2
+    assert ident.scaling == "charge" and 0.5 < ident.charge_scale < 2
     assert ident.misfire.all()
     assert np.all(np.isfinite(ident.imep_pa)) and np.abs(ident.imep_pa - motored).max() < 0.1e5
     assert any("no firing" in n for n in ident.notes)

@@ -15,11 +15,10 @@ from conftest import ROOT
 
 import rotor
 from rotor.dynamics.equation import TRACES
+from rotor.units import RPM_PER_RAD_S as RPM
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from reference import scipy_angle_reference  # noqa: E402
-
-RPM = 30 / np.pi
 
 
 def _with_inertia(engine, J):
@@ -110,7 +109,7 @@ def test_fidelity_levels_differ_by_the_pinned_amounts(diesel):
     for o in (0.5, 1.0, 1.5):
         assert ov[o] < 1e-9 * ov[2.0]
     # the textbook estimate (seed 004) is within 0.5 % of the simulated δ here
-    assert float(v.info["textbook_delta"] / v.delta) - 1 == pytest.approx(0.0043, abs=5e-4)
+    assert float(v.textbook_delta / v.delta) - 1 == pytest.approx(0.0043, abs=5e-4)
 
 
 def test_series_fidelity_is_the_lambda_series_and_converges_as_lambda_cubed(diesel):
@@ -145,23 +144,23 @@ def test_steady_state_is_periodic_and_methods_agree(diesel):
     closed = rotor.steady_state(diesel)
     shoot = rotor.steady_state(diesel, method="shooting")
     assert closed.method == "closed" and shoot.method == "shooting"
-    assert float(shoot.info["periodicity_error"]) < 1e-10
+    assert float(shoot.periodicity_error) < 1e-10
     assert float(closed.mean_rpm) == pytest.approx(1250.0, rel=1e-12)
     np.testing.assert_allclose(np.asarray(shoot.omega), np.asarray(closed.omega), rtol=1e-9)
     # one more cycle from the closed-form start returns to the same state
-    load = rotor.ConstantLoad(closed.info["load_torque_Nm"])
+    load = rotor.ConstantLoad(closed.load_torque_Nm)
     run = rotor.simulate(diesel, rpm=float(closed.omega[0]) * RPM, cycles=2, load=load, step_deg=0.25)
     P = run.points_per_cycle
     assert run.omega.shape[0] == 2 * P + 1  # two whole cycles and the sample that ends them
     np.testing.assert_allclose(np.asarray(run.omega[P : 2 * P + 1]), np.asarray(run.omega[: P + 1]), rtol=1e-10)
     np.testing.assert_allclose(np.asarray(run.omega[:P]), np.asarray(closed.omega), rtol=1e-10)
     # the load is the mean engine torque: n·IMEP·Vh/Θ
-    assert float(closed.info["load_torque_Nm"]) == pytest.approx(float(rotor.mean_gas_torque(diesel)), rel=1e-6)
+    assert float(closed.load_torque_Nm) == pytest.approx(float(rotor.mean_gas_torque(diesel)), rel=1e-6)
 
 
 def test_steady_state_matches_a_settled_run(diesel, propeller):
     ss = rotor.steady_state(diesel, rpm=1250.0, load=propeller)
-    fuel = float(ss.info["fuel_scale"])
+    fuel = float(ss.fuel_scale)
     run = rotor.simulate(
         diesel, rpm=1150.0, cycles=300, load=propeller, combustion=np.full((300, diesel.cylinders), fuel)
     )
@@ -173,12 +172,12 @@ def test_steady_state_with_speed_linear_friction_uses_shooting(diesel):
     fr = rotor.Friction(fmep_pa=0.6e5, fmep_per_speed_pa_s_per_m=0.1e5)
     ss = rotor.steady_state(diesel, friction=fr)
     assert ss.method == "shooting"
-    assert float(ss.info["periodicity_error"]) < 1e-10
+    assert float(ss.periodicity_error) < 1e-10
     # the balancing load is the engine's mean torque minus the friction at the mean speed, to O(δ²)
     a, b, c = (float(x) for x in fr.torque_coefficients(diesel))
     w = 1250 / RPM
     expected = float(rotor.mean_gas_torque(diesel)) - a - b * w
-    assert float(ss.info["load_torque_Nm"]) == pytest.approx(expected, rel=1e-4)
+    assert float(ss.load_torque_Nm) == pytest.approx(expected, rel=1e-4)
 
 
 def test_no_steady_state_says_where(diesel):
@@ -273,3 +272,14 @@ def test_vmap_over_flywheels(diesel):
     # δ ∝ 1/(J + mean inertia of the crank train) to first order
     rest = float(rotor.mean_reduced_inertia(diesel)) - 10.2
     assert float(deltas[0] / deltas[2]) == pytest.approx((20.0 + rest) / (5.0 + rest), rel=0.01)
+
+
+def test_no_steady_state_is_a_solver_outcome_and_a_status_under_jit(diesel):
+    light = _with_inertia(diesel, 0.01)
+    with pytest.raises(rotor.NoSteadyStateError) as info:
+        rotor.steady_state(light, rpm=300.0)
+    assert isinstance(info.value, rotor.errors.SolverError) and not isinstance(info.value, rotor.EngineError)
+    # under jit no error can be raised: the result says so
+    ok = jax.jit(lambda r: rotor.steady_state(light, rpm=r).converged)(300.0)
+    assert not bool(ok)
+    assert bool(rotor.steady_state(diesel).converged)

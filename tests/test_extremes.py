@@ -10,8 +10,7 @@ import pytest
 
 import rotor
 from rotor.engine.file import preset_path
-
-RPM = 30 / np.pi
+from rotor.units import RPM_PER_RAD_S as RPM
 
 
 def _finite(res):
@@ -46,7 +45,7 @@ def test_rod_ratio_extremes(diesel, lam):
     R = float(diesel.geometry.crank_radius_m)
     engine = _with(diesel, lambda e: e.geometry.rod_length_m, R / lam)
     ss = rotor.steady_state(engine)
-    assert _finite(ss) and float(ss.info["periodicity_error"] if "periodicity_error" in ss.info else 0.0) < 1e-10
+    assert _finite(ss) and float(ss.periodicity_error if ss.periodicity_error is not None else 0.0) < 1e-10
     coast = rotor.simulate(engine.replace(pressure=rotor.NoPressure()), rpm=1000.0, cycles=20)
     ke = 0.5 * rotor.reduced_inertia(engine, coast.theta) * coast.omega**2
     assert float(jnp.max(jnp.abs(ke / ke[0] - 1))) < 1e-9
@@ -98,7 +97,7 @@ def test_one_to_sixteen_cylinders(n):
         engine,
         rpm=float(ss.omega[0]) * RPM,
         cycles=2,
-        load=rotor.ConstantLoad(ss.info["load_torque_Nm"]),
+        load=rotor.ConstantLoad(ss.load_torque_Nm),
         step_deg=0.25,
     )
     P = run.points_per_cycle
@@ -113,10 +112,10 @@ def test_one_to_sixteen_cylinders(n):
 def test_a_hundred_thousand_cycles_keep_the_phase(diesel):
     """The neutral constant load: 1e5 cycles from the steady state stay on it (θ ≈ 1.3e6 rad)."""
     ss = rotor.steady_state(diesel, grid_deg=2.0)
-    load = rotor.ConstantLoad(ss.info["load_torque_Nm"])
+    load = rotor.ConstantLoad(ss.load_torque_Nm)
     cycles = 100_000
     run = rotor.simulate(diesel, rpm=float(ss.omega[0]) * RPM, cycles=cycles, load=load, grid_deg=2.0, step_deg=90.0)
-    assert float(run.t[-1]) == pytest.approx(cycles * float(ss.info["period_s"]), rel=1e-10)
+    assert float(run.t[-1]) == pytest.approx(cycles * float(ss.period_s), rel=1e-10)
     assert float(run.omega[-1]) == pytest.approx(float(ss.omega[0]), rel=1e-10)
 
 
@@ -127,7 +126,7 @@ def test_reversal_runs_on_through_zero_speed(diesel):
     w = np.asarray(run.omega)
     assert _finite(run) and not run.stalled
     assert w.min() < 0  # the load drives it backwards
-    assert "before reaching the end" in run.info["incomplete"]
+    assert "before reaching the end" in run.incomplete
 
 
 def test_a_pressure_table_with_a_one_degree_rise(diesel):

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.design.flywheel import OperatingPoint, _with_inertia
+from rotor.design.flywheel import OperatingPoint, with_crankshaft_inertia
+from rotor.units import rad_s_to_rpm, rpm_to_rad_s
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +25,11 @@ def _bisect(engine, point, delta, lo, hi, rel=1e-5):
     def d(J):
         return float(
             rotor.steady_state(
-                _with_inertia(engine, J), point.rpm, point.load, imep_scale=point.imep_scale, method="shooting"
+                with_crankshaft_inertia(engine, J),
+                point.rpm,
+                point.load,
+                imep_scale=point.imep_scale,
+                method="shooting",
             ).delta
         )
 
@@ -37,9 +42,9 @@ def _bisect(engine, point, delta, lo, hi, rel=1e-5):
 
 def test_textbook_formulas(diesel):
     tb = rotor.textbook_flywheel(diesel, 0.01, 1250)
-    omega = 1250 * math.pi / 30
+    omega = rpm_to_rad_s(1250)
     # the excess work of the textbook total torque, computed independently by engine_summary
-    assert tb.excess_work_J == pytest.approx(rotor.engine_summary(diesel, 1250)["excess_work_J"], rel=2e-3)
+    assert tb.excess_work_J == pytest.approx(rotor.engine_summary(diesel, 1250).excess_work_J, rel=2e-3)
     assert tb.total_inertia_kgm2 == pytest.approx(tb.excess_work_J / (0.01 * omega**2), rel=1e-12)
     assert tb.flywheel_kgm2 == pytest.approx(0.85 * tb.total_inertia_kgm2, rel=1e-12)
     assert tb.mean_diameter_m == pytest.approx(2.5 * 0.205)
@@ -72,14 +77,16 @@ def test_design_meets_target_and_agrees_with_bisection(preset, points):
     )
     binding = binding if isinstance(binding, OperatingPoint) else OperatingPoint(binding)
     # δ at the design by another method (shooting on the RK4 cycle map) and in the time domain
-    r = rotor.steady_state(_with_inertia(engine, J), binding.rpm, imep_scale=binding.imep_scale, method="shooting")
+    r = rotor.steady_state(
+        with_crankshaft_inertia(engine, J), binding.rpm, imep_scale=binding.imep_scale, method="shooting"
+    )
     assert float(r.delta) == pytest.approx(target, rel=1e-3)
     run = rotor.simulate(
-        _with_inertia(engine, J),
-        rpm=float(r.omega[0]) * 30 / np.pi,
+        with_crankshaft_inertia(engine, J),
+        rpm=rad_s_to_rpm(float(r.omega[0])),
         cycles=2,
         method="time",
-        load=rotor.ConstantLoad(float(r.info["load_torque_Nm"])),
+        load=rotor.ConstantLoad(float(r.load_torque_Nm)),
         combustion=np.full((2, engine.cylinders), binding.imep_scale),
         progress=False,
     )
@@ -123,7 +130,7 @@ def test_lightest_disc_matches_a_general_optimiser():
     assert disc.limited_by == "rim speed"
     assert disc.rim_speed_m_s == pytest.approx(vmax)
     assert disc.inertia_kgm2 == pytest.approx(rho * math.pi * disc.width_m * (disc.outer_diameter_m**4 - bore**4) / 32)
-    omega = peak * math.pi / 30
+    omega = rpm_to_rad_s(peak)
 
     def mass(x):
         D, b = x
@@ -162,7 +169,7 @@ def test_design_with_disc_and_shaft(diesel):
     assert d.flywheel_kgm2 == pytest.approx(d.crankshaft_inertia_kgm2 - 1.5)
     assert d.disc.inertia_kgm2 == pytest.approx(d.flywheel_kgm2)
     assert d.disc.width_m <= 0.2
-    assert "lightest disc" in d.report()
+    assert "lightest disc" in d.summary()
 
 
 @pytest.mark.parametrize(
@@ -211,7 +218,9 @@ def test_cli_json_and_errors(capsys, tmp_path):
     # the design is the [crankshaft] value: the engine with it meets the target at the binding point
     engine = rotor.load_engine("4chn15")
     scale = 0.4 if out["binding_rpm"] == 800.0 else 1.0
-    r = rotor.steady_state(_with_inertia(engine, out["crankshaft_inertia_kgm2"]), out["binding_rpm"], imep_scale=scale)
+    r = rotor.steady_state(
+        with_crankshaft_inertia(engine, out["crankshaft_inertia_kgm2"]), out["binding_rpm"], imep_scale=scale
+    )
     assert float(r.delta) == pytest.approx(0.01, rel=1e-6)
 
     assert main(["flywheel", "4chn15", "--delta", "0.01", "--rpm", "800,900", "--imep-scale", "1,1,1"]) == 2
@@ -241,10 +250,10 @@ def test_plot_and_report(diesel):
     import matplotlib.pyplot as plt
 
     d = rotor.design_flywheel(diesel, 0.01, [OperatingPoint(600, 0.25, None, 0.03), 1250])
-    axes = d.plot(diesel, n=5)
+    axes = d.plot(n=5)
     assert len(axes) == 2 and len(axes[0].lines) >= 4
     plt.close("all")
-    text = d.report()
+    text = d.summary()
     assert "binding" in text and "a shaft of" not in text  # no shaft line when none was given
     mech = float(rotor.mean_reduced_inertia(diesel)) - float(diesel.crankshaft.inertia_kgm2)
     assert d.textbook_total_ratio == pytest.approx(
@@ -263,7 +272,7 @@ def _excess_work(engine, scales, rpm, n=2880):
     fired = np.asarray(rotor.cylinder_gas_torques(engine, th))
     mot = np.asarray(rotor.cylinder_gas_torques(motored, th))
     total = (mot + np.asarray(scales) * (fired - mot)).sum(-1) + np.asarray(
-        rotor.reciprocating_inertia_torque(engine, th, rpm * np.pi / 30)
+        rotor.reciprocating_inertia_torque(engine, th, rpm_to_rad_s(rpm))
     )
     W = np.cumsum(total - total.mean()) * engine.cycle_rad / n
     return W.max() - W.min()
@@ -276,9 +285,9 @@ def test_textbook_excess_work_at_the_points_fuelling(diesel, scale):
     load = rotor.PropellerLoad(300.0, 1250.0) if scale == "propeller" else None
     s = 1.0 if scale == "propeller" else scale
     r = rotor.steady_state(diesel, 900, load, imep_scale=s)
-    fuel = float(r.info["fuel_scale"]) if load is not None else 1.0
+    fuel = float(r.fuel_scale) if load is not None else 1.0
     expected = _excess_work(diesel, fuel * np.broadcast_to(np.asarray(s, float), (4,)), 900)
-    assert float(r.info["excess_work_J"]) == pytest.approx(expected, rel=2e-3)
+    assert float(r.excess_work_J) == pytest.approx(expected, rel=2e-3)
     tb = rotor.textbook_flywheel(diesel, 0.01, 900, imep_scale=s, load=load)
     assert tb.excess_work_J == pytest.approx(expected, rel=2e-3)
 
@@ -288,7 +297,7 @@ def test_rim_speed_at_the_highest_speed(diesel):
     [operating] rpm and the points' peak speeds, or max_rpm."""
     d = rotor.design_flywheel(diesel, 0.03, [OperatingPoint(600, 0.25)], max_rim_speed_m_s=50)
     assert d.disc.peak_rpm >= 1250  # the engine runs at 1250 rpm, not only at the idle point
-    omega = d.disc.peak_rpm * math.pi / 30
+    omega = rpm_to_rad_s(d.disc.peak_rpm)
     assert d.disc.rim_speed_m_s == pytest.approx(50.0) and omega * d.disc.outer_diameter_m / 2 == pytest.approx(50.0)
     d2 = rotor.design_flywheel(diesel, 0.03, [OperatingPoint(600, 0.25)], max_rim_speed_m_s=50, max_rpm=2000)
     assert d2.disc.peak_rpm == 2000 and d2.disc.outer_diameter_m == pytest.approx(
@@ -305,7 +314,7 @@ def test_no_flywheel_needed_and_shaft_alone(diesel):
     )
     assert d.points[0].inertia_kgm2 == 0.0 and d.binding_index == 1
     big = rotor.design_flywheel(diesel, 0.01, shaft_inertia_kgm2=100.0)
-    assert big.flywheel_kgm2 < 0 and "alone meets the target" in big.report()
+    assert big.flywheel_kgm2 < 0 and "alone meets the target" in big.summary()
 
 
 @pytest.mark.parametrize(
@@ -324,3 +333,75 @@ def test_no_flywheel_needed_and_shaft_alone(diesel):
 def test_bad_design_arguments(diesel, kwargs, match):
     with pytest.raises(rotor.EngineError, match=match):
         rotor.design_flywheel(diesel, 0.01, **kwargs)
+
+
+def test_design_speaks_the_result_protocol(diesel):
+    """The design knows its engine; its JSON is the CLI's, its table has a row per point, and
+    its δ sweep (computed by the design, drawn by plotting) meets the design at the points."""
+    pts = [OperatingPoint(600, 0.25, None, 0.03), OperatingPoint(1250, [1.0, 1.0, 1.0, 0.9])]
+    d = rotor.design_flywheel(diesel, 0.01, pts, shaft_inertia_kgm2=1.0, max_outer_diameter_m=0.7)
+    assert d.engine is diesel and d.engine_name == diesel.name
+    out = d.to_json_dict()
+    assert list(out) == [
+        "engine",
+        "delta_target",
+        "crankshaft_inertia_kgm2",
+        "textbook_inertia_kgm2",
+        "textbook_ratio",
+        "textbook_total_ratio",
+        "binding_rpm",
+        "delta_achieved",
+        "shaft_inertia_kgm2",
+        "flywheel_kgm2",
+        "textbook",
+        "fidelity",
+        "points",
+        "disc",
+        "grid_deg",
+        "diameter_strokes",
+    ]
+    assert json.loads(json.dumps(out, allow_nan=False)) == out
+    assert out["points"][1]["imep_scale"] == [1.0, 1.0, 1.0, 0.9] and out["disc"]["limited_by"] == "outer diameter"
+    df = d.to_pandas()
+    assert list(df["rpm"]) == [600.0, 1250.0] and df["binding"].sum() == 1
+    assert df["delta_designed"].tolist() == [p.delta for p in d.points]
+    assert d.summary().splitlines()[0].startswith(diesel.name) and len(repr(d)) < 300
+    # δ of the sweep at a point's own speed and fuelling is the design's δ there
+    i = d.binding_index
+    s = d.delta_sweep((d.points[i].rpm, d.points[i].rpm), 1)
+    assert s.designed[0] == pytest.approx(d.delta_achieved, rel=1e-9)
+    s = d.delta_sweep(n=4)
+    assert s.rpm.tolist() == pytest.approx(np.linspace(480, 1500, 4).tolist())
+    assert s.textbook is not None and np.all(np.isfinite(s.designed)) and np.all(s.designed > 0)
+    for bad in [(1000, 500), (0, 1000), "fast"]:
+        with pytest.raises(rotor.EngineError, match="rpm_range"):
+            d.delta_sweep(bad)
+    with pytest.raises(rotor.EngineError, match="number of sweep speeds"):
+        d.delta_sweep(n=0)
+
+
+def test_textbook_and_disc_are_results(diesel):
+    tb = rotor.textbook_flywheel(diesel, 0.01, 1250)
+    assert f"{tb.total_inertia_kgm2:.4f}" in tb.summary()
+    assert tb.to_json_dict()["excess_work_J"] == tb.excess_work_J and len(tb.to_pandas()) == 1
+    disc = rotor.lightest_disc(1.0, peak_rpm=1250, max_outer_diameter_m=0.5)
+    assert disc.summary().startswith("lightest disc: D = 0.500 m (outer diameter limit)")
+    assert disc.to_json_dict()["mass_kg"] == pytest.approx(disc.mass_kg)
+
+
+def test_solver_outcomes_are_not_input_errors(diesel, monkeypatch):
+    """No steady state at a point, or Newton's method finding no inertia, is a SolverError
+    (the command line exits 1), not an EngineError (exit 2)."""
+    from rotor.design.flywheel import DeltaOfInertia
+    from rotor.errors import SolverError
+
+    with monkeypatch.context() as m:  # the crankshaft stops within the cycle at every inertia tried
+        m.setattr(DeltaOfInertia, "state", lambda self, J, p: (float("nan"), 0.0))
+        with pytest.raises(rotor.NoSteadyStateError, match="no steady state at 1250 rpm") as e:
+            rotor.design_flywheel(diesel, 0.01)
+        assert not isinstance(e.value, rotor.EngineError)
+    with monkeypatch.context() as m:  # Newton stops short of the target
+        m.setattr(DeltaOfInertia, "root", lambda self, u0, log_target, p, rtol: (u0, False, 60))
+        with pytest.raises(SolverError, match="Newton's method found no crankshaft inertia") as e:
+            rotor.design_flywheel(diesel, 0.01)
+        assert not isinstance(e.value, rotor.EngineError)

@@ -20,6 +20,7 @@ from scipy.interpolate import CubicSpline
 import rotor
 from rotor.diagnostics.identification import symmetric_pairs
 from rotor.logs.wheel import TWO_PI
+from rotor.units import RPM_PER_RAD_S
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import synthetic_wheel  # noqa: E402
@@ -57,9 +58,9 @@ def simulate(name, load_frac, cycles=CYCLES, misfires=None, rpm=None, step_deg=0
     )
     res = rotor.simulate(
         e,
-        rpm=float(st.omega[0]) * 30 / np.pi,
+        rpm=float(st.omega[0]) * RPM_PER_RAD_S,
         cycles=cycles,
-        load=rotor.ConstantLoad(float(st.info["load_torque_Nm"])),
+        load=rotor.ConstantLoad(float(st.load_torque_Nm)),
         step_deg=step_deg,
         combustion=comb,
         progress=False,
@@ -137,7 +138,7 @@ def test_blocks_match_one_fit():
         e, rpm=1250, cycles=26, load=rotor.ConstantLoad(1000.0), combustion=comb, step_deg=3.0, progress=False
     )
     blocked = rotor.identify(e, res, block_cycles=8, overlap=2)
-    assert blocked.info["blocks"] == 4
+    assert blocked.blocks == 4
     assert np.abs(blocked.scale - comb).max() < 1e-5
     assert blocked.misfires() == true_misfires(comb)
     assert blocked.scale_std.shape == (26, 4) and np.all(np.isfinite(blocked.covariance))
@@ -149,12 +150,12 @@ def test_blocks_match_one_fit():
 def test_firings_cut_by_the_record():
     """A firing with 10 % of its combustion torque inside the record is fitted but not
     identified; one with 0.5 % inside is not fitted (shares its neighbour's scale)."""
-    from rotor.diagnostics.identification import _layout
+    from rotor.diagnostics.identification import block_layout
 
-    pos, own, count = _layout(np.array([0.1]), np.array([0.9]), np.array([0]), 3)
+    pos, own, count = block_layout(np.array([0.1]), np.array([0.9]), np.array([0]), 3)
     assert own[:, 0].tolist() == [False, True, True] and count == 4  # firings 0 … 3 fitted, −1 outside
     assert pos[:, 0].tolist() == [0, 0, 1, 2, 3]
-    pos, own, count = _layout(np.array([0.005]), np.array([0.995]), np.array([0]), 3)
+    pos, own, count = block_layout(np.array([0.005]), np.array([0.995]), np.array([0]), 3)
     assert own[:, 0].tolist() == [False, True, True] and count == 3
     assert pos[:, 0].tolist() == [0, 0, 0, 1, 2]
 

@@ -9,6 +9,7 @@ import pytest
 from conftest import two_mass_engine
 
 import rotor
+from rotor.units import RAD_S_PER_RPM
 
 TH = jnp.linspace(0, 2 * np.pi, 512, endpoint=False)
 
@@ -31,7 +32,7 @@ def test_derivative_closed_form_two_mass():
 
 
 def test_inertia_torque_is_minus_half_dI_omega_squared_and_has_zero_mean(diesel):
-    omega = 1250 * np.pi / 30
+    omega = 1250 * RAD_S_PER_RPM
     th = jnp.linspace(0, 4 * np.pi, 4096, endpoint=False)
     tq = rotor.reciprocating_inertia_torque(diesel, th, omega)
     assert np.allclose(tq, -0.5 * rotor.reduced_inertia_derivative(diesel, th) * omega**2, atol=1e-9)

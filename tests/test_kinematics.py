@@ -8,6 +8,7 @@ import pytest
 
 import rotor
 from rotor.engine.kinematics import piston_motion, rod_motion
+from rotor.units import RAD_S_PER_RPM
 
 TH = jnp.linspace(0, 2 * np.pi, 721)
 R = 0.05
@@ -83,7 +84,7 @@ def test_central_tdc_bdc_values():
 
 
 def test_mean_piston_speed():
-    omega = 1250 * np.pi / 30
+    omega = 1250 * RAD_S_PER_RPM
     assert np.isclose(rotor.mean_piston_speed(0.205, omega), 0.205 * 1250 / 30, rtol=1e-14)
 
 

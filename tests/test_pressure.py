@@ -219,3 +219,28 @@ def test_wiebe_heat_integral_against_adaptive_quadrature(preset):
             phi = max(np.deg2rad(phi_deg), lower)
             got = float(burn.integral(jnp.asarray(phi), volume, n, None if lower == s0 else lower))
             assert abs(got - exact(phi, lower)) < 1e-9 * total, (lower, phi_deg)
+
+
+def test_charge_scaling_is_a_method_of_the_pressure_model():
+    import jax
+
+    wiebe = rotor.load_engine("tue-single").pressure
+    assert isinstance(wiebe, rotor.WiebeCycle) and wiebe.charge_scalable
+    half = wiebe.scale_charge(0.5)
+    assert float(half.intake_pa) == pytest.approx(0.5 * float(wiebe.intake_pa))
+    assert float(half.imep_pa) == pytest.approx(0.5 * float(wiebe.imep_pa))
+    # differentiable in σ
+    assert float(jax.grad(lambda s: wiebe.scale_charge(s).imep_pa)(1.0)) == pytest.approx(float(wiebe.imep_pa))
+    for other in (rotor.NoPressure(), wiebe.motored()):
+        assert not other.charge_scalable
+        with pytest.raises(rotor.EngineError, match=repr(other.kind)):
+            other.scale_charge(0.5)
+
+
+def test_pressure_sources_share_one_abstract_base():
+    from rotor.engine.pressure import PressureSource
+
+    with pytest.raises(TypeError):
+        PressureSource()
+    for cls in (rotor.PressureTable, rotor.WiebeCycle, rotor.MotoredCycle, rotor.NoPressure):
+        assert issubclass(cls, PressureSource) and isinstance(cls.kind, str)

@@ -12,8 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import rotor
+from rotor.units import RPM_PER_RAD_S as RPM
 
-RPM = 30 / np.pi
 LAYOUTS = {  # cylinders: (throws, firing order)
     1: ([0.0], [1]),
     3: ([0.0, 240.0, 120.0], [1, 3, 2]),
@@ -98,7 +98,7 @@ def test_steady_state_is_periodic(case):
         cycles=1,
         fidelity=fidelity,
         step_deg=0.25,
-        load=rotor.ConstantLoad(ss.info["load_torque_Nm"]),
+        load=rotor.ConstantLoad(ss.load_torque_Nm),
     )
     np.testing.assert_allclose(np.asarray(run.omega), np.append(np.asarray(ss.omega), float(ss.omega[0])), rtol=1e-10)
 

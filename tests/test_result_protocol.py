@@ -5,9 +5,9 @@ room's tests in ``tests/protocol_<room>.py``."""
 import importlib
 
 import pytest
+from result_protocol import check_result_protocol
 
 import rotor
-from result_protocol import check_result_protocol
 from rotor.results import Result
 
 ROOMS = ["engine", "dynamics", "logs", "diagnostics", "design"]

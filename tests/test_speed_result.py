@@ -59,7 +59,7 @@ def test_chunked_run_equals_one_shot(diesel):
 
 
 def test_progress_bar_draws_after_two_seconds(capsys):
-    bar = transient._Progress(10, True)
+    bar = transient.Progress(10, True)
     bar.update(1)
     assert capsys.readouterr().err == ""  # a short run shows nothing
     bar.start -= 3.0

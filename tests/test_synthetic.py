@@ -24,11 +24,7 @@ FIT = dict(columns=COLUMNS, compression_ratio=8.5, rod_ratio=ROD_RATIO)
 
 
 def _charge_scaled(engine, s):
-    return eqx.tree_at(
-        lambda e: (e.pressure.intake_pa, e.pressure.imep_pa),
-        engine,
-        (engine.pressure.intake_pa * s, engine.pressure.imep_pa * s),
-    )
+    return eqx.tree_at(lambda e: e.pressure, engine, engine.pressure.scale_charge(s))
 
 
 @pytest.fixture(scope="module")

@@ -125,9 +125,9 @@ def test_steady_estimate_keeps_the_engine_orders_out():
     te = rotor.estimate_tooth_errors(track)
     assert set(te.engine_orders) >= {2, 4}
     phi = w.pitch_rad * np.arange(58)
-    from rotor.logs.wheel import _order_fit_matrix
+    from rotor.logs.wheel import order_fit_matrix
 
-    X = _order_fit_matrix(phi, te.engine_orders)
+    X = order_fit_matrix(phi, te.engine_orders)
     beta, *_ = np.linalg.lstsq(X, err, rcond=None)
     identifiable = err - X @ beta  # the wheel's errors less the orders given to the engine
     assert np.rad2deg(np.max(np.abs(te.errors_rad - identifiable))) < 0.02

@@ -25,49 +25,67 @@ the width that gives the inertia, which must not exceed the width limit.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
-from typing import NamedTuple
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any, Literal, NamedTuple, cast
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
+from jaxtyping import Float
 
-from ..dynamics.result import RPM_PER_RAD_S
+from ..dynamics.loads import Load, parse_load
 from ..dynamics.steady import steady_state
+from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
-from ..errors import EngineError, NoSteadyStateError
+from ..engine.model import Engine
+from ..errors import EngineError, NoSteadyStateError, SolverError
+from ..plotting.design import plot_disc_flywheel, plot_flywheel_design, plot_textbook_flywheel
+from ..results import Result, json_safe
+from ..units import rpm_to_rad_s
 
 __all__ = [
     "OperatingPoint",
     "TextbookFlywheel",
     "DiscFlywheel",
+    "PointResult",
+    "DeltaSweep",
     "FlywheelDesign",
+    "DeltaOfInertia",
     "textbook_flywheel",
     "design_flywheel",
     "lightest_disc",
     "inertia_for_delta",
+    "with_crankshaft_inertia",
 ]
 
 TEXTBOOK_SHARE = 0.85  # seed 004 §3.2.12: J_flywheel = 0.85·J₀
 CAST_IRON_KG_M3 = 7200.0
 
+#: what a friction argument may be, as in :func:`rotor.steady_state`
+FrictionArg = Friction | Literal[False] | None
+
 
 class OperatingPoint(NamedTuple):
     """One operating point: mean speed ``rpm`` [rev/min], the fuelling ``imep_scale``
-    (combustion scale [-], 1 = the engine file's pressure), a ``load`` (None or a
-    :class:`rotor.ConstantLoad`: the load balances the engine; a speed-dependent load:
-    the fuelling is scaled to carry it) and its own target ``delta`` [-] (None: the
-    design's; e.g. a looser one at idle)."""
+    (combustion scale [-], 1 = the engine file's pressure; one number or one per
+    cylinder), a ``load`` (None or a :class:`rotor.ConstantLoad`: the load balances the
+    engine; a speed-dependent load or its spec such as ``"propeller:3000,1250"``: the
+    fuelling is scaled to carry it) and its own target ``delta`` [-] (None: the design's;
+    e.g. a looser one at idle)."""
 
     rpm: float
-    imep_scale: float = 1.0
-    load: object = None
+    imep_scale: float | Sequence[float] = 1.0
+    load: Load | str | None = None
     delta: float | None = None
 
 
-def _points(points, engine) -> list[OperatingPoint]:
+PointsArg = float | OperatingPoint | Sequence[float | OperatingPoint | tuple] | None
+
+
+def _points(points: PointsArg, engine: Engine) -> list[OperatingPoint]:
     if points is None:
         points = [float(engine.operating.rpm)]
     if isinstance(points, (int, float, OperatingPoint)):
@@ -87,12 +105,8 @@ def _points(points, engine) -> list[OperatingPoint]:
                 f"operating point at {rpm:g} rpm: imep_scale = {p.imep_scale!r} must be one number ≥ 0 "
                 f"or one per cylinder ({engine.cylinders})"
             )
-        load = p.load
-        if isinstance(load, str):
-            from ..dynamics.loads import parse_load
-
-            load = parse_load(load)
-        if load is not None and not hasattr(load, "torque"):
+        load = parse_load(p.load) if isinstance(p.load, str) else p.load
+        if load is not None and not isinstance(load, Load):
             raise EngineError(
                 f"operating point at {rpm:g} rpm: load = {p.load!r} is not a load (a rotor.ConstantLoad, "
                 "rotor.PropellerLoad, … or a spec such as 'propeller:3000,1250')"
@@ -105,7 +119,7 @@ def _points(points, engine) -> list[OperatingPoint]:
     return out
 
 
-def _check_delta(delta):
+def _check_delta(delta: float) -> float:
     d = float(delta)
     if not (math.isfinite(d) and 0 < d < 1):
         raise EngineError(
@@ -114,15 +128,23 @@ def _check_delta(delta):
     return d
 
 
+def _one_row(result: Any) -> Any:
+    import pandas as pd
+
+    return pd.DataFrame([asdict(result)])
+
+
 # ----------------------------------------------------------------------------- textbook
-@dataclass(frozen=True)
-class TextbookFlywheel:
+@dataclass(frozen=True, repr=False)
+class TextbookFlywheel(Result):
     """The textbook sizing at one operating point (seed 004 §3.2.12), SI units.
 
-    ``total_inertia_kgm2`` is J₀ (everything that turns and reciprocates);
-    ``crankshaft_inertia_kgm2`` is J₀ less the cycle-mean inertia of the rods and pistons,
-    the ``[crankshaft] inertia_kgm2`` the textbook implies; ``flywheel_kgm2`` = 0.85·J₀,
-    ``mean_diameter_m`` = ``diameter_strokes``·S and ``mass_kg`` = 4·J_flywheel/D²."""
+    ``rpm`` [rev/min] and ``delta`` [-]: the point and the target; ``excess_work_J`` [J]:
+    L_excess of the point's turning-moment diagram; ``total_inertia_kgm2`` is J₀
+    (everything that turns and reciprocates); ``crankshaft_inertia_kgm2`` is J₀ less the
+    cycle-mean inertia of the rods and pistons, the ``[crankshaft] inertia_kgm2`` the
+    textbook implies; ``flywheel_kgm2`` = 0.85·J₀, ``mean_diameter_m`` =
+    ``diameter_strokes``·S and ``mass_kg`` = 4·J_flywheel/D² (a thin rim)."""
 
     rpm: float
     delta: float
@@ -133,9 +155,50 @@ class TextbookFlywheel:
     mean_diameter_m: float
     mass_kg: float
 
+    @property
+    def mechanism_inertia_kgm2(self) -> float:
+        """The cycle-mean inertia of the rods and pistons, J₀ less the crankshaft [kg·m²]."""
+        return self.total_inertia_kgm2 - self.crankshaft_inertia_kgm2
 
-def _textbook(engine, delta, point, excess_work, mechanism_inertia, diameter_strokes):
-    omega = point.rpm / RPM_PER_RAD_S
+    def summary(self) -> str:
+        """The textbook sizing, step by step, as text."""
+        omega = rpm_to_rad_s(self.rpm)
+        lines = [
+            f"textbook flywheel (seed 004 §3.2.12) at {self.rpm:g} rpm for δ = {self.delta:g}",
+            f"  {'excess work L_excess':42} {self.excess_work_J:10.1f} J",
+            f"  {f'J₀ = L_excess/(δ·ω²), ω = {omega:.1f} rad/s':42} {self.total_inertia_kgm2:10.4f} kg·m²",
+            f"  {'rods and pistons (cycle mean)':42} {self.mechanism_inertia_kgm2:10.4f} kg·m²",
+            f"  {'[crankshaft] inertia_kgm2 (J₀ less them)':42} {self.crankshaft_inertia_kgm2:10.4f} kg·m²"
+            + ("" if self.crankshaft_inertia_kgm2 > 0 else "  (not applicable: < 0)"),
+            f"  {'flywheel 0.85·J₀':42} {self.flywheel_kgm2:10.4f} kg·m²",
+            f"  {f'as a rim of mean diameter {self.mean_diameter_m:.3f} m':42} {self.mass_kg:10.1f} kg",
+        ]
+        if self.delta > 0.2:
+            lines.append(f"  (δ = {self.delta:g} is not small: the textbook's first-order theory does not hold)")
+        return "\n".join(lines)
+
+    def to_pandas(self) -> Any:
+        """One row: the fields, units in their names."""
+        return _one_row(self)
+
+    def to_json_dict(self) -> dict:
+        """The fields as plain JSON."""
+        return json_safe(asdict(self))
+
+    def plot(self, ax: Any = None) -> Any:
+        """The split of J₀ [kg·m²] (bars); see :func:`rotor.plotting.plot_textbook_flywheel`."""
+        return plot_textbook_flywheel(self, ax=ax)
+
+
+def _textbook(
+    engine: Engine,
+    delta: float,
+    point: OperatingPoint,
+    excess_work: float,
+    mechanism_inertia: float,
+    diameter_strokes: float,
+) -> TextbookFlywheel:
+    omega = rpm_to_rad_s(point.rpm)
     j0 = excess_work / (delta * omega**2)
     jf = TEXTBOOK_SHARE * j0
     dm = diameter_strokes * float(engine.geometry.stroke_m)
@@ -152,15 +215,15 @@ def _textbook(engine, delta, point, excess_work, mechanism_inertia, diameter_str
 
 
 def textbook_flywheel(
-    engine,
+    engine: Engine,
     delta: float,
-    rpm=None,
+    rpm: float | None = None,
     *,
-    imep_scale=1.0,
-    load=None,
+    imep_scale: float | Sequence[float] = 1.0,
+    load: Load | str | None = None,
     diameter_strokes: float = 2.5,
     fidelity: str = "variable",
-    friction=None,
+    friction: FrictionArg = None,
     grid_deg: float = 0.25,
 ) -> TextbookFlywheel:
     """The textbook flywheel of seed 004 §3.2.12 at one operating point.
@@ -170,26 +233,42 @@ def textbook_flywheel(
     in :func:`rotor.steady_state`; ``diameter_strokes``, the mean diameter in strokes (the
     seed's 2…3) [-]; ``fidelity``, ``friction``, ``grid_deg`` [deg] as in
     :func:`rotor.steady_state`.
+
+    **Returns:** a :class:`TextbookFlywheel`.
+
+    **Raises:** :class:`rotor.EngineError` for a bad argument; :class:`rotor.NoSteadyStateError`
+    where the engine has no steady state at this point with its own inertia.
     """
     delta = _check_delta(delta)
     _number("diameter_strokes", diameter_strokes, 0.0)
-    (point,) = _points([OperatingPoint(engine.operating.rpm if rpm is None else rpm, imep_scale, load)], engine)
-    ev = _Evaluator(engine, fidelity, friction, grid_deg)
+    (point,) = _points([OperatingPoint(float(engine.operating.rpm) if rpm is None else rpm, imep_scale, load)], engine)
+    ev = DeltaOfInertia(engine, fidelity, friction, grid_deg)
     _, excess = ev.state(float(engine.crankshaft.inertia_kgm2), point)
-    return _textbook(engine, delta, point, excess, ev.mechanism, diameter_strokes)
+    return _textbook(engine, delta, point, excess, ev.mechanism_kgm2, diameter_strokes)
 
 
 # ----------------------------------------------------------------------------- through the simulator
-def _with_inertia(engine, inertia):
-    return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, jnp.asarray(inertia, dtype=jnp.float64))
+def with_crankshaft_inertia(engine: Engine, inertia_kgm2: float | Float[jax.Array, ""]) -> Engine:
+    """``engine`` with ``[crankshaft] inertia_kgm2`` replaced by ``inertia_kgm2`` [kg·m²];
+    works on a traced value too (for ``jax.grad`` or ``jax.vmap`` over the inertia)."""
+    return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, jnp.asarray(inertia_kgm2, dtype=jnp.float64))
 
 
 @eqx.filter_jit
-def _state(engine, inertia, rpm, scale, load, fidelity, friction, grid_deg):
+def _state(
+    engine: Engine,
+    inertia: Any,
+    rpm: Any,
+    scale: Any,
+    load: Load | None,
+    fidelity: str,
+    friction: FrictionArg,
+    grid_deg: float,
+) -> tuple[Any, Any]:
     """δ (NaN where the crankshaft nearly stops) and the textbook excess work [J] of the
     steady state with ``[crankshaft] inertia_kgm2 = inertia``."""
     r = steady_state(
-        _with_inertia(engine, inertia),
+        with_crankshaft_inertia(engine, inertia),
         rpm,
         load,
         fidelity=fidelity,
@@ -198,44 +277,76 @@ def _state(engine, inertia, rpm, scale, load, fidelity, friction, grid_deg):
         grid_deg=grid_deg,
     )
     ok = jnp.min(r.omega) > 0.01 * r.mean_omega
-    return jnp.where(ok, r.delta, jnp.nan), r.info["excess_work_J"]
+    return jnp.where(ok, r.delta, jnp.nan), r.excess_work_J
 
 
 @eqx.filter_jit
-def _root(engine, u0, log_target, rpm, scale, load, fidelity, friction, grid_deg, rtol):
+def _root(
+    engine: Engine,
+    u0: Any,
+    log_target: Any,
+    rpm: Any,
+    scale: Any,
+    load: Load | None,
+    fidelity: str,
+    friction: FrictionArg,
+    grid_deg: float,
+    rtol: float,
+) -> tuple[Any, Any, Any]:
     def fn(u, _):
         d, _ = _state(engine, jnp.exp(u), rpm, scale, load, fidelity, friction, grid_deg)
         return jnp.log(d) - log_target
 
-    sol = optx.root_find(fn, optx.Newton(rtol=rtol, atol=rtol), u0, max_steps=60, throw=False)
+    sol: Any = optx.root_find(fn, optx.Newton(rtol=rtol, atol=rtol), u0, max_steps=60, throw=False)
     return sol.value, sol.result == optx.RESULTS.successful, sol.stats["num_steps"]
 
 
-class _Evaluator:
-    """The steady state of one engine at operating points, as a function of its inertia;
-    ``mechanism``: the cycle-mean inertia of its rods and pistons [kg·m²]."""
+class DeltaOfInertia:
+    """The steady state of one engine at operating points as a function of its
+    ``[crankshaft] inertia_kgm2``, compiled once (the closed form of
+    :func:`rotor.steady_state`). Where the crankshaft nearly stops within the cycle, δ is
+    NaN instead of an error, so that a search over the inertia can step past it.
 
-    def __init__(self, engine, fidelity, friction, grid_deg):
+    **Arguments:** ``engine`` (a :class:`rotor.Engine`); ``fidelity``, ``friction`` and
+    ``grid_deg`` [deg] as in :func:`rotor.steady_state`.
+
+    ``mechanism_kgm2``: the cycle-mean inertia of the rods and pistons [kg·m²].
+    """
+
+    def __init__(
+        self, engine: Engine, fidelity: str = "variable", friction: FrictionArg = None, grid_deg: float = 0.25
+    ):
         self.engine, self.fidelity, self.friction, self.grid_deg = engine, fidelity, friction, grid_deg
-        self.mechanism = float(mean_reduced_inertia(engine)) - float(engine.crankshaft.inertia_kgm2)
+        self.mechanism_kgm2 = float(mean_reduced_inertia(engine)) - float(engine.crankshaft.inertia_kgm2)
 
-    def _args(self, point):
+    def _args(self, point: OperatingPoint) -> tuple[Any, Any, Any]:
         rpm = jnp.asarray(point.rpm, dtype=jnp.float64)
         scale = jnp.asarray(point.imep_scale, dtype=jnp.float64)
         return rpm, scale, point.load
 
-    def state(self, inertia, point):
+    def state(self, inertia_kgm2: float, point: OperatingPoint) -> tuple[float, float]:
+        """δ [-] (NaN where the crankshaft nearly stops) and the textbook excess work [J]
+        at ``point`` (its load already parsed) with ``[crankshaft] inertia_kgm2`` [kg·m²]."""
         out = _state(
             self.engine,
-            jnp.asarray(inertia, dtype=jnp.float64),
+            jnp.asarray(inertia_kgm2, dtype=jnp.float64),
             *self._args(point),
             self.fidelity,
             self.friction,
             self.grid_deg,
         )
-        return tuple(float(v) for v in jax.device_get(out))
+        delta, excess = (float(v) for v in jax.device_get(out))
+        return delta, excess
 
-    def root(self, u0, log_target, point, rtol):
+    def delta(self, inertia_kgm2: float, point: OperatingPoint) -> float:
+        """δ [-] at ``point`` with ``[crankshaft] inertia_kgm2`` [kg·m²] (NaN where the
+        crankshaft nearly stops)."""
+        return self.state(inertia_kgm2, point)[0]
+
+    def root(self, u0: float, log_target: float, point: OperatingPoint, rtol: float) -> tuple[float, bool, int]:
+        """Newton's method on log δ(e^u) = ``log_target`` from ``u0`` (u = log of the
+        inertia in kg·m²) to relative tolerance ``rtol`` [-]: u, whether it converged, and
+        the number of steps."""
         u, ok, steps = _root(
             self.engine,
             jnp.asarray(u0, dtype=jnp.float64),
@@ -250,24 +361,30 @@ class _Evaluator:
 
 
 def inertia_for_delta(
-    engine,
+    engine: Engine,
     delta: float,
-    rpm=None,
+    rpm: float | None = None,
     *,
-    imep_scale=1.0,
-    load=None,
+    imep_scale: float | Sequence[float] = 1.0,
+    load: Load | str | None = None,
     fidelity: str = "variable",
-    friction=None,
+    friction: FrictionArg = None,
     grid_deg: float = 0.25,
     rtol: float = 1e-10,
 ) -> float:
     """The ``[crankshaft] inertia_kgm2`` [kg·m²] at which the steady state at one operating
-    point has exactly δ = ``delta`` (Newton's method through :func:`rotor.steady_state`).
-    Arguments as in :func:`design_flywheel`, for one point."""
+    point has exactly δ = ``delta`` [-] (Newton's method through :func:`rotor.steady_state`).
+
+    **Arguments:** ``engine`` (a :class:`rotor.Engine`); ``rpm`` [rev/min] (default
+    ``[operating] rpm``); ``imep_scale`` [-] and ``load`` as in :class:`OperatingPoint`;
+    ``fidelity``, ``friction``, ``grid_deg`` [deg] as in :func:`rotor.steady_state`;
+    ``rtol``: Newton tolerance on log J [-]. As :func:`design_flywheel` for one point,
+    with the same errors.
+    """
     design = design_flywheel(
         engine,
         delta,
-        [OperatingPoint(engine.operating.rpm if rpm is None else rpm, imep_scale, load)],
+        [OperatingPoint(float(engine.operating.rpm) if rpm is None else rpm, imep_scale, load)],
         fidelity=fidelity,
         friction=friction,
         grid_deg=grid_deg,
@@ -277,10 +394,13 @@ def inertia_for_delta(
 
 
 # ----------------------------------------------------------------------------- geometry
-@dataclass(frozen=True)
-class DiscFlywheel:
-    """A steel or cast-iron disc flywheel [m, kg, kg·m², m/s]: outer diameter, bore, width
-    (axial), density, its inertia and mass, and its peak rim speed (at ``peak_rpm``)."""
+@dataclass(frozen=True, repr=False)
+class DiscFlywheel(Result):
+    """A steel or cast-iron disc flywheel: ``outer_diameter_m`` [m], ``bore_m`` [m],
+    ``width_m`` (axial) [m], ``density_kg_m3`` [kg/m³], its ``inertia_kgm2`` [kg·m²] and
+    ``mass_kg`` [kg], and its rim speed ``rim_speed_m_s`` [m/s] at ``peak_rpm`` [rev/min];
+    ``limited_by``: the limit that sets the outer diameter (``"outer diameter"`` or
+    ``"rim speed"``)."""
 
     outer_diameter_m: float
     bore_m: float
@@ -291,6 +411,26 @@ class DiscFlywheel:
     rim_speed_m_s: float
     peak_rpm: float
     limited_by: str
+
+    def summary(self) -> str:
+        """The disc in one line."""
+        return (
+            f"lightest disc: D = {self.outer_diameter_m:.3f} m ({self.limited_by} limit), bore "
+            f"{self.bore_m:.3f} m, width {self.width_m * 1e3:.1f} mm, {self.mass_kg:.1f} kg, rim speed "
+            f"{self.rim_speed_m_s:.1f} m/s at {self.peak_rpm:.0f} rpm (the highest speed it must stand)"
+        )
+
+    def to_pandas(self) -> Any:
+        """One row: the fields, units in their names."""
+        return _one_row(self)
+
+    def to_json_dict(self) -> dict:
+        """The fields as plain JSON."""
+        return json_safe(asdict(self))
+
+    def plot(self, ax: Any = None) -> Any:
+        """The disc's axial section [mm]; see :func:`rotor.plotting.plot_disc_flywheel`."""
+        return plot_disc_flywheel(self, ax=ax)
 
 
 def lightest_disc(
@@ -318,9 +458,9 @@ def lightest_disc(
             f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
             "the target: no flywheel is needed)"
         )
-    for name, v in (("density_kg_m3", density_kg_m3), ("peak_rpm", peak_rpm)):
-        if not (math.isfinite(float(v)) and float(v) > 0):
-            raise EngineError(f"{name} = {v!r}: must be positive")
+    for name, x in (("density_kg_m3", density_kg_m3), ("peak_rpm", peak_rpm)):
+        if not (math.isfinite(float(x)) and float(x) > 0):
+            raise EngineError(f"{name} = {x!r}: must be positive")
     for name, v in (
         ("max_outer_diameter_m", max_outer_diameter_m),
         ("max_width_m", max_width_m),
@@ -334,8 +474,8 @@ def lightest_disc(
         bore_m = float("nan")
     if not (bore_m >= 0 and math.isfinite(bore_m)):
         raise EngineError("bore_m: must be a number ≥ 0 [m]")
-    omega = peak_rpm / RPM_PER_RAD_S
-    bounds = {}
+    omega = rpm_to_rad_s(float(peak_rpm))
+    bounds: dict[str, float] = {}
     if max_outer_diameter_m is not None:
         bounds["outer diameter"] = float(max_outer_diameter_m)
     if max_rim_speed_m_s is not None:
@@ -345,7 +485,7 @@ def lightest_disc(
             "the lightest disc is as large as allowed: give max_outer_diameter_m or max_rim_speed_m_s "
             "(or use the textbook's mean diameter of 2…3 strokes)"
         )
-    limited_by = min(bounds, key=bounds.get)
+    limited_by = min(bounds, key=lambda k: bounds[k])
     D = bounds[limited_by]
     if not D**4 - bore_m**4 > 0 or D <= bore_m:
         raise EngineError(
@@ -381,13 +521,18 @@ def lightest_disc(
 
 
 # ----------------------------------------------------------------------------- the design
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class PointResult:
-    """One operating point of a design: the inertia that meets δ_target there exactly
-    [kg·m²], δ with the designed inertia [-], the peak speed [rev/min] and the textbook."""
+    """One operating point of a :class:`FlywheelDesign` (a part of it, not a result of its
+    own): ``rpm`` [rev/min], ``imep_scale`` [-] (a number or one per cylinder), ``load``
+    (the load's name, ``"balanced"`` for none), ``delta_target`` [-], ``inertia_kgm2``:
+    the ``[crankshaft]`` inertia that meets the target here exactly [kg·m²] (0 where none
+    is needed), ``delta``: δ with the designed inertia [-], ``peak_rpm``: the highest speed
+    within the cycle [rev/min], ``newton_steps``, ``textbook``: the textbook sizing here,
+    ``fuel_scale``: the fuelling solved for a speed-dependent load [-] (None otherwise)."""
 
     rpm: float
-    imep_scale: object
+    imep_scale: float | list[float]
     load: str
     delta_target: float
     inertia_kgm2: float
@@ -395,45 +540,72 @@ class PointResult:
     peak_rpm: float
     newton_steps: int
     textbook: TextbookFlywheel
-    fuel_scale: float | None = None  # the fuelling solved for a speed-dependent load [-]
+    fuel_scale: float | None = None
+
+    def __repr__(self) -> str:
+        return f"PointResult(rpm={self.rpm:g}, delta={self.delta:.5g}, inertia_kgm2={self.inertia_kgm2:.5g})"
 
 
-@dataclass(frozen=True)
-class FlywheelDesign:
+class DeltaSweep(NamedTuple):
+    """δ of a design's engine over a sweep of mean speeds (see
+    :meth:`FlywheelDesign.delta_sweep`): ``rpm`` [rev/min]; ``designed`` and ``textbook``:
+    δ [-] with the designed and with the textbook ``[crankshaft]`` inertia (NaN where the
+    crankshaft nearly stops; None where that inertia is not positive)."""
+
+    rpm: Float[np.ndarray, " n"]
+    designed: Float[np.ndarray, " n"] | None
+    textbook: Float[np.ndarray, " n"] | None
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class FlywheelDesign(Result):
     """The smallest ``[crankshaft] inertia_kgm2`` meeting each point's δ target, the
     textbook estimate, and (with limits) the lightest disc.
 
+    - ``engine``: the :class:`rotor.Engine` it was designed for (its own ``[crankshaft]
+      inertia_kgm2`` was only the starting guess);
     - ``crankshaft_inertia_kgm2``: the designed ``[crankshaft] inertia_kgm2`` [kg·m²];
-    - ``binding_rpm``: the point that sets it; ``delta_target``: its target [-];
-      ``delta_achieved``: δ there [-];
+    - ``binding_rpm`` [rev/min] and ``binding_index``: the point that sets it;
+      ``delta_target``: its target [-]; ``delta_achieved``: δ there [-];
     - ``textbook``: the textbook sizing at the point where it asks most (the textbook
       applied at every point; at one point only it can be far off: see ``points``);
       ``textbook_inertia_kgm2``: its ``[crankshaft]`` equivalent (J₀ less the rods and
       pistons); ``textbook_ratio``: that over the design; ``textbook_total_ratio``: J₀ over
       the design's total mean inertia (the fairer ratio when the rods and pistons are a
       large share);
-    - ``flywheel_kgm2``: the design less ``shaft_inertia_kgm2`` (what the flywheel must add);
-    - ``disc``: a :class:`DiscFlywheel` or None; ``points``: per point.
+    - ``shaft_inertia_kgm2``: the crankshaft's own inertia without the flywheel [kg·m²];
+      ``flywheel_kgm2``: the design less it (what the flywheel must add) [kg·m²];
+    - ``disc``: a :class:`DiscFlywheel` or None; ``points``: a :class:`PointResult` per
+      point; ``loads``: each point's load (None: balanced);
+    - ``fidelity``, ``friction``, ``grid_deg`` [deg]: as given to :func:`rotor.steady_state`;
+      ``diameter_strokes``: the textbook's rim diameter in strokes [-].
     """
 
-    engine_name: str
+    engine: Engine
     delta_target: float
     crankshaft_inertia_kgm2: float
     binding_rpm: float
+    binding_index: int
     delta_achieved: float
     shaft_inertia_kgm2: float
     flywheel_kgm2: float
     textbook: TextbookFlywheel
-    points: tuple
+    points: tuple[PointResult, ...]
+    loads: tuple[Load | None, ...]
     disc: DiscFlywheel | None = None
     fidelity: str = "variable"
-    settings: dict = field(default_factory=dict)
-    friction: object = None  # as given to design_flywheel (for plots); not in to_dict
-    binding_index: int = 0  # of the binding point in ``points``
-    loads: tuple = ()  # each point's load object (for plots); not in to_dict
+    friction: FrictionArg = None
+    grid_deg: float = 0.25
+    diameter_strokes: float = 2.5
+
+    @property
+    def engine_name(self) -> str:
+        """The name of the engine it was designed for."""
+        return self.engine.name
 
     @property
     def textbook_inertia_kgm2(self) -> float:
+        """The textbook's ``[crankshaft]`` equivalent, J₀ less the rods and pistons [kg·m²]."""
         return self.textbook.crankshaft_inertia_kgm2
 
     @property
@@ -445,10 +617,10 @@ class FlywheelDesign:
     def textbook_total_ratio(self) -> float:
         """textbook J₀ / the design's total mean inertia (crankshaft + rods and pistons) [-]."""
         t = self.textbook
-        mechanism = t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2
-        return t.total_inertia_kgm2 / (self.crankshaft_inertia_kgm2 + mechanism)
+        return t.total_inertia_kgm2 / (self.crankshaft_inertia_kgm2 + t.mechanism_inertia_kgm2)
 
-    def to_dict(self) -> dict:
+    def to_json_dict(self) -> dict:
+        """The design as plain JSON (what ``rotor flywheel --json`` prints, less the plots)."""
         d = {
             "engine": self.engine_name,
             "delta_target": self.delta_target,
@@ -462,13 +634,38 @@ class FlywheelDesign:
             "flywheel_kgm2": self.flywheel_kgm2,
             "textbook": asdict(self.textbook),
             "fidelity": self.fidelity,
-            "points": [dict(asdict(p), textbook=asdict(p.textbook)) for p in self.points],
+            "points": [asdict(p) for p in self.points],
             "disc": None if self.disc is None else asdict(self.disc),
+            "grid_deg": self.grid_deg,
+            "diameter_strokes": self.diameter_strokes,
         }
-        d.update(self.settings)
-        return d
+        return json_safe(d)
 
-    def report(self) -> str:
+    def to_pandas(self) -> Any:
+        """One row per operating point: speed [rpm], fuelling [-], load, δ target [-], the
+        inertia that meets it there [kg·m²], δ with the design [-], peak speed [rpm], Newton
+        steps, solved fuelling [-], the textbook there [J, kg·m²], and the binding point."""
+        import pandas as pd
+
+        return pd.DataFrame(
+            {
+                "rpm": [p.rpm for p in self.points],
+                "imep_scale": [p.imep_scale for p in self.points],
+                "load": [p.load for p in self.points],
+                "delta_target": [p.delta_target for p in self.points],
+                "inertia_for_target_kgm2": [p.inertia_kgm2 for p in self.points],
+                "delta_designed": [p.delta for p in self.points],
+                "peak_rpm": [p.peak_rpm for p in self.points],
+                "newton_steps": [p.newton_steps for p in self.points],
+                "fuel_scale": [np.nan if p.fuel_scale is None else p.fuel_scale for p in self.points],
+                "textbook_excess_work_J": [p.textbook.excess_work_J for p in self.points],
+                "textbook_total_inertia_kgm2": [p.textbook.total_inertia_kgm2 for p in self.points],
+                "textbook_crankshaft_inertia_kgm2": [p.textbook.crankshaft_inertia_kgm2 for p in self.points],
+                "binding": [i == self.binding_index for i in range(len(self.points))],
+            }
+        )
+
+    def summary(self) -> str:
         """A comparison of the textbook and the designed flywheel, as text."""
         t = self.textbook
         lines = [
@@ -487,8 +684,8 @@ class FlywheelDesign:
                     else f"{scale} ×{p.fuel_scale:.3g}"
                 )
             need = f"{p.inertia_kgm2:13.4f}" if p.inertia_kgm2 > 0 else f"{'none':>13}"
-            tb = p.textbook.crankshaft_inertia_kgm2
-            tb = f"{tb:11.4f}" if tb > 0 else f"{'n/a':>11}"
+            tb_j = p.textbook.crankshaft_inertia_kgm2
+            tb = f"{tb_j:11.4f}" if tb_j > 0 else f"{'n/a':>11}"
             lines.append(
                 f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {need} {p.delta:11.5f} {tb}{mark}"
             )
@@ -497,7 +694,7 @@ class FlywheelDesign:
             f"  designed [crankshaft] inertia_kgm2   {self.crankshaft_inertia_kgm2:10.4f} kg·m²  (binding at "
             f"{self.binding_rpm:g} rpm, δ = {self.delta_achieved:.5f})",
             f"  textbook (seed 004 §3.2.12) at {t.rpm:g} rpm: J₀ = L_excess/(δ·ω²) = {t.excess_work_J:.1f} J / "
-            f"({t.delta:g}·{t.rpm / RPM_PER_RAD_S:.1f}²) = {t.total_inertia_kgm2:.4f} kg·m²",
+            f"({t.delta:g}·{rpm_to_rad_s(t.rpm):.1f}²) = {t.total_inertia_kgm2:.4f} kg·m²",
         ]
         if t.crankshaft_inertia_kgm2 > 0:
             lines.append(
@@ -508,15 +705,14 @@ class FlywheelDesign:
         else:
             lines.append(
                 "    not applicable: J₀ is smaller than the rods' and pistons' own mean inertia "
-                f"({t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2:.4g} kg·m²)"
+                f"({t.mechanism_inertia_kgm2:.4g} kg·m²)"
             )
         if t.delta > 0.2:
             lines.append(f"    (δ = {t.delta:g} is not small: the textbook's first-order theory does not hold)")
-        mech = t.total_inertia_kgm2 - t.crankshaft_inertia_kgm2
         lines.append(
             f"    the seed's flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean "
             f"diameter {t.mean_diameter_m:.3f} m; its 0.85 assumes the shaft, rods and pistons make "
-            f"0.15·J₀ = {0.15 * t.total_inertia_kgm2:.4g} kg·m² (rods and pistons here: {mech:.4g})"
+            f"0.15·J₀ = {0.15 * t.total_inertia_kgm2:.4g} kg·m² (rods and pistons here: {t.mechanism_inertia_kgm2:.4g})"
         )
         if self.shaft_inertia_kgm2:
             if self.flywheel_kgm2 > 0:
@@ -530,29 +726,70 @@ class FlywheelDesign:
                     f"  a shaft of {self.shaft_inertia_kgm2:g} kg·m² alone meets the target: no flywheel is needed"
                 )
         if self.disc is not None:
-            d = self.disc
-            lines.append(
-                f"  lightest disc: D = {d.outer_diameter_m:.3f} m ({d.limited_by} limit), bore "
-                f"{d.bore_m:.3f} m, width {d.width_m * 1e3:.1f} mm, {d.mass_kg:.1f} kg, rim speed "
-                f"{d.rim_speed_m_s:.1f} m/s at {d.peak_rpm:.0f} rpm (the highest speed it must stand)"
-            )
+            lines.append("  " + self.disc.summary())
         return "\n".join(lines)
 
-    def plot(self, engine, axes=None, rpm_range=None, n: int = 25):
-        """Plot the design (needs the ``engine``): see :func:`rotor.plotting.plot_flywheel_design`."""
-        from ..plotting import plot_flywheel_design
+    def delta_sweep(self, rpm_range: tuple[float, float] | None = None, n: int = 25) -> DeltaSweep:
+        """δ over ``n`` mean speeds from ``rpm_range`` = (low, high) [rev/min] (default the
+        points' range ±20 %), with the designed and with the textbook ``[crankshaft]``
+        inertia: each cylinder's fuelling interpolated between the points, the nearest
+        point's load.
 
-        return plot_flywheel_design(self, engine, axes=axes, rpm_range=rpm_range, n=n)
+        **Returns:** a :class:`DeltaSweep` of the speeds [rev/min] and δ [-].
+        """
+        rpms = np.array([p.rpm for p in self.points])
+        if rpm_range is None:
+            lo, hi = 0.8 * rpms.min(), 1.2 * rpms.max()
+        else:
+            try:
+                lo, hi = (float(v) for v in rpm_range)
+            except (TypeError, ValueError):
+                lo, hi = math.nan, math.nan
+            if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+                raise EngineError(f"rpm_range = {rpm_range!r}: give (low, high) speeds with 0 < low ≤ high [rpm]")
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise EngineError(f"n = {n!r}: the number of sweep speeds must be an integer ≥ 1")
+        cylinders = self.engine.cylinders
+        sweep = np.linspace(lo, hi, n)
+        ev = DeltaOfInertia(self.engine, self.fidelity, self.friction, self.grid_deg)
+        order = np.argsort(rpms)
+        scales = np.stack([np.broadcast_to(np.asarray(p.imep_scale, float), (cylinders,)) for p in self.points])
+        fuel = np.stack([np.interp(sweep, rpms[order], scales[order, c]) for c in range(cylinders)], axis=1)
+        loads = self.loads or (None,) * len(rpms)
+        near = [loads[int(np.argmin(np.abs(rpms - r)))] for r in sweep]
+
+        def deltas(J: float) -> Float[np.ndarray, " n"] | None:
+            if J <= 0:
+                return None
+            return np.array(
+                [
+                    ev.delta(J, OperatingPoint(r, f if np.ptp(f) else float(f[0]), ld))
+                    for r, f, ld in zip(sweep, fuel, near)
+                ]
+            )
+
+        return DeltaSweep(sweep, deltas(self.crankshaft_inertia_kgm2), deltas(self.textbook_inertia_kgm2))
+
+    def plot(self, ax: Any = None, rpm_range: tuple[float, float] | None = None, n: int = 25) -> Any:
+        """δ against mean speed with the designed and the textbook inertia and the points
+        (left); the inertia each point needs, by Newton and by the textbook (right). ``ax``:
+        two Axes (one: the left panel only) or None; ``rpm_range`` [rev/min] and ``n`` as in
+        :meth:`delta_sweep`. See :func:`rotor.plotting.plot_flywheel_design`.
+
+        **Returns:** what it drew on (the two Axes, or the one given).
+        """
+        s = self.delta_sweep(rpm_range, n)
+        return plot_flywheel_design(self, s.rpm, s.designed, s.textbook, ax=ax)
 
 
-def _load_name(load):
+def _load_name(load: Load | None) -> str:
     return "balanced" if load is None else type(load).__name__
 
 
 def design_flywheel(
-    engine,
+    engine: Engine,
     delta: float | None,
-    points=None,
+    points: PointsArg = None,
     *,
     shaft_inertia_kgm2: float = 0.0,
     diameter_strokes: float = 2.5,
@@ -563,7 +800,7 @@ def design_flywheel(
     max_rim_speed_m_s: float | None = None,
     max_rpm: float | None = None,
     fidelity: str = "variable",
-    friction=None,
+    friction: FrictionArg = None,
     grid_deg: float = 0.25,
     rtol: float = 1e-10,
 ) -> FlywheelDesign:
@@ -589,10 +826,12 @@ def design_flywheel(
     - ``fidelity``, ``friction``, ``grid_deg`` [deg]: as in :func:`rotor.steady_state`.
     - ``rtol``: Newton tolerance on log J [-].
 
-    **Returns:** a :class:`FlywheelDesign`; ``.report()`` compares it with the textbook.
+    **Returns:** a :class:`FlywheelDesign`; ``.summary()`` compares it with the textbook.
 
-    **Raises:** :class:`rotor.EngineError` for a bad target or point, an operating point
-    with no steady state, or limits no disc can meet.
+    **Raises:** :class:`rotor.EngineError` for a bad target, point or limit, limits no disc
+    can meet, or a target met with no flywheel at all; :class:`rotor.NoSteadyStateError`
+    (a :class:`rotor.SolverError`) for an operating point with no steady state, and
+    :class:`rotor.SolverError` where Newton's method finds no inertia.
     """
     pts = _points(points, engine)
     if delta is None and any(p.delta is None for p in pts):
@@ -607,11 +846,11 @@ def design_flywheel(
         max_width_m,
         bore_m,
     )
-    ev = _Evaluator(engine, fidelity, friction, grid_deg)
+    ev = DeltaOfInertia(engine, fidelity, friction, grid_deg)
     j_start = float(engine.crankshaft.inertia_kgm2)
     results = []
     for p in pts:
-        target = default if p.delta is None else float(p.delta)
+        target = float(cast(float, default if p.delta is None else p.delta))
         J, steps, tb = _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol)
         results.append((p, J, steps, tb, target))
     i_bind = int(np.argmax([r[1] for r in results]))
@@ -627,33 +866,33 @@ def design_flywheel(
     for p, J, steps, tb, target in results:
         try:  # the eager steady state: every check of rotor.steady_state applies to the design
             r = steady_state(
-                _with_inertia(engine, J_design),
+                with_crankshaft_inertia(engine, J_design),
                 p.rpm,
-                p.load,
+                cast("Load | None", p.load),  # parsed by _points
                 fidelity=fidelity,
                 friction=friction,
-                imep_scale=p.imep_scale,
+                imep_scale=cast(Any, p.imep_scale),
                 grid_deg=grid_deg,
             )
         except NoSteadyStateError as e:
-            raise EngineError(
+            raise NoSteadyStateError(
                 f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}"
             ) from e
         if max_rpm is None:
             peak = max(peak, float(r.max_rpm))
-        fuel = r.info.get("fuel_scale")
+        fuel = r.fuel_scale
         point_results.append(
             PointResult(
                 rpm=p.rpm,
                 imep_scale=_jsonable(p.imep_scale),
-                load=_load_name(p.load),
+                load=_load_name(cast("Load | None", p.load)),  # parsed by _points
                 delta_target=target,
                 inertia_kgm2=J,
                 delta=float(r.delta),
                 peak_rpm=float(r.max_rpm),
                 newton_steps=steps,
                 textbook=tb,
-                fuel_scale=None if fuel is None else float(fuel),
+                fuel_scale=None if fuel is None else float(np.asarray(fuel)),
             )
         )
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
@@ -670,25 +909,26 @@ def design_flywheel(
             max_rim_speed_m_s=max_rim_speed_m_s,
         )
     return FlywheelDesign(
-        engine_name=engine.name,
+        engine=engine,
         delta_target=results[i_bind][4],
         crankshaft_inertia_kgm2=J_design,
         binding_rpm=pts[i_bind].rpm,
+        binding_index=i_bind,
         delta_achieved=point_results[i_bind].delta,
         shaft_inertia_kgm2=float(shaft_inertia_kgm2),
         flywheel_kgm2=flywheel,
         textbook=tb_worst,
         points=tuple(point_results),
+        loads=tuple(cast("Load | None", p.load) for p in pts),  # parsed by _points
         disc=disc,
         fidelity=fidelity,
-        binding_index=i_bind,
-        settings={"grid_deg": grid_deg, "diameter_strokes": diameter_strokes},
         friction=friction,
-        loads=tuple(p.load for p in pts),
+        grid_deg=float(grid_deg),
+        diameter_strokes=float(diameter_strokes),
     )
 
 
-def _number(name, v, lo, strict=True):
+def _number(name: str, v: Any, lo: float, strict: bool = True) -> float:
     try:
         x = float(v)
     except (TypeError, ValueError):
@@ -698,7 +938,15 @@ def _number(name, v, lo, strict=True):
     return x
 
 
-def _check_design_args(shaft, diameter_strokes, grid_deg, max_rpm, disc, max_width_m, bore_m):
+def _check_design_args(
+    shaft: float,
+    diameter_strokes: float,
+    grid_deg: float,
+    max_rpm: float | None,
+    disc: bool,
+    max_width_m: float | None,
+    bore_m: float,
+) -> None:
     _number("shaft_inertia_kgm2", shaft, 0.0, strict=False)
     _number("diameter_strokes", diameter_strokes, 0.0)
     _number("grid_deg", grid_deg, 0.0)
@@ -711,7 +959,15 @@ def _check_design_args(shaft, diameter_strokes, grid_deg, max_rpm, disc, max_wid
         )
 
 
-def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
+def _point_inertia(
+    engine: Engine,
+    ev: DeltaOfInertia,
+    p: OperatingPoint,
+    target: float,
+    j_start: float,
+    diameter_strokes: float,
+    rtol: float,
+) -> tuple[float, int, TextbookFlywheel]:
     """The [crankshaft] inertia with δ = target at one point (0 where none is needed), the
     Newton steps and the textbook there."""
     j_try = j_start
@@ -721,31 +977,31 @@ def _point_inertia(engine, ev, p, target, j_start, diameter_strokes, rtol):
             break
         j_try *= 10
     else:
-        raise EngineError(
+        raise NoSteadyStateError(
             f"no steady state at {p.rpm:g} rpm even with a {j_try / 10:g} kg·m² crankshaft: the engine "
             "cannot run at this point (check its fuelling and load)"
         )
-    mech = ev.mechanism
+    mech = ev.mechanism_kgm2
     tb = _textbook(engine, target, p, excess, mech, diameter_strokes)
     # start from this point's own δ/J slope (δ ∝ 1/(J + mech))
     u0 = math.log(max((j_try + mech) * d0 / target - mech, 1e-3 * (j_try + mech)))
     u, ok, steps = ev.root(u0, math.log(target), p, rtol)
     J = math.exp(u)
-    d_check = ev.state(J, p)[0] if ok else float("nan")
+    d_check = ev.delta(J, p) if ok else float("nan")
     if ok and abs(d_check / target - 1) < 1e-6:
         return J, steps, tb
     # why not: no flywheel needed (δ below the target with almost no crankshaft inertia), or a target too tight
     j_floor = 1e-6 * (j_try + mech)
-    d_floor = ev.state(j_floor, p)[0]
+    d_floor = ev.delta(j_floor, p)
     if math.isfinite(d_floor) and d_floor <= target:
         return 0.0, steps, tb
-    raise EngineError(
+    raise SolverError(
         f"at {p.rpm:g} rpm Newton's method found no crankshaft inertia with δ = {target:g} (it stopped at "
         f"{J:.4g} kg·m², δ = {d_check:.4g}; with a {j_try:g} kg·m² crankshaft δ = {d0:.4g}): check the target "
         "(too tight for float64 below about 1e-8?), the tolerance rtol, and rotor.steady_state at this point"
     )
 
 
-def _jsonable(x):
+def _jsonable(x: float | Sequence[float]) -> float | list[float]:
     a = np.asarray(x, dtype=float)
     return float(a) if a.ndim == 0 else a.tolist()

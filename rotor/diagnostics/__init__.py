@@ -5,6 +5,7 @@ combustion scale (:mod:`.identification`), the misfire index (:mod:`.misfire`),
 calibration against a pressure channel and the diagnose workflow
 (:mod:`.calibration`), and simulated bench recordings (:mod:`.synthetic`).
 
-May import: :mod:`rotor.dynamics`, :mod:`rotor.logs`, :mod:`rotor.engine` and the
-ground floor. Never :mod:`rotor.design`, :mod:`rotor.plotting` or :mod:`rotor.cli`.
+May import: :mod:`rotor.dynamics`, :mod:`rotor.logs`, :mod:`rotor.engine`,
+:mod:`rotor.plotting` (to draw its results) and the ground floor. Never
+:mod:`rotor.design` or :mod:`rotor.cli`.
 """

@@ -66,21 +66,32 @@ and ``docs/diagnostics.md``.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
 import numpy as np
 
 from ..errors import EngineError
+from ..fileio import load_json, save_json
+from ..logs.analysis import LogAnalysis
+from ..logs.wheel import ToothErrors
+from ..results import Result, json_safe
+from ..units import PA_PER_BAR, RPM_PER_RAD_S
+from .identification import Identification
+
+if TYPE_CHECKING:
+    from ..dynamics.result import SpeedResult
+    from ..engine.model import Engine
 
 __all__ = [
     "Calibration",
+    "Diagnosis",
     "calibrate",
     "diagnose",
     "measured_imep",
-    "cylinder_torques",
     "preset_calibration",
     "CALIBRATION_FORMAT",
 ]
@@ -95,8 +106,8 @@ PRESETS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__fil
 
 
 # ----------------------------------------------------------------------------- the record
-@dataclasses.dataclass(frozen=True, eq=False)
-class Calibration:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Calibration(Result):
     """What :func:`calibrate` found, to reuse on speed-only recordings of the same engine.
 
     **Fields:** ``engine`` (the engine's name); ``inertia_kgm2``: crankshaft, flywheel and
@@ -120,7 +131,7 @@ class Calibration:
     scaling: str = "charge"
     charge_scale: float = 1.0
     wheel: str = ""
-    tooth_errors: object = None
+    tooth_errors: ToothErrors | None = None
     source: str = ""
     fit: dict = dataclasses.field(default_factory=dict)
     cylinders: int = 0  # of the calibrated engine (0: not stored, an older file)
@@ -139,9 +150,10 @@ class Calibration:
         if self.scaling not in SCALINGS:
             raise EngineError(f"calibration scaling = {self.scaling!r}: one of {', '.join(SCALINGS)}")
 
-    def check_engine(self, engine, where: str = "calibration") -> None:
+    def check_engine(self, engine: Engine, where: str = "calibration") -> None:
         """Raise :class:`rotor.EngineError` unless ``engine`` is the calibrated one: the same
-        name, cylinder count, strokes and geometry (those the calibration stores)."""
+        name, cylinder count, strokes and geometry (those the calibration stores); ``where``
+        names the calibration in the message."""
         diffs = []
         if self.engine and self.engine != engine.name:
             diffs.append(f"engine {self.engine!r}, not {engine.name!r}")
@@ -159,11 +171,13 @@ class Calibration:
                 f"not apply; calibrate this engine (rotor diagnose --save-calibration)"
             )
 
-    def apply(self, engine):
-        """The engine with the calibrated crankshaft inertia."""
+    def apply(self, engine: Engine) -> Engine:
+        """``engine`` with the calibrated crankshaft inertia [kg·m²]."""
         return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, float(self.inertia_kgm2))
 
     def to_json_dict(self) -> dict:
+        """Plain JSON (what :meth:`save` writes and ``rotor diagnose --json`` reports): the
+        calibrated quantities in SI units, the tooth errors, the fit's figures."""
         return {
             "format": CALIBRATION_FORMAT,
             "version": CALIBRATION_VERSION,
@@ -178,17 +192,15 @@ class Calibration:
             "wheel": self.wheel,
             "tooth_errors": None if self.tooth_errors is None else self.tooth_errors.to_json_dict(),
             "source": self.source,
-            "fit": _plain(self.fit),
+            "fit": json_safe(self.fit),
             "cylinders": int(self.cylinders),
             "strokes": int(self.strokes),
-            "geometry": _plain(self.geometry),
+            "geometry": json_safe(self.geometry),
         }
 
     @classmethod
-    def from_json_dict(cls, d, where: str = "calibration") -> Calibration:
-        """Build from :meth:`to_json_dict`'s dict; errors name ``where`` and the key."""
-        from ..logs.wheel import ToothErrors
-
+    def from_json_dict(cls, d: dict, where: str = "calibration") -> Calibration:
+        """Build from :meth:`to_json_dict`'s dict ``d``; errors name ``where`` and the key."""
         if not isinstance(d, dict):
             raise EngineError(f"{where}: not a calibration (a JSON object is needed)")
         if d.get("format") != CALIBRATION_FORMAT:
@@ -272,29 +284,55 @@ class Calibration:
             geometry=dict(geo),
         )
 
-    def save(self, path) -> None:
-        """Write as JSON, whole or not at all."""
-        from ..fileio import write_text_atomic
-
-        path = os.fspath(path)
-        folder = os.path.dirname(os.path.abspath(path))
-        if not os.path.isdir(folder):
-            raise EngineError(f"{path}: cannot write the calibration: no folder {folder}")
-        write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1, allow_nan=False) + "\n")
+    def save(self, path: str | os.PathLike) -> None:
+        """Write as JSON to ``path``, whole or not at all."""
+        save_json(path, self.to_json_dict(), what="the calibration", error=EngineError)
 
     @classmethod
-    def load(cls, path) -> Calibration:
-        """Read a file written by :meth:`save`; a malformed file raises
+    def load(cls, path: str | os.PathLike) -> Calibration:
+        """Read a file written by :meth:`save` from ``path``; a malformed file raises
         :class:`rotor.EngineError` naming the file and the key."""
         path = os.fspath(path)
-        try:
-            with open(path, encoding="utf-8") as f:
-                d = json.load(f)
-        except json.JSONDecodeError as e:
-            raise EngineError(f"{path}: not a calibration file (JSON: {e})") from None
-        return cls.from_json_dict(d, where=path)
+        d = load_json(path, what="a calibration file", error=EngineError)
+        return cls.from_json_dict(d, where=path)  # type: ignore[arg-type]  # checked there
+
+    def to_pandas(self) -> Any:
+        """Tidy: one row per cycle of the calibration recording: ``cycle``,
+        ``imep_measured_pa`` (from the pressure channel with the calibrated gain) and
+        ``loss_torque_Nm`` (friction plus load fitted by the energy balance). No rows for
+        a calibration file without these figures (``fit``)."""
+        import pandas as pd
+
+        imep, loss = self._cycle_figures()
+        return pd.DataFrame({"cycle": np.arange(imep.size), "imep_measured_pa": imep, "loss_torque_Nm": loss})
+
+    def plot(self, ax: Any = None) -> Any:
+        """The calibration recording's IMEP per cycle from the pressure channel (with the
+        engine file's, for charge scaling) and the fitted friction + load per cycle, on
+        ``ax`` (two Axes, or None for a new figure)
+        (:func:`rotor.plotting.diagnostics.plot_calibration`). Returns the Axes."""
+        from ..plotting.diagnostics import plot_calibration
+
+        imep, loss = self._cycle_figures()
+        mean = self.fit.get("imep_measured_pa")
+        file_imep = float(mean) / self.charge_scale if (self.scaling == "charge" and mean is not None) else None
+        return plot_calibration(
+            imep_measured_pa=imep,
+            loss_torque_Nm=loss,
+            imep_file_pa=file_imep,
+            title=f"calibration of {self.engine}" + (f" from {self.source}" if self.source else ""),
+            ax=ax,
+        )
+
+    def _cycle_figures(self) -> tuple[np.ndarray, np.ndarray]:
+        imep = np.asarray(self.fit.get("imep_measured_cycles_pa", []), dtype=np.float64).reshape(-1)
+        loss = np.asarray(self.fit.get("loss_torque_cycles_Nm", []), dtype=np.float64).reshape(-1)
+        if loss.size != imep.size:
+            loss = np.full(imep.size, np.nan)
+        return imep, loss
 
     def summary(self) -> str:
+        """A few lines: inertia, TDC, the pressure sensor's gain and offset, the losses, σ."""
         j_e = self.fit.get("energy_balance_inertia_kgm2", float("nan"))
         imep = self.fit.get("imep_measured_pa", float("nan"))
         sign = "+" if self.pressure_offset_pa >= 0 else "−"
@@ -302,8 +340,9 @@ class Calibration:
             f"calibration of {self.engine} from {self.source or 'a recording'}:",
             f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {j_e:.5f})",
             f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = "
-            f"{self.pressure_gain_pa / 1e5:.4g} bar × signal {sign} {abs(self.pressure_offset_pa) / 1e5:.4g} bar",
-            f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / 1e5:.3f} bar; "
+            f"{self.pressure_gain_pa / PA_PER_BAR:.4g} bar × signal {sign} "
+            f"{abs(self.pressure_offset_pa) / PA_PER_BAR:.4g} bar",
+            f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / PA_PER_BAR:.3f} bar; "
             f"scaling {self.scaling} (σ {self.charge_scale:.4f})",
         ]
         return "\n".join(lines) + "\n"
@@ -312,11 +351,11 @@ class Calibration:
 _GEOMETRY_KEYS = ("bore_m", "stroke_m", "rod_length_m")
 
 
-def _engine_geometry(engine) -> dict:
+def _engine_geometry(engine: Engine) -> dict:
     return {k: float(getattr(engine.geometry, k)) for k in _GEOMETRY_KEYS}
 
 
-def preset_calibration(engine):
+def preset_calibration(engine: Engine) -> tuple[Calibration, str] | None:
     """The calibration shipped with the preset of ``engine`` (``rotor/presets/<name>.calibration.json``
     whose stored engine is this one), as (Calibration, path), or None."""
     import glob
@@ -330,20 +369,6 @@ def preset_calibration(engine):
                 continue  # the preset's name on another geometry: not its calibration
             return cal, path
     return None
-
-
-def _plain(x):
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, np.ndarray):
-        x = x.tolist()
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return float(x) if math.isfinite(float(x)) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    return x
 
 
 # ----------------------------------------------------------------------------- pieces
@@ -402,7 +427,7 @@ def _signal_work(engine, analysis):
     return np.stack([np.interp(psi, edges, row) for row in cum])
 
 
-def measured_imep(engine, analysis, pressure_gain: float) -> np.ndarray:
+def measured_imep(engine: Engine, analysis: LogAnalysis, pressure_gain: float) -> np.ndarray:
     """IMEP of each complete cycle from the recording's pressure channel, ∮p·dV / V_h [Pa].
 
     **Arguments:** ``engine`` (its geometry: the swept volume and the crank mechanism);
@@ -482,15 +507,18 @@ def _energy_balance(engine, analysis, gain, max_order):
 
 
 def _scaled(engine, sigma):
-    """The engine's Wiebe cycle scaled as a whole: intake pressure and IMEP × σ."""
-    p = engine.pressure
-    return eqx.tree_at(
-        lambda e: (e.pressure.intake_pa, e.pressure.imep_pa), engine, (p.intake_pa * sigma, p.imep_pa * sigma)
-    )
+    """The engine with its pressure's whole charge scaled by σ (:meth:`scale_charge`)."""
+    return eqx.tree_at(lambda e: e.pressure, engine, engine.pressure.scale_charge(sigma))
 
 
-def _can_scale(engine):
-    return all(hasattr(engine.pressure, k) for k in ("intake_pa", "imep_pa"))
+def _check_scaling(scaling, engine, hint=""):
+    if scaling not in SCALINGS:
+        raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
+    if scaling == "charge" and not engine.pressure.charge_scalable:
+        raise EngineError(
+            f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
+            f"{type(engine.pressure).__name__}{hint}"
+        )
 
 
 def _mean_scale(ident):
@@ -502,16 +530,16 @@ def _mean_scale(ident):
 
 # ----------------------------------------------------------------------------- calibrate
 def calibrate(
-    engine,
-    log,
+    engine: Engine,
+    log: str | os.PathLike | LogAnalysis,
     *,
-    wheel=None,
-    columns=None,
+    wheel: str | None = None,
+    columns: str | Sequence[str] | None = None,
     pressure_gain: float | None = None,
     max_order: float = DEFAULT_MAX_ORDER,
     scaling: str = "charge",
     refine: bool = True,
-    tooth_errors="estimate",
+    tooth_errors: str | os.PathLike | ToothErrors | None = "estimate",
     load_per: str = "block",
 ) -> Calibration:
     """Calibrate inertia, losses, TDC, tooth errors and the pressure offset from a recording
@@ -532,16 +560,10 @@ def calibrate(
     **Returns:** :class:`Calibration`. Raises :class:`rotor.EngineError` /
     :class:`rotor.LogError` for what cannot be calibrated.
     """
-    from ..logs.analysis import LogAnalysis, analyze_log
+    from ..logs.analysis import analyze_log
 
     _check_single(engine, "calibrate")
-    if scaling not in SCALINGS:
-        raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
-    if scaling == "charge" and not _can_scale(engine):
-        raise EngineError(
-            f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
-            f"{type(engine.pressure).__name__}: use scaling='none'"
-        )
+    _check_scaling(scaling, engine, ": use scaling='none'")
     if pressure_gain is not None and not (np.isfinite(pressure_gain) and pressure_gain > 0):
         raise EngineError(f"pressure_gain = {pressure_gain!r}: must be a positive number [Pa per signal unit]")
     rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
@@ -579,7 +601,7 @@ def calibrate(
         gain_from = "given"
     imep_cycles = gain * w_cycle / vh
     J_e, b_rel, a_k, figs = _energy_balance(engine, a, gain, max_order)
-    offset = b_rel + float(engine.pressure.crankcase_pa)
+    offset = b_rel + float(engine.pressure.crankcase_pa)  # single-zone cycles
     imep_mean = float(np.mean(imep_cycles))
     sigma = imep_mean / nominal if scaling == "charge" else 1.0
     fit = {
@@ -638,21 +660,116 @@ def calibrate(
     )
 
 
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Diagnosis(Identification):
+    """What :func:`diagnose` found: an :class:`rotor.Identification` (every field of it)
+    with the recording and the calibration it used.
+
+    **Fields added:** ``calibration`` (the :class:`Calibration` used, or None);
+    ``calibration_source`` (``"preset <path>"``, ``"file <path>"``, ``"given"``, or what the
+    caller named it; None without one); ``analysis`` (the :class:`rotor.LogAnalysis` of the
+    recording, or None for a speed array); ``scaling`` (``"charge"`` or ``"none"``);
+    ``charge_scale`` σ [-] and ``charge_iterations`` (identifications it took);
+    ``no_firing`` (the record holds no firing: every firing a misfire);
+    ``measured_imep_pa`` (cycles,) [Pa]: the IMEP of each cycle from the recording's
+    pressure channel with the calibration's gain (single cylinder), or None.
+
+    ``summary()`` and ``to_json_dict()`` are what ``rotor diagnose`` prints.
+    """
+
+    calibration: Calibration | None = None
+    calibration_source: str | None = None
+    analysis: LogAnalysis | None = None
+    scaling: str = "none"
+    charge_scale: float = 1.0
+    charge_iterations: int = 0
+    no_firing: bool = False
+    measured_imep_pa: np.ndarray | None = None
+
+    @property
+    def source(self) -> str | None:
+        """The recording's name (None for a speed array)."""
+        return None if self.analysis is None else self.analysis.source
+
+    def summary(self) -> str:
+        """The calibration (if any) and where it came from, the identification's summary,
+        and the identified IMEP against the pressure channel's (if measured)."""
+        text = ""
+        if self.calibration is not None:
+            text += self.calibration.summary() + f"  calibration: {self.calibration_source}\n"
+        text += Identification.summary(self)
+        if self.measured_imep_pa is not None:
+            measured = self.measured_imep_pa
+            err = self.imep_pa[:, 0] - measured
+            text += (
+                f"  IMEP from the pressure channel {np.mean(measured) / PA_PER_BAR:.3f} bar; identified − measured: "
+                f"mean {np.mean(err) / PA_PER_BAR:+.3f} bar, rms {np.sqrt(np.mean(err**2)) / PA_PER_BAR:.3f} bar\n"
+            )
+        return text
+
+    def to_json_dict(self, written: Sequence[str] = ()) -> dict:
+        """What ``rotor diagnose --json`` prints: per cycle the start time [s], mean speed
+        [rpm], each cylinder's IMEP and its standard deviation [Pa], misfire flags,
+        contributions, load torque [N·m] (and the IMEP measured by the pressure channel);
+        the misfires, the calibration, σ, TDC and the fit. ``written``: the files the
+        command wrote, listed last. ``None``, never NaN."""
+        a = self.analysis
+        t0 = self.t_start_s
+        cycles = []
+        for k in range(self.cycles):
+            row = {
+                "t_start_s": None if t0 is None else t0[k],
+                "mean_rpm": self.mean_omega[k] * RPM_PER_RAD_S,
+                "imep_pa": self.imep_pa[k],
+                "imep_std_pa": self.imep_std_pa[k],
+                "misfire": self.misfire[k],
+                "contribution": self.contribution[k],
+                "load_torque_Nm": self.load_torque_Nm[k],
+            }
+            if self.measured_imep_pa is not None:
+                row["measured_imep_pa"] = [self.measured_imep_pa[k]]
+            cycles.append(row)
+        cal = self.calibration
+        return json_safe(
+            {
+                "engine": self.engine_name,
+                "source": self.source,
+                "cylinders": self.cylinders,
+                "cycles": cycles,
+                "misfires": self.misfires(),
+                "calibration": None if cal is None else {**cal.to_json_dict(), "loaded_from": self.calibration_source},
+                "calibration_source": self.calibration_source,
+                "ambiguous_pairs": [list(p) for p in self.ambiguous_pairs],
+                "scaling": self.scaling,
+                "charge_scale": self.charge_scale,
+                "tdc_after_gap_deg": None if a is None else np.rad2deg(a.tdc_rad),
+                "tdc_method": None if a is None else a.tdc_method,
+                "firing_method": None if a is None else a.firing_method,
+                "rms_residual_rad_s": self.rms_residual,
+                "r2": self.fit_r2,
+                "threshold": self.threshold,
+                "notes": list(self.notes) + (list(a.notes) if a is not None else []),
+                "written": list(written),
+            }
+        )
+
+
 # ----------------------------------------------------------------------------- diagnose
 def diagnose(
-    engine,
-    log,
-    calibration="preset",
+    engine: Engine,
+    log: str | os.PathLike | LogAnalysis | SpeedResult | np.ndarray,
+    calibration: Calibration | str | os.PathLike | None = "preset",
     *,
-    wheel=None,
-    columns=None,
+    wheel: str | None = None,
+    columns: str | Sequence[str] | None = None,
     tdc_deg: float | None = None,
-    firing="auto",
+    firing: str | int = "auto",
     load_per: str = "block",
     scaling: str | None = None,
     max_iterations: int = 8,
-    **identify_kwargs,
-):
+    calibration_source: str | None = None,
+    **identify_kwargs: Any,
+) -> Diagnosis:
     """Per-firing IMEP, load and misfires of a recording from its crank speed alone, with a
     calibration (see the module doc).
 
@@ -670,11 +787,13 @@ def diagnose(
     - ``scaling``: ``"charge"`` or ``"none"`` (default: the calibration's, else ``"none"``).
     - ``max_iterations``: of the charge-scale iteration; other keywords go to
       :func:`rotor.identify`.
+    - ``calibration_source``: how the result names where the calibration came from
+      (default ``"preset <path>"``, ``"file <path>"`` or ``"given"``).
 
-    **Returns:** :class:`rotor.Identification`; ``info["charge_scale"]``,
-    ``info["calibration"]`` (the calibration's dict or None), ``info["calibration_source"]``
-    (``"preset <path>"``, ``"file <path>"``, ``"given"`` or None), ``info["analysis"]`` (the
-    :class:`rotor.LogAnalysis` when the log was read here).
+    **Returns:** a :class:`Diagnosis`: the :class:`rotor.Identification` with the
+    calibration used, where it came from, the charge scale σ, the
+    :class:`rotor.LogAnalysis` of the recording and the IMEP its pressure channel measured
+    (if it has one and a calibration gives the sensor's gain).
 
     **No firing** (a coast-down, fuel cut): where the firings' mean combustion scale lies
     below the misfire floor (:data:`rotor.diagnostics.misfire.FLOOR_SCALE`) the charge iteration stops
@@ -695,17 +814,13 @@ def diagnose(
     elif calibration is not None:
         cal_source = "given"
     if calibration is not None:
-        calibration.check_engine(engine, where=cal_source if cal_source != "given" else "calibration")
+        calibration.check_engine(engine, where=cal_source if cal_source not in (None, "given") else "calibration")
+    if calibration_source is not None:
+        cal_source = calibration_source
     if scaling is None:
         scaling = calibration.scaling if calibration is not None else "none"
-    if scaling not in SCALINGS:
-        raise EngineError(f"scaling = {scaling!r}: one of {', '.join(SCALINGS)}")
-    if scaling == "charge" and not _can_scale(engine):
-        raise EngineError(
-            f"scaling='charge' scales a Wiebe cycle (intake_pa, imep_pa); engine {engine.name!r} has "
-            f"{type(engine.pressure).__name__}"
-        )
-    analysis = None
+    _check_scaling(scaling, engine)
+    analysis: LogAnalysis | None = None
     if isinstance(log, (str, os.PathLike)):
         if tdc_deg is None and calibration is not None:
             tdc_deg = calibration.tdc_after_gap_deg
@@ -730,7 +845,7 @@ def diagnose(
                 f"{analysis.source}: TDC is not known: give a calibration (--calibration), tdc_deg "
                 f"(--tdc-deg) or a pressure channel"
             )
-        speed = analysis
+        speed: LogAnalysis | SpeedResult | np.ndarray = analysis
     else:
         speed = log
     eng = calibration.apply(engine) if calibration is not None else engine
@@ -784,36 +899,25 @@ def diagnose(
                 extra.append(
                     f"no firing (mean combustion scale below the misfire floor {FLOOR_SCALE:g}): every firing a misfire"
                 )
-    info = dict(ident.info)
-    info.update(
-        charge_scale=float(sigma),
-        charge_iterations=iters,
-        scaling=scaling,
-        calibration=None if calibration is None else calibration.to_json_dict(),
-        analysis=analysis,
-        engine=_scaled(eng, sigma) if scaling == "charge" else eng,
-        calibration_source=cal_source,
-        no_firing=no_firing,
-    )
+    if isinstance(log, LogAnalysis):
+        analysis = log
     if cal_source is not None and cal_source.startswith("preset"):
         extra.append(f"calibration: the preset's own ({cal_source[len('preset ') :]})")
-    notes = ident.notes + tuple(extra)
+    measured = None
+    if calibration is not None and analysis is not None and analysis.pressure is not None and engine.cylinders == 1:
+        measured = measured_imep(engine, analysis, calibration.pressure_gain_pa)
+    fields = {f.name: getattr(ident, f.name) for f in dataclasses.fields(Identification)}
+    fields["notes"] = ident.notes + tuple(extra)
     if no_firing:
-        return dataclasses.replace(ident, info=info, notes=notes, misfire=ident.misfire | ident.identified)
-    return dataclasses.replace(ident, info=info, notes=notes)
-
-
-def cylinder_torques(engine, ident) -> np.ndarray:
-    """The identified gas torque of each cylinder on each cycle's grid: the motored torque
-    plus the firing's scale times its combustion torque, (cycles, P, cylinders) [N·m]
-    (firing k of a cylinder owns the half cycle either side of its TDC; here each cycle's
-    grid takes the scale of that cycle's firing). ``engine``: the one identified
-    (``ident.info["engine"]`` after :func:`diagnose`)."""
-    from ..engine.forces import cylinder_gas_torques
-
-    C, P = ident.omega.shape
-    theta = np.arange(P) * float(engine.cycle_rad) / P
-    fired = np.asarray(cylinder_gas_torques(engine, theta))
-    motored = np.asarray(cylinder_gas_torques(engine.replace(pressure=engine.pressure.motored(engine.strokes)), theta))
-    comb = fired - motored
-    return motored[None, :, :] + ident.scale[:, None, :] * comb[None, :, :]
+        fields["misfire"] = ident.misfire | ident.identified
+    return Diagnosis(
+        **fields,
+        calibration=calibration,
+        calibration_source=cal_source,
+        analysis=analysis,
+        scaling=scaling,
+        charge_scale=float(sigma),
+        charge_iterations=iters,
+        no_firing=no_firing,
+        measured_imep_pa=measured,
+    )

@@ -73,6 +73,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
 import jax
@@ -81,6 +82,7 @@ import jax.scipy.linalg
 import lineax as lx
 import numpy as np
 import optimistix as optx
+from jaxtyping import ArrayLike
 
 from ..dynamics.crank_train import (
     COL_COMBUSTION,
@@ -94,7 +96,15 @@ from ..dynamics.crank_train import (
 from ..dynamics.equation import friction_coefficients, hermite_cumulative, node_offsets, wrap_periodic
 from ..dynamics.loads import ConstantLoad, Load
 from ..errors import EngineError
+from ..results import Result, json_safe
+from ..units import PA_PER_BAR
 from .misfire import FLOOR_SCALE, MISFIRE_THRESHOLD, contribution_index
+
+if TYPE_CHECKING:
+    from ..dynamics.result import SpeedResult
+    from ..engine.friction import Friction
+    from ..engine.model import Engine
+    from ..logs.analysis import LogAnalysis
 
 __all__ = ["Identification", "identify", "PARAMETERS"]
 
@@ -103,12 +113,11 @@ TIED_BELOW = 0.5  # a firing with less than this share of its combustion torque 
 FITTED_FROM = 0.01  # … and with less than this share not fitted either (tied to its neighbour)
 DEFAULT_BLOCK = 8
 DEFAULT_OVERLAP = 2
-RPM_PER_RAD_S = 30.0 / np.pi
 
 
 # ----------------------------------------------------------------------------- result
-@dataclasses.dataclass(frozen=True, eq=False)
-class Identification:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Identification(Result):
     """Per-firing combustion scales, IMEP, loads and misfires identified from ω(θ).
 
     **Per cycle and cylinder** (cycles, cylinders): ``scale`` [-] (the firing's combustion
@@ -127,8 +136,13 @@ class Identification:
     **Record:** ``omega``, ``omega_model`` (cycles, P) [rad/s]; ``rms_residual`` [rad/s],
     ``fit_r2`` and ``relative_residual`` (rms residual / rms speed fluctuation) of the
     whole record; ``ambiguous_pairs`` (cylinder pairs, numbered from 1, that the crank
-    speed cannot tell apart, or ()); ``threshold``; ``notes``; ``wall_s``; ``info``
-    (blocks, iterations).
+    speed cannot tell apart, or ()); ``threshold``; ``notes``; ``wall_s`` [s];
+    ``engine``: the :class:`rotor.Engine` identified (its tables explain the speed; after
+    :func:`rotor.diagnose` the calibrated and charge-scaled one).
+
+    **The fit:** ``blocks`` (how many), ``block_cycles`` (cycles per block, overlap
+    included), ``block_starts`` (first cycle of each), ``iterations`` (Levenberg–Marquardt
+    steps of each), ``table_points`` (crank-train table nodes per cycle), ``load_per``.
     """
 
     scale: np.ndarray
@@ -153,41 +167,64 @@ class Identification:
     relative_residual: float
     imep_nominal_pa: np.ndarray
     threshold: float
+    engine: Engine
     ambiguous_pairs: tuple = ()
     t_start_s: np.ndarray | None = None
     notes: tuple = ()
     engine_name: str = ""
     wall_s: float = float("nan")
-    info: dict = dataclasses.field(default_factory=dict)
+    blocks: int = 1
+    block_cycles: int = 0
+    block_starts: tuple = ()
+    iterations: tuple = ()
+    table_points: int = 0
+    load_per: str = "cycle"
 
     @property
     def cycles(self) -> int:
+        """Cycles identified."""
         return int(self.scale.shape[0])
 
     @property
     def cylinders(self) -> int:
+        """Cylinders of the engine identified."""
         return int(self.scale.shape[1])
 
     def misfires(self) -> list:
         """The misfires as (cycle from 0, cylinder from 1) pairs."""
         return [(int(k), int(c) + 1) for k, c in np.argwhere(self.misfire)]
 
+    def cylinder_torques(self) -> np.ndarray:
+        """The identified gas torque of each cylinder on each cycle's grid: the motored torque
+        plus the firing's scale times its combustion torque, (cycles, P, cylinders) [N·m], of
+        :attr:`engine` (firing k of a cylinder owns the half cycle either side of its TDC;
+        here each cycle's grid takes the scale of that cycle's firing)."""
+        from ..engine.forces import cylinder_gas_torques
+
+        engine = self.engine
+        C, P = self.omega.shape
+        theta = np.arange(P) * float(engine.cycle_rad) / P
+        fired = np.asarray(cylinder_gas_torques(engine, theta))
+        motored_engine = engine.replace(pressure=engine.pressure.motored(engine.strokes))
+        motored = np.asarray(cylinder_gas_torques(motored_engine, theta))
+        comb = fired - motored
+        return motored[None, :, :] + self.scale[:, None, :] * comb[None, :, :]
+
     def summary(self) -> str:
-        """A few lines for a terminal."""
+        """A few lines for a terminal: the fit, each cylinder's IMEP, the load, the misfires."""
         lines = [
             f"{self.engine_name}: {self.cycles} cycles identified, rms residual {self.rms_residual:.3g} rad/s "
-            f"({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})"
+            f"({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})",
+            "  cylinder  IMEP mean [bar]  ± std   scale mean   misfires   (mean over the normal firings)",
         ]
-        lines.append("  cylinder  IMEP mean [bar]  ± std   scale mean   misfires")
         for c in range(self.cylinders):
             ok = self.identified[:, c] & ~self.misfire[:, c]
-            imep = f"{np.mean(self.imep_pa[ok, c]) / 1e5:15.3f}" if ok.any() else f"{'—':>15}"
+            imep = f"{np.mean(self.imep_pa[ok, c]) / PA_PER_BAR:15.3f}" if ok.any() else f"{'—':>15}"
             scale = f"{np.mean(self.scale[ok, c]):10.4f}" if ok.any() else f"{'—':>10}"
             lines.append(
-                f"  {c + 1:8d}  {imep}  {np.median(self.imep_std_pa[:, c]) / 1e5:6.3f}   {scale}   "
+                f"  {c + 1:8d}  {imep}  {np.median(self.imep_std_pa[:, c]) / PA_PER_BAR:6.3f}   {scale}   "
                 f"{int(np.sum(self.misfire[:, c]))}"
             )
-        lines[1] = "  cylinder  IMEP mean [bar]  ± std   scale mean   misfires   (mean over the normal firings)"
         lines.append(
             f"  load torque {np.mean(self.load_torque_Nm):.2f} N·m (cycles {np.min(self.load_torque_Nm):.2f} … "
             f"{np.max(self.load_torque_Nm):.2f})"
@@ -198,40 +235,79 @@ class Identification:
             lines.append(f"  note: {n}")
         return "\n".join(lines) + "\n"
 
-    def plot(self, engine=None, axes=None):
-        """Speed, identified torque per cylinder, IMEP per cycle with misfires marked
-        (:func:`rotor.plotting.plot_identification`)."""
-        from ..plotting import plot_identification
+    def to_pandas(self) -> Any:
+        """Tidy: one row per cycle and cylinder: ``cycle``, ``cylinder`` (from 1),
+        ``t_start_s``, ``mean_rpm``, ``scale``, ``scale_std``, ``imep_bar``, ``imep_std_bar``,
+        ``identified``, ``contribution``, ``misfire``, ``load_torque_Nm``, ``load_std_Nm``."""
+        import pandas as pd
 
-        return plot_identification(self, engine=engine, axes=axes)
+        from ..units import RPM_PER_RAD_S
+
+        C, n = self.scale.shape
+        k = np.repeat(np.arange(C), n)
+        t0 = np.full(C, np.nan) if self.t_start_s is None else np.asarray(self.t_start_s, dtype=np.float64)
+        return pd.DataFrame(
+            {
+                "cycle": k,
+                "cylinder": np.tile(np.arange(1, n + 1), C),
+                "t_start_s": t0[k],
+                "mean_rpm": np.asarray(self.mean_omega)[k] * RPM_PER_RAD_S,
+                "scale": self.scale.reshape(-1),
+                "scale_std": self.scale_std.reshape(-1),
+                "imep_bar": self.imep_pa.reshape(-1) / PA_PER_BAR,
+                "imep_std_bar": self.imep_std_pa.reshape(-1) / PA_PER_BAR,
+                "identified": self.identified.reshape(-1),
+                "contribution": self.contribution.reshape(-1),
+                "misfire": self.misfire.reshape(-1),
+                "load_torque_Nm": np.asarray(self.load_torque_Nm)[k],
+                "load_std_Nm": np.asarray(self.load_std_Nm)[k],
+            }
+        )
+
+    def plot(self, ax: Any = None) -> Any:
+        """Speed (measured and the model's), the identified gas torque of each cylinder, and
+        each cylinder's IMEP per cycle with the misfires marked, on ``ax`` (three Axes, or
+        None for a new figure); :func:`rotor.plotting.diagnostics.plot_identification`.
+        Returns the Axes."""
+        from ..plotting.diagnostics import plot_identification
+
+        return plot_identification(
+            omega=self.omega,
+            omega_model=self.omega_model,
+            cylinder_torques=self.cylinder_torques(),
+            imep_pa=self.imep_pa,
+            imep_std_pa=self.imep_std_pa,
+            misfire=self.misfire,
+            title=f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}",
+            ax=ax,
+        )
 
     def to_json_dict(self) -> dict:
-        """Plain numbers for JSON."""
-
-        def f(x):
-            return np.where(np.isfinite(x), x, np.nan).tolist()
-
-        return {
-            "engine": self.engine_name,
-            "cycles": self.cycles,
-            "cylinders": self.cylinders,
-            "scale": f(self.scale),
-            "scale_std": f(self.scale_std),
-            "imep_pa": f(self.imep_pa),
-            "imep_std_pa": f(self.imep_std_pa),
-            "identified": self.identified.tolist(),
-            "contribution": f(self.contribution),
-            "misfire": self.misfire.tolist(),
-            "misfires": self.misfires(),
-            "threshold": self.threshold,
-            "load_torque_Nm": f(self.load_torque_Nm),
-            "load_std_Nm": f(self.load_std_Nm),
-            "rms_residual_rad_s": float(self.rms_residual),
-            "r2": float(self.fit_r2),
-            "relative_residual": float(self.relative_residual),
-            "ambiguous_pairs": [list(p) for p in self.ambiguous_pairs],
-            "notes": list(self.notes),
-        }
+        """Plain JSON: the scales, IMEP [Pa], contributions, misfires and loads [N·m] per
+        cycle and cylinder, and the fit; ``None``, never NaN."""
+        return json_safe(
+            {
+                "engine": self.engine_name,
+                "cycles": self.cycles,
+                "cylinders": self.cylinders,
+                "scale": self.scale,
+                "scale_std": self.scale_std,
+                "imep_pa": self.imep_pa,
+                "imep_std_pa": self.imep_std_pa,
+                "identified": self.identified,
+                "contribution": self.contribution,
+                "misfire": self.misfire,
+                "misfires": self.misfires(),
+                "threshold": self.threshold,
+                "load_torque_Nm": self.load_torque_Nm,
+                "load_std_Nm": self.load_std_Nm,
+                "rms_residual_rad_s": float(self.rms_residual),
+                "r2": float(self.fit_r2),
+                "relative_residual": float(self.relative_residual),
+                "ambiguous_pairs": [list(p) for p in self.ambiguous_pairs],
+                "notes": list(self.notes),
+            }
+        )
 
 
 # ----------------------------------------------------------------------------- the model
@@ -284,7 +360,7 @@ def _make_bases(train, c_loss, stride: int):
     )
 
 
-def _layout(work_L, work_R, offset_L, L: int):
+def block_layout(work_L, work_R, offset_L, L: int):
     """Static parameter layout of a block of L cycles. Firings f = −1 … L of each cylinder
     whose combustion torque lies at least 1 % inside the block are fitted, each on its own;
     the others share the nearest fitted firing's scale. Returns the position of each
@@ -529,11 +605,11 @@ def symmetric_pairs(engine):
 
 # ----------------------------------------------------------------------------- entry point
 def identify(
-    engine,
-    speed,
+    engine: Engine,
+    speed: LogAnalysis | SpeedResult | ArrayLike,
     *,
-    load=None,
-    friction=None,
+    load: Load | float | None = None,
+    friction: Friction | bool | None = None,
     parameters: str = "imep_scale",
     fidelity: str = "variable",
     grid_deg: float = 0.25,
@@ -624,7 +700,7 @@ def identify(
     else:
         cores = [(b * block_cycles, min((b + 1) * block_cycles, C)) for b in range(nb)]
         starts = np.array([int(np.clip(c0 - overlap, 0, C - L)) for c0, _ in cores])
-    pos, own, nscale = _layout(work_L, work_R, offset_L, L)
+    pos, own, nscale = block_layout(work_L, work_R, offset_L, L)
     na = L if load_per == "cycle" else 1
     blocks = np.stack([omega[s0 : s0 + L] for s0 in starts])
     vh = float(engine.geometry.displacement_m3)
@@ -724,14 +800,13 @@ def identify(
         ambiguous_pairs=pairs,
         t_start_s=t_start,
         notes=tuple(notes),
+        engine=engine,
         engine_name=engine.name,
         wall_s=time.perf_counter() - wall,
-        info={
-            "blocks": int(nb),
-            "block_cycles": int(L),
-            "block_starts": starts.tolist(),
-            "iterations": np.asarray(steps).tolist(),
-            "table_points": int(N),
-            "load_per": load_per,
-        },
+        blocks=int(nb),
+        block_cycles=int(L),
+        block_starts=tuple(int(x) for x in starts),
+        iterations=tuple(int(x) for x in np.asarray(steps).reshape(-1)),
+        table_points=int(N),
+        load_per=load_per,
     )

@@ -46,17 +46,26 @@ and phase of A·cos(νθ + φ) with θ from the start of the cycle.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..checks import arrays_only
 from ..dynamics.crank_train import COL_I, COL_K, crank_train
 from ..dynamics.equation import friction_coefficients
 from ..dynamics.loads import ConstantLoad, Load
 from ..errors import EngineError
+from ..results import Result, json_safe
+
+if TYPE_CHECKING:
+    from ..dynamics.result import SpeedResult
+    from ..engine.friction import Friction
+    from ..engine.model import Engine
+    from ..logs.analysis import LogAnalysis
 
 __all__ = [
     "IndicatedTorque",
@@ -92,15 +101,17 @@ class TorqueOrders(eqx.Module):
     complex_Nm: np.ndarray
 
     @property
-    def amplitude_Nm(self):
+    def amplitude_Nm(self) -> np.ndarray:
+        """Amplitude of each order in each cycle [N·m], (cycles, K)."""
         return np.abs(self.complex_Nm)
 
     @property
-    def phase_rad(self):
+    def phase_rad(self) -> np.ndarray:
+        """Phase of each order in each cycle [rad], (cycles, K)."""
         return np.angle(self.complex_Nm)
 
 
-class IndicatedTorque(eqx.Module):
+class IndicatedTorque(eqx.Module, Result):
     """The indicated torque of every cycle from :func:`indicated_torque`.
 
     **Per cycle** (cycles, P) on the cycle-angle grid ``theta`` (P,) [rad]:
@@ -145,11 +156,82 @@ class IndicatedTorque(eqx.Module):
 
     def orders(self, max_order: float = 12.0, of: str = "torque") -> TorqueOrders:
         """Harmonics of ``of`` (``"torque"``, ``"net_torque"``, ``"load_torque"``, …) per
-        cycle, orders up to ``max_order`` (FFT of each cycle)."""
+        cycle, orders up to ``max_order`` [per revolution] (FFT of each cycle)."""
         return cycle_orders(getattr(self, of), self.strokes, max_order)
 
+    def summary(self) -> str:
+        """A few lines: cycles, fidelity and regularisation, the mean and peak torque."""
+        reg = "none" if self.regularisation is None else self.regularisation
+        if self.max_order is not None:
+            reg += f" (order {self.max_order:g})"
+        m = self.mean_torque_Nm
+        lines = [
+            f"indicated torque of {self.cycles} cycle(s) of {math.degrees(self.cycle_rad):g}° "
+            f"({self.torque.shape[1]} points each), {self.fidelity} fidelity, regularisation {reg}",
+            f"  mean torque {np.mean(m):.2f} N·m (cycles {np.min(m):.2f} … {np.max(m):.2f}); "
+            f"peak {np.max(self.torque):.1f} N·m, least {np.min(self.torque):.1f} N·m",
+            f"  friction {np.mean(self.friction_torque):.2f} N·m, load {np.mean(self.load_torque):.2f} N·m (means)",
+        ]
+        return "\n".join(lines) + "\n"
 
-class HarmonicTorque(eqx.Module):
+    def __repr__(self) -> str:
+        return Result.__repr__(self)
+
+    def to_pandas(self) -> Any:
+        """Tidy: one row per cycle and grid point: ``cycle``, ``theta_deg``, ``t_s``,
+        ``omega_rad_s``, ``domega_dtheta_rad_s_per_rad``, ``torque_Nm``, ``net_torque_Nm``,
+        ``inertia_torque_Nm``, ``friction_torque_Nm``, ``load_torque_Nm``."""
+        import pandas as pd
+
+        C, P = self.torque.shape
+        return pd.DataFrame(
+            {
+                "cycle": np.repeat(np.arange(C), P),
+                "theta_deg": np.tile(np.rad2deg(np.asarray(self.theta)), C),
+                "t_s": np.asarray(self.t).reshape(-1),
+                "omega_rad_s": np.asarray(self.omega).reshape(-1),
+                "domega_dtheta_rad_s_per_rad": np.asarray(self.domega_dtheta).reshape(-1),
+                "torque_Nm": np.asarray(self.torque).reshape(-1),
+                "net_torque_Nm": np.asarray(self.net_torque).reshape(-1),
+                "inertia_torque_Nm": np.broadcast_to(self.inertia_torque, (C, P)).reshape(-1),
+                "friction_torque_Nm": np.broadcast_to(self.friction_torque, (C, P)).reshape(-1),
+                "load_torque_Nm": np.broadcast_to(self.load_torque, (C, P)).reshape(-1),
+            }
+        )
+
+    def to_json_dict(self) -> dict:
+        """Plain JSON: the settings, the grid [deg], and per cycle the mean torque and the
+        indicated torque on the grid [N·m]; ``None``, never NaN."""
+        return json_safe(
+            {
+                "cycles": self.cycles,
+                "strokes": self.strokes,
+                "fidelity": self.fidelity,
+                "regularisation": self.regularisation,
+                "max_order": self.max_order,
+                "tikhonov_weight": self.tikhonov_weight,
+                "theta_deg": np.rad2deg(np.asarray(self.theta)),
+                "mean_torque_Nm": self.mean_torque_Nm,
+                "torque_Nm": self.torque,
+            }
+        )
+
+    def plot(self, ax: Any = None) -> Any:
+        """The indicated and the net torque over the record, on ``ax`` (one Axes or None);
+        :func:`rotor.plotting.diagnostics.plot_indicated_torque`. Returns the Axes."""
+        from ..plotting.diagnostics import plot_indicated_torque
+
+        reg = "" if self.regularisation is None else f", {self.regularisation}"
+        return plot_indicated_torque(
+            theta=self.theta,
+            torque=self.torque,
+            net_torque=self.net_torque,
+            title=f"indicated torque by inverse dynamics ({self.fidelity}{reg})",
+            ax=ax,
+        )
+
+
+class HarmonicTorque(eqx.Module, Result):
     """Gas-torque harmonics from speed harmonics, :func:`harmonic_torque`.
 
     **Fields:** ``torque`` (:class:`TorqueOrders`, the gas torque: mean and orders up to
@@ -168,8 +250,75 @@ class HarmonicTorque(eqx.Module):
     trend: np.ndarray
     relative_speed_amplitude: np.ndarray
 
+    @property
+    def cycles(self) -> int:
+        """Cycles analysed."""
+        return int(np.asarray(self.mean_omega).size)
 
-def cycle_orders(x, strokes: int, max_order: float) -> TorqueOrders:
+    def summary(self) -> str:
+        """A few lines: the mean torque, and each order's amplitude (mean over the cycles)."""
+        t = self.torque
+        amp = np.atleast_2d(t.amplitude_Nm)
+        lines = [
+            f"gas-torque harmonics of {self.cycles} cycle(s) from {np.asarray(self.speed_orders).size} speed "
+            f"orders (largest relative speed fluctuation {np.max(self.relative_speed_amplitude):.4f})",
+            f"  mean torque {np.mean(t.mean_Nm):.2f} N·m",
+            "  order  amplitude [N·m] (mean over the cycles)",
+        ]
+        for o, a in list(zip(np.asarray(t.order), amp.mean(axis=0)))[:40]:
+            lines.append(f"  {o:5.1f}  {a:12.2f}")
+        return "\n".join(lines) + "\n"
+
+    def __repr__(self) -> str:
+        return Result.__repr__(self)
+
+    def to_pandas(self) -> Any:
+        """Tidy: one row per cycle and order: ``cycle``, ``order``, ``amplitude_Nm``,
+        ``phase_rad``, ``mean_Nm`` (the cycle's mean torque), ``mean_omega_rad_s``."""
+        import pandas as pd
+
+        amp = np.atleast_2d(self.torque.amplitude_Nm)
+        C, K = amp.shape
+        cyc = np.repeat(np.arange(C), K)
+        return pd.DataFrame(
+            {
+                "cycle": cyc,
+                "order": np.tile(np.asarray(self.torque.order, dtype=np.float64), C),
+                "amplitude_Nm": amp.reshape(-1),
+                "phase_rad": np.atleast_2d(self.torque.phase_rad).reshape(-1),
+                "mean_Nm": np.asarray(self.torque.mean_Nm)[cyc],
+                "mean_omega_rad_s": np.asarray(self.mean_omega)[cyc],
+            }
+        )
+
+    def to_json_dict(self) -> dict:
+        """Plain JSON: the orders, per cycle the mean torque [N·m], each order's amplitude
+        [N·m] and phase [rad], the mean speed [rad/s]; ``None``, never NaN."""
+        return json_safe(
+            {
+                "order": self.torque.order,
+                "mean_torque_Nm": self.torque.mean_Nm,
+                "amplitude_Nm": self.torque.amplitude_Nm,
+                "phase_rad": self.torque.phase_rad,
+                "mean_omega_rad_s": self.mean_omega,
+                "relative_speed_amplitude": self.relative_speed_amplitude,
+            }
+        )
+
+    def plot(self, ax: Any = None) -> Any:
+        """The gas-torque amplitude by order (mean and cycle-to-cycle spread), on ``ax`` (one
+        Axes or None); :func:`rotor.plotting.diagnostics.plot_torque_orders`. Returns the Axes."""
+        from ..plotting.diagnostics import plot_torque_orders
+
+        return plot_torque_orders(
+            order=self.torque.order,
+            amplitude_Nm=self.torque.amplitude_Nm,
+            title="gas-torque harmonics from the speed (harmonic method)",
+            ax=ax,
+        )
+
+
+def cycle_orders(x: ArrayLike, strokes: int, max_order: float) -> TorqueOrders:
     """Mean and harmonics (orders up to ``max_order``) of each row of ``x`` (cycles, P)."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
     P = x.shape[1]
@@ -350,11 +499,11 @@ def _cumulative_time(omega, h, t0):
 
 # ----------------------------------------------------------------------------- exact inverse
 def indicated_torque(
-    engine,
-    speed,
+    engine: Engine,
+    speed: LogAnalysis | SpeedResult | ArrayLike,
     *,
-    load=None,
-    friction=None,
+    load: Load | float | None = None,
+    friction: Friction | bool | None = None,
     regularisation: str | None = None,
     max_order: float | None = None,
     tikhonov_weight: float | None = None,
@@ -450,19 +599,14 @@ def indicated_torque(
 
 
 # ----------------------------------------------------------------------------- harmonic method
-def _two_sided(X, n):
-    """Two-sided coefficients c_{−n…n} from the one-sided X_1…X_n (amplitude·e^{iφ}) and the mean."""
-    mean, pos = X
-    c = np.zeros(X[1].shape[:-1] + (2 * n + 1,), complex)
-    c[..., n] = mean
-    c[..., n + 1 :] = pos[..., :n] / 2
-    c[..., :n] = np.conj(pos[..., :n][..., ::-1]) / 2
-    return c
-
-
 def harmonic_response(
-    inertia_coefficients, mean_omega, revs, out_orders: int, explicit_coefficients=None, loss_slope=0.0
-):
+    inertia_coefficients: ArrayLike,
+    mean_omega: float,
+    revs: float,
+    out_orders: int,
+    explicit_coefficients: ArrayLike | None = None,
+    loss_slope: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """The linearised response of the crank train: gas-torque harmonics from speed harmonics.
 
     **Arguments** (two-sided complex Fourier coefficients over one cycle, index n for
@@ -509,13 +653,13 @@ def _cycle_trends(omega, end, cycle, periodic):
 
 
 def harmonic_torque(
-    engine,
-    speed,
+    engine: Engine,
+    speed: LogAnalysis | SpeedResult | ArrayLike,
     *,
     max_order: float = 6.0,
     speed_max_order: float | None = None,
-    load=None,
-    friction=None,
+    load: Load | float | None = None,
+    friction: Friction | bool | None = None,
     fidelity: str = "variable",
     grid_deg: float = 0.25,
     cycle_rad: float | None = None,

@@ -39,6 +39,7 @@ its meaning: the engine is then close to motoring.
 from __future__ import annotations
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..errors import EngineError
 
@@ -50,14 +51,14 @@ REFERENCE_CYCLES = 5  # w: the reference is the median over the cycles k âˆ’ w â
 
 
 def contribution_index(
-    scale,
-    scale_std=None,
+    scale: ArrayLike,
+    scale_std: ArrayLike | None = None,
     *,
     threshold: float = MISFIRE_THRESHOLD,
     floor: float = FLOOR_SCALE,
     window: int = REFERENCE_CYCLES,
-    valid=None,
-):
+    valid: ArrayLike | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Contribution index and misfire flags of identified combustion scales.
 
     **Arguments:**

@@ -44,15 +44,22 @@ from __future__ import annotations
 import math
 import os
 import pathlib
+from typing import TYPE_CHECKING
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..engine.forces import cylinder_pressure  # compiled once per shape
 from ..errors import EngineError
+from ..logs.wheel import ToothErrors, Wheel, parse_wheel
+from ..units import PA_PER_BAR, RPM_PER_RAD_S
+
+if TYPE_CHECKING:
+    from ..engine.model import Engine
 
 __all__ = ["simulated_recording", "simulated_tooth_errors", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
 
-BENCH_GAIN_PA_PER_V = 1e5 / (5 * 0.00385)  # the bench's sensor: 51.95 bar per volt
+BENCH_GAIN_PA_PER_V = PA_PER_BAR / (5 * 0.00385)  # the bench's sensor: 51.95 bar per volt
 BENCH_OFFSET_V = 5 * 0.115  # the sensor's output at 0 bar [V]
 DEFAULT_GAP_DEG = -29.4  # the real bench: TDC 29.4° after the gap (rotor.analyze_log on full_load.txt)
 LOW_V, HIGH_V = -0.73, 4.0  # encoder levels of the real files
@@ -71,19 +78,17 @@ def _wheel_errors(wheel, tooth_error_deg):
     return e - e.mean()
 
 
-def simulated_tooth_errors(wheel=None, tooth_error_deg: float = 0.1):
+def simulated_tooth_errors(wheel: str | Wheel | None = None, tooth_error_deg: float = 0.1) -> ToothErrors:
     """The true tooth-spacing errors of the wheel that :func:`simulated_recording` draws with
     the same ``wheel`` and ``tooth_error_deg`` [deg] (the same for every ``seed``), as a
     :class:`rotor.ToothErrors` (``method="simulated"``) to compare an estimate with, or to
     analyse a simulated recording with its exact correction."""
-    from ..logs.wheel import ToothErrors, Wheel, parse_wheel
-
     w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
     tooth_error_deg = _number("tooth_error_deg", tooth_error_deg, nonnegative=True)
     return ToothErrors(w.spec, _wheel_errors(w, tooth_error_deg), method="simulated", source="rotor.synthetic")
 
 
-def pressure_volts(p_pa):
+def pressure_volts(p_pa: ArrayLike) -> np.ndarray:
     """The bench sensor's voltage [V] for an absolute pressure [Pa]: V = 5·(0.115 + 0.00385·p[bar])."""
     return BENCH_OFFSET_V + np.asarray(p_pa, dtype=np.float64) / BENCH_GAIN_PA_PER_V
 
@@ -102,14 +107,14 @@ def _number(name, x, *, positive=False, nonnegative=False):
 
 
 def simulated_recording(
-    path,
-    engine="tue-single",
-    rpm=None,
+    path: str | os.PathLike,
+    engine: str | os.PathLike | Engine = "tue-single",
+    rpm: float | None = None,
     *,
     cycles: int = 12,
     imep_scale: float = 1.0,
     sample_rate_hz: float = 100_000.0,
-    wheel=None,
+    wheel: str | Wheel | None = None,
     gap_deg: float = DEFAULT_GAP_DEG,
     tooth_error_deg: float = 0.1,
     noise_v: float = 0.01,
@@ -156,7 +161,6 @@ def simulated_recording(
     from ..engine.file import load_engine
     from ..engine.model import Engine
     from ..fileio import atomic_path
-    from ..logs.wheel import Wheel, parse_wheel
     from .calibration import SIGMA_RANGE
 
     # ---------------------------------------------------------------- arguments
@@ -200,23 +204,19 @@ def simulated_recording(
 
     # ---------------------------------------------------------------- the speed
     pressure = eng.pressure
-    if all(hasattr(pressure, k) for k in ("intake_pa", "imep_pa")):  # a Wiebe cycle: the whole charge scaled
+    if pressure.charge_scalable:  # a Wiebe cycle: the whole charge scaled
         lo, hi = SIGMA_RANGE
         if not lo <= imep_scale <= hi:
             raise EngineError(
                 f"imep_scale = {imep_scale:g}: scales this engine's Wiebe cycle whole (intake pressure "
                 f"with the IMEP); the physical range is {lo:g} … {hi:g}"
             )
-        eng = eqx.tree_at(
-            lambda e: (e.pressure.intake_pa, e.pressure.imep_pa),
-            eng,
-            (pressure.intake_pa * imep_scale, pressure.imep_pa * imep_scale),
-        )
+        eng = eqx.tree_at(lambda e: e.pressure, eng, pressure.scale_charge(imep_scale))
         comb_scale = 1.0
     else:
         comb_scale = imep_scale
     ss = steady_state(eng, rpm, imep_scale=comb_scale)
-    period = float(ss.info["period_s"])
+    period = float(np.asarray(ss.period_s))
     cycle_rad = float(ss.cycle_rad)
     theta1 = np.asarray(ss.theta, dtype=np.float64)
     t1 = np.asarray(ss.t, dtype=np.float64)
@@ -226,7 +226,7 @@ def simulated_recording(
     if pitch_s * fs < MIN_SAMPLES_PER_PITCH:
         raise EngineError(
             f"sample_rate_hz = {fs:g}: {pitch_s * fs:.1f} samples per tooth pitch at the "
-            f"fastest point ({w_max * 30 / np.pi:.0f} rpm) of a {w.spec} wheel; need at least "
+            f"fastest point ({w_max * RPM_PER_RAD_S:.0f} rpm) of a {w.spec} wheel; need at least "
             f"{MIN_SAMPLES_PER_PITCH} (raise the sampling rate or lower rpm)"
         )
 

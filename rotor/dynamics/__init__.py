@@ -6,6 +6,6 @@ equation of motion and its integrators (:mod:`.equation`), the periodic steady s
 (:mod:`.loads`), per-cycle combustion events (:mod:`.combustion`) and the speed result
 ω(θ, t) with δ and orders (:mod:`.result`).
 
-May import: :mod:`rotor.engine` and the ground floor. Never :mod:`rotor.logs`,
-:mod:`rotor.diagnostics` or :mod:`rotor.design`.
+May import: :mod:`rotor.engine`, :mod:`rotor.plotting` (to draw its results) and the
+ground floor. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or :mod:`rotor.design`.
 """

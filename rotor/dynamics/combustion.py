@@ -17,7 +17,10 @@ half a cycle before to half a cycle after that TDC (where fired and motored trac
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..errors import EngineError
 
@@ -28,8 +31,8 @@ def combustion_pattern(
     cycles: int,
     cylinders: int,
     *,
-    imep_scale=1.0,
-    misfires=(),
+    imep_scale: ArrayLike = 1.0,
+    misfires: Iterable[tuple[int, int]] = (),
     misfire_rate: float = 0.0,
     cov: float = 0.0,
     seed: int | None = 0,

@@ -26,16 +26,22 @@ Fidelity (``fidelity=``):
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import arrays_only
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
 from ..errors import EngineError
+
+if TYPE_CHECKING:
+    from ..engine.model import Engine
 
 __all__ = ["CrankTrain", "crank_train", "FIDELITIES", "COL_I", "COL_K", "COL_MOTORED", "COL_COMBUSTION"]
 
@@ -98,8 +104,8 @@ class CrankTrain(eqx.Module):
     def step_rad(self):
         return self.cycle_rad / self.points
 
-    def at(self, theta):
-        """Hermite-interpolated (values, slopes) at engine angle(s) θ [rad]: shape θ.shape + (K,)."""
+    def at(self, theta: ArrayLike) -> tuple[Float[Array, "... K"], Float[Array, "... K"]]:
+        """Hermite-interpolated (values, slopes) at engine angle(s) ``theta`` [rad]: shape θ.shape + (K,)."""
         theta = jnp.asarray(theta, dtype=jnp.float64)
         h = self.step_rad
         u = theta / h
@@ -109,12 +115,13 @@ class CrankTrain(eqx.Module):
         j1 = jnp.mod(j0 + 1, self.points)
         return _hermite(self.values[j0], self.values[j1], self.slopes[j0], self.slopes[j1], tau, h)
 
-    def nodes(self):
+    def nodes(self) -> Float[Array, " N"]:  # noqa: F722
         """Node angles over one cycle [rad], shape (N,)."""
         return jnp.arange(self.points) * self.step_rad
 
-    def scale_index(self, theta, cycles: int):
-        """Index k of each cylinder's firing whose half-cycle window holds θ, clipped to the run."""
+    def scale_index(self, theta: ArrayLike, cycles: int) -> Array:
+        """Index k of each cylinder's firing whose half-cycle window holds the engine angle
+        ``theta`` [rad], clipped to the run's ``cycles``: shape θ.shape + (cylinders,)."""
         theta = jnp.asarray(theta, dtype=jnp.float64)
         k = jnp.floor((theta[..., None] - self.firing_rad) / self.cycle_rad + 0.5)
         return jnp.clip(k, 0, cycles - 1).astype(jnp.int32)
@@ -244,7 +251,7 @@ def _build(engine, fidelity, points):
     return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, COL_I]), firing, textbook_k
 
 
-def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
+def crank_train(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
     """Prepare ``engine`` for the equation of motion (tables over one cycle).
 
     **Arguments:**
@@ -256,7 +263,7 @@ def crank_train(engine, fidelity: str = "variable", grid_deg: float = 0.25) -> C
     return train_from_engine(engine, fidelity, grid_points(engine.strokes, grid_deg))
 
 
-def train_from_engine(engine, fidelity: str, points: int) -> CrankTrain:
+def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     """:func:`crank_train` with the node count given (usable inside jit)."""
     engine = arrays_only(engine)
     values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)

@@ -286,16 +286,21 @@ def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_st
 
 @eqx.filter_jit
 def dense_at_angles(sol, t_guess, theta_q, omega_ref):
-    """(t, ω, z) where the time-domain solution passes the angles ``theta_q``: Newton on
-    θ(t) = θ_q with the solver's dense output, from the guesses ``t_guess``."""
+    """(t, ω, z) where the time-domain solution passes the angles ``theta_q``: Newton's
+    method (optimistix) on θ(t) = θ_q with the solver's dense output, from the guesses
+    ``t_guess``."""
     count_trace()
 
-    def one(t, th_q):
-        for _ in range(4):
-            theta, w, _ = sol.evaluate(t)
-            t = t - (theta - th_q) / (w * omega_ref)
-        theta, w, z = sol.evaluate(t)
-        return t, w * omega_ref, z
+    def one(t0, th_q):
+        sol_t = optx.root_find(
+            lambda t, _: sol.evaluate(t)[0] - th_q,
+            optx.Newton(rtol=1e-13, atol=1e-10),
+            t0,
+            max_steps=16,
+            throw=False,
+        )
+        theta, w, z = sol.evaluate(sol_t.value)
+        return sol_t.value, w * omega_ref, z
 
     return jax.vmap(one)(t_guess, theta_q)
 

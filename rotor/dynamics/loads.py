@@ -18,14 +18,17 @@ cylinder's gas torque) by a PI law on the speed error.
 
 from __future__ import annotations
 
+import abc
 from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import as_f64, check_finite, check_positive, concrete
 from ..errors import EngineError
+from ..units import RPM_PER_RAD_S
 
 __all__ = [
     "Load",
@@ -38,20 +41,27 @@ __all__ = [
     "parse_load",
 ]
 
-_RPM = 30.0 / np.pi  # rpm per rad/s
+#: (a, b, c) of a load a + b·ω + c·ω², None for a coefficient that is zero
+Coefficients = tuple[ArrayLike | None, ArrayLike | None, ArrayLike | None]
 
 
 class Load(eqx.Module):
-    """Base class: ``torque(omega, t)`` [N·m] against the rotation."""
+    """What every load is (abstract): a torque ``torque(omega, t)`` [N·m] against the rotation.
 
-    time_dependent: ClassVar[bool] = False
+    Concrete loads are final ``eqx.Module`` classes. ``time_dependent``: whether the
+    torque changes with time at a given speed (a steady state needs it False).
+    """
 
-    def torque(self, omega, t):  # pragma: no cover - abstract
-        raise NotImplementedError
+    time_dependent: eqx.AbstractClassVar[bool]
 
-    def polynomial(self):
-        """(a, b, c) when the load is a + b·ω + c·ω² with constant coefficients, else None."""
-        return None
+    @abc.abstractmethod
+    def torque(self, omega: ArrayLike, t: ArrayLike) -> Float[Array, ...]:
+        """The load torque [N·m] at crank speed ``omega`` [rad/s] and time ``t`` [s]."""
+
+    @abc.abstractmethod
+    def polynomial(self) -> Coefficients | None:
+        """(a, b, c) when the load is a + b·ω + c·ω² with constant coefficients
+        ([N·m], [N·m·s/rad], [N·m·s²/rad²]; None for a zero one), else None."""
 
 
 class ConstantLoad(Load):
@@ -61,14 +71,17 @@ class ConstantLoad(Load):
     """
 
     torque_Nm: jnp.ndarray = eqx.field(converter=as_f64)
+    time_dependent: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         check_finite("load", "torque_Nm", self.torque_Nm)
 
-    def torque(self, omega, t):
-        return self.torque_Nm + 0.0 * omega
+    def torque(self, omega: ArrayLike, t: ArrayLike) -> Float[Array, ...]:
+        """``torque_Nm`` [N·m] at every speed ``omega`` [rad/s] and time ``t`` [s]."""
+        return self.torque_Nm + 0.0 * jnp.asarray(omega)
 
-    def polynomial(self):
+    def polynomial(self) -> Coefficients:
+        """(torque_Nm, None, None) [N·m]."""
         return self.torque_Nm, None, None
 
 
@@ -81,15 +94,19 @@ class PolynomialLoad(Load):
     a: jnp.ndarray = eqx.field(converter=as_f64)
     b: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
     c: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    time_dependent: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         for k in ("a", "b", "c"):
             check_finite("load", k, getattr(self, k))
 
-    def torque(self, omega, t):
+    def torque(self, omega: ArrayLike, t: ArrayLike) -> Float[Array, ...]:
+        """a + b·ω + c·ω² [N·m] at speed ``omega`` [rad/s] (any time ``t`` [s])."""
+        omega = jnp.asarray(omega)
         return self.a + self.b * omega + self.c * omega**2
 
-    def polynomial(self):
+    def polynomial(self) -> Coefficients:
+        """(a, b, c) [N·m, N·m·s/rad, N·m·s²/rad²]."""
         return self.a, self.b, self.c
 
 
@@ -101,19 +118,23 @@ class PropellerLoad(Load):
 
     torque_Nm: jnp.ndarray = eqx.field(converter=as_f64)
     rpm: jnp.ndarray = eqx.field(converter=as_f64)
+    time_dependent: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         check_finite("load", "torque_Nm", self.torque_Nm)
         check_positive("load", "rpm", self.rpm)
 
     @property
-    def c(self):
-        return self.torque_Nm / (self.rpm / _RPM) ** 2
+    def c(self) -> Array:
+        """The coefficient c of M = c·ω² [N·m·s²/rad²]."""
+        return self.torque_Nm / (self.rpm / RPM_PER_RAD_S) ** 2
 
-    def torque(self, omega, t):
-        return self.c * omega**2
+    def torque(self, omega: ArrayLike, t: ArrayLike) -> Float[Array, ...]:
+        """c·ω² [N·m] at speed ``omega`` [rad/s] (any time ``t`` [s])."""
+        return self.c * jnp.asarray(omega) ** 2
 
-    def polynomial(self):
+    def polynomial(self) -> Coefficients:
+        """(None, None, c) [N·m·s²/rad²]."""
         return None, None, self.c
 
 
@@ -125,8 +146,9 @@ class TableLoad(Load):
 
     rpm: jnp.ndarray = eqx.field(converter=as_f64)
     torque_Nm: jnp.ndarray = eqx.field(converter=as_f64)
+    time_dependent: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         r, m = concrete(self.rpm), concrete(self.torque_Nm)
         if r is None or m is None:
             return
@@ -137,8 +159,13 @@ class TableLoad(Load):
         if np.any(np.diff(r) <= 0):
             raise EngineError(f"load table: rpm must increase, got {r.tolist()}")
 
-    def torque(self, omega, t):
-        return jnp.interp(omega * _RPM, self.rpm, self.torque_Nm)
+    def torque(self, omega: ArrayLike, t: ArrayLike) -> Float[Array, ...]:
+        """The tabulated torque [N·m] at speed ``omega`` [rad/s] (any time ``t`` [s])."""
+        return jnp.interp(jnp.asarray(omega) * RPM_PER_RAD_S, self.rpm, self.torque_Nm)
+
+    def polynomial(self) -> None:
+        """None: a table is not a polynomial."""
+        return None
 
 
 class LoadStep(Load):
@@ -154,18 +181,23 @@ class LoadStep(Load):
     ramp_s: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
     time_dependent: ClassVar[bool] = True
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         check_positive("load", "time_s", self.time_s, allow_zero=True)
         check_positive("load", "ramp_s", self.ramp_s, allow_zero=True)
 
-    def fraction(self, t):
-        """How far the change has gone at time t [s]: 0 … 1."""
+    def fraction(self, t: ArrayLike) -> Float[Array, ...]:
+        """How far the change has gone at time ``t`` [s]: 0 … 1 [-]."""
         ramp = jnp.maximum(self.ramp_s, 1e-300)
         return jnp.where(self.ramp_s > 0, jnp.clip((t - self.time_s) / ramp, 0.0, 1.0), (t >= self.time_s) * 1.0)
 
-    def torque(self, omega, t):
+    def torque(self, omega: ArrayLike, t: ArrayLike) -> Float[Array, ...]:
+        """``before`` blended into ``after`` [N·m] at speed ``omega`` [rad/s] and time ``t`` [s]."""
         f = self.fraction(t)
         return (1 - f) * self.before.torque(omega, t) + f * self.after.torque(omega, t)
+
+    def polynomial(self) -> None:
+        """None: the load changes in time."""
+        return None
 
 
 class Governor(eqx.Module):
@@ -187,7 +219,7 @@ class Governor(eqx.Module):
     fuel_min: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
     fuel_max: jnp.ndarray = eqx.field(converter=as_f64, default=2.0)
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         check_positive("governor", "rpm", self.rpm)
         for k in ("kp", "ki", "fuel_start", "fuel_min", "fuel_max"):
             check_positive("governor", k, getattr(self, k), allow_zero=True)
@@ -196,20 +228,21 @@ class Governor(eqx.Module):
             raise EngineError(f"governor: fuel_min ({lo:g}) must be below fuel_max ({hi:g})")
 
     @property
-    def omega(self):
-        return self.rpm / _RPM
+    def omega(self) -> Array:
+        """The set speed [rad/s]."""
+        return self.rpm / RPM_PER_RAD_S
 
-    def error(self, omega):
-        """Relative speed error (ω_set − ω)/ω_set [-]."""
+    def error(self, omega: ArrayLike) -> Float[Array, ...]:
+        """Relative speed error (ω_set − ω)/ω_set [-] at speed ``omega`` [rad/s]."""
         return (self.omega - omega) / self.omega
 
-    def fuel(self, omega, integral):
-        """Fuel scale [-] at speed ω [rad/s] and integrated error ``integral`` [s]."""
+    def fuel(self, omega: ArrayLike, integral: ArrayLike) -> Float[Array, ...]:
+        """Fuel scale [-] at speed ``omega`` [rad/s] and integrated error ``integral`` [s]."""
         u = self.fuel_start + self.kp * self.error(omega) + self.ki * integral
         return jnp.clip(u, self.fuel_min, self.fuel_max)
 
 
-def _numbers(text, n, spec):
+def _numbers(text: str, n: int, spec: str) -> list[float]:
     try:
         vals = [float(v) for v in text.split(",")]
     except ValueError:
@@ -227,7 +260,8 @@ LOAD_HELP = (
 
 
 def parse_load(spec: str) -> Load | None:
-    """A load from its command-line spec (see ``rotor simulate --help``)."""
+    """A load from its command-line spec ``spec`` (see ``rotor simulate --help`` and
+    :data:`LOAD_HELP`; torques in N·m, speeds in rpm, times in s); None for ``"none"``."""
     s = spec.strip()
     kind, _, rest = s.partition(":")
     kind = kind.lower()
@@ -236,25 +270,26 @@ def parse_load(spec: str) -> Load | None:
             return None
         if not rest:
             try:
-                return ConstantLoad(float(s))
+                return ConstantLoad(as_f64(float(s)))
             except ValueError:
                 raise EngineError(f"--load {spec!r}: not understood; {LOAD_HELP}") from None
         if kind == "constant":
-            return ConstantLoad(*_numbers(rest, 1, spec))
+            return ConstantLoad(*map(as_f64, _numbers(rest, 1, spec)))
         if kind == "poly":
-            return PolynomialLoad(*_numbers(rest, 3, spec))
+            return PolynomialLoad(*map(as_f64, _numbers(rest, 3, spec)))
         if kind == "propeller":
-            return PropellerLoad(*_numbers(rest, 2, spec))
+            return PropellerLoad(*map(as_f64, _numbers(rest, 2, spec)))
         if kind == "step":
             vals = [float(v) for v in rest.split(",")] if rest.count(",") in (2, 3) else _numbers(rest, 3, spec)
             ramp = vals[3] if len(vals) == 4 else 0.0
-            return LoadStep(ConstantLoad(vals[0]), ConstantLoad(vals[1]), vals[2], ramp)
+            before, after, time_s, ramp_s = (as_f64(v) for v in (vals[0], vals[1], vals[2], ramp))
+            return LoadStep(ConstantLoad(before), ConstantLoad(after), time_s, ramp_s)
         if kind == "table":
             pairs = [p.split("=") for p in rest.split(",")]
             if any(len(p) != 2 for p in pairs):
                 raise EngineError(f"--load {spec!r}: a table is RPM=TORQUE_NM pairs separated by commas")
             rpm, tq = zip(*[(float(a), float(b)) for a, b in pairs])
-            return TableLoad(list(rpm), list(tq))
+            return TableLoad(as_f64(list(rpm)), as_f64(list(tq)))
     except ValueError as e:
         if isinstance(e, EngineError):
             raise

@@ -1,29 +1,39 @@
 """The result of a steady-state or transient run: ω(θ, t), δ, orders, plots, tables.
 
 Arrays are JAX float64 arrays, so ``jax.grad`` flows through ``.delta`` and
-``.orders()``; ``.to_pandas()``, ``.summary()`` and ``.plot()`` are for people.
+``.orders()``; ``.to_pandas()``, ``.summary()``, ``.to_json_dict()`` and ``.plot()`` are
+for people (the result protocol of :mod:`rotor.results`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from ..results import Result, json_safe
+from ..units import RPM_PER_RAD_S
 
 __all__ = ["SpeedResult", "Orders"]
 
-RPM_PER_RAD_S = 30.0 / np.pi
+_ORDER_KEYS = ("order", "speed_amplitude_rad_s", "speed_phase_rad", "torque_amplitude_Nm", "torque_phase_rad")
 
 
-@dataclasses.dataclass(frozen=True)
-class Orders:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Orders(Result):
     """Harmonics of speed and engine torque by engine order (cycles per revolution).
 
     x(θ) = mean + Σ amplitude·cos(order·θ + phase), θ the engine crank angle from the
     start of the analysed cycle [rad]. ``order`` 0.5, 1, 1.5, … for a four-stroke engine.
+
+    **Fields:** ``order`` [per revolution]; ``speed_amplitude_rad_s`` [rad/s];
+    ``speed_phase_rad`` [rad]; ``torque_amplitude_Nm`` [N·m]; ``torque_phase_rad`` [rad];
+    ``engine_name``.
     """
 
     order: np.ndarray
@@ -31,24 +41,48 @@ class Orders:
     speed_phase_rad: jnp.ndarray
     torque_amplitude_Nm: jnp.ndarray
     torque_phase_rad: jnp.ndarray
+    engine_name: str = ""
 
     def to_list(self) -> list[dict]:
-        return [
-            {
-                "order": float(o),
-                "speed_amplitude_rad_s": float(a),
-                "speed_phase_rad": float(p),
-                "torque_amplitude_Nm": float(ta),
-                "torque_phase_rad": float(tp),
-            }
-            for o, a, p, ta, tp in zip(
-                self.order,
-                np.asarray(self.speed_amplitude_rad_s),
-                np.asarray(self.speed_phase_rad),
-                np.asarray(self.torque_amplitude_Nm),
-                np.asarray(self.torque_phase_rad),
-            )
+        """One dict per order with the keys of the fields (plain floats)."""
+        cols = [np.asarray(getattr(self, k), dtype=np.float64) for k in _ORDER_KEYS]
+        return [{k: float(v) for k, v in zip(_ORDER_KEYS, row)} for row in zip(*cols)]
+
+    def summary(self) -> str:
+        """The orders as a table: speed amplitude [rad/s and rpm], torque amplitude [N·m]."""
+        lines = [
+            f"{self.engine_name + ': ' if self.engine_name else ''}speed and torque harmonics by engine order",
+            "  order  speed amplitude [rad/s]  [rpm]      torque amplitude [N·m]",
         ]
+        rows = self.to_list()
+        shown = rows if len(rows) <= 50 else rows[:50]
+        for o in shown:
+            lines.append(
+                f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  "
+                f"{o['speed_amplitude_rad_s'] * RPM_PER_RAD_S:9.4f}  {o['torque_amplitude_Nm']:22.2f}"
+            )
+        if len(rows) > len(shown):
+            lines.append(f"  … {len(rows) - len(shown)} more orders (to_pandas() has them all)")
+        return "\n".join(lines) + "\n"
+
+    def to_pandas(self) -> Any:
+        """One row per order: ``order``, ``speed_amplitude_rad_s``, ``speed_phase_rad``,
+        ``torque_amplitude_Nm``, ``torque_phase_rad``."""
+        import pandas as pd
+
+        return pd.DataFrame({k: np.asarray(getattr(self, k), dtype=np.float64) for k in _ORDER_KEYS})
+
+    def to_json_dict(self) -> dict:
+        """``{"engine": name, "orders": [one dict per order]}``."""
+        return json_safe({"engine": self.engine_name, "orders": self.to_list()})
+
+    def plot(self, ax: Any = None) -> Any:
+        """Bars of the speed amplitude [rpm] by engine order on ``ax`` (a new figure if None);
+        returns the Axes."""
+        from ..plotting.speed import plot_orders
+
+        amp = np.asarray(self.speed_amplitude_rad_s) * RPM_PER_RAD_S
+        return plot_orders(np.asarray(self.order), amp, f"{self.engine_name}: speed harmonics", ax=ax)
 
 
 def _peak(y0, y1, y2, sign):
@@ -79,8 +113,8 @@ def _extremes(x, periodic: bool):
     return out[0], out[1]
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class SpeedResult:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class SpeedResult(Result):
     """ω(θ) and friends from :func:`rotor.steady_state` or :func:`rotor.simulate`.
 
     **Arrays** (one entry per sample): ``t`` [s], ``theta`` [rad], ``omega`` [rad/s],
@@ -91,8 +125,22 @@ class SpeedResult:
     **Attributes:** ``method``, ``fidelity``, ``kind`` (``"steady"``/``"transient"``),
     ``stalled`` and, if so, ``stall_time_s`` and ``stall_angle_rad``; ``cycle_rad``,
     ``strokes``, ``points_per_cycle`` (samples per cycle of the uniform part);
-    ``uniform_cycles``: how many whole cycles are sampled uniformly in θ; ``info``:
-    extra figures (load or fuel balance of a steady state, solver statistics).
+    ``uniform_cycles``: how many whole cycles are sampled uniformly in θ; ``engine_name``;
+    ``wall_s``: wall-clock time of the run [s].
+
+    **A steady state** also has ``period_s`` (the cycle's duration) [s]; either
+    ``load_torque_Nm`` (the load that balances the engine's mean torque minus friction)
+    [N·m] or ``fuel_scale`` (the fuelling that carries a speed-dependent load) [-];
+    ``excess_work_J`` (seed 004 §3.2.12: the largest swing of the work of the textbook
+    total torque) [J] and ``textbook_delta`` (its δ ≈ L_excess/(J·ω²)) [-];
+    ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting only) [-]; ``converged``: whether
+    the solver reached the periodic solution and the kinetic energy stays above 10⁻⁴ of
+    its mean (a JAX bool under ``jit``/``vmap``, where no error can be raised: check it).
+
+    **A transient run** may have ``steps_per_cycle`` (``method="grid"``),
+    ``solver_steps`` (accepted steps of ``method="angle"``), ``fuel`` (the governor's
+    fuel scale at each sample) [-] and ``incomplete`` (why the run ended before its last
+    cycle, if it did).
     """
 
     t: jnp.ndarray
@@ -114,14 +162,26 @@ class SpeedResult:
     stall_angle_rad: float | None = None
     engine_name: str = ""
     wall_s: float = float("nan")
-    info: dict = dataclasses.field(default_factory=dict)
+    # the steady state
+    period_s: ArrayLike | None = None
+    load_torque_Nm: ArrayLike | None = None
+    fuel_scale: ArrayLike | None = None
+    excess_work_J: ArrayLike | None = None
+    textbook_delta: ArrayLike | None = None
+    periodicity_error: ArrayLike | None = None
+    converged: ArrayLike = True
+    # a transient run
+    steps_per_cycle: int | None = None
+    solver_steps: int | None = None
+    fuel: jnp.ndarray | None = None
+    incomplete: str | None = None
 
     # ------------------------------------------------------------------ cycles
-    def _cycle_matrix(self, x):
+    def _cycle_matrix(self, x: jnp.ndarray) -> jnp.ndarray:
         n = self.uniform_cycles * self.points_per_cycle
         return x[:n].reshape(self.uniform_cycles, self.points_per_cycle)
 
-    def _need_cycles(self):
+    def _need_cycles(self) -> None:
         if self.uniform_cycles < 1:
             raise ValueError(
                 "the run holds no complete cycle sampled in the angle domain (it stalled or started from rest "
@@ -134,18 +194,19 @@ class SpeedResult:
         return self.uniform_cycles
 
     @property
-    def mean_omega(self):
+    def mean_omega(self) -> Array:
         """Time-mean speed over the whole run, angle travelled / time taken [rad/s]."""
         if self.kind == "steady":
-            return self.cycle_rad / self.info["period_s"]
+            return self.cycle_rad / jnp.asarray(self.period_s)
         return (self.theta[-1] - self.theta[0]) / (self.t[-1] - self.t[0])
 
     @property
-    def mean_rpm(self):
+    def mean_rpm(self) -> Array:
+        """Time-mean speed over the whole run [rpm]."""
         return self.mean_omega * RPM_PER_RAD_S
 
     @property
-    def cycle_mean_omega(self):
+    def cycle_mean_omega(self) -> Float[Array, " cycles"]:
         """Time-mean speed of each complete cycle [rad/s], shape (cycles,)."""
         self._need_cycles()
         P = self.points_per_cycle
@@ -161,14 +222,14 @@ class SpeedResult:
         return self.cycle_rad / (t_end - t_start)
 
     @property
-    def delta_per_cycle(self):
+    def delta_per_cycle(self) -> Float[Array, " cycles"]:
         """δ of each complete cycle, (ω_max − ω_min)/ω_mean [-], shape (cycles,)."""
         self._need_cycles()
         hi, lo = _extremes(self._cycle_matrix(self.omega), periodic=self.kind == "steady")
         return (hi - lo) / self.cycle_mean_omega
 
     @property
-    def delta(self):
+    def delta(self) -> Array:
         """δ over the whole run (all complete cycles), (ω_max − ω_min)/ω_mean [-]."""
         self._need_cycles()
         hi, lo = _extremes(self._cycle_matrix(self.omega), periodic=self.kind == "steady")
@@ -176,19 +237,21 @@ class SpeedResult:
         return (jnp.max(hi) - jnp.min(lo)) / mean
 
     @property
-    def min_rpm(self):
+    def min_rpm(self) -> Array:
+        """Lowest sampled speed [rpm]."""
         return jnp.min(self.omega) * RPM_PER_RAD_S
 
     @property
-    def max_rpm(self):
+    def max_rpm(self) -> Array:
+        """Highest sampled speed [rpm]."""
         return jnp.max(self.omega) * RPM_PER_RAD_S
 
-    def orders(self, cycle=-1, max_order: float = 12.0) -> Orders:
+    def orders(self, cycle: int | str = -1, max_order: float = 12.0) -> Orders:
         """Amplitude and phase of the speed and engine-torque harmonics by engine order.
 
         **Arguments:** ``cycle``: which complete cycle (default the last), or ``"mean"``
         for the average of the complex harmonics over all complete cycles;
-        ``max_order``: the highest order returned.
+        ``max_order``: the highest order returned [per revolution].
         """
         self._need_cycles()
         P = self.points_per_cycle
@@ -197,17 +260,22 @@ class SpeedResult:
         m = self._cycle_matrix(self.torque)
         if cycle == "mean":
             W, M = jnp.mean(jnp.fft.rfft(w, axis=1), axis=0), jnp.mean(jnp.fft.rfft(m, axis=1), axis=0)
+        elif isinstance(cycle, str):
+            raise ValueError(f"cycle = {cycle!r}: a cycle number or 'mean'")
         else:
             W, M = jnp.fft.rfft(w[cycle]), jnp.fft.rfft(m[cycle])
         k_max = min(int(np.floor(max_order * revs + 1e-9)), P // 2 - 1)
         k = np.arange(1, k_max + 1)
         W, M = W[1 : k_max + 1] * 2 / P, M[1 : k_max + 1] * 2 / P
-        return Orders(k / revs, jnp.abs(W), jnp.angle(W), jnp.abs(M), jnp.angle(M))
+        return Orders(k / revs, jnp.abs(W), jnp.angle(W), jnp.abs(M), jnp.angle(M), self.engine_name)
 
     # ------------------------------------------------------------------ people
-    def summary(self, max_order: float = 6.0) -> dict:
-        """Plain numbers for JSON: mean/min/max rpm, δ, method, fidelity, stall, orders."""
-        out = {
+    def to_json_dict(self, max_order: float = 6.0) -> dict:
+        """What ``rotor steady --json`` and ``rotor simulate --json`` print: engine, kind,
+        method, fidelity, cycles, mean/min/max rpm, δ, stall, wall time, the steady state's
+        balance and textbook figures, and the orders up to ``max_order`` [per revolution]
+        (speed amplitude [rad/s], torque amplitude [N·m])."""
+        out: dict[str, Any] = {
             "engine": self.engine_name,
             "kind": self.kind,
             "method": self.method,
@@ -222,13 +290,10 @@ class SpeedResult:
             "stall_angle_deg": None if self.stall_angle_rad is None else float(np.rad2deg(self.stall_angle_rad)),
             "wall_s": float(self.wall_s),
         }
-        out.update(
-            {
-                k: (float(v) if np.ndim(v) == 0 else np.asarray(v).tolist())
-                for k, v in self.info.items()
-                if k in ("load_torque_Nm", "fuel_scale", "periodicity_error", "excess_work_J", "textbook_delta")
-            }
-        )
+        for key in ("load_torque_Nm", "fuel_scale", "excess_work_J", "textbook_delta", "periodicity_error"):
+            v = getattr(self, key)
+            if v is not None:
+                out[key] = float(v) if np.ndim(v) == 0 else np.asarray(v).tolist()
         if self.uniform_cycles:
             o = self.orders(max_order=max_order)
             out["orders"] = [
@@ -236,9 +301,41 @@ class SpeedResult:
             ]
         else:
             out["orders"] = []
-        return out
+        return json_safe(out)
 
-    def to_pandas(self):
+    def summary(self, max_order: float = 6.0) -> str:
+        """What ``rotor steady`` and ``rotor simulate`` print: speeds, δ, the steady state's
+        balance, a stall, and the orders up to ``max_order`` [per revolution]."""
+        s = self.to_json_dict(max_order)
+        lines = [
+            f"{s['engine']}: {s['kind']} run, method {s['method']}, {s['fidelity']} inertia",
+            f"  mean speed      {s['mean_rpm']:10.2f} rpm   (min {s['min_rpm']:.2f}, max {s['max_rpm']:.2f})",
+        ]
+        if s["delta"] is not None:
+            lines.append(f"  irregularity δ  {s['delta']:10.5f}      (1/δ = {1 / s['delta']:.1f})")
+        if "textbook_delta" in s:
+            lines.append(
+                f"  textbook δ      {s['textbook_delta']:10.5f}      (seed 004: L_excess / (J·ω²), "
+                f"L_excess = {s['excess_work_J']:.1f} J)"
+            )
+        if "load_torque_Nm" in s:
+            lines.append(f"  load torque     {s['load_torque_Nm']:10.2f} N·m (balances the mean engine torque)")
+        if "fuel_scale" in s:
+            lines.append(f"  fuel scale      {s['fuel_scale']:10.4f}      (carries the load)")
+        if s["stalled"]:
+            lines.append(f"  STALLED at t = {s['stall_time_s']:.4f} s, crank angle {s['stall_angle_deg']:.1f}°")
+        if self.incomplete:
+            lines.append(f"  note: {self.incomplete}")
+        if s["orders"]:
+            lines.append("  order  speed amplitude [rad/s]  torque amplitude [N·m]")
+            for o in s["orders"]:
+                lines.append(
+                    f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  {o['torque_amplitude_Nm']:22.2f}"
+                )
+        lines.append(f"  wall time {s['wall_s']:.3f} s")
+        return "\n".join(lines) + "\n"
+
+    def to_pandas(self) -> Any:
         """The samples as a ``pandas.DataFrame`` (one row per sample, SI units in the names)."""
         import pandas as pd
 
@@ -257,13 +354,36 @@ class SpeedResult:
             }
         )
 
-    def plot(self, ax=None, kind: str = "cycle"):
+    def plot(self, ax: Any = None, kind: str = "cycle") -> Any:
         """Draw on ``ax`` (a new figure if None) and return it.
 
         ``kind``: ``"cycle"`` (rpm over the last cycle against crank angle), ``"time"``
         (rpm against time over the run), ``"torque"`` (engine and load torque over the
         last cycle) or ``"orders"`` (speed harmonics by engine order).
         """
-        from ..plotting import plot_speed
+        from ..plotting.speed import plot_cycle_torque, plot_orders, plot_speed, plot_speed_time
 
-        return plot_speed(self, ax=ax, kind=kind)
+        kinds = ("cycle", "time", "torque", "orders")
+        if kind not in kinds:
+            raise ValueError(f"kind = {kind!r}: one of {', '.join(kinds)}")
+        rpm = np.asarray(self.omega) * RPM_PER_RAD_S
+        cycle_deg = float(np.rad2deg(self.cycle_rad))
+        title = f"{self.engine_name} — {self.kind}, {self.method}, {self.fidelity} inertia"
+        if kind == "time":
+            stall = self.stall_time_s if self.stalled else None
+            return plot_speed_time(np.asarray(self.t), rpm, title, stall_time_s=stall, ax=ax)
+        if kind == "orders":
+            o = self.orders()
+            amp = np.asarray(o.speed_amplitude_rad_s) * RPM_PER_RAD_S
+            return plot_orders(o.order, amp, f"{title}; δ = {float(self.delta):.4g}", ax=ax)
+        P, C = self.points_per_cycle, self.uniform_cycles
+        if C < 1:
+            raise ValueError("the run holds no complete cycle to plot against crank angle")
+        sl = slice((C - 1) * P, C * P)
+        angle = np.arange(P) * cycle_deg / P
+        if kind == "cycle":
+            mean_rpm = float(self.cycle_mean_omega[-1]) * RPM_PER_RAD_S
+            title = f"{title}; δ = {float(self.delta_per_cycle[-1]):.4g}"
+            return plot_speed(angle, rpm[sl], mean_rpm, title, cycle_deg, ax=ax)
+        torque, load = np.asarray(self.torque)[sl], np.asarray(self.load_torque)[sl]
+        return plot_cycle_torque(angle, torque, load, title, cycle_deg, ax=ax)

@@ -13,27 +13,35 @@ Found directly, never by integrating until transients die:
   started from the closed-form solution of the linearised losses.
 
 Balance: with no load or a constant load, the load torque is set to the engine's cycle-mean
-torque minus friction (``info["load_torque_Nm"]``); with a load that depends on speed,
-the fuelling is scaled until the engine carries it (``info["fuel_scale"]``, 1 = the
+torque minus friction (``result.load_torque_Nm``); with a load that depends on speed,
+the fuelling is scaled until the engine carries it (``result.fuel_scale``, 1 = the
 engine file's pressure).
 
 A periodic solution with a given mean speed always exists in theory, but when the
 kinetic energy at its minimum is below 10⁻⁴ of its mean (ω_min < 1 % of ω_mean) the
-crankshaft practically stops once a cycle: :class:`NoSteadyStateError` says so and where.
+crankshaft practically stops once a cycle: :class:`rotor.NoSteadyStateError` (a solver
+outcome, not an input error) says so and where. Under ``jit``/``vmap``/``grad`` no error
+can be raised on a traced value: there ``result.converged`` says whether the solution is
+usable, and the caller must look at it.
 """
 
 from __future__ import annotations
 
 import time
+from typing import Any, Literal
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
+from jaxtyping import ArrayLike
 
 from ..checks import arrays_only, concrete
+from ..engine.friction import Friction
+from ..engine.model import Engine
 from ..errors import EngineError, NoSteadyStateError
+from ..units import RPM_PER_RAD_S
 from .crank_train import COL_COMBUSTION, COL_MOTORED, check_fidelity, grid_points, train_from_engine
 from .equation import (
     Scene,
@@ -46,8 +54,8 @@ from .equation import (
     linear_parts,
     wrap_periodic,
 )
-from .loads import ConstantLoad
-from .result import RPM_PER_RAD_S, SpeedResult
+from .loads import ConstantLoad, Load
+from .result import SpeedResult
 
 __all__ = ["steady_state"]
 
@@ -100,7 +108,14 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
         return jnp.log(period_of(e_star + e_ref * jnp.exp(eta)) / period)
 
     eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
-    sol = optx.root_find(residual, optx.Newton(rtol=1e-14, atol=1e-14), eta0, max_steps=200, throw=False)
+    sol = optx.root_find(
+        residual,
+        optx.Newton(rtol=1e-14, atol=1e-14),
+        eta0,
+        max_steps=200,
+        adjoint=optx.ImplicitAdjoint(),
+        throw=False,
+    )
     E0 = e_star + e_ref * jnp.exp(sol.value)
     x = x0 + x1 * E0
     parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
@@ -132,29 +147,24 @@ def _balanced_scene(scene, x, balance):
     return eqx.tree_at(lambda sc: sc.scales, scene, scene.scales * x)
 
 
-def newton(residual, u0, tol=1e-13, max_iter=30):
-    """Newton's method on a small system, differentiable by the implicit function theorem.
+def _solve_newton(residual: Any, u0: jnp.ndarray, tol: float = 1e-13, max_steps: int = 30) -> tuple[Any, Any]:
+    """Newton's method (optimistix) on a small system ``residual(u) = 0`` from ``u0``.
 
-    The iterations run without gradients (Jacobian by forward mode); one last Newton
-    step from the converged point carries them, which gives
-    exactly the implicit derivative −J⁻¹·∂r/∂p at the root.
+    Differentiable by the implicit function theorem (``optx.ImplicitAdjoint``): the
+    derivative of the root is −J⁻¹·∂r/∂p at the root, whatever the iterations did.
+    Returns the root and whether it is one (finite, max |r| < 1e-8).
     """
-    jac = jax.jacfwd(residual)
-
-    def cond(c):
-        i, u, step = c
-        return (i < max_iter) & (step > tol)
-
-    def body(c):
-        i, u, _ = c
-        du = jnp.linalg.solve(jac(u), residual(u))
-        return i + 1, u - du, jnp.max(jnp.abs(du))
-
-    u_conv = jax.lax.stop_gradient(jax.lax.while_loop(cond, body, (0, jax.lax.stop_gradient(u0), jnp.inf))[1])
-    J = jax.lax.stop_gradient(jac(u_conv))
-    r = residual(u_conv)
-    u = u_conv - jnp.linalg.solve(J, r)
-    ok = jnp.all(jnp.isfinite(u)) & (jnp.max(jnp.abs(jax.lax.stop_gradient(r))) < 1e-8)
+    sol: Any = optx.root_find(
+        lambda u, _: residual(u),
+        optx.Newton(rtol=tol, atol=tol),
+        u0,
+        max_steps=max_steps,
+        adjoint=optx.ImplicitAdjoint(),
+        throw=False,
+    )
+    u = sol.value
+    r = jax.lax.stop_gradient(residual(u))
+    ok = jnp.all(jnp.isfinite(u)) & (jnp.max(jnp.abs(r)) < 1e-8)
     return u, ok
 
 
@@ -183,20 +193,20 @@ def _shooting_kernel(engine, scene, omega_m, guess_E0, guess_x, balance):
         E0, _, _, _, y_end = cycle(u)
         return jnp.stack([(y_end[0] - E0) / e_ref, jnp.log(y_end[1] / period)])
 
-    u, ok = newton(residual, jnp.stack([0.0, guess_x / x_ref]))
+    u, ok = _solve_newton(residual, jnp.stack([jnp.zeros_like(guess_x / x_ref), guess_x / x_ref]))
     E0, x, E, t, y_end = cycle(u)
     scene = _balanced_scene(scene, x, balance)
     return x, scene, E, t, y_end[0], ok, _finish_arrays(engine, scene, E, t, omega_m)
 
 
 def steady_state(
-    engine,
-    rpm=None,
-    load=None,
+    engine: Engine,
+    rpm: ArrayLike | None = None,
+    load: Load | None = None,
     *,
     fidelity: str = "variable",
-    friction=None,
-    imep_scale=1.0,
+    friction: Friction | Literal[False] | None = None,
+    imep_scale: ArrayLike = 1.0,
     method: str = "auto",
     grid_deg: float = 0.25,
 ) -> SpeedResult:
@@ -218,12 +228,15 @@ def steady_state(
       ``"closed"`` or ``"shooting"``.
     - ``grid_deg``: node spacing of the tables and of the result [deg].
 
-    **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``);
-    ``info`` holds ``load_torque_Nm`` or ``fuel_scale``, ``period_s`` and
-    ``periodicity_error`` (|E(Θ) − E(0)|/E(0)).
+    **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``) with
+    ``load_torque_Nm`` [N·m] or ``fuel_scale`` [-], ``period_s`` [s], ``excess_work_J``
+    [J], ``textbook_delta`` [-], ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting)
+    and ``converged``.
 
-    **Raises:** :class:`NoSteadyStateError` where the kinetic energy would reach zero;
-    :class:`rotor.EngineError` for impossible arguments.
+    **Raises:** :class:`rotor.NoSteadyStateError` (a :class:`rotor.SolverError`) where the
+    kinetic energy would reach zero, when the values are concrete; under ``jit``/``vmap``
+    the result's ``converged`` is False instead. :class:`rotor.EngineError` for impossible
+    arguments.
     """
     start = time.perf_counter()
     rpm = engine.operating.rpm if rpm is None else rpm
@@ -251,8 +264,9 @@ def steady_state(
             "use method='auto' or 'shooting'"
         )
     if lin is not None and method != "shooting":
+        a_lin, c_lin = lin
         train, scene, E, t, x, ok, arrays = _closed_steady(
-            engine, fidelity, points, s, fr, speed_load, *lin, omega_m, balance
+            engine, fidelity, points, s, fr, speed_load, a_lin, c_lin, omega_m, balance
         )
         _check_combustion(train, balance)
         return _finish(engine, train, scene, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
@@ -315,17 +329,10 @@ def _finish_arrays(engine, scene, E, t, omega_m):
 
 def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
     a = arrays
-    info = {
-        "period_s": a["period_s"],
-        ("load_torque_Nm" if balance == "load" else "fuel_scale"): x,
-        "excess_work_J": a["excess_work_J"],
-        "textbook_delta": a["textbook_delta"],
-    }
-    if E_end is not None:
-        info["periodicity_error"] = jnp.abs(E_end - E[0]) / E[0]
+    converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
     if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
-        e_ratio, ok, i_min = jax.device_get((a["e_ratio"], ok, a["i_min"]))
-        if not ok or not np.isfinite(e_ratio) or e_ratio < STOP_FRACTION:
+        good, i_min = jax.device_get((converged, a["i_min"]))
+        if not good:
             raise NoSteadyStateError(
                 f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "
                 f"crank angle {float(np.rad2deg(i_min * train.cycle_rad / train.points)):.1f}° of the cycle (the "
@@ -349,5 +356,11 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
         uniform_cycles=1,
         engine_name=engine.name,
         wall_s=time.perf_counter() - start,
-        info=info,
+        period_s=a["period_s"],
+        load_torque_Nm=x if balance == "load" else None,
+        fuel_scale=x if balance == "fuel" else None,
+        excess_work_J=a["excess_work_J"],
+        textbook_delta=a["textbook_delta"],
+        periodicity_error=None if E_end is None else jnp.abs(E_end - E[0]) / E[0],
+        converged=converged,
     )

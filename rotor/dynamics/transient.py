@@ -13,14 +13,19 @@ from __future__ import annotations
 import math
 import sys
 import time
+from typing import Any, Literal
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..checks import arrays_only, concrete
+from ..engine.friction import Friction
+from ..engine.model import Engine
 from ..errors import EngineError
+from ..units import RPM_PER_RAD_S
 from .crank_train import crank_train
 from .equation import (
     Scene,
@@ -33,7 +38,8 @@ from .equation import (
     linear_losses,
     time_run,
 )
-from .result import RPM_PER_RAD_S, SpeedResult
+from .loads import Governor, Load
+from .result import SpeedResult
 
 __all__ = ["simulate", "METHODS"]
 
@@ -43,14 +49,18 @@ STALL_HANDOVER = 0.02  # the angle domain hands over to the time domain below 2 
 TIME_DOMAIN_STEPS = 200_000
 
 
-class _Progress:
-    """A one-line progress bar on stderr, shown only after ~2 s and only on a terminal."""
+class Progress:
+    """A one-line progress bar on stderr, shown only after ~2 s and only on a terminal.
 
-    def __init__(self, total: int, enabled):
+    ``total``: cycles in the run; ``enabled``: True, False or None (when stderr is a terminal).
+    """
+
+    def __init__(self, total: int, enabled: bool | None):
         self.total, self.start, self.shown = total, time.perf_counter(), False
         self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
 
-    def update(self, done: int):
+    def update(self, done: int) -> None:
+        """Show that ``done`` of the cycles are done (once the run has taken ~2 s)."""
         if not self.enabled:
             return
         elapsed = time.perf_counter() - self.start
@@ -63,7 +73,8 @@ class _Progress:
         sys.stderr.flush()
         self.shown = True
 
-    def close(self):
+    def close(self) -> None:
+        """End the bar's line, if it was shown."""
         if self.shown:
             sys.stderr.write("\n")
             sys.stderr.flush()
@@ -103,23 +114,23 @@ def _check_scales(combustion, cycles, n):
 
 
 def simulate(
-    engine,
-    rpm=None,
+    engine: Engine,
+    rpm: ArrayLike | None = None,
     cycles: int = 10,
-    load=None,
+    load: Load | None = None,
     *,
     method: str = "auto",
     fidelity: str = "variable",
-    rtol=None,
-    friction=None,
-    governor=None,
-    combustion=None,
+    rtol: ArrayLike | None = None,
+    friction: Friction | Literal[False] | None = None,
+    governor: Governor | None = None,
+    combustion: ArrayLike | None = None,
     step_deg: float = 1.0,
     grid_deg: float = 0.25,
-    steps_per_cycle=None,
+    steps_per_cycle: int | None = None,
     stop_at_stall: bool = True,
-    max_time_s=None,
-    progress=None,
+    max_time_s: float | None = None,
+    progress: bool | None = None,
 ) -> SpeedResult:
     """Run the engine for ``cycles`` cycles from crank angle 0 at speed ``rpm``.
 
@@ -190,12 +201,13 @@ def simulate(
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
     omega0, E0, e_switch = _start(train, rpm)
     theta_step = train.cycle_rad / P
-    bar = _Progress(cycles, progress)
-    pieces = []  # (theta, t, E or None, omega or None, z)
+    bar = Progress(cycles, progress)
+    pieces: list[tuple[Any, ...]] = []  # (theta, t, E or None, omega or None, z, rows kept or None)
     done, t_now, E_now, z_now = 0, jnp.asarray(0.0), E0, jnp.asarray(0.0)
     handover = None  # (theta, t, omega, z) where the time domain takes over
-    info = {}
+    extras: dict[str, Any] = {}  # typed fields of the result: steps_per_cycle, solver_steps, incomplete
     if method == "closed":
+        assert lin is not None  # checked above
         a, c = lin
         for size in _chunks(cycles, bar.enabled):
             E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride)
@@ -235,7 +247,7 @@ def simulate(
                 th_h = done * train.cycle_rad
                 handover = (th_h, t_now, _omega_at(train, th_h, E_now), z_now)
                 break
-        info["steps_per_cycle"] = spc
+        extras["steps_per_cycle"] = spc
     elif method == "angle":
         steps = 0
         for size in _chunks(cycles, bar.enabled):
@@ -274,7 +286,7 @@ def simulate(
             bar.update(done)
             if done == cycles:
                 pieces.append((theta_out[-1:], t_now, E_now, None, z_now, None))
-        info["steps"] = steps
+        extras["solver_steps"] = steps
     else:
         handover = (0.0, 0.0, omega0, 0.0)
     bar.close()
@@ -313,7 +325,7 @@ def simulate(
             stalled = True
             stall_t, stall_th = float(ts[-1]), float(th[-1])
         elif not bool(mask[0]):
-            info["incomplete"] = (
+            extras["incomplete"] = (
                 f"the time-domain run ended at t = {float(ts[-1]):.3f} s, crank angle "
                 f"{float(np.rad2deg(th[-1])):.1f}°, before reaching the end of cycle {cycles}"
                 + ("" if bool(ok) else " (step limit)")
@@ -324,7 +336,7 @@ def simulate(
         else:
             method = f"{method}+time"
     return _assemble(
-        engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, info, cycles
+        engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras
     )
 
 
@@ -391,9 +403,7 @@ def _gather(scene, pieces):
     return tuple(jnp.concatenate(a) for a in zip(*parts))
 
 
-def _assemble(
-    engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, info, cycles
-):
+def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras):
     pieces = [p for p in pieces if np.shape(p[0])[0] > 0 and p[5] != 0]
     # the whole cycles of P samples (a single end sample adds none); ``keep`` counts the
     # rows kept of a (cycles, P) piece or the samples kept of a flat one
@@ -404,8 +414,6 @@ def _assemble(
             uniform += whole
     theta, t, omega, m_eng, m_loss, accel, fuel = _gather(scene, tuple(pieces))
     imep = _imep(train, scene.scales)
-    if scene.governor is not None:
-        info["fuel"] = fuel
     return SpeedResult(
         t=t,
         theta=theta,
@@ -426,7 +434,8 @@ def _assemble(
         stall_angle_rad=stall_th,
         engine_name=engine.name,
         wall_s=time.perf_counter() - wall,
-        info=info,
+        fuel=None if scene.governor is None else fuel,
+        **extras,
     )
 
 

@@ -7,6 +7,6 @@ torques at a given speed (:mod:`.forces`), friction (:mod:`.friction`), the text
 one-cylinder table (:mod:`.table`) and the one-screen engine summary (:mod:`.summary`).
 
 May import: the ground floor (:mod:`rotor.units`, :mod:`rotor.errors`,
-:mod:`rotor.checks`, :mod:`rotor.fileio`, :mod:`rotor.results`). Nothing here integrates
-an equation of motion.
+:mod:`rotor.checks`, :mod:`rotor.fileio`, :mod:`rotor.results`) and :mod:`rotor.plotting`
+(its results draw themselves there). Nothing here integrates an equation of motion.
 """

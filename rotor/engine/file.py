@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import os
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -176,7 +177,7 @@ def preset_path(name: str):
     return resources.files("rotor.presets") / f"{name}.toml"
 
 
-def load_engine(path_or_name) -> Engine:
+def load_engine(path_or_name: str | os.PathLike[str]) -> Engine:
     """Load an engine from a TOML file or a preset name.
 
     **Arguments:** ``path_or_name``: a path to an engine file, or one of

@@ -18,12 +18,18 @@ the textbook inertia torque.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike
 
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
+
+if TYPE_CHECKING:
+    from .model import Engine
 
 __all__ = [
     "cylinder_pressure",
@@ -69,7 +75,7 @@ def gas_torque(engine, theta, model: str = "exact"):
     return jnp.sum(cylinder_gas_torques(engine, theta, model), axis=-1)
 
 
-def reciprocating_inertia_torque(engine, theta, omega, model: str = "exact"):
+def reciprocating_inertia_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str = "exact") -> Array:
     """Textbook inertia torque of the reciprocating masses at constant speed [N·m].
 
     Σ −m_rec·ω²·(d²s/dθ²)·(ds/dθ) = −½·I′_rec(θ)·ω²; its mean over a revolution is zero.
@@ -83,7 +89,7 @@ def reciprocating_inertia_torque(engine, theta, omega, model: str = "exact"):
     return jnp.sum(-m_rec * omega**2 * pm.d2s * pm.ds, axis=-1)
 
 
-def total_torque(engine, theta, omega, model: str = "exact"):
+def total_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str = "exact") -> Array:
     """Textbook total torque of the engine at constant speed [N·m]: gas torque plus the
     reciprocating inertia torque, summed over the cylinders at their phases (seed 004
     §3.2.3 and §3.2.11; the total tangential force is this divided by R).
@@ -94,7 +100,9 @@ def total_torque(engine, theta, omega, model: str = "exact"):
     return gas_torque(engine, theta, model) + reciprocating_inertia_torque(engine, theta, omega, model)
 
 
-def crank_forces(engine, theta, omega, cylinder: int = 1, model: str = "exact") -> dict:
+def crank_forces(
+    engine: Engine, theta: ArrayLike, omega: ArrayLike, cylinder: int = 1, model: str = "exact"
+) -> dict[str, Array]:
     """The seed 004 forces of one cylinder at constant crank speed.
 
     **Arguments:**
@@ -169,7 +177,7 @@ def mean_gas_torque(engine):
     return jnp.mean(gas_torque(engine, theta))
 
 
-def indicated_power_w(engine, omega=None):
+def indicated_power_w(engine: Engine, omega: ArrayLike | None = None) -> Array:
     """Indicated power [W] = mean gas torque × ω.
 
     **Arguments:** ``omega``: crank speed [rad/s]; default the engine's ``[operating] rpm``.
@@ -178,7 +186,7 @@ def indicated_power_w(engine, omega=None):
     return mean_gas_torque(engine) * omega
 
 
-def table_angles_deg(engine, step_deg: float) -> np.ndarray:
+def table_angles_deg(engine: Engine, step_deg: float) -> np.ndarray:
     """Angles 0, step, …, cycle (inclusive, as in seed 004's tables) [deg]."""
     cycle = 360.0 * engine.strokes / 2
     if not (np.isfinite(step_deg) and 0 < step_deg <= cycle):

@@ -16,14 +16,26 @@ table or the call passes one.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar, Protocol
 
 import equinox as eqx
 import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike
 
 from ..checks import as_f64, check_finite, check_positive
 
 __all__ = ["Friction"]
+
+
+class EngineLike(Protocol):
+    """What friction needs of a :class:`rotor.Engine` (the model imports this module, not
+    the other way round)."""
+
+    geometry: Any
+    cylinders: int
+
+    @property
+    def cycle_rad(self) -> float: ...
 
 
 class Friction(eqx.Module):
@@ -45,12 +57,12 @@ class Friction(eqx.Module):
             check_finite(self.table, key, getattr(self, key))
             check_positive(self.table, key, getattr(self, key), allow_zero=True)
 
-    def fmep(self, piston_speed_m_s):
+    def fmep(self, piston_speed_m_s: ArrayLike) -> Array:
         """FMEP [Pa] at mean piston speed c_m [m/s]."""
         c = piston_speed_m_s
         return self.fmep_pa + self.fmep_per_speed_pa_s_per_m * c + self.fmep_per_speed2_pa_s2_per_m2 * c**2
 
-    def torque_coefficients(self, engine):
+    def torque_coefficients(self, engine: EngineLike) -> tuple[Array, Array, Array]:
         """(a, b, c) with M_f = a + b·ω + c·ω² [N·m, N·m·s, N·m·s²] for ``engine``."""
         g = engine.geometry
         scale = g.displacement_m3 * engine.cylinders / engine.cycle_rad
@@ -61,7 +73,7 @@ class Friction(eqx.Module):
             self.fmep_per_speed2_pa_s2_per_m2 * k**2 * scale,
         )
 
-    def torque(self, engine, omega):
+    def torque(self, engine: EngineLike, omega: ArrayLike) -> Array:
         """Friction torque [N·m] of ``engine`` at crank speed ``omega`` [rad/s] (ω ≥ 0)."""
         a, b, c = self.torque_coefficients(engine)
         return a + b * omega + c * omega**2

@@ -27,12 +27,18 @@ I'(θ) comes from automatic differentiation of the same expression.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import jax
 import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
 
 from .articulated import knuckle_velocity_sq, slave_piston_motion
 from .kinematics import piston_motion, rod_motion
 from .mechanism import slave_geometry
+
+if TYPE_CHECKING:
+    from .model import Engine
 
 __all__ = [
     "cylinder_inertia",
@@ -64,25 +70,25 @@ def ordinary_cylinder_inertia(alpha, geometry, masses):
     )
 
 
-def cylinder_inertia(engine, theta):
+def cylinder_inertia(engine: Engine, theta: ArrayLike) -> Float[Array, "... cylinders"]:
     """Each cylinder's contribution to I(θ) [kg·m²], shape ``theta.shape + (cylinders,)``.
 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
     """
     alpha = engine.mechanical_angles(theta)
     out = ordinary_cylinder_inertia(alpha, engine.geometry, engine.masses)
+    art = engine.articulated
     for s, m in engine.slave_index().items():
+        assert art is not None  # slaves exist only on an articulated engine
         sg = slave_geometry(engine, s, m)
         a_master = alpha[..., s] + sg.bank_rad
         ds = slave_piston_motion(a_master, sg).ds
-        i_slave = engine.masses.reciprocating_kg * ds**2 + engine.articulated.rod_knuckle_kg * knuckle_velocity_sq(
-            a_master, sg
-        )
+        i_slave = engine.masses.reciprocating_kg * ds**2 + art.rod_knuckle_kg * knuckle_velocity_sq(a_master, sg)
         out = out.at[..., s].set(i_slave)
     return out
 
 
-def inertia_coefficients(engine):
+def inertia_coefficients(engine: Engine) -> tuple[Array, Array, Array]:
     """The seed 003 coefficients of each cylinder: I_cyl(α) ≈ A·cos²α + B·cosα + C.
 
     Chosen so that the form has the same mean and the same first and second cosine
@@ -105,7 +111,7 @@ def _check_model(model):
         raise ValueError(f"inertia model must be one of {_MODELS}, got {model!r}")
 
 
-def reduced_inertia(engine, theta, model: str = "exact"):
+def reduced_inertia(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     """Reduced moment of inertia of the whole engine I(θ) [kg·m²].
 
     **Arguments:**
@@ -127,7 +133,7 @@ def reduced_inertia(engine, theta, model: str = "exact"):
     return J + jnp.sum(A * c**2 + B * c + C, axis=-1)
 
 
-def reduced_inertia_derivative(engine, theta, model: str = "exact"):
+def reduced_inertia_derivative(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     """dI/dθ [kg·m²/rad] by automatic differentiation of :func:`reduced_inertia`.
 
     **Arguments:** as :func:`reduced_inertia`.
@@ -136,7 +142,7 @@ def reduced_inertia_derivative(engine, theta, model: str = "exact"):
     return jax.jvp(lambda t: reduced_inertia(engine, t, model), (theta,), (jnp.ones_like(theta),))[1]
 
 
-def mean_reduced_inertia(engine):
+def mean_reduced_inertia(engine: Engine) -> Array:
     """Mean of I(θ) over a revolution [kg·m²] (exact, by spectral quadrature).
 
     For a central two-mass engine this is J + n·(m_rot·R² + m_rec·R²·(½ + λ²/8 + O(λ⁴))).

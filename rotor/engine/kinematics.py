@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike
 
 __all__ = [
     "PistonMotion",
@@ -64,7 +65,9 @@ def _check_model(model: str) -> None:
         raise ValueError(f"kinematics model must be one of {_MODELS}, got {model!r}")
 
 
-def rod_motion(theta, crank_radius_m, rod_length_m, pin_offset_m=0.0) -> RodMotion:
+def rod_motion(
+    theta: ArrayLike, crank_radius_m: ArrayLike, rod_length_m: ArrayLike, pin_offset_m: ArrayLike = 0.0
+) -> RodMotion:
     """Exact rod angle β(θ) and its derivatives (seed 000).
 
     **Arguments:**
@@ -81,10 +84,16 @@ def rod_motion(theta, crank_radius_m, rod_length_m, pin_offset_m=0.0) -> RodMoti
     cos_beta = jnp.sqrt(1.0 - sin_beta**2)
     dbeta = R * jnp.cos(theta) / (L * cos_beta)
     d2beta = jnp.tan(beta) * dbeta**2 - R * jnp.sin(theta) / (L * cos_beta)
-    return RodMotion(beta, dbeta, d2beta)
+    return RodMotion(beta, jnp.asarray(dbeta), jnp.asarray(d2beta))
 
 
-def piston_motion(theta, crank_radius_m, rod_length_m, pin_offset_m=0.0, model="exact") -> PistonMotion:
+def piston_motion(
+    theta: ArrayLike,
+    crank_radius_m: ArrayLike,
+    rod_length_m: ArrayLike,
+    pin_offset_m: ArrayLike = 0.0,
+    model: str = "exact",
+) -> PistonMotion:
     """Piston displacement from TDC, ds/dθ and d²s/dθ² (seeds 000, 002, 004).
 
     Exact: s = R[√((1+1/λ)² − z²) − cos θ − cos β / λ], ds/dθ = R sin(θ+β)/cos β,
@@ -109,18 +118,18 @@ def piston_motion(theta, crank_radius_m, rod_length_m, pin_offset_m=0.0, model="
         s = R * ((1 + lam / 4) - jnp.cos(theta) - lam / 4 * jnp.cos(2 * theta) - lam * z * jnp.sin(theta))
         ds = R * (jnp.sin(theta) + lam / 2 * jnp.sin(2 * theta) - lam * z * jnp.cos(theta))
         d2s = R * (jnp.cos(theta) + lam * jnp.cos(2 * theta) + lam * z * jnp.sin(theta))
-        return PistonMotion(s, ds, d2s)
+        return PistonMotion(jnp.asarray(s), jnp.asarray(ds), jnp.asarray(d2s))
     beta, dbeta, _ = rod_motion(theta, R, L, k)
     cos_beta = jnp.cos(beta)
     s = jnp.sqrt((R + L) ** 2 - k**2) - R * jnp.cos(theta) - L * cos_beta
     ds = R * jnp.sin(theta + beta) / cos_beta
     d2s = R * jnp.cos(theta + beta) / cos_beta + L * dbeta**2 / cos_beta
-    return PistonMotion(s, ds, d2s)
+    return PistonMotion(jnp.asarray(s), jnp.asarray(ds), jnp.asarray(d2s))
 
 
-def mean_piston_speed(stroke_m, omega):
+def mean_piston_speed(stroke_m: ArrayLike, omega: ArrayLike) -> Array:
     """Mean piston speed v_m = S·n/30 = S·ω/π [m/s].
 
     **Arguments:** ``stroke_m``: S [m]; ``omega``: mean crank speed [rad/s].
     """
-    return stroke_m * omega / jnp.pi
+    return jnp.asarray(stroke_m) * jnp.asarray(omega) / jnp.pi

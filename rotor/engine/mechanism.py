@@ -6,10 +6,16 @@ mechanical angle; slave cylinders of articulated rods use :mod:`rotor.engine.art
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import jax.numpy as jnp
+from jaxtyping import ArrayLike
 
 from .articulated import SlaveGeometry, slave_piston_motion
 from .kinematics import PistonMotion, piston_motion
+
+if TYPE_CHECKING:
+    from .model import Engine
 
 __all__ = ["slave_geometry", "engine_piston_motion"]
 
@@ -29,7 +35,7 @@ def slave_geometry(engine, slave: int, master: int) -> SlaveGeometry:
     )
 
 
-def engine_piston_motion(engine, theta, model: str = "exact") -> PistonMotion:
+def engine_piston_motion(engine: Engine, theta: ArrayLike, model: str = "exact") -> PistonMotion:
     """Piston displacement and its crank-angle derivatives for every cylinder.
 
     **Arguments:**

@@ -21,11 +21,13 @@ from typing import ClassVar
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
 from ..errors import EngineError
+from ..units import RAD_S_PER_RPM
 from .friction import Friction
-from .pressure import MotoredCycle, NoPressure, PressureTable, WiebeCycle
+from .pressure import NoPressure, PressureSource
 
 __all__ = [
     "Geometry",
@@ -35,10 +37,7 @@ __all__ = [
     "Operating",
     "Articulated",
     "Engine",
-    "PressureSource",
 ]
-
-PressureSource = PressureTable | WiebeCycle | MotoredCycle | NoPressure
 
 
 def _tuple_of_ints(x):
@@ -134,15 +133,16 @@ class Masses(eqx.Module):
     def full_rod(self) -> bool:
         return self.rod_kg is not None
 
-    def two_mass_split(self, rod_length_m):
-        """(reciprocating, rotating) masses [kg] of the equivalent two-mass model.
+    def two_mass_split(self, rod_length_m: ArrayLike) -> tuple[Array, Array]:
+        """(reciprocating, rotating) masses [kg] of the equivalent two-mass model, for a rod
+        ``rod_length_m`` [m] long.
 
         For a full rod, its mass is split statically between the pin (m·a/L) and the crank
         pin (m·(L − a)/L), a being the distance of its centre of mass from the big end.
         """
-        if not self.full_rod:
+        if self.rod_kg is None or self.rod_cg_from_big_end_m is None:  # the two-mass model
             return self.reciprocating_kg, self.rotating_kg
-        a_over_l = self.rod_cg_from_big_end_m / rod_length_m
+        a_over_l = self.rod_cg_from_big_end_m / jnp.asarray(rod_length_m)
         return (
             self.reciprocating_kg + self.rod_kg * a_over_l,
             self.rotating_kg + self.rod_kg * (1 - a_over_l),
@@ -198,7 +198,7 @@ class Operating(eqx.Module):
     @property
     def omega(self):
         """Operating speed [rad/s]."""
-        return self.rpm * jnp.pi / 30
+        return self.rpm * RAD_S_PER_RPM
 
 
 class Articulated(eqx.Module):
@@ -275,7 +275,7 @@ class Engine(eqx.Module):
     crankshaft: Crankshaft
     layout: Layout
     pressure: PressureSource = eqx.field(default_factory=NoPressure)
-    operating: Operating = eqx.field(default_factory=lambda: Operating(rpm=1000.0))
+    operating: Operating = eqx.field(default_factory=lambda: Operating(rpm=as_f64(1000.0)))
     articulated: Articulated | None = None
     friction: Friction | None = None
 
@@ -362,7 +362,7 @@ class Engine(eqx.Module):
         angles, _, _ = _firing_tdc_deg(jnp, self.tdc_angles_deg, self.layout.firing_order, self.strokes)
         return jnp.deg2rad(jnp.stack([jnp.asarray(a, dtype=jnp.float64) for a in angles]))
 
-    def mechanical_angles(self, theta):
+    def mechanical_angles(self, theta: ArrayLike) -> Float[Array, "... cylinders"]:
         """Each cylinder's crank angle from its own axis [rad], shape ``theta.shape + (cylinders,)``.
 
         **Arguments:** ``theta``: engine crank angle [rad].
@@ -370,7 +370,7 @@ class Engine(eqx.Module):
         theta = jnp.asarray(theta, dtype=jnp.float64)
         return theta[..., None] - jnp.deg2rad(self.tdc_angles_deg)
 
-    def cycle_angles(self, theta):
+    def cycle_angles(self, theta: ArrayLike) -> Float[Array, "... cylinders"]:
         """Each cylinder's cycle angle (0 = TDC before intake) [rad], in [0, cycle), shape
         ``theta.shape + (cylinders,)``.
 
@@ -386,8 +386,9 @@ class Engine(eqx.Module):
             return {}
         return {s - 1: m - 1 for s, m in zip(self.articulated.slaves, self.articulated.masters)}
 
-    def replace(self, **changes) -> Engine:
-        """A copy with some whole tables replaced, e.g. ``engine.replace(pressure=NoPressure())``."""
+    def replace(self, **changes: object) -> Engine:
+        """A copy with some whole tables replaced, e.g. ``engine.replace(pressure=NoPressure())``
+        (``changes``: field name → new table or value, units as in the file)."""
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         fields.update(changes)
         return Engine(**fields)

@@ -14,17 +14,20 @@ step in the table (the seed's drop at 540° when the exhaust opens) does not rin
 
 from __future__ import annotations
 
-from typing import ClassVar
+import abc
+from typing import TYPE_CHECKING, ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
 from ..errors import EngineError
 from .kinematics import piston_motion
 
 __all__ = [
+    "PressureSource",
     "PressureTable",
     "WiebeCycle",
     "MotoredCycle",
@@ -55,7 +58,7 @@ def _pchip_slopes(x, y, period):
     return jnp.where(same_sign, m, 0.0)
 
 
-def periodic_pchip(xq, x, y, period):
+def periodic_pchip(xq: ArrayLike, x: ArrayLike, y: ArrayLike, period: float) -> Array:
     """Evaluate the periodic monotone cubic through (x, y) at ``xq``.
 
     **Arguments:**
@@ -106,23 +109,53 @@ def _smoothstep(u):
 
 
 # --------------------------------------------------------------------------- sources
-class _Source(eqx.Module):
-    """Common base: every source knows its crankcase pressure."""
+class PressureSource(eqx.Module):
+    """What every cylinder pressure source is: an abstract ``eqx.Module``.
 
+    Concrete sources (:class:`PressureTable`, :class:`WiebeCycle`, :class:`MotoredCycle`,
+    :class:`NoPressure`) are final; each has a ``kind`` (its ``[pressure] kind`` in the
+    engine file), a ``crankcase_pa`` field [Pa], and says whether its charge can be
+    scaled as a whole (``charge_scalable``, see :meth:`scale_charge`).
+    """
+
+    kind: eqx.AbstractClassVar[str]
+    charge_scalable: eqx.AbstractClassVar[bool]
     table: ClassVar[str] = "pressure"
+    if TYPE_CHECKING:  # every concrete source has this field (not declared here: it has a default)
 
-    def __call__(self, phi, geometry, strokes: int = 4):  # pragma: no cover - abstract
-        raise NotImplementedError
+        @property
+        def crankcase_pa(self) -> jnp.ndarray: ...
 
+    @abc.abstractmethod
+    def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
+        """Absolute cylinder pressure [Pa] at the cycle angles ``phi`` [rad] (any shape) of a
+        cylinder with ``geometry`` (a :class:`rotor.Geometry`) in a ``strokes``-stroke engine."""
+
+    @abc.abstractmethod
     def validate_for(self, strokes: int) -> None:
-        """Cross-checks that need the engine (cycle length)."""
+        """Cross-checks that need the engine's cycle: ``strokes`` (2 or 4); raises
+        :class:`rotor.EngineError`."""
 
-    def motored(self, strokes: int = 4) -> _Source:
-        """The trace of the same cylinder without combustion (a misfire)."""
-        return self
+    @abc.abstractmethod
+    def motored(self, strokes: int = 4) -> PressureSource:
+        """The trace of the same cylinder without combustion (a misfire) in a
+        ``strokes``-stroke engine."""
+
+    @abc.abstractmethod
+    def scale_charge(self, sigma: ArrayLike) -> PressureSource:
+        """The source with its whole charge scaled by ``sigma`` [-] (a throttle or a boost):
+        intake pressure and IMEP × σ. Only where ``charge_scalable``; otherwise raises
+        :class:`rotor.EngineError` naming the source kind. Differentiable in ``sigma``."""
 
 
-class NoPressure(_Source):
+def _not_scalable(source: PressureSource) -> EngineError:
+    return EngineError(
+        f"[pressure] kind = {source.kind!r} cannot scale its charge: only a Wiebe cycle (kind = 'wiebe', "
+        "intake_pa and imep_pa scaled together) can"
+    )
+
+
+class NoPressure(PressureSource):
     """No gas force: the cylinder pressure equals the crankcase pressure.
 
     **Fields:** ``crankcase_pa`` [Pa].
@@ -130,15 +163,28 @@ class NoPressure(_Source):
 
     crankcase_pa: jnp.ndarray = eqx.field(converter=as_f64, default=STANDARD_CRANKCASE_PA)
     kind: ClassVar[str] = "none"
+    charge_scalable: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         check_positive(self.table, "crankcase_pa", self.crankcase_pa, allow_zero=True)
 
-    def __call__(self, phi, geometry, strokes: int = 4):
+    def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
+        """The crankcase pressure [Pa] at every cycle angle ``phi`` [rad]."""
         return jnp.broadcast_to(self.crankcase_pa, jnp.shape(phi)).astype(jnp.float64)
 
+    def validate_for(self, strokes: int) -> None:
+        """Nothing to check: no pressure fits any cycle (``strokes`` 2 or 4)."""
 
-class PressureTable(_Source):
+    def motored(self, strokes: int = 4) -> NoPressure:
+        """Itself: without combustion nothing changes (``strokes`` 2 or 4)."""
+        return self
+
+    def scale_charge(self, sigma: ArrayLike) -> PressureSource:
+        """Raises :class:`rotor.EngineError`: there is no charge to scale by ``sigma`` [-]."""
+        raise _not_scalable(self)
+
+
+class PressureTable(PressureSource):
     """A tabulated cylinder pressure trace over one cycle.
 
     **Fields:**
@@ -153,8 +199,9 @@ class PressureTable(_Source):
     pressure_pa: jnp.ndarray = eqx.field(converter=as_f64)
     crankcase_pa: jnp.ndarray = eqx.field(converter=as_f64, default=STANDARD_CRANKCASE_PA)
     kind: ClassVar[str] = "table"
+    charge_scalable: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         t = self.table
         a, p = concrete(self.angle_deg), concrete(self.pressure_pa)
         if a is not None and p is not None:
@@ -177,6 +224,7 @@ class PressureTable(_Source):
         check_positive(t, "crankcase_pa", self.crankcase_pa, allow_zero=True)
 
     def validate_for(self, strokes: int) -> None:
+        """The table must lie within and cover the ``strokes``-stroke cycle."""
         a = concrete(self.angle_deg)
         if a is None:
             return
@@ -196,7 +244,8 @@ class PressureTable(_Source):
                 f"give points over the whole cycle 0…{cycle:g}°"
             )
 
-    def __call__(self, phi, geometry, strokes: int = 4):
+    def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
+        """The interpolated pressure [Pa] at cycle angles ``phi`` [rad] (``geometry`` unused)."""
         period = 2 * jnp.pi * strokes / 2
         return periodic_pchip(phi, jnp.deg2rad(self.angle_deg), self.pressure_pa, period)
 
@@ -215,9 +264,14 @@ class PressureTable(_Source):
         p = jnp.where(mirror, self(reflected, None, strokes), self.pressure_pa)
         return PressureTable(self.angle_deg, p, self.crankcase_pa)
 
+    def scale_charge(self, sigma: ArrayLike) -> PressureSource:
+        """Raises :class:`rotor.EngineError`: a measured trace has no charge to scale by ``sigma`` [-]."""
+        raise _not_scalable(self)
 
-class _SingleZone(_Source):
-    """Gas exchange and polytropic compression/expansion shared by the parametric cycles."""
+
+class _SingleZone(PressureSource):
+    """Gas exchange and polytropic compression/expansion shared by the parametric cycles
+    (abstract: :class:`WiebeCycle` and :class:`MotoredCycle` are the concrete ones)."""
 
     compression_ratio: jnp.ndarray = eqx.field(converter=as_f64)
     intake_pa: jnp.ndarray = eqx.field(converter=as_f64)
@@ -228,7 +282,11 @@ class _SingleZone(_Source):
     overlap_deg: jnp.ndarray = eqx.field(converter=as_f64, default=20.0)
     crankcase_pa: jnp.ndarray = eqx.field(converter=as_f64, default=STANDARD_CRANKCASE_PA)
 
-    def _check_single_zone(self):
+    def _expansion(self) -> jnp.ndarray:
+        """The polytropic exponent after firing TDC [-]."""
+        return self.compression_exponent
+
+    def _check_single_zone(self, exponents: tuple[str, ...] = ("compression_exponent",)) -> None:
         t = self.table
         for key in ("intake_pa", "exhaust_pa", "blowdown_deg", "overlap_deg"):
             check_positive(t, key, getattr(self, key))
@@ -237,9 +295,7 @@ class _SingleZone(_Source):
         eps = concrete(self.compression_ratio)
         if eps is not None and not eps > 1:
             raise EngineError(f"{where(t, 'compression_ratio')} = {fmt(eps)}: must be greater than 1")
-        for key in ("compression_exponent", "expansion_exponent"):
-            if not hasattr(self, key):
-                continue
+        for key in exponents:
             n = concrete(getattr(self, key))
             if n is not None and not (1.0 <= n <= 2.0):
                 raise EngineError(f"{where(t, key)} = {fmt(n)}: a polytropic exponent must lie in 1…2")
@@ -252,6 +308,7 @@ class _SingleZone(_Source):
                 )
 
     def validate_for(self, strokes: int) -> None:
+        """A single-zone cycle is four-stroke: ``strokes`` must be 4."""
         if strokes != 4:
             raise EngineError(
                 f"[pressure] kind = {self.kind!r} is implemented for four-stroke engines only; "
@@ -263,7 +320,7 @@ class _SingleZone(_Source):
         """Closed-cycle pressure (no gas exchange) at φ ∈ [π, 3π] as the affine pair (p0, p1)."""
         eps = self.compression_ratio
         nc = self.compression_exponent
-        ne = getattr(self, "expansion_exponent", nc)
+        ne = self._expansion()
         V = lambda x: cylinder_volume_m3(x, geometry, eps)  # noqa: E731
         v = V(phi)
         v_bdc = V(jnp.pi)
@@ -317,12 +374,6 @@ class _SingleZone(_Source):
         vh = geometry.piston_area_m2 * geometry.stroke_m
         w = 4 * jnp.pi / n
         return jnp.sum(p0 * dv) * w / vh, jnp.sum(p1 * dv) * w / vh
-
-
-def _safe_pow(u, a):
-    """u**a for u > 0 and 0 for u <= 0, with finite derivatives everywhere (no 0**a NaNs)."""
-    pos = u > 0
-    return jnp.where(pos, jnp.where(pos, u, 1.0) ** a, 0.0)
 
 
 class _WiebeBurn(eqx.Module):
@@ -398,9 +449,10 @@ class WiebeCycle(_SingleZone):
     duration_deg: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
     form_factor: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True, default=2.0)
     kind: ClassVar[str] = "wiebe"
+    charge_scalable: ClassVar[bool] = True
 
-    def __check_init__(self):
-        self._check_single_zone()
+    def __check_init__(self) -> None:
+        self._check_single_zone(("compression_exponent", "expansion_exponent"))
         t = self.table
         check_positive(t, "imep_pa", self.imep_pa)
         check_positive(t, "duration_deg", self.duration_deg)
@@ -409,22 +461,36 @@ class WiebeCycle(_SingleZone):
         if s is not None and not (180.0 < s < 540.0):
             raise EngineError(f"{where(t, 'start_deg')} = {fmt(s)}: combustion must start between 180° and 540°")
 
-    def _burn(self):
+    def _expansion(self) -> jnp.ndarray:
+        return self.expansion_exponent
+
+    def _burn(self) -> _WiebeBurn:
         return _WiebeBurn(jnp.deg2rad(self.start_deg), jnp.deg2rad(self.duration_deg), self.form_factor)
 
-    def heat_scale(self, geometry):
-        """The heat-release scale [Pa·m³ per unit of the Wiebe integral] that gives ``imep_pa``."""
+    def heat_scale(self, geometry: object) -> Array:
+        """The heat-release scale [Pa·m³ per unit of the Wiebe integral] that gives ``imep_pa``
+        in a cylinder of ``geometry`` (a :class:`rotor.Geometry`, lengths in m)."""
         i0, i1 = self._imep_parts(geometry, self._burn())
         return (self.imep_pa - i0) / i1
 
-    def __call__(self, phi, geometry, strokes: int = 4):
-        burn = self._burn()
-        p0, p1 = self._parts(phi, geometry, burn)
+    def pressure_parts(self, phi: ArrayLike, geometry: object) -> tuple[Float[Array, ...], Float[Array, ...]]:
+        """The pressure as the affine pair (p0, p1) [Pa, Pa per unit heat scale] at cycle
+        angles ``phi`` [rad] in a cylinder of ``geometry``: p = p0 + :meth:`heat_scale`·p1."""
+        return self._parts(phi, geometry, self._burn())
+
+    def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
+        """The cycle's pressure [Pa] at cycle angles ``phi`` [rad] in a cylinder of ``geometry``."""
+        p0, p1 = self.pressure_parts(phi, geometry)
         return p0 + self.heat_scale(geometry) * p1
 
     def motored(self, strokes: int = 4) -> MotoredCycle:
         """The same engine with the fuel cut: the trace of a misfiring cylinder."""
         return MotoredCycle(**{f: getattr(self, f) for f in _SINGLE_ZONE_FIELDS})
+
+    def scale_charge(self, sigma: ArrayLike) -> WiebeCycle:
+        """The cycle with its whole charge scaled by ``sigma`` [-]: ``intake_pa`` and
+        ``imep_pa`` × σ (a throttled spark-ignition engine). Differentiable in ``sigma``."""
+        return eqx.tree_at(lambda p: (p.intake_pa, p.imep_pa), self, (self.intake_pa * sigma, self.imep_pa * sigma))
 
 
 class MotoredCycle(_SingleZone):
@@ -438,12 +504,22 @@ class MotoredCycle(_SingleZone):
     """
 
     kind: ClassVar[str] = "motored"
+    charge_scalable: ClassVar[bool] = False
 
-    def __check_init__(self):
+    def __check_init__(self) -> None:
         self._check_single_zone()
 
-    def __call__(self, phi, geometry, strokes: int = 4):
+    def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
+        """The motored pressure [Pa] at cycle angles ``phi`` [rad] in a cylinder of ``geometry``."""
         return self._parts(phi, geometry, None)[0]
+
+    def motored(self, strokes: int = 4) -> MotoredCycle:
+        """Itself: a motored cycle has no combustion to cut (``strokes`` must be 4)."""
+        return self
+
+    def scale_charge(self, sigma: ArrayLike) -> PressureSource:
+        """Raises :class:`rotor.EngineError`: only a Wiebe cycle scales its charge (``sigma`` [-])."""
+        raise _not_scalable(self)
 
 
 _SINGLE_ZONE_FIELDS = (

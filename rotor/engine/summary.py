@@ -1,27 +1,128 @@
-"""A one-screen summary of an engine at an operating speed."""
+"""A one-screen summary of an engine at an operating speed, and its curves over a cycle."""
 
 from __future__ import annotations
+
+import dataclasses
+from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
 
-from .forces import imep_pa, mean_gas_torque, total_torque
+from ..results import Result, json_safe
+from ..units import RAD_S_PER_RPM
+from .forces import gas_torque, imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
 from .kinematics import mean_piston_speed
+from .model import Engine
 
-__all__ = ["engine_summary", "format_summary"]
+__all__ = ["EngineSummary", "engine_summary", "EngineCurves", "engine_curves"]
 
 
-def engine_summary(engine, rpm=None) -> dict:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class EngineSummary(Result):
+    """Key figures of an engine at one speed (what ``rotor info`` prints), in SI units.
+
+    **Fields:** ``name``, ``strokes``, ``cylinders``; ``rpm`` [rev/min];
+    ``displacement_m3`` (all cylinders) [m³]; ``crank_radius_m`` [m]; ``rod_ratio`` λ = R/L
+    [-]; ``mean_piston_speed_m_s`` [m/s]; ``imep_pa`` [Pa]; ``mean_gas_torque_Nm`` [N·m];
+    ``indicated_power_w`` [W]; ``total_torque_min_Nm``, ``total_torque_max_Nm``: range of
+    the textbook total torque (gas + reciprocating inertia at constant speed) [N·m];
+    ``excess_work_J``: the largest swing of ∫(M − M_mean)dθ (seed 004 §3.2.12) [J];
+    ``inertia_mean_kgm2``, ``inertia_min_kgm2``, ``inertia_max_kgm2``: of the reduced
+    inertia I(θ) [kg·m²]; ``inertia_coefficients_kgm2``: cylinder 1's seed 003 A, B, C
+    [kg·m²]. **Curves** (not in the JSON): ``angle_deg`` [deg], ``total_torque_Nm`` [N·m]
+    and ``inertia_kgm2`` [kg·m²] over one cycle.
+    """
+
+    name: str
+    strokes: int
+    cylinders: int
+    rpm: float
+    displacement_m3: float
+    crank_radius_m: float
+    rod_ratio: float
+    mean_piston_speed_m_s: float
+    imep_pa: float
+    mean_gas_torque_Nm: float
+    indicated_power_w: float
+    total_torque_min_Nm: float
+    total_torque_max_Nm: float
+    excess_work_J: float
+    inertia_mean_kgm2: float
+    inertia_min_kgm2: float
+    inertia_max_kgm2: float
+    inertia_coefficients_kgm2: dict[str, float]
+    angle_deg: np.ndarray
+    total_torque_Nm: np.ndarray
+    inertia_kgm2: np.ndarray
+
+    def to_json_dict(self) -> dict:
+        """What ``rotor info --json`` prints: every figure, no curves."""
+        keys = [f.name for f in dataclasses.fields(self)][:-3]
+        return json_safe({k: getattr(self, k) for k in keys})
+
+    def summary(self) -> str:
+        """What ``rotor info`` prints: the figures as aligned text."""
+        rows = [
+            ("engine", f"{self.name} ({self.cylinders} cylinders, {self.strokes}-stroke)"),
+            ("speed", f"{self.rpm:g} rpm"),
+            ("displacement", f"{self.displacement_m3 * 1e3:.3f} L"),
+            ("crank radius R, lambda", f"{self.crank_radius_m * 1e3:.2f} mm, {self.rod_ratio:.4f}"),
+            ("mean piston speed", f"{self.mean_piston_speed_m_s:.2f} m/s"),
+            ("IMEP", f"{self.imep_pa / 1e6:.4f} MPa"),
+            ("mean gas torque", f"{self.mean_gas_torque_Nm:.1f} N*m"),
+            ("indicated power", f"{self.indicated_power_w / 1e3:.1f} kW"),
+            (
+                "total torque (gas + inertia)",
+                f"{self.total_torque_min_Nm:.0f} ... {self.total_torque_max_Nm:.0f} N*m",
+            ),
+            ("excess work (seed 004, 3.2.12)", f"{self.excess_work_J:.1f} J"),
+            (
+                "reduced inertia I(theta)",
+                f"mean {self.inertia_mean_kgm2:.4f}, {self.inertia_min_kgm2:.4f} ... "
+                f"{self.inertia_max_kgm2:.4f} kg*m^2",
+            ),
+            (
+                "seed 003 form, cylinder 1",
+                "A = {A:.5f}, B = {B:.5f}, C = {C:.5f} kg*m^2".format(**self.inertia_coefficients_kgm2),
+            ),
+        ]
+        w = max(len(k) for k, _ in rows)
+        return "\n".join(f"{k.ljust(w)}  {v}" for k, v in rows) + "\n"
+
+    def to_pandas(self) -> Any:
+        """The curves over one cycle: ``angle_deg``, ``total_torque_Nm``, ``inertia_kgm2``."""
+        import pandas as pd
+
+        return pd.DataFrame(
+            {"angle_deg": self.angle_deg, "total_torque_Nm": self.total_torque_Nm, "inertia_kgm2": self.inertia_kgm2}
+        )
+
+    def plot(self, ax: Any = None) -> Any:
+        """The textbook total torque over the cycle with its mean, on ``ax`` (or a new
+        figure); returns the Axes."""
+        from ..plotting.engine import plot_torque
+
+        return plot_torque(
+            self.angle_deg,
+            self.total_torque_Nm,
+            float(np.mean(self.total_torque_Nm)),
+            f"{self.name}: total torque at {self.rpm:g} rpm",
+            360.0 * self.strokes / 2,
+            ax=ax,
+        )
+
+
+def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
     """Key figures of an engine at ``rpm`` [rev/min] (default ``[operating] rpm``), in SI units.
 
-    **Returns:** a dict: displacement, crank radius, λ, mean piston speed, IMEP, mean
-    gas torque, indicated power, the range of the textbook total torque and its excess
-    work (the largest swing of ∫(M − M_mean)dθ, seed 004 §3.2.12), and the mean,
-    minimum and maximum of the reduced inertia I(θ).
+    **Returns:** an :class:`EngineSummary`: displacement, crank radius, λ, mean piston
+    speed, IMEP, mean gas torque, indicated power, the range of the textbook total torque
+    and its excess work (the largest swing of ∫(M − M_mean)dθ, seed 004 §3.2.12), and the
+    mean, minimum and maximum of the reduced inertia I(θ).
     """
     rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
-    omega = rpm * np.pi / 30
+    omega = rpm * RAD_S_PER_RPM
     g = engine.geometry
     theta = jnp.linspace(0.0, engine.cycle_rad, int(720 * engine.strokes / 2), endpoint=False)
     total = total_torque(engine, theta, omega)
@@ -29,49 +130,156 @@ def engine_summary(engine, rpm=None) -> dict:
     torque = float(mean_gas_torque(engine))
     A, B, C = inertia_coefficients(engine)
     work = np.cumsum(np.asarray(total) - float(jnp.mean(total))) * (engine.cycle_rad / theta.shape[0])
-    return {
-        "name": engine.name,
-        "strokes": engine.strokes,
-        "cylinders": engine.cylinders,
-        "rpm": rpm,
-        "displacement_m3": float(g.displacement_m3 * engine.cylinders),
-        "crank_radius_m": float(g.crank_radius_m),
-        "rod_ratio": float(g.rod_ratio),
-        "mean_piston_speed_m_s": float(mean_piston_speed(g.stroke_m, omega)),
-        "imep_pa": float(imep_pa(engine)),
-        "mean_gas_torque_Nm": torque,
-        "indicated_power_w": torque * omega,
-        "total_torque_min_Nm": float(jnp.min(total)),
-        "total_torque_max_Nm": float(jnp.max(total)),
-        "excess_work_J": float(work.max() - work.min()),
-        "inertia_mean_kgm2": float(mean_reduced_inertia(engine)),
-        "inertia_min_kgm2": float(jnp.min(inertia)),
-        "inertia_max_kgm2": float(jnp.max(inertia)),
-        "inertia_coefficients_kgm2": {"A": float(A[0]), "B": float(B[0]), "C": float(C[0])},
-    }
+    return EngineSummary(
+        name=engine.name,
+        strokes=engine.strokes,
+        cylinders=engine.cylinders,
+        rpm=rpm,
+        displacement_m3=float(g.displacement_m3 * engine.cylinders),
+        crank_radius_m=float(g.crank_radius_m),
+        rod_ratio=float(g.rod_ratio),
+        mean_piston_speed_m_s=float(mean_piston_speed(g.stroke_m, omega)),
+        imep_pa=float(imep_pa(engine)),
+        mean_gas_torque_Nm=torque,
+        indicated_power_w=torque * omega,
+        total_torque_min_Nm=float(jnp.min(total)),
+        total_torque_max_Nm=float(jnp.max(total)),
+        excess_work_J=float(work.max() - work.min()),
+        inertia_mean_kgm2=float(mean_reduced_inertia(engine)),
+        inertia_min_kgm2=float(jnp.min(inertia)),
+        inertia_max_kgm2=float(jnp.max(inertia)),
+        inertia_coefficients_kgm2={"A": float(A[0]), "B": float(B[0]), "C": float(C[0])},
+        angle_deg=np.rad2deg(np.asarray(theta)),
+        total_torque_Nm=np.asarray(total),
+        inertia_kgm2=np.asarray(inertia),
+    )
 
 
-def format_summary(s: dict) -> str:
-    """The summary as aligned text for a terminal."""
-    rows = [
-        ("engine", f"{s['name']} ({s['cylinders']} cylinders, {s['strokes']}-stroke)"),
-        ("speed", f"{s['rpm']:g} rpm"),
-        ("displacement", f"{s['displacement_m3'] * 1e3:.3f} L"),
-        ("crank radius R, lambda", f"{s['crank_radius_m'] * 1e3:.2f} mm, {s['rod_ratio']:.4f}"),
-        ("mean piston speed", f"{s['mean_piston_speed_m_s']:.2f} m/s"),
-        ("IMEP", f"{s['imep_pa'] / 1e6:.4f} MPa"),
-        ("mean gas torque", f"{s['mean_gas_torque_Nm']:.1f} N*m"),
-        ("indicated power", f"{s['indicated_power_w'] / 1e3:.1f} kW"),
-        ("total torque (gas + inertia)", f"{s['total_torque_min_Nm']:.0f} ... {s['total_torque_max_Nm']:.0f} N*m"),
-        ("excess work (seed 004, 3.2.12)", f"{s['excess_work_J']:.1f} J"),
-        (
-            "reduced inertia I(theta)",
-            f"mean {s['inertia_mean_kgm2']:.4f}, {s['inertia_min_kgm2']:.4f} ... {s['inertia_max_kgm2']:.4f} kg*m^2",
-        ),
-        (
-            "seed 003 form, cylinder 1",
-            "A = {A:.5f}, B = {B:.5f}, C = {C:.5f} kg*m^2".format(**s["inertia_coefficients_kgm2"]),
-        ),
-    ]
-    w = max(len(k) for k, _ in rows)
-    return "\n".join(f"{k.ljust(w)}  {v}" for k, v in rows) + "\n"
+_INERTIA_MODELS = ("exact", "coefficients", "mean")
+
+
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class EngineCurves(Result):
+    """Torque and reduced inertia of an engine over one cycle at a constant speed.
+
+    **Fields:** ``engine_name``; ``rpm`` [rev/min]; ``strokes``; ``angle_deg``: crank
+    angle of cylinder 1 over the cycle, ends included [deg]; ``gas_torque_Nm``,
+    ``inertia_torque_Nm`` (the reciprocating masses' textbook inertia torque) and
+    ``total_torque_Nm`` [N·m]; ``inertia_exact_kgm2``, ``inertia_coefficients_kgm2`` (the
+    seed 003 form) and ``inertia_mean_kgm2`` (its cycle mean) of I(θ) [kg·m²].
+    """
+
+    engine_name: str
+    rpm: float
+    strokes: int
+    angle_deg: np.ndarray
+    gas_torque_Nm: np.ndarray
+    inertia_torque_Nm: np.ndarray
+    total_torque_Nm: np.ndarray
+    inertia_exact_kgm2: np.ndarray
+    inertia_coefficients_kgm2: np.ndarray
+    inertia_mean_kgm2: np.ndarray
+
+    @property
+    def cycle_deg(self) -> float:
+        """Length of the cycle [deg]."""
+        return 360.0 * self.strokes / 2
+
+    @property
+    def mean_torque_Nm(self) -> float:
+        """Cycle mean of the total torque [N·m] (the end point, which repeats the start, left out)."""
+        return float(self.total_torque_Nm[:-1].mean())
+
+    def summary(self) -> str:
+        """Range and mean of the torques and of I(θ)."""
+        lines = [f"{self.engine_name}: torque and inertia over the {self.cycle_deg:g}° cycle at {self.rpm:g} rpm"]
+        for label, y, unit, fmt in (
+            ("gas torque", self.gas_torque_Nm, "N·m", ".1f"),
+            ("inertia torque", self.inertia_torque_Nm, "N·m", ".1f"),
+            ("total torque", self.total_torque_Nm, "N·m", ".1f"),
+            ("I(θ) exact", self.inertia_exact_kgm2, "kg·m²", ".5f"),
+            ("I(θ) seed 003", self.inertia_coefficients_kgm2, "kg·m²", ".5f"),
+        ):
+            y = np.asarray(y)[:-1]
+            lines.append(f"  {label:15s} mean {y.mean():{fmt}}, {y.min():{fmt}} … {y.max():{fmt}} {unit}")
+        return "\n".join(lines) + "\n"
+
+    def to_pandas(self) -> Any:
+        """One row per crank angle: the torques [N·m] and the three forms of I(θ) [kg·m²]."""
+        import pandas as pd
+
+        return pd.DataFrame(
+            {
+                "angle_deg": self.angle_deg,
+                "gas_torque_Nm": self.gas_torque_Nm,
+                "inertia_torque_Nm": self.inertia_torque_Nm,
+                "total_torque_Nm": self.total_torque_Nm,
+                "inertia_exact_kgm2": self.inertia_exact_kgm2,
+                "inertia_coefficients_kgm2": self.inertia_coefficients_kgm2,
+                "inertia_mean_kgm2": self.inertia_mean_kgm2,
+            }
+        )
+
+    def to_json_dict(self) -> dict:
+        """Engine, speed and every curve as lists."""
+        return json_safe(
+            {"engine": self.engine_name, "rpm": self.rpm, "strokes": self.strokes, **self.to_pandas().to_dict("list")}
+        )
+
+    def plot(self, ax: Any = None, which: str = "torque") -> Any:
+        """``which="torque"``: total torque (gas + reciprocating inertia), its parts and its
+        mean over the cycle; ``"inertia"``: I(θ) over a revolution, exact, the seed 003
+        form and the mean. On ``ax`` (or a new figure); returns the Axes."""
+        from ..plotting.engine import plot_inertia, plot_torque
+
+        if which == "torque":
+            return plot_torque(
+                self.angle_deg,
+                self.total_torque_Nm,
+                self.mean_torque_Nm,
+                f"{self.engine_name}: total torque at {self.rpm:g} rpm",
+                self.cycle_deg,
+                gas_Nm=self.gas_torque_Nm,
+                inertia_Nm=self.inertia_torque_Nm,
+                xlabel="crank angle of cylinder 1 [deg]",
+                ax=ax,
+            )
+        if which == "inertia":
+            rev = self.angle_deg <= 360.0 + 1e-9
+            curves = {
+                "exact": self.inertia_exact_kgm2[rev],
+                "coefficients": self.inertia_coefficients_kgm2[rev],
+                "mean": self.inertia_mean_kgm2[rev],
+            }
+            return plot_inertia(self.angle_deg[rev], curves, f"{self.engine_name}: reduced moment of inertia", ax=ax)
+        raise ValueError(f"which = {which!r}: 'torque' or 'inertia'")
+
+
+def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int = 2) -> EngineCurves:
+    """Torque (gas, reciprocating inertia, total) and the reduced inertia I(θ) (exact, seed
+    003 form, mean) over one cycle at constant speed: what ``rotor plot`` draws.
+
+    **Arguments:** ``engine``: a :class:`rotor.Engine`; ``rpm``: crank speed [rev/min]
+    (default ``[operating] rpm``); ``points_per_deg``: samples per degree [1/deg].
+    """
+    rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
+    if not (np.isfinite(rpm) and rpm > 0):
+        raise ValueError(f"rpm must be a positive number, got {rpm!r}")
+    cycle_deg = 360 * engine.strokes / 2
+    deg = np.linspace(0, cycle_deg, int(cycle_deg * points_per_deg) + 1)
+    theta = jnp.deg2rad(deg)
+    gas = np.asarray(gas_torque(engine, theta))
+    total = np.asarray(total_torque(engine, theta, rpm * RAD_S_PER_RPM))
+    inertia = {m: np.asarray(reduced_inertia(engine, theta, m)) for m in _INERTIA_MODELS}
+    return EngineCurves(
+        engine_name=engine.name,
+        rpm=rpm,
+        strokes=engine.strokes,
+        angle_deg=deg,
+        gas_torque_Nm=gas,
+        inertia_torque_Nm=total - gas,
+        total_torque_Nm=total,
+        inertia_exact_kgm2=inertia["exact"],
+        inertia_coefficients_kgm2=inertia["coefficients"],
+        inertia_mean_kgm2=inertia["mean"],
+    )

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
 
+from ..results import Result, json_safe
+from ..units import RAD_S_PER_RPM
 from .forces import crank_forces, table_angles_deg
+from .model import Engine
 
 __all__ = ["CrankTable", "crank_table", "TABLE_COLUMNS"]
 
@@ -31,27 +35,48 @@ _TEXT = (
 )
 
 
-@dataclass(frozen=True)
-class CrankTable:
+@dataclass(frozen=True, eq=False, repr=False)
+class CrankTable(Result):
     """Kinematics and forces of one cylinder over a cycle at constant speed.
 
     **Attributes:** ``columns``: dict of numpy arrays named as :data:`TABLE_COLUMNS`
-    (SI units: m, m/s, m/s², N, N·m; angle in degrees); ``engine_name``, ``rpm``,
-    ``kinematics`` (``"series"`` or ``"exact"``), ``cylinder``.
+    (SI units: m, m/s, m/s², N, N·m; angle in degrees); ``engine_name``, ``rpm``
+    [rev/min], ``kinematics`` (``"series"`` or ``"exact"``), ``cylinder``; the inputs of
+    the table's header: ``crank_radius_m`` [m], ``rod_ratio`` λ = R/L [-],
+    ``reciprocating_kg`` [kg], ``piston_area_m2`` [m²], ``crankcase_pa`` [Pa].
     """
 
-    columns: dict
+    columns: dict[str, np.ndarray]
     engine_name: str
     rpm: float
     kinematics: str
-    cylinder: int = 1
-    meta: dict = field(default_factory=dict)
+    cylinder: int
+    crank_radius_m: float
+    rod_ratio: float
+    reciprocating_kg: float
+    piston_area_m2: float
+    crankcase_pa: float
 
-    def __getitem__(self, key):
+    def __getitem__(self, key: str) -> np.ndarray:
         return self.columns[key]
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.columns["angle_deg"])
+
+    def _title(self) -> str:
+        return (
+            f"{self.engine_name}: cylinder {self.cylinder} at {self.rpm:g} rpm, "
+            f"{self.kinematics} kinematics (seed 004 uses the lambda series)"
+        )
+
+    def _header(self) -> list[str]:
+        return [
+            f"  R [m]: {self.crank_radius_m:.4f}",
+            f"  lambda = R/L: {self.rod_ratio:.4f}",
+            f"  reciprocating mass [kg]: {self.reciprocating_kg:.4f}",
+            f"  piston area [m2]: {self.piston_area_m2:.5f}",
+            f"  crankcase pressure [MPa]: {self.crankcase_pa / 1e6:.4f}",
+        ]
 
     def to_csv(self) -> str:
         """CSV text with the header ``angle_deg,s_m,…,m_Nm`` (SI units)."""
@@ -64,12 +89,7 @@ class CrankTable:
 
     def to_text(self) -> str:
         """A fixed-width table as in seed 004 (forces in kN), with a header of the inputs."""
-        lines = [
-            f"{self.engine_name}: cylinder {self.cylinder} at {self.rpm:g} rpm, "
-            f"{self.kinematics} kinematics (seed 004 uses the lambda series)",
-        ]
-        for k, v in self.meta.items():
-            lines.append(f"  {k}: {v}")
+        lines = [self._title(), *self._header()]
         widths = [max(len(h), len(u) + 2, 9 if d < 3 else 10) for _, h, u, _, d in _TEXT]
         lines.append(" ".join(h.rjust(w) for (_, h, _, _, _), w in zip(_TEXT, widths)))
         lines.append(" ".join(f"[{u}]".rjust(w) for (_, _, u, _, _), w in zip(_TEXT, widths)))
@@ -81,23 +101,58 @@ class CrankTable:
             lines.append(" ".join(cells))
         return "\n".join(lines) + "\n"
 
-    def to_pandas(self):
-        """The columns as a ``pandas.DataFrame`` (pandas must be installed)."""
+    def summary(self) -> str:
+        """The header of the table and the extreme value of every column over the cycle."""
+        lines = [self._title(), *self._header(), f"  {len(self)} rows; over the cycle:"]
+        for col, head, unit, scale, dec in _TEXT[1:]:
+            y = np.asarray(self.columns[col]) * scale
+            i_lo, i_hi = int(np.argmin(y)), int(np.argmax(y))
+            a = self.columns["angle_deg"]
+            lines.append(
+                f"  {head:>4} [{unit}]".ljust(14)
+                + f"min {y[i_lo]:12.{dec}f} at {a[i_lo]:5.1f}°,  max {y[i_hi]:12.{dec}f} at {a[i_hi]:5.1f}°"
+            )
+        return "\n".join(lines) + "\n"
+
+    def to_pandas(self) -> Any:
+        """The columns as a ``pandas.DataFrame``, one row per angle (SI units in the names)."""
         import pandas as pd
 
         return pd.DataFrame({c: self.columns[c] for c in TABLE_COLUMNS})
 
-    def plot(self, which: str = "forces", ax=None):
-        """Plot ``"kinematics"`` (S, V, J), ``"forces"`` (Pg, Pj, PΣ, N, K, Z, T) or ``"torque"`` (M).
+    def to_json_dict(self) -> dict:
+        """Engine, cylinder, speed [rpm], kinematics, the header's inputs and every column as a list."""
+        return json_safe(
+            {
+                "engine": self.engine_name,
+                "cylinder": self.cylinder,
+                "rpm": self.rpm,
+                "kinematics": self.kinematics,
+                "crank_radius_m": self.crank_radius_m,
+                "rod_ratio": self.rod_ratio,
+                "reciprocating_kg": self.reciprocating_kg,
+                "piston_area_m2": self.piston_area_m2,
+                "crankcase_pa": self.crankcase_pa,
+                "columns": {c: self.columns[c] for c in TABLE_COLUMNS},
+            }
+        )
+
+    def plot(self, ax: Any = None, which: str = "forces") -> Any:
+        """Plot ``which``: ``"kinematics"`` (S, V, J), ``"forces"`` (Pg, Pj, PΣ, N, K, Z, T)
+        or ``"torque"`` (M), on ``ax`` (three Axes for kinematics) or a new figure.
 
         **Returns:** the matplotlib Axes (or array of Axes for kinematics).
         """
-        from ..plotting import plot_table
+        from ..plotting.engine import plot_table
 
+        if isinstance(ax, str):
+            raise TypeError(f"CrankTable.plot(ax=None, which=...): give the plot as which={ax!r}")
         return plot_table(self, which, ax=ax)
 
 
-def crank_table(engine, rpm=None, step_deg: float = 10.0, kinematics: str = "series", cylinder: int = 1) -> CrankTable:
+def crank_table(
+    engine: Engine, rpm: float | None = None, step_deg: float = 10.0, kinematics: str = "series", cylinder: int = 1
+) -> CrankTable:
     """Seed 004's kinematic and dynamic table of one cylinder over a cycle.
 
     **Arguments:**
@@ -114,7 +169,7 @@ def crank_table(engine, rpm=None, step_deg: float = 10.0, kinematics: str = "ser
     if not (np.isfinite(rpm) and rpm > 0):
         raise ValueError(f"rpm must be a positive number, got {rpm!r}")
     angles = table_angles_deg(engine, step_deg)
-    omega = rpm * np.pi / 30
+    omega = rpm * RAD_S_PER_RPM
     # the table is for the cylinder's own cycle angle: shift by its firing angle
     i = cylinder - 1
     if not 1 <= cylinder <= engine.cylinders:
@@ -125,11 +180,15 @@ def crank_table(engine, rpm=None, step_deg: float = 10.0, kinematics: str = "ser
     cols = {"angle_deg": angles, **cols}
     g = engine.geometry
     m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
-    meta = {
-        "R [m]": f"{float(g.crank_radius_m):.4f}",
-        "lambda = R/L": f"{float(g.rod_ratio):.4f}",
-        "reciprocating mass [kg]": f"{float(m_rec):.4f}",
-        "piston area [m2]": f"{float(g.piston_area_m2):.5f}",
-        "crankcase pressure [MPa]": f"{float(engine.pressure.crankcase_pa) / 1e6:.4f}",
-    }
-    return CrankTable(cols, engine.name, rpm, kinematics, cylinder, meta)
+    return CrankTable(
+        cols,
+        engine.name,
+        rpm,
+        kinematics,
+        cylinder,
+        crank_radius_m=float(g.crank_radius_m),
+        rod_ratio=float(g.rod_ratio),
+        reciprocating_kg=float(m_rec),
+        piston_area_m2=float(g.piston_area_m2),
+        crankcase_pa=float(engine.pressure.crankcase_pa),
+    )

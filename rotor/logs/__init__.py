@@ -5,6 +5,7 @@ Holds the log readers (:mod:`.reader`), edge finding in sampled wheel signals
 (:mod:`.wheel`) and the logged-speed analysis: per-cycle speed, δ and orders
 (:mod:`.analysis`).
 
-May import: :mod:`rotor.engine` (the engine's inertia ripple) and the ground floor.
-Never :mod:`rotor.dynamics` or :mod:`rotor.diagnostics`.
+May import: :mod:`rotor.engine` (the engine's inertia ripple), :mod:`rotor.plotting` (to
+draw its results) and the ground floor. Never :mod:`rotor.dynamics` or
+:mod:`rotor.diagnostics`.
 """

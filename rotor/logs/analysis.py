@@ -28,22 +28,29 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..errors import LogError
+from ..results import Result, json_safe
+from ..units import RPM_PER_RAD_S
 from .edges import Edges, find_edges
 from .reader import Log, read_log
-from .wheel import ToothErrors, ToothTrack, estimate_tooth_errors, locate_teeth, parse_wheel
+from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, locate_teeth, parse_wheel
+
+if TYPE_CHECKING:
+    from ..engine.model import Engine
 
 __all__ = ["LogAnalysis", "analyze_log", "tdc_from_pressure"]
 
 TWO_PI = 2.0 * np.pi
-RPM_PER_RAD_S = 30.0 / np.pi
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class LogAnalysis:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class LogAnalysis(Result):
     """Per-cycle speed, δ and orders of a logged recording (see :func:`analyze_log`).
 
     **Per cycle** (arrays with one row per complete cycle): ``t_start_s`` [s],
@@ -93,6 +100,7 @@ class LogAnalysis:
     # ------------------------------------------------------------------ numbers
     @property
     def cycles(self) -> int:
+        """Complete cycles analysed."""
         return int(self.mean_omega.size)
 
     @property
@@ -102,6 +110,7 @@ class LogAnalysis:
 
     @property
     def points_per_cycle(self) -> int:
+        """Samples of the uniform cycle-angle grid per cycle."""
         return int(self.omega.shape[1])
 
     @property
@@ -149,7 +158,9 @@ class LogAnalysis:
 
     # ------------------------------------------------------------------ people
     def to_json_dict(self, max_order: float | None = None) -> dict:
-        """Plain numbers for JSON: the cycles, the wheel as found, the correction applied."""
+        """Plain numbers for JSON (what ``rotor analyze --json`` prints): the cycles, the wheel
+        as found, the correction applied; orders up to ``max_order`` (default the analysis's)
+        [per revolution]. ``None`` where a number is undefined."""
         keep = self.order <= (self.max_order if max_order is None else max_order) + 1e-9
         cycles = [
             {
@@ -168,7 +179,7 @@ class LogAnalysis:
         wheel = self.track.to_json_dict() if self.track is not None else None
         if wheel is not None and self.edges is not None:
             wheel["encoder"] = self.edges.to_json_dict()
-        return _finite_json(
+        return json_safe(
             {
                 "source": self.source,
                 "kind": self.kind,
@@ -225,23 +236,32 @@ class LogAnalysis:
             lines.append(f"  note: {n}")
         return "\n".join(lines) + "\n"
 
-    def plot(self, axes=None):
+    def to_pandas(self) -> Any:
+        """Tidy: one row per cycle and order: ``cycle``, ``t_start_s``, ``mean_rpm``,
+        ``delta`` [-], ``order`` [per revolution], ``amplitude_rad_s``, ``phase_rad``."""
+        import pandas as pd
+
+        C, K = self.amplitude_rad_s.shape
+        cyc = np.repeat(np.arange(C), K)
+        return pd.DataFrame(
+            {
+                "cycle": cyc,
+                "t_start_s": np.asarray(self.t_start_s, dtype=np.float64)[cyc],
+                "mean_rpm": np.asarray(self.mean_rpm, dtype=np.float64)[cyc],
+                "delta": np.asarray(self.delta, dtype=np.float64)[cyc],
+                "order": np.tile(np.asarray(self.order, dtype=np.float64), C),
+                "amplitude_rad_s": np.asarray(self.amplitude_rad_s, dtype=np.float64).reshape(-1),
+                "phase_rad": np.asarray(self.phase_rad, dtype=np.float64).reshape(-1),
+            }
+        )
+
+    def plot(self, ax: Any = None) -> Any:
         """The combined plot (speed over the cycle, per-cycle mean speed and δ, order
-        spectrum, pressure if logged); see :func:`rotor.plotting.plot_log_analysis`."""
-        from ..plotting import plot_log_analysis
+        spectrum, pressure if logged) on ``ax`` (a 2×2 array of Axes, or None for a new
+        figure); see :func:`rotor.plotting.plot_log_analysis`. Returns the Axes."""
+        from ..plotting.logs import plot_log_analysis
 
-        return plot_log_analysis(self, axes=axes)
-
-
-def _finite_json(x):
-    """``x`` with every float that is not finite (NaN, ±inf) replaced by None (JSON null)."""
-    if isinstance(x, dict):
-        return {k: _finite_json(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_finite_json(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if np.isfinite(x) else None
-    return x
+        return plot_log_analysis(self, ax=ax)
 
 
 # ---------------------------------------------------------------------- alignment
@@ -253,7 +273,12 @@ def _volume_ratio(x, compression_ratio, rod_ratio):
 
 
 def tdc_from_pressure(
-    phi, p, *, compression_ratio: float | None = None, rod_ratio: float | None = None, window_deg=(-90.0, -10.0)
+    phi: ArrayLike,
+    p: ArrayLike,
+    *,
+    compression_ratio: float | None = None,
+    rod_ratio: float | None = None,
+    window_deg: tuple[float, float] = (-90.0, -10.0),
 ) -> tuple[float, int, str]:
     """TDC of the compression from a pressure signal sampled at wheel angles.
 
@@ -421,23 +446,23 @@ def _firing_run_note(te, cylinders, strokes, max_order, teeth):
 
 # ---------------------------------------------------------------------- analysis
 def analyze_log(
-    source,
-    wheel=None,
+    source: str | os.PathLike | Log,
+    wheel: str | Wheel | None = None,
     *,
-    columns=None,
+    columns: str | Sequence[str] | None = None,
     strokes: int = 4,
     cylinders: int = 1,
     tdc_deg: float | None = None,
-    firing="auto",
-    tooth_errors="estimate",
-    engine_orders="auto",
+    firing: str | int = "auto",
+    tooth_errors: str | os.PathLike | ToothErrors | None = "estimate",
+    engine_orders: str | Sequence[int] = "auto",
     max_order: float | None = None,
     points_per_cycle: int | None = None,
     edge: str = "rising",
     compression_ratio: float | None = None,
     rod_ratio: float | None = None,
     denoise: bool = True,
-    engine=None,
+    engine: Engine | None = None,
 ) -> LogAnalysis:
     """Per-cycle mean speed, δ and order spectrum of a logged recording.
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..errors import LogError
 
@@ -46,6 +47,7 @@ class Edges:
     inverted: bool
 
     def to_json_dict(self) -> dict:
+        """Plain JSON: the edge count, the levels and thresholds [V], glitches removed, the edge."""
         return {
             "edges": int(self.times.size),
             "low_v": float(self.low_v),
@@ -57,7 +59,7 @@ class Edges:
         }
 
 
-def signal_levels(v, name: str = "encoder_v") -> tuple[float, float]:
+def signal_levels(v: ArrayLike, name: str = "encoder_v") -> tuple[float, float]:
     """(low, high) levels [V] of a two-level pulse signal, from its own statistics.
 
     Raises :class:`LogError` if the signal has no two distinct levels.
@@ -92,7 +94,14 @@ def _runs(s):
 
 
 def find_edges(
-    t, v, *, edge: str = "rising", band=(0.2, 0.45), level: float = 0.32, glitch: float = 0.2, name: str = "encoder_v"
+    t: ArrayLike,
+    v: ArrayLike,
+    *,
+    edge: str = "rising",
+    band: tuple[float, float] = (0.2, 0.45),
+    level: float = 0.32,
+    glitch: float = 0.2,
+    name: str = "encoder_v",
 ) -> Edges:
     """Times [s] of the tooth edges of a sampled wheel signal.
 

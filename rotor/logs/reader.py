@@ -26,8 +26,10 @@ from __future__ import annotations
 import dataclasses
 import io
 import os
+from collections.abc import Sequence
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..errors import LogError
 
@@ -45,7 +47,7 @@ COLUMN_NAMES = {
 }
 
 
-def parse_columns(spec) -> tuple[str, ...]:
+def parse_columns(spec: str | Sequence[str]) -> tuple[str, ...]:
     """The column names of a spec such as ``"time,encoder_v,pressure_v"`` (or a list).
 
     Raises :class:`LogError` naming an unknown or repeated name.
@@ -86,7 +88,7 @@ class Log:
         _check(self)
 
     @classmethod
-    def from_arrays(cls, **columns) -> Log:
+    def from_arrays(cls, **columns: ArrayLike) -> Log:
         """A log from arrays, e.g. ``Log.from_arrays(time=t, encoder_v=v)`` or
         ``Log.from_arrays(tooth_time_s=edges)``; the names are those of :data:`COLUMN_NAMES`."""
         parse_columns(list(columns))
@@ -204,7 +206,9 @@ def _data_lines(text: str):
             yield n, s
 
 
-def read_log(path, columns=None, *, delimiter: str | None = None) -> Log:
+def read_log(
+    path: str | os.PathLike, columns: str | Sequence[str] | None = None, *, delimiter: str | None = None
+) -> Log:
     """Read a CSV/TSV/blank-separated log.
 
     **Arguments:**

@@ -33,14 +33,22 @@ all orders (``engine_orders=()``), and is saved as JSON for other recordings.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 import re
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ..errors import LogError
+from ..fileio import load_json, save_json
+from ..results import Result
+from ..units import RPM_PER_RAD_S
+
+if TYPE_CHECKING:
+    from ..engine.model import Engine
 
 __all__ = [
     "Wheel",
@@ -89,7 +97,7 @@ class Wheel:
         return self.missing == 0
 
 
-def parse_wheel(spec) -> Wheel:
+def parse_wheel(spec: str | int | Wheel) -> Wheel:
     """A :class:`Wheel` from ``"60-2"``, ``"36-1"``, ``"36-2"`` (N−M) or ``"60"`` (with an index)."""
     if isinstance(spec, Wheel):
         return spec
@@ -128,6 +136,7 @@ class ToothTrack:
         return int(np.count_nonzero(self.tooth == 0)) - 1
 
     def to_json_dict(self) -> dict:
+        """Plain JSON: the wheel as found (teeth, edges, revolutions, the gap's period ratios)."""
         return {
             "spec": self.wheel.spec,
             "teeth_per_rev": self.wheel.teeth,
@@ -155,7 +164,7 @@ def _ratios(dt):
     return r
 
 
-def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
+def locate_teeth(times: ArrayLike, wheel: str | Wheel, *, index_times: ArrayLike | None = None) -> ToothTrack:
     """Place each tooth edge on the wheel: find the gaps (or use the index) and count.
 
     **Arguments:** ``times``: tooth edge times [s], increasing; ``wheel``: a
@@ -242,8 +251,8 @@ def locate_teeth(times, wheel, *, index_times=None) -> ToothTrack:
     return ToothTrack(t, np.mod(k, E), np.floor_divide(k, E), wheel, gap_ratio, tooth_max)
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class ToothErrors:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class ToothErrors(Result):
     """Angle errors of a wheel's teeth: tooth ``j`` sits at ``j·pitch + errors_rad[j]``.
 
     The errors have zero mean (the angle origin is the best-fit tooth grid).
@@ -295,6 +304,8 @@ class ToothErrors:
         return track.nominal_angle + self.errors_rad[track.tooth]
 
     def to_json_dict(self) -> dict:
+        """Plain JSON: the wheel, how the errors were found, their rms and largest [deg], each
+        tooth's error [rad] (and standard error, if known); what :meth:`save` writes."""
         d = {
             "wheel": self.wheel,
             "method": self.method,
@@ -311,28 +322,55 @@ class ToothErrors:
             d["order_rms_rad"] = float(self.order_rms_rad)
         return d
 
-    def save(self, path) -> None:
-        """Write as JSON (whole or not at all), to reuse on other recordings of the same wheel."""
-        from ..fileio import write_text_atomic
+    def summary(self) -> str:
+        """A few lines: the wheel, the method, the rms and largest error and the orders left
+        to the engine."""
+        lines = [
+            f"tooth errors of a {self.wheel} wheel ({self.method}"
+            + (f", {self.revolutions} revolutions" if self.revolutions else "")
+            + (f", from {self.source}" if self.source else "")
+            + ")",
+            f"  rms {np.rad2deg(self.rms_rad):.4f}°, largest {np.max(np.abs(self.errors_deg)):.4f}° "
+            f"(tooth {int(np.argmax(np.abs(self.errors_rad)))}, 0 = the first after the gap)",
+        ]
+        if self.engine_orders:
+            lines.append(f"  orders left to the engine: {', '.join(f'{k:g}' for k in self.engine_orders)}")
+        if self.order_rms_rad is not None:
+            lines.append(f"  the wheel's likely error per order there: {np.rad2deg(self.order_rms_rad):.4f}° rms")
+        return "\n".join(lines) + "\n"
 
-        path = os.fspath(path)
-        folder = os.path.dirname(os.path.abspath(path))
-        if not os.path.isdir(folder):
-            raise LogError(f"{path}: cannot write the tooth errors: no folder {folder}")
-        try:
-            write_text_atomic(path, json.dumps(self.to_json_dict(), indent=1, allow_nan=False) + "\n")
-        except OSError as e:
-            raise LogError(f"{path}: cannot write the tooth errors: {e.strerror or e}") from None
+    def to_pandas(self) -> Any:
+        """One row per tooth (0 = the first edge after the gap): ``tooth``, ``error_deg``,
+        ``error_rad`` and, if known, ``standard_error_rad``."""
+        import pandas as pd
+
+        d = {
+            "tooth": np.arange(self.errors_rad.size),
+            "error_deg": self.errors_deg,
+            "error_rad": self.errors_rad,
+        }
+        if self.standard_error_rad is not None:
+            d["standard_error_rad"] = np.asarray(self.standard_error_rad, dtype=np.float64)
+        return pd.DataFrame(d)
+
+    def plot(self, ax: Any = None) -> Any:
+        """Each tooth's error [deg] as a bar (:func:`rotor.plotting.logs.plot_tooth_errors`);
+        returns the Axes."""
+        from ..plotting.logs import plot_tooth_errors
+
+        return plot_tooth_errors(self.errors_deg, self.method, ax=ax)
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write as JSON (whole or not at all) to ``path``, to reuse on other recordings of
+        the same wheel."""
+        save_json(path, self.to_json_dict(), what="the tooth errors", error=LogError)
 
     @classmethod
-    def load(cls, path) -> ToothErrors:
-        """Read a file written by :meth:`save`."""
+    def load(cls, path: str | os.PathLike) -> ToothErrors:
+        """Read a file written by :meth:`save` from ``path``; a malformed file raises
+        :class:`rotor.LogError` naming the file and the key."""
         path = os.fspath(path)
-        try:
-            with open(path, encoding="utf-8") as f:
-                d = json.load(f)
-        except json.JSONDecodeError as e:
-            raise LogError(f"{path}: not a tooth-error file (JSON: {e})") from None
+        d = load_json(path, what="a tooth-error file", error=LogError)
         if not isinstance(d, dict) or "wheel" not in d or "errors_rad" not in d:
             raise LogError(f"{path}: not a tooth-error file (needs 'wheel' and 'errors_rad')")
 
@@ -382,7 +420,10 @@ class ToothErrors:
             raise LogError(f"{path}: {e}") from None
 
 
-def _order_fit_matrix(phi, orders):
+def order_fit_matrix(phi: ArrayLike, orders: Sequence[float]) -> np.ndarray:
+    """The least-squares design matrix of a constant and a cosine and sine of each order
+    at the angles ``phi`` [rad]: (len(phi), 1 + 2·len(orders))."""
+    phi = np.asarray(phi, dtype=np.float64)
     cols = [np.ones_like(phi)]
     for k in orders:
         cols += [np.cos(k * phi), np.sin(k * phi)]
@@ -434,12 +475,12 @@ def _inertia_ripple(wheel, engine, tdc_deg):
 def estimate_tooth_errors(
     track: ToothTrack,
     *,
-    engine_orders="auto",
+    engine_orders: str | Sequence[int] = "auto",
     strokes: int = 4,
     cylinders: int = 1,
     coastdown_ratio: float = 1.5,
     source: str = "",
-    engine=None,
+    engine: Engine | None = None,
     tdc_deg: float | None = None,
 ) -> ToothErrors:
     """Tooth-spacing errors of the wheel, from the log itself.
@@ -499,12 +540,14 @@ def estimate_tooth_errors(
         a = coef[0]  # the speed-independent part: (ω̄/ω)² → 0 leaves no torque-driven fluctuation
         resid = d - X @ coef
         se = np.sqrt(np.sum(resid**2, axis=0) / max(R - 2, 1) / R)
-        method = f"coast-down regression on (ω̄/ω)², {omega.min() * 30 / np.pi:.0f}–{omega.max() * 30 / np.pi:.0f} rpm"
+        method = (
+            f"coast-down regression on (ω̄/ω)², {omega.min() * RPM_PER_RAD_S:.0f}–{omega.max() * RPM_PER_RAD_S:.0f} rpm"
+        )
     else:
         a = d.mean(axis=0)
         se = d.std(axis=0, ddof=1) / np.sqrt(R) if R > 1 else np.zeros(E)
     if engine is not None:
-        method += f", {engine.name}'s inertia ripple removed (TDC {float(tdc_deg):g}° after the gap)"
+        method += f", {engine.name}'s inertia ripple removed (TDC {tdc_deg:g}° after the gap)"
     a = a - a.mean()
     # single teeth far off the rest (e.g. the edges that border the gap) are the wheel's;
     # they are left out of the order analysis, so their broad spectrum does not mask the engine's
@@ -536,7 +579,7 @@ def estimate_tooth_errors(
         keep = tuple(int(k) for k in engine_orders)
         if any(k < 1 or k >= w.teeth // 2 for k in keep):
             raise LogError(f"engine_orders = {engine_orders!r}: whole orders from 1 to {w.teeth // 2 - 1}")
-    X = _order_fit_matrix(phi, keep)
+    X = order_fit_matrix(phi, keep)
     beta, *_ = np.linalg.lstsq(X[clean], a[clean], rcond=None)
     e = a - X @ beta
     # the wheel's errors per order at the orders estimated (flat for independent tooth errors): what the

@@ -1,74 +1,166 @@
-"""The plot of an identification: speed fit, cylinder torques, IMEP and misfires."""
+"""The plots of the diagnostics room: an identification (speed fit, cylinder torques, IMEP
+and misfires) and a calibration (measured against identified IMEP per cycle)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-__all__ = ["plot_identification"]
+from ..units import PA_PER_BAR, RPM_PER_RAD_S
+
+__all__ = ["plot_calibration", "plot_identification", "plot_indicated_torque", "plot_torque_orders"]
 
 
-def plot_identification(ident, engine=None, axes=None):
-    """The plot of a :class:`rotor.Identification`: the speed over the record (measured and
-    the model's), the identified gas torque of each cylinder (needs ``engine``, the one
-    identified: ``ident.info["engine"]`` after :func:`rotor.diagnose`; without it the
-    panel shows the per-cycle load torque), and each cylinder's IMEP per cycle with the
-    misfires marked.
+def plot_identification(
+    *,
+    omega: Any,
+    omega_model: Any,
+    cylinder_torques: Any,
+    imep_pa: Any,
+    imep_std_pa: Any,
+    misfire: Any,
+    title: str,
+    ax: Any = None,
+) -> Any:
+    """The plot of a :class:`rotor.Identification`, from what it hands over: the speed over
+    the record, measured ``omega`` and the model's ``omega_model`` ((cycles, P) [rad/s]); the
+    identified gas torque of each cylinder ``cylinder_torques`` ((cycles, P, cylinders)
+    [N·m]); each cylinder's IMEP per cycle ``imep_pa`` ± ``imep_std_pa`` ((cycles, cylinders)
+    [Pa]) with the ``misfire`` flags ((cycles, cylinders) bool) marked. ``title``: of the
+    speed panel. ``ax``: three Axes, or None for a new figure.
 
     **Returns:** the array of three Axes.
     """
+    axes = ax
     if axes is None:
         import matplotlib.pyplot as plt
 
         fig, axes = plt.subplots(3, 1, figsize=(11, 9), layout="constrained")
     axes = np.asarray(axes).ravel()
     ax_w, ax_m, ax_i = axes[:3]
-    C, P = ident.omega.shape
+    omega, omega_model = np.asarray(omega), np.asarray(omega_model)
+    imep_pa, imep_std_pa, misfire = np.asarray(imep_pa), np.asarray(imep_std_pa), np.asarray(misfire)
+    C, P = omega.shape
+    cylinders = imep_pa.shape[1]
     x = np.arange(C * P) / P  # record angle in cycles
-    rpm = 30.0 / np.pi
-    ax_w.plot(x, ident.omega.reshape(-1) * rpm, lw=0.8, color="C0", label="measured")
-    ax_w.plot(x, ident.omega_model.reshape(-1) * rpm, lw=0.8, color="C1", ls="--", label="model (identified)")
+    ax_w.plot(x, omega.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C0", label="measured")
+    ax_w.plot(x, omega_model.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C1", ls="--", label="model (identified)")
     ax_w.set_ylabel("speed [rpm]")
     ax_w.set_xlabel("cycle (from the record's first cycle start)")
     ax_w.set_xlim(0, C)
     ax_w.grid(True, alpha=0.3)
     ax_w.legend(fontsize=8)
-    ax_w.set_title(f"{ident.engine_name}: speed; rms residual {ident.rms_residual:.3g} rad/s, R² {ident.fit_r2:.4f}")
-    if engine is None:
-        engine = ident.info.get("engine") if isinstance(ident.info, dict) else None
-    if engine is not None:
-        from ..diagnostics.calibration import cylinder_torques
-
-        m = cylinder_torques(engine, ident)
-        for c in range(m.shape[2]):
-            ax_m.plot(x, m[:, :, c].reshape(-1), lw=0.8, label=f"cylinder {c + 1}")
-        ax_m.set_ylabel("gas torque [N·m]")
-        ax_m.set_title("identified gas torque per cylinder (motored + scale × combustion)")
-        if m.shape[2] <= 8:
-            ax_m.legend(fontsize=8, ncol=min(4, m.shape[2]))
-    else:
-        ax_m.plot(np.arange(C) + 0.5, ident.load_torque_Nm, "o-", ms=3)
-        ax_m.set_ylabel("load torque [N·m]")
-        ax_m.set_title("identified load torque per cycle (give engine= for the cylinders' torque)")
+    ax_w.set_title(title)
+    m = np.asarray(cylinder_torques)
+    for c in range(m.shape[2]):
+        ax_m.plot(x, m[:, :, c].reshape(-1), lw=0.8, label=f"cylinder {c + 1}")
+    ax_m.set_ylabel("gas torque [N·m]")
+    ax_m.set_title("identified gas torque per cylinder (motored + scale × combustion)")
+    if m.shape[2] <= 8:
+        ax_m.legend(fontsize=8, ncol=min(4, m.shape[2]))
     ax_m.set_xlim(0, C)
     ax_m.grid(True, alpha=0.3)
     k = np.arange(C)
-    for c in range(ident.cylinders):
+    for c in range(cylinders):
         ax_i.errorbar(
-            k + 0.08 * (c - (ident.cylinders - 1) / 2),
-            ident.imep_pa[:, c] / 1e5,
-            yerr=ident.imep_std_pa[:, c] / 1e5,
+            k + 0.08 * (c - (cylinders - 1) / 2),
+            imep_pa[:, c] / PA_PER_BAR,
+            yerr=imep_std_pa[:, c] / PA_PER_BAR,
             fmt="o-",
             ms=3,
             lw=0.8,
             capsize=2,
             label=f"cylinder {c + 1}",
         )
-    mk, mc = np.nonzero(ident.misfire)
+    mk, mc = np.nonzero(misfire)
     if mk.size:
-        ax_i.plot(mk, ident.imep_pa[mk, mc] / 1e5, "x", color="red", ms=10, mew=2, label="misfire")
+        ax_i.plot(mk, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
     ax_i.set_xlabel("cycle")
     ax_i.set_ylabel("IMEP [bar]")
     ax_i.grid(True, alpha=0.3)
     ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
-    ax_i.legend(fontsize=8, ncol=min(5, ident.cylinders + 1))
+    ax_i.legend(fontsize=8, ncol=min(5, cylinders + 1))
     return axes
+
+
+def plot_calibration(
+    *,
+    imep_measured_pa: Any,
+    loss_torque_Nm: Any,
+    imep_file_pa: float | None,
+    title: str,
+    ax: Any = None,
+) -> Any:
+    """The plot of a :class:`rotor.Calibration`: the calibration recording's IMEP of each
+    cycle from its pressure channel ``imep_measured_pa`` ((cycles,) [Pa], with the engine
+    file's ``imep_file_pa`` [Pa] as a line when known), and the loss torque (friction plus
+    load) fitted per cycle ``loss_torque_Nm`` ((cycles,) [N·m]). ``ax``: two Axes, or None
+    for a new figure.
+
+    **Returns:** the array of two Axes.
+    """
+    axes = ax
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True, layout="constrained")
+    axes = np.asarray(axes).ravel()
+    ax_p, ax_l = axes[:2]
+    imep = np.asarray(imep_measured_pa, dtype=np.float64)
+    loss = np.asarray(loss_torque_Nm, dtype=np.float64)
+    ax_p.plot(np.arange(imep.size), imep / PA_PER_BAR, "o-", ms=4, color="C0", label="pressure channel")
+    if imep_file_pa is not None:
+        ax_p.axhline(imep_file_pa / PA_PER_BAR, color="0.4", ls="--", lw=1, label="engine file")
+    ax_p.set_ylabel("IMEP [bar]")
+    ax_p.grid(True, alpha=0.3)
+    ax_p.legend(fontsize=8)
+    ax_p.set_title(title)
+    ax_l.plot(np.arange(loss.size), loss, "s-", ms=4, color="C3")
+    ax_l.set_xlabel("cycle")
+    ax_l.set_ylabel("friction + load [N·m]")
+    ax_l.grid(True, alpha=0.3)
+    return axes
+
+
+def plot_indicated_torque(*, theta: Any, torque: Any, net_torque: Any, title: str, ax: Any = None) -> Any:
+    """The indicated torque of every cycle over the record: ``theta`` the cycle-angle grid
+    (P,) [rad], ``torque`` and ``net_torque`` (cycles, P) [N·m] (the gas torque and the
+    torque accelerating the crank train). ``ax``: one Axes or None. **Returns:** the Axes."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(10, 4), layout="constrained")
+    theta = np.asarray(theta)
+    torque, net = np.atleast_2d(np.asarray(torque)), np.atleast_2d(np.asarray(net_torque))
+    C, P = torque.shape
+    x = np.arange(C * P) / P  # record angle in cycles
+    ax.plot(x, torque.reshape(-1), lw=0.9, color="C0", label="indicated (gas) torque")
+    ax.plot(x, net.reshape(-1), lw=0.7, color="C1", alpha=0.8, label="net torque d(½Iω²)/dθ")
+    ax.set_xlim(0, C)
+    ax.set_xlabel(f"cycle (of {np.rad2deg(theta[-1] + theta[1] - theta[0]):.0f}° each)")
+    ax.set_ylabel("torque [N·m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return ax
+
+
+def plot_torque_orders(*, order: Any, amplitude_Nm: Any, title: str, ax: Any = None) -> Any:
+    """Torque harmonics by engine order: ``order`` (K,) [per revolution], ``amplitude_Nm``
+    (cycles, K) [N·m] as bars of the cycles' mean with their spread. ``ax``: one Axes or
+    None. **Returns:** the Axes."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(8, 4), layout="constrained")
+    order = np.asarray(order)
+    amp = np.atleast_2d(np.asarray(amplitude_Nm))
+    spread = amp.std(axis=0, ddof=1) if amp.shape[0] > 1 else np.zeros(order.size)
+    width = 0.6 * float(np.min(np.diff(order))) if order.size > 1 else 0.3
+    ax.bar(order, amp.mean(axis=0), width=width, yerr=spread, capsize=2, color="C0")
+    ax.set_xlabel("engine order [per revolution]")
+    ax.set_ylabel("torque amplitude [N·m]")
+    ax.grid(True, alpha=0.3, axis="y")
+    ax.set_title(title)
+    return ax

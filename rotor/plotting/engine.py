@@ -1,18 +1,26 @@
-"""Plots of the engine: the textbook table, torque and inertia over the cycle."""
+"""Plots of the engine: the textbook table, torque and inertia over the cycle.
+
+Each function draws what a result of :mod:`rotor.engine` hands it (a
+:class:`rotor.CrankTable`, the arrays of an :class:`rotor.EngineCurves`); nothing here
+evaluates the engine.
+"""
 
 from __future__ import annotations
 
-import jax.numpy as jnp
-import numpy as np
+from collections.abc import Mapping
+from typing import Any
+
+from jaxtyping import ArrayLike
 
 from .common import angle_axis, new_axes
 
 __all__ = ["plot_table", "plot_torque", "plot_inertia"]
 
 
-def plot_table(table, which="forces", ax=None):
-    """Plot a :class:`rotor.CrankTable`: ``"kinematics"`` (S, V, J on three axes),
-    ``"forces"`` (Pg, Pj, PΣ, N, K, Z, T in kN) or ``"torque"`` (M in N·m).
+def plot_table(table: Any, which: str = "forces", ax: Any = None) -> Any:
+    """Plot a :class:`rotor.CrankTable`: ``which`` is ``"kinematics"`` (S, V, J on three
+    axes), ``"forces"`` (Pg, Pj, PΣ, N, K, Z, T in kN) or ``"torque"`` (M in N·m); ``ax``:
+    an Axes (three for kinematics) or None (a new figure).
 
     **Returns:** the Axes (an array of three for kinematics).
     """
@@ -55,52 +63,61 @@ def plot_table(table, which="forces", ax=None):
     return axis
 
 
-def plot_torque(engine, rpm=None, ax=None, points_per_deg: int = 2):
-    """Total torque of the engine over a cycle (textbook: gas + reciprocating inertia at
-    constant speed), its gas and inertia parts, and its mean.
+def plot_torque(
+    angle_deg: ArrayLike,
+    total_Nm: ArrayLike,
+    mean_Nm: float,
+    title: str,
+    cycle_deg: float,
+    *,
+    gas_Nm: ArrayLike | None = None,
+    inertia_Nm: ArrayLike | None = None,
+    xlabel: str = "crank angle [deg]",
+    ax: Any = None,
+) -> Any:
+    """Total torque of the engine over a cycle, its mean and, if given, its gas and
+    reciprocating-inertia parts.
 
-    **Arguments:** ``engine``; ``rpm``: speed [rev/min] (default ``[operating] rpm``); ``ax``.
+    **Arguments:** ``angle_deg``: crank angle [deg]; ``total_Nm``: total torque [N·m];
+    ``mean_Nm``: its cycle mean [N·m]; ``title``; ``cycle_deg``: the cycle [deg];
+    ``gas_Nm``, ``inertia_Nm``: the parts [N·m]; ``xlabel``; ``ax``.
 
     **Returns:** the Axes.
     """
-    from ..engine.forces import gas_torque, total_torque
-
-    rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
-    cycle_deg = 360 * engine.strokes / 2
-    deg = np.linspace(0, cycle_deg, int(cycle_deg * points_per_deg) + 1)
-    theta = jnp.deg2rad(deg)
-    gas = np.asarray(gas_torque(engine, theta))
-    total = np.asarray(total_torque(engine, theta, rpm * np.pi / 30))
-    inertia = total - gas
     axis = new_axes(ax)
-    axis.plot(deg, gas, lw=1, alpha=0.7, label="gas")
-    axis.plot(deg, inertia, lw=1, alpha=0.7, label="reciprocating inertia")
-    axis.plot(deg, total, lw=1.8, color="k", label="total")
-    axis.axhline(total[:-1].mean(), color="C3", ls="--", lw=1.2, label=f"mean {total[:-1].mean():.0f} N·m")
+    if gas_Nm is not None:
+        axis.plot(angle_deg, gas_Nm, lw=1, alpha=0.7, label="gas")
+    if inertia_Nm is not None:
+        axis.plot(angle_deg, inertia_Nm, lw=1, alpha=0.7, label="reciprocating inertia")
+    axis.plot(angle_deg, total_Nm, lw=1.8, color="k", label="total")
+    axis.axhline(mean_Nm, color="C3", ls="--", lw=1.2, label=f"mean {mean_Nm:.0f} N·m")
     axis.axhline(0, color="k", lw=0.5)
-    axis.set_xlabel("crank angle of cylinder 1 [deg]")
+    axis.set_xlabel(xlabel)
     axis.set_ylabel("torque [N·m]")
-    axis.set_title(f"{engine.name}: total torque at {rpm:g} rpm")
+    axis.set_title(title)
     axis.legend(fontsize=8, ncol=2)
     angle_axis(axis, cycle_deg)
     return axis
 
 
-def plot_inertia(engine, ax=None):
-    """Reduced inertia I(θ) over a revolution: exact, the seed 003 form, and the mean.
+_STYLES = {"exact": "-", "coefficients": "--", "mean": ":"}
+
+
+def plot_inertia(angle_deg: ArrayLike, curves: Mapping[str, ArrayLike], title: str, ax: Any = None) -> Any:
+    """Reduced inertia I(θ) over a revolution, one line per model.
+
+    **Arguments:** ``angle_deg``: crank angle over 0…360° [deg]; ``curves``: {model name:
+    I(θ) [kg·m²]} (``"exact"``, ``"coefficients"``, ``"mean"`` get their own line styles);
+    ``title``; ``ax``.
 
     **Returns:** the Axes.
     """
-    from ..engine.inertia import reduced_inertia
-
-    deg = np.linspace(0, 360, 721)
-    theta = jnp.deg2rad(deg)
     axis = new_axes(ax)
-    for model, style in (("exact", "-"), ("coefficients", "--"), ("mean", ":")):
-        axis.plot(deg, np.asarray(reduced_inertia(engine, theta, model)), style, lw=1.5, label=model)
+    for model, y in curves.items():
+        axis.plot(angle_deg, y, _STYLES.get(model, "-"), lw=1.5, label=model)
     axis.set_xlabel("crank angle [deg]")
     axis.set_ylabel("I(θ) [kg·m²]")
-    axis.set_title(f"{engine.name}: reduced moment of inertia")
+    axis.set_title(title)
     axis.legend(fontsize=8)
     angle_axis(axis, 360)
     return axis

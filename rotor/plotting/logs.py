@@ -1,22 +1,41 @@
-"""The plot of a logged-speed analysis."""
+"""The plots of the logs room: a logged-speed analysis and a wheel's tooth errors."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from .common import angle_axis
+from ..units import RPM_PER_RAD_S
+from .common import angle_axis, new_axes
 
-__all__ = ["plot_log_analysis"]
+__all__ = ["plot_log_analysis", "plot_tooth_errors"]
 
 
-def plot_log_analysis(analysis, axes=None):
+def plot_tooth_errors(errors_deg: Any, method: str, ax: Any = None) -> Any:
+    """Each tooth's angle error as a bar: ``errors_deg`` [deg] (tooth 0 = the first edge
+    after the gap), ``method`` (how they were found, for the title). **Returns:** the Axes."""
+    ax = new_axes(ax)
+    errors_deg = np.asarray(errors_deg)
+    ax.bar(np.arange(errors_deg.size), errors_deg, color="C1")
+    ax.set_xlabel("tooth (0 = first after the gap)")
+    ax.set_ylabel("tooth error [deg]")
+    ax.grid(True, alpha=0.3, axis="y")
+    ax.set_title(f"tooth errors applied ({method})")
+    return ax
+
+
+def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
     """The combined plot of a :class:`rotor.LogAnalysis`: speed over the cycle (every
     cycle and their mean), each cycle's mean speed and δ, the order spectrum (mean and
     cycle-to-cycle spread), and the pressure signal over the cycle (or, without one,
     the tooth errors applied).
 
+    ``ax``: a 2×2 array of Axes (or four Axes), or None for a new figure.
+
     **Returns:** the 2×2 array of Axes.
     """
+    axes = ax
     if axes is None:
         import matplotlib.pyplot as plt
 
@@ -26,7 +45,7 @@ def plot_log_analysis(analysis, axes=None):
     ax_w, ax_c, ax_o, ax_p = axes.ravel()[:4]
     cycle_deg = np.rad2deg(a.cycle_rad)
     ang = np.rad2deg(a.cycle_angle_rad)
-    rpm = a.omega * 30 / np.pi
+    rpm = a.omega * RPM_PER_RAD_S
     for row in rpm:
         ax_w.plot(ang, row, lw=0.6, color="0.6", alpha=0.6)
     ax_w.plot(ang, rpm.mean(axis=0), lw=1.8, color="C0", label=f"mean of {a.cycles} cycles")
@@ -62,12 +81,7 @@ def plot_log_analysis(analysis, axes=None):
         angle_axis(ax_p, cycle_deg)
         ax_p.set_title(f"pressure; TDC {np.rad2deg(a.tdc_rad):.1f}° after the gap")
     elif a.tooth_errors is not None:
-        te = a.tooth_errors
-        ax_p.bar(np.arange(te.errors_rad.size), te.errors_deg, color="C1")
-        ax_p.set_xlabel("tooth (0 = first after the gap)")
-        ax_p.set_ylabel("tooth error [deg]")
-        ax_p.grid(True, alpha=0.3, axis="y")
-        ax_p.set_title(f"tooth errors applied ({te.method})")
+        plot_tooth_errors(a.tooth_errors.errors_deg, a.tooth_errors.method, ax=ax_p)
     else:
         ax_p.set_axis_off()
     return axes

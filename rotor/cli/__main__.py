@@ -1,0 +1,7 @@
+"""``python -m rotor.cli``: the ``rotor`` command."""
+
+import sys
+
+from .app import main
+
+sys.exit(main())

@@ -1,0 +1,162 @@
+"""Argument types and the options every command group shares.
+
+The flag convention of the whole command line lives here, so that each command module
+adds the same option the same way:
+
+- ``ENGINE``: an engine file (TOML) or a preset name, a positional argument (``diagnose``
+  and ``analyze``, whose positional is the log, take ``--engine ENGINE``);
+- ``--json``: print the result as one JSON object (``result.to_json_dict()``), on every
+  command that computes a result;
+- ``--plot DIR``: write the command's plots (PNG) into DIR, on every command that draws;
+- ``--quiet``: no progress bar, on the commands that can show one;
+- ``--format``: only for tables (``rotor table``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+from typing import NoReturn
+
+__all__ = [
+    "EXIT_SOLVER",
+    "EXIT_USAGE",
+    "Parser",
+    "add_dynamics_options",
+    "add_engine",
+    "add_json",
+    "add_plot",
+    "add_quiet",
+    "delta_list",
+    "fidelity_option",
+    "nonnegative_float",
+    "positive_float",
+    "scale_list",
+    "speed",
+    "speed_list",
+    "whole",
+]
+
+EXIT_USAGE = 2
+"""Exit status of bad input: a usage error, an engine or log that cannot be read."""
+EXIT_SOLVER = 1
+"""Exit status of valid input without an answer (a solver that did not converge)."""
+
+FIDELITIES = ("variable", "series", "coefficients", "constant")
+
+
+class Parser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` whose usage errors are one line and exit 2."""
+
+    def error(self, message: str) -> NoReturn:
+        """One line on stderr, exit status 2, as for any bad input."""
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+# ----------------------------------------------------------------------------- types
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0."""
+    v = _number(text)
+    if not (0 < v < math.inf):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a positive number")
+    return v
+
+
+def nonnegative_float(text: str) -> float:
+    """A finite number ≥ 0."""
+    v = _number(text)
+    if not (0 <= v < math.inf):
+        raise argparse.ArgumentTypeError(f"{text!r} must be zero or positive")
+    return v
+
+
+speed = nonnegative_float
+"""A crank speed [rev/min]: zero allowed (from rest)."""
+
+
+def whole(text: str) -> int:
+    """A whole number ≥ 1."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be 1 or more")
+    return v
+
+
+def _number_list(text: str, check: Callable[[str], float], what: str) -> list[float]:
+    out = []
+    for item in filter(None, (t.strip() for t in text.split(","))):
+        try:
+            out.append(check(item))
+        except argparse.ArgumentTypeError as e:
+            raise argparse.ArgumentTypeError(f"{text!r}: {e}; expected {what}") from None
+    if not out:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected {what}")
+    return out
+
+
+def speed_list(text: str) -> list[float]:
+    """Speeds > 0 [rev/min] separated by commas."""
+    return _number_list(text, positive_float, "speeds in rpm separated by commas, e.g. 800,1250,2000")
+
+
+def delta_list(text: str) -> list[float]:
+    """Irregularity targets > 0 separated by commas."""
+    return _number_list(text, positive_float, "targets separated by commas, e.g. 0.01 or 0.03,0.01,0.005")
+
+
+def scale_list(text: str) -> list[float]:
+    """Scales ≥ 0 separated by commas."""
+    return _number_list(text, speed, "scales ≥ 0 separated by commas, e.g. 0.3,1,1")
+
+
+# ----------------------------------------------------------------------------- options
+ENGINE_HELP = "engine file (.toml) or preset name (see `rotor presets`)"
+
+
+def add_engine(p: argparse.ArgumentParser, rpm: bool = True) -> None:
+    """The positional ENGINE and (``rpm``) ``--rpm`` at one speed > 0."""
+    p.add_argument("engine", metavar="ENGINE", help=ENGINE_HELP)
+    if rpm:
+        p.add_argument("--rpm", type=positive_float, help="crank speed [rev/min] (default: the file's [operating] rpm)")
+
+
+def add_json(p: argparse.ArgumentParser) -> None:
+    """``--json``: print the result as one JSON object."""
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_plot(p: argparse.ArgumentParser, what: str = "plots", default: str | None = None) -> None:
+    """``--plot DIR``: write ``what`` into DIR (only when given, unless ``default``)."""
+    text = f"write {what} to DIR" + (f" (default {default}/)" if default else "")
+    p.add_argument("--plot", metavar="DIR", default=default, help=text)
+
+
+def add_quiet(p: argparse.ArgumentParser) -> None:
+    """``--quiet``: no progress bar."""
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def fidelity_option(p: argparse.ArgumentParser, text: str) -> None:
+    """``--fidelity``: the inertia model."""
+    p.add_argument("--fidelity", choices=FIDELITIES, default="variable", help=text)
+
+
+def add_dynamics_options(p: argparse.ArgumentParser) -> None:
+    """``--load``, ``--fidelity``, ``--json`` and ``--plot`` of ``steady`` and ``simulate``."""
+    from ..dynamics.loads import LOAD_HELP
+
+    p.add_argument("--load", default="none", metavar="SPEC", help=LOAD_HELP + " (default none)")
+    fidelity_option(p, "inertia model: exact I(θ) (default), seed 003 coefficients, or constant + textbook torque")
+    add_json(p)
+    add_plot(p)

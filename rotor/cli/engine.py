@@ -1,0 +1,115 @@
+"""``rotor table``, ``rotor info``, ``rotor plot`` and ``rotor presets``: an engine by itself."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from .args import add_engine, add_json, add_plot, positive_float
+from .output import json_text, plot_folder, print_json, print_text, print_written, save_plot
+
+if TYPE_CHECKING:
+    from ..engine.model import Engine
+
+__all__ = ["add_parsers", "cmd_info", "cmd_plot", "cmd_presets", "cmd_table", "engine_plots"]
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """Add ``table``, ``info``, ``plot`` and ``presets`` to the subcommands ``sub``."""
+    p = sub.add_parser("table", help="one-cylinder kinematic and dynamic table over the cycle (seed 004)")
+    add_engine(p)
+    p.add_argument("--step", type=positive_float, default=10.0, help="angle step [deg] (default 10)")
+    fmt = p.add_mutually_exclusive_group()
+    fmt.add_argument("--format", choices=("text", "csv"), default="text", help="table format (default text)")
+    add_json(fmt)
+    p.add_argument(
+        "--kinematics",
+        choices=("series", "exact"),
+        default="series",
+        help="piston kinematics: the textbook lambda series (default, as in seed 004) or exact",
+    )
+    p.add_argument("--cylinder", type=int, default=1, help="cylinder number (default 1)")
+    p.add_argument("--output", "-o", metavar="FILE", help="write to FILE instead of standard output")
+    p.set_defaults(func=cmd_table)
+
+    p = sub.add_parser("info", help="summary of an engine: geometry, IMEP, power, torque range, inertia")
+    add_engine(p)
+    add_json(p)
+    p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("plot", help="plots of kinematics, forces, total torque and inertia to a folder")
+    add_engine(p)
+    add_plot(p, "the plots", default="out")
+    p.set_defaults(func=cmd_plot)
+
+    p = sub.add_parser("presets", help="list the built-in engines")
+    add_json(p)
+    p.set_defaults(func=cmd_presets)
+
+
+def cmd_table(args: argparse.Namespace) -> None:
+    """Seed 004's table of one cylinder: text, CSV or JSON, to standard output or ``--output``."""
+    from ..engine.file import load_engine
+    from ..engine.table import crank_table
+    from ..fileio import write_text_atomic
+
+    engine = load_engine(args.engine)
+    table = crank_table(engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics, cylinder=args.cylinder)
+    if args.json:
+        text = json_text(table.to_json_dict())
+    elif args.format == "csv":
+        text = table.to_csv()
+    else:
+        text = table.to_text()
+    if args.output:
+        write_text_atomic(args.output, text)
+    else:
+        print_text(text)
+
+
+def cmd_info(args: argparse.Namespace) -> None:
+    """The engine's key figures at ``--rpm``."""
+    from ..engine.file import load_engine
+    from ..engine.summary import engine_summary
+
+    summary = engine_summary(load_engine(args.engine), rpm=args.rpm)
+    if args.json:
+        print_json(summary.to_json_dict())
+    else:
+        print_text(summary.summary())
+
+
+def engine_plots(engine: Engine, rpm: float | None, folder: str) -> list[str]:
+    """Kinematics, forces (the exact crank table at 2° steps), total torque and inertia of
+    ``engine`` at ``rpm`` into ``folder``; the paths written."""
+    from ..engine.summary import engine_curves
+    from ..engine.table import crank_table
+
+    plot_folder(folder)
+    table = crank_table(engine, rpm=rpm, step_deg=2.0, kinematics="exact")
+    curves = engine_curves(engine, rpm)
+    return [
+        save_plot(table.plot(which="kinematics"), folder, "kinematics.png"),
+        save_plot(table.plot(which="forces"), folder, "forces.png"),
+        save_plot(curves.plot(which="torque"), folder, "torque.png"),
+        save_plot(curves.plot(which="inertia"), folder, "inertia.png"),
+    ]
+
+
+def cmd_plot(args: argparse.Namespace) -> None:
+    """Write the engine's plots to ``--plot DIR``."""
+    from ..engine.file import load_engine
+
+    print_written(engine_plots(load_engine(args.engine), args.rpm, args.plot))
+
+
+def cmd_presets(args: argparse.Namespace) -> None:
+    """The built-in engines: preset name and engine name."""
+    from ..engine.file import load_engine, preset_names
+
+    names = {name: load_engine(name).name for name in preset_names()}
+    if args.json:
+        print_json({"presets": [{"name": k, "engine": v} for k, v in names.items()]})
+    else:
+        for name, engine in names.items():
+            print(f"{name:12s} {engine}")
