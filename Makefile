@@ -4,13 +4,14 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo lint test notebooks bench bench-quick clean
+.PHONY: install demo lint docs docs-build test wheel-check notebooks bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "rotor needs Python >= 3.11 (set PYTHON=...)")'
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip uninstall --quiet --yes rotor  # the distribution's name before crank-rotor
+	$(PY) -m pip install --quiet -e '.[test,docs]'
 	@touch $(STAMP)
 
 install: $(STAMP)
@@ -25,8 +26,21 @@ lint: $(STAMP)
 	$(VENV)/bin/lint-imports --no-cache
 	$(VENV)/bin/mypy
 
-test: lint
-	$(PY) -m pytest -q
+# the documentation site: `make docs` serves it on http://127.0.0.1:8000 and rebuilds on
+# every change; `make test` builds it strictly (a broken reference fails) into build/site
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs serve
+
+docs-build: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+
+test: lint docs-build
+	$(PY) -m pytest -q -n 2  # two worker processes: the CI machine has two cores
+
+# the wheel installs in a clean virtualenv (its dependencies from the package index) and
+# runs `rotor demo` there (about a minute)
+wheel-check: $(STAMP)
+	ROTOR_WHEEL_CHECK=1 $(PY) -m pytest -q -p no:cacheprovider tests/test_packaging.py
 
 # re-execute the notebooks in their full form and save their outputs (a few minutes)
 notebooks: $(STAMP)
@@ -53,4 +67,4 @@ bench-quick: $(STAMP)
 	$(PY) benchmarks/simulator_speed.py --quick
 
 clean:
-	rm -rf $(VENV) out .pytest_cache build *.egg-info
+	rm -rf $(VENV) out .pytest_cache build dist *.egg-info

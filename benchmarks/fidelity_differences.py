@@ -2,9 +2,9 @@
 
 For each preset at its ``[operating] rpm`` (balanced constant load, no friction), the
 steady state at the ``"variable"`` (exact I(θ)), ``"series"`` (λ-series kinematics in I(θ)
-and the gas torque), ``"coefficients"`` (seed 003 A/B/C form) and ``"constant"`` (mean
-inertia + textbook inertia torque) fidelity levels, and the seed 004 textbook
-δ = L_excess/(J·ω²). Then, at the variable level:
+and the gas torque), ``"coefficients"`` (the A·cos²θ + B·cosθ + C form of Anisimov, Yelenich & Melnyk) and ``"constant"`` (mean
+inertia + textbook inertia torque) fidelity levels, and the textbook
+δ = L_excess/(J·ω²) of Shishkov, "Dinamika dvigatelei" (SUSU 2014), §3.2.12. Then, at the variable level:
 
 - ``friction``: FMEP = 0.5 bar + 0.06 bar per m/s of mean piston speed, on;
 - ``table_pchip_5deg``: the preset's pressure sampled every 5° and read back by rotor's

@@ -15,7 +15,7 @@ part-load fuelling at the lower speeds):
   adaptive) started on the designed steady state;
 - ``textbook_ratio``: the textbook's [crankshaft] inertia (J₀ = L_excess/(δ·ω²) less the
   rods' and pistons' mean inertia) at the point where it asks most, over the design;
-  ``textbook_rated_ratio``: the same from the rated point alone (the seed's practice);
+  ``textbook_rated_ratio``: the same from the rated point alone (the textbook's practice);
 - ``timing``: the design's first call (compile and run, in a process that has made no other
   design) and the median of ``--repeats`` later calls, and a bisection on the same jitted
   closed-form δ(J) (``rotor.design.flywheel.DeltaOfInertia``) to the same tolerance as Newton's, for the ratio.

@@ -1,8 +1,10 @@
-"""How closely `rotor table 4chn15` reproduces seed 004's appendix-5 tables.
+"""How closely `rotor table 4chn15` reproduces the appendix-5 tables of Shishkov,
+"Dinamika dvigatelei" (Engine dynamics: guide to the course project, SUSU 2014) for its
+4ChN15/20.5 example.
 
 Prints a markdown table of the worst error of every column, as a percentage of the
 column's largest magnitude, for the lambda-series kinematics (the table's default, the
-seed's own method) and for the exact kinematics, and writes the figures as JSON.
+book's own method) and for the exact kinematics, and writes the figures as JSON.
 
     .venv/bin/python benchmarks/seed004_accuracy.py [--out benchmarks/results/seed004_accuracy.json]
 """

@@ -1,7 +1,12 @@
 """rotor: rotational dynamics of piston engines.
 
 Crank kinematics, reduced inertia I(θ), gas and inertia torques, and the crankshaft's
-speed fluctuation, in JAX (float64 is switched on when rotor is imported).
+speed fluctuation, in JAX.
+
+Importing rotor changes one process-wide setting: JAX's float64 (``jax_enable_x64``),
+which rotor's numerics need. JAX's persistent compilation cache stays as the user left
+it: the ``rotor`` command switches it on, and :func:`rotor.enable_compilation_cache`
+does so in Python.
 """
 
 import jax as _jax
@@ -9,9 +14,6 @@ import jax as _jax
 _jax.config.update("jax_enable_x64", True)
 
 from .cache import enable_compilation_cache  # noqa: E402
-
-enable_compilation_cache()
-
 from .design.flywheel import (  # noqa: E402
     DiscFlywheel,
     FlywheelDesign,

@@ -1,6 +1,7 @@
-"""JAX's persistent compilation cache, switched on for rotor's users.
+"""JAX's persistent compilation cache, for rotor's kernels.
 
-Compiling rotor's kernels takes 1–3 s per method in a fresh process; with the cache the
+The ``rotor`` command switches it on; in Python, call :func:`enable_compilation_cache`
+(importing rotor does not touch JAX's cache settings). Compiling rotor's kernels takes 1–3 s per method in a fresh process; with the cache the
 compiled code of an earlier process is reused and a first call costs mainly tracing
 (``benchmarks/compile_time.py`` measures both). The cache lives in
 ``$ROTOR_COMPILATION_CACHE`` if set (``0``, ``off`` or ``no`` switches it off), else in
@@ -23,8 +24,9 @@ def enable_compilation_cache(path: str | os.PathLike[str] | None = None) -> str 
     """Use JAX's persistent compilation cache at ``path`` (see the module doc for the default).
 
     ``path``: a folder (created if missing). Returns the directory in use, or None when the
-    cache is off. Called once when rotor is imported; call it again with another ``path``
-    to move the cache.
+    cache is off. Sets JAX's process-wide cache directory, the compile-time threshold
+    (0.1 s) and the size cap (1 GB); the ``rotor`` command calls it once per run. Call it
+    again with another ``path`` to move the cache.
     """
     env = os.environ.get("ROTOR_COMPILATION_CACHE")
     if path is None:

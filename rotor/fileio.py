@@ -5,26 +5,62 @@ Ground floor: imports nothing from rotor.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
-import tempfile
+import secrets
+import stat
 from contextlib import contextmanager
+
+
+def _new_file_beside(path: str) -> str:
+    """Create an empty file with a fresh name in ``path``'s folder and return its name.
+
+    It is created by ``os.open(..., 0o666)``, so the operating system applies the user's
+    umask (and a folder's default ACL) exactly as for a plain ``open(path, "w")``; a
+    ``tempfile.mkstemp`` file would be mode 0600 whatever the umask."""
+    folder = os.path.dirname(os.path.abspath(path))
+    suffix = os.path.splitext(path)[1]
+    for _ in range(100):
+        tmp = os.path.join(folder, f".rotor-{secrets.token_hex(4)}{suffix}")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(errno.EEXIST, "no free temporary name in the folder", path)
 
 
 @contextmanager
 def atomic_path(path):
     """Yield a temporary path beside ``path``; rename it onto ``path`` if the block
     succeeds, delete it if not. A reader never sees half a file, and an error leaves
-    an existing file as it was."""
+    an existing file as it was.
+
+    **Mode:** the file ends with the mode a plain ``open(path, "w")`` gives it: a new file
+    gets ``0o666 & ~umask``; a file that is replaced keeps its mode.
+    **Errors:** an ``OSError`` raised while writing or renaming names ``path``, never the
+    temporary file."""
     path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".rotor-", suffix=os.path.splitext(path)[1])
-    os.close(fd)
+    tmp = None
     try:
+        tmp = _new_file_beside(path)
+        try:
+            old_mode = stat.S_IMODE(os.stat(path).st_mode) if os.path.isfile(path) else None
+            if old_mode is not None:
+                os.chmod(tmp, old_mode)
+        except OSError:
+            pass  # keeping the old mode is a courtesy; the write goes on with the umask's
         yield tmp
         os.replace(tmp, path)
+    except OSError as e:
+        names_tmp = tmp is not None and (str(e.filename).startswith(tmp) or e.filename2 == tmp)
+        if e.errno is not None and (e.filename is None or names_tmp):
+            raise type(e)(e.errno, e.strerror, path) from None
+        raise
     finally:
-        if os.path.exists(tmp):
+        if tmp is not None and os.path.exists(tmp):
             os.remove(tmp)
 
 

@@ -1,4 +1,5 @@
-"""The persistent compilation cache: on by default, movable, and off on request."""
+"""The persistent compilation cache: untouched by `import rotor`, switched on by the `rotor`
+command and by `rotor.enable_compilation_cache()`, movable, and off on request."""
 
 import json
 import os
@@ -7,29 +8,54 @@ import sys
 
 CODE = """
 import json, jax, rotor
-print(json.dumps({"dir": jax.config.jax_compilation_cache_dir}))
+before = jax.config.jax_compilation_cache_dir
+used = rotor.enable_compilation_cache()
+print(json.dumps({"before": before, "dir": jax.config.jax_compilation_cache_dir, "used": used}))
 """
 
 
-def _run(env_value, tmp_path):
+def _env(tmp_path, env_value=None):
     env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "xdg"))
     env.pop("ROTOR_COMPILATION_CACHE", None)
     if env_value is not None:
         env["ROTOR_COMPILATION_CACHE"] = env_value
-    out = subprocess.run([sys.executable, "-c", CODE], env=env, capture_output=True, text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])["dir"]
+    return env
 
 
-def test_cache_default_path_env_path_and_off(tmp_path):
-    assert _run(None, tmp_path) == str(tmp_path / "xdg" / "rotor" / "jax")
-    assert _run(str(tmp_path / "mine"), tmp_path) == str(tmp_path / "mine")
-    assert (tmp_path / "mine").is_dir()
-    assert _run("off", tmp_path) is None
+def _run(env_value, tmp_path):
+    out = subprocess.run(
+        [sys.executable, "-c", CODE], env=_env(tmp_path, env_value), capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_import_leaves_the_cache_alone_and_enable_switches_it_on(tmp_path):
+    r = _run(None, tmp_path)
+    assert r["before"] is None, "import rotor must not set JAX's compilation cache"
+    assert r["dir"] == r["used"] == str(tmp_path / "xdg" / "rotor" / "jax")
+    r = _run(str(tmp_path / "mine"), tmp_path)
+    assert r["used"] == str(tmp_path / "mine") and (tmp_path / "mine").is_dir()
+    r = _run("off", tmp_path)
+    assert r["used"] is None and r["dir"] is None
+
+
+def test_the_command_switches_the_cache_on(tmp_path):
+    env = _env(tmp_path)
+    subprocess.run(
+        [sys.executable, "-m", "rotor.cli", "info", "4chn15", "--json"], env=env, check=True, capture_output=True
+    )
+    assert (tmp_path / "xdg" / "rotor" / "jax").is_dir()
+    off = tmp_path / "off"
+    env = dict(_env(off), ROTOR_COMPILATION_CACHE="off")
+    subprocess.run(
+        [sys.executable, "-m", "rotor.cli", "info", "4chn15", "--json"], env=env, check=True, capture_output=True
+    )
+    assert not (off / "xdg").exists()
 
 
 def test_a_compiled_kernel_is_reused_by_the_next_process(tmp_path):
     code = (
-        "import jax, rotor; e = rotor.load_engine('4chn15'); "
+        "import jax, rotor; rotor.enable_compilation_cache(); e = rotor.load_engine('4chn15'); "
         "jax.block_until_ready(rotor.steady_state(e, grid_deg=2.0).omega)"
     )
     env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"))

@@ -84,6 +84,9 @@ def _join_columns(argv: list[str]) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rotor`` command: run ``argv`` (default ``sys.argv[1:]``); the exit status."""
     args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
+    from ..cache import enable_compilation_cache
+
+    enable_compilation_cache()  # the command's compiled kernels are reused by its next run
     try:
         args.func(args)
     except BrokenPipeError:  # e.g. `rotor table ... | head`

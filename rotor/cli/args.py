@@ -157,6 +157,10 @@ def add_dynamics_options(p: argparse.ArgumentParser) -> None:
     from ..dynamics.loads import LOAD_HELP
 
     p.add_argument("--load", default="none", metavar="SPEC", help=LOAD_HELP + " (default none)")
-    fidelity_option(p, "inertia model: exact I(θ) (default), seed 003 coefficients, or constant + textbook torque")
+    fidelity_option(
+        p,
+        "inertia model: exact I(θ) (default), the A·cos²θ + B·cosθ + C form of Anisimov, Yelenich & "
+        "Melnyk, or constant + textbook torque",
+    )
     add_json(p)
     add_plot(p)

@@ -24,7 +24,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "flywheel",
         help="the smallest flywheel keeping δ ≤ --delta at every operating point, "
-        "against the textbook (seed 004 §3.2.12)",
+        "against the textbook (Shishkov, Dinamika dvigatelei, SUSU 2014, §3.2.12)",
     )
     p.add_argument("engine", metavar="ENGINE", help="engine file (.toml) or preset name (see `rotor presets`)")
     p.add_argument(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 
 from .args import add_json, add_plot, positive_float
 from .logs import log_plot
@@ -118,6 +119,8 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
         )
     except ArithmeticError as e:  # a one-line error, not a traceback
         raise EngineError(f"{args.log}: the diagnosis failed ({e})") from None
+    for w in res.warnings:  # on stderr too, where a pipe or --json would hide it
+        print(f"rotor: warning: {args.log}: {w}", file=sys.stderr)
     if args.plot:
         written.append(log_plot(res.plot(), args.plot, args.log, "diagnosis"))
     if args.json:

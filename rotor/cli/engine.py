@@ -16,7 +16,11 @@ __all__ = ["add_parsers", "cmd_info", "cmd_plot", "cmd_presets", "cmd_table", "e
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``table``, ``info``, ``plot`` and ``presets`` to the subcommands ``sub``."""
-    p = sub.add_parser("table", help="one-cylinder kinematic and dynamic table over the cycle (seed 004)")
+    p = sub.add_parser(
+        "table",
+        help="one-cylinder kinematic and dynamic table over the cycle (as in Shishkov, "
+        "Dinamika dvigatelei, SUSU 2014, appendix 5)",
+    )
     add_engine(p)
     p.add_argument("--step", type=positive_float, default=10.0, help="angle step [deg] (default 10)")
     fmt = p.add_mutually_exclusive_group()
@@ -26,7 +30,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--kinematics",
         choices=("series", "exact"),
         default="series",
-        help="piston kinematics: the textbook lambda series (default, as in seed 004) or exact",
+        help="piston kinematics: the textbook lambda series (default, as in Shishkov 2014) or exact",
     )
     p.add_argument("--cylinder", type=int, default=1, help="cylinder number (default 1)")
     p.add_argument("--output", "-o", metavar="FILE", help="write to FILE instead of standard output")
@@ -48,7 +52,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_table(args: argparse.Namespace) -> None:
-    """Seed 004's table of one cylinder: text, CSV or JSON, to standard output or ``--output``."""
+    """The textbook table of one cylinder (Shishkov 2014, appendix 5): text, CSV or JSON, to standard output or ``--output``."""
     from ..engine.file import load_engine
     from ..engine.table import crank_table
     from ..fileio import write_text_atomic

@@ -1,6 +1,7 @@
 """Flywheel sizing: the textbook rule and the smallest flywheel found through the simulator.
 
-**Textbook** (seed 004 §3.2.12): from one turning-moment diagram at constant speed (gas
+**Textbook** (Shishkov, "Dinamika dvigatelei" [Engine dynamics: guide to the course project],
+South Ural State University, 2014, §3.2.12, after Kolchin & Demidov and Popyk): from one turning-moment diagram at constant speed (gas
 plus reciprocating inertia torque), the excess work L_excess (the largest swing of
 ∫(M − M_mean)dθ) gives the inertia of everything that turns, J₀ = L_excess/(δ·ω²); the
 flywheel takes J_flywheel = 0.85·J₀ and, at a mean diameter D = (2…3)·S, a mass
@@ -61,7 +62,7 @@ __all__ = [
     "with_crankshaft_inertia",
 ]
 
-TEXTBOOK_SHARE = 0.85  # seed 004 §3.2.12: J_flywheel = 0.85·J₀
+TEXTBOOK_SHARE = 0.85  # Shishkov (2014) §3.2.12: J_flywheel = 0.85·J₀
 CAST_IRON_KG_M3 = 7200.0
 
 #: what a friction argument may be, as in :func:`rotor.steady_state`
@@ -71,9 +72,9 @@ FrictionArg = Friction | Literal[False] | None
 class OperatingPoint(NamedTuple):
     """One operating point: mean speed ``rpm`` [rev/min], the fuelling ``imep_scale``
     (combustion scale [-], 1 = the engine file's pressure; one number or one per
-    cylinder), a ``load`` (None or a :class:`rotor.ConstantLoad`: the load balances the
-    engine; a speed-dependent load or its spec such as ``"propeller:3000,1250"``: the
-    fuelling is scaled to carry it) and its own target ``delta`` [-] (None: the design's;
+    cylinder), a ``load`` (None: a constant load balances the engine's mean torque at this
+    fuelling; any load, or its spec such as ``"propeller:3000,1250"``: the fuelling is
+    scaled to carry it) and its own target ``delta`` [-] (None: the design's;
     e.g. a looser one at idle)."""
 
     rpm: float
@@ -137,7 +138,7 @@ def _one_row(result: Any) -> Any:
 # ----------------------------------------------------------------------------- textbook
 @dataclass(frozen=True, repr=False)
 class TextbookFlywheel(Result):
-    """The textbook sizing at one operating point (seed 004 §3.2.12), SI units.
+    """The textbook sizing at one operating point (Shishkov (2014) §3.2.12), SI units.
 
     ``rpm`` [rev/min] and ``delta`` [-]: the point and the target; ``excess_work_J`` [J]:
     L_excess of the point's turning-moment diagram; ``total_inertia_kgm2`` is J₀
@@ -164,7 +165,7 @@ class TextbookFlywheel(Result):
         """The textbook sizing, step by step, as text."""
         omega = rpm_to_rad_s(self.rpm)
         lines = [
-            f"textbook flywheel (seed 004 §3.2.12) at {self.rpm:g} rpm for δ = {self.delta:g}",
+            f"textbook flywheel (Shishkov 2014, §3.2.12) at {self.rpm:g} rpm for δ = {self.delta:g}",
             f"  {'excess work L_excess':42} {self.excess_work_J:10.1f} J",
             f"  {f'J₀ = L_excess/(δ·ω²), ω = {omega:.1f} rad/s':42} {self.total_inertia_kgm2:10.4f} kg·m²",
             f"  {'rods and pistons (cycle mean)':42} {self.mechanism_inertia_kgm2:10.4f} kg·m²",
@@ -226,12 +227,12 @@ def textbook_flywheel(
     friction: FrictionArg = None,
     grid_deg: float = 0.25,
 ) -> TextbookFlywheel:
-    """The textbook flywheel of seed 004 §3.2.12 at one operating point.
+    """The textbook flywheel of Shishkov (2014) §3.2.12 at one operating point.
 
     **Arguments:** ``engine`` (a :class:`rotor.Engine`); ``delta``, the target irregularity
     [-]; ``rpm`` [rev/min] (default ``[operating] rpm``); ``imep_scale`` [-] and ``load`` as
     in :func:`rotor.steady_state`; ``diameter_strokes``, the mean diameter in strokes (the
-    seed's 2…3) [-]; ``fidelity``, ``friction``, ``grid_deg`` [deg] as in
+    textbook's 2…3) [-]; ``fidelity``, ``friction``, ``grid_deg`` [deg] as in
     :func:`rotor.steady_state`.
 
     **Returns:** a :class:`TextbookFlywheel`.
@@ -693,7 +694,7 @@ class FlywheelDesign(Result):
             "",
             f"  designed [crankshaft] inertia_kgm2   {self.crankshaft_inertia_kgm2:10.4f} kg·m²  (binding at "
             f"{self.binding_rpm:g} rpm, δ = {self.delta_achieved:.5f})",
-            f"  textbook (seed 004 §3.2.12) at {t.rpm:g} rpm: J₀ = L_excess/(δ·ω²) = {t.excess_work_J:.1f} J / "
+            f"  textbook (Shishkov 2014, §3.2.12) at {t.rpm:g} rpm: J₀ = L_excess/(δ·ω²) = {t.excess_work_J:.1f} J / "
             f"({t.delta:g}·{rpm_to_rad_s(t.rpm):.1f}²) = {t.total_inertia_kgm2:.4f} kg·m²",
         ]
         if t.crankshaft_inertia_kgm2 > 0:
@@ -710,7 +711,7 @@ class FlywheelDesign(Result):
         if t.delta > 0.2:
             lines.append(f"    (δ = {t.delta:g} is not small: the textbook's first-order theory does not hold)")
         lines.append(
-            f"    the seed's flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean "
+            f"    the textbook's flywheel 0.85·J₀ = {t.flywheel_kgm2:.4f} kg·m², {t.mass_kg:.1f} kg as a rim of mean "
             f"diameter {t.mean_diameter_m:.3f} m; its 0.85 assumes the shaft, rods and pistons make "
             f"0.15·J₀ = {0.15 * t.total_inertia_kgm2:.4g} kg·m² (rods and pistons here: {t.mechanism_inertia_kgm2:.4g})"
         )
@@ -719,7 +720,7 @@ class FlywheelDesign(Result):
                 r = t.flywheel_kgm2 / self.flywheel_kgm2
                 lines.append(
                     f"  flywheel to add to a shaft of {self.shaft_inertia_kgm2:g} kg·m²: "
-                    f"{self.flywheel_kgm2:.4f} kg·m² (the seed's 0.85·J₀ is {r:.3f} × it, {100 * (r - 1):+.1f} %)"
+                    f"{self.flywheel_kgm2:.4f} kg·m² (the textbook's 0.85·J₀ is {r:.3f} × it, {100 * (r - 1):+.1f} %)"
                 )
             else:
                 lines.append(

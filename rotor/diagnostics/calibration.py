@@ -707,6 +707,27 @@ class Diagnosis(Identification):
             )
         return text
 
+    def plot(self, ax: Any = None) -> Any:
+        """The identification's plot (:meth:`rotor.Identification.plot`) with the IMEP the
+        pressure channel measured per cycle (``measured_imep_pa``, when there is one) over the
+        identified IMEP. Returns the three Axes."""
+        from ..plotting.diagnostics import plot_identification
+
+        title = f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}"
+        if self.warnings:
+            title += " (poor fit)"
+        return plot_identification(
+            omega=self.omega,
+            omega_model=self.omega_model,
+            cylinder_torques=self.cylinder_torques(),
+            imep_pa=self.imep_pa,
+            imep_std_pa=self.imep_std_pa,
+            misfire=self.misfire,
+            title=title,
+            measured_imep_pa=self.measured_imep_pa,
+            ax=ax,
+        )
+
     def to_json_dict(self, written: Sequence[str] = ()) -> dict:
         """What ``rotor diagnose --json`` prints: per cycle the start time [s], mean speed
         [rpm], each cylinder's IMEP and its standard deviation [Pa], misfire flags,
@@ -747,6 +768,7 @@ class Diagnosis(Identification):
                 "firing_method": None if a is None else a.firing_method,
                 "rms_residual_rad_s": self.rms_residual,
                 "r2": self.fit_r2,
+                "warnings": list(self.warnings),
                 "threshold": self.threshold,
                 "notes": list(self.notes) + (list(a.notes) if a is not None else []),
                 "written": list(written),
@@ -886,7 +908,7 @@ def diagnose(
                 if not settled:
                     at = " (at the bound of its range)" if xb in (lo, hi) or xa in (lo, hi) else ""
                     extra.append(
-                        f"the charge scale did not settle in {iters} identifications{at} (σ {sigma:.4g}, "
+                        f"the charge scale did not settle in {iters} identification{'s' if iters != 1 else ''}{at} (σ {sigma:.4g}, "
                         f"mean combustion scale {math.exp(ga):.3f})"
                     )
         except ArithmeticError as e:

@@ -16,12 +16,14 @@ Fidelity (``fidelity=``):
 - ``"variable"``: exact I(θ) (:func:`rotor.reduced_inertia`); the reciprocating inertia
   torque −½·I′(θ)·ω² comes out of I(θ) and k = 0. The default.
 - ``"series"``: as ``"variable"`` but with the textbook λ-series piston kinematics
-  (seeds 000 and 004: s′ = R(sin θ + (λ/2)·sin 2θ − λ·z·cos θ)) in I(θ) = J + Σ(m_rot·R² +
+  (Lukanin (ed.), "Internal combustion engines, vol. 2: Dynamics and design", 2009, and Shishkov,
+  "Dinamika dvigatelei", SUSU 2014: s′ = R(sin θ + (λ/2)·sin 2θ − λ·z·cos θ)) in I(θ) = J + Σ(m_rot·R² +
   m_rec·s′²) (two-mass split) and in the gas torque's lever arm p·A·s′; ordinary crank
   trains only.
-- ``"coefficients"``: I(θ) in the seed 003 form A·cos²θ + B·cosθ + C per cylinder, k = 0.
+- ``"coefficients"``: I(θ) in the form of Anisimov, Yelenich & Melnyk, "Modelling a piston engine by the
+  irregularity of crankshaft rotation", A·cos²θ + B·cosθ + C per cylinder, k = 0.
 - ``"constant"``: I = the cycle mean of the exact I(θ) and k(θ) = −Σ m_rec·s″·s′ (the
-  textbook inertia torque, seed 004); the reciprocating masses are never counted twice.
+  textbook inertia torque, Shishkov (2014)); the reciprocating masses are never counted twice.
 """
 
 from __future__ import annotations

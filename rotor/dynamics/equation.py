@@ -26,6 +26,8 @@ time domain, which ends the run where ω reaches zero (a stall).
 
 from __future__ import annotations
 
+from typing import Any
+
 import diffrax as dfx
 import equinox as eqx
 import jax
@@ -38,9 +40,46 @@ from .loads import Governor, Load
 
 TRACES = {"count": 0}  # incremented each time a kernel is traced (compiled): tests check it
 
+#: ``report``: the running progress bar's ``fraction(done)`` while :func:`rotor.simulate` shows one, else None
+PROGRESS: dict[str, Any] = {"report": None}
+
 
 def count_trace():
     TRACES["count"] += 1
+
+
+def _to_bar(fraction):
+    report = PROGRESS["report"]
+    if report is not None:
+        report(float(np.max(np.asarray(fraction))))
+
+
+def report_progress(fraction):
+    """From inside a compiled run: tell the progress bar (if one runs) that ``fraction`` of
+    the run is done. A host callback that does not change what else is compiled; kernels
+    call it only when their static ``progress`` flag is set."""
+    jax.debug.callback(_to_bar, fraction)
+
+
+def _report_every(k, cycles: int):
+    """Report cycle ``k`` (from 0) of ``cycles`` done, about a hundred times a run."""
+    every = max(1, cycles // 100)
+    jax.lax.cond((k + 1) % every == 0, lambda: report_progress((k + 1) / cycles), lambda: None)
+
+
+class BarMeter(dfx.AbstractProgressMeter):
+    """diffrax's progress hook feeding :data:`PROGRESS` (about every 1 % of the solve)."""
+
+    def init(self):
+        return jnp.asarray(0.0)
+
+    def step(self, state, progress):
+        due = (progress - state >= 0.01) | (progress >= 1.0)
+        jax.lax.cond(jnp.all(due), lambda: report_progress(progress), lambda: None)
+        return jnp.where(due, progress, state)
+
+    def close(self, state):
+        report_progress(jnp.asarray(1.0))
 
 
 class Scene(eqx.Module):
@@ -147,11 +186,12 @@ def linear_cycle(train: CrankTrain, parts, E0, t0):
 
 
 @eqx.filter_jit
-def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int):
+def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int, progress: bool = False):
     """``cycles`` cycles in closed form from E0, t0; the combustion scale of cycle k is
     ``scene.scales[first_cycle + k]``. Returns per cycle the node values every ``stride``
     nodes (E, ω, t) of shape (cycles, N/stride), the end state, and the first cycle in
-    which E reached zero (or ``cycles``)."""
+    which E reached zero (or ``cycles``). ``progress``: report to the progress bar
+    (:func:`report_progress`)."""
     count_trace()
     train = scene.train
     offsets = node_offsets(train)
@@ -170,6 +210,8 @@ def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int
         E_end = jnp.where(keep, E[-1], E0)
         t_end = jnp.where(keep, t[-1], t0)
         out = (E[:-1:stride], t[:-1:stride])
+        if progress:
+            _report_every(k, cycles)
         return (E_end, t_end, stalled_at), out
 
     (E_end, t_end, stalled_at), (E, t) = jax.lax.scan(body, (E0, t0, jnp.asarray(cycles)), jnp.arange(cycles))
@@ -206,10 +248,11 @@ def _solver():
 
 
 @eqx.filter_jit
-def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: int):
+def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: int, progress: bool = False):
     """Adaptive solve in the angle domain from θ0 with y0 = (E, t, z), saving at ``theta_out``.
 
-    Ends early (a stall hand-over) where E falls to ``e_switch``. Returns the saved
+    Ends early (a stall hand-over) where E falls to ``e_switch``; ``progress``: report to
+    the progress bar (diffrax's progress-meter hook, :class:`BarMeter`). Returns the saved
     (E, t, z), the final θ and state, and whether it ended early."""
     count_trace()
     E0, t0, z0 = y0
@@ -230,6 +273,7 @@ def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: in
         event=event,
         max_steps=max_steps,
         throw=False,
+        progress_meter=BarMeter() if progress else dfx.NoProgressMeter(),
     )
     e, tau, z = sol.ys
     n = theta_out.shape[0]
@@ -345,13 +389,16 @@ def linear_losses(load, friction_abc):
 
 # ----------------------------------------------------------------------------- fixed steps on the grid
 @eqx.filter_jit
-def grid_run(scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride: int, e_switch):
+def grid_run(
+    scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride: int, e_switch, progress: bool = False
+):
     """Classic RK4 in the angle domain with ``steps_per_cycle`` equal steps per cycle, on the
     table nodes when it divides their number (then the right-hand side is one smooth cubic
     within each step). A lax.scan: no step-size control, no per-step overhead.
 
     Returns the states (E, t, z) every ``stride`` steps (cycles, steps_per_cycle/stride),
-    the end state and the first cycle where E fell to ``e_switch`` (or ``cycles``)."""
+    the end state and the first cycle where E fell to ``e_switch`` (or ``cycles``).
+    ``progress``: report to the progress bar (:func:`report_progress`)."""
     count_trace()
     h = scene.train.cycle_rad / steps_per_cycle
 
@@ -380,6 +427,8 @@ def grid_run(scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride
         bad = (jnp.min(ys[:, 0]) <= e_switch) | (y_end[0] <= e_switch) | ~jnp.all(jnp.isfinite(y_end))
         stalled_at = jnp.where((stalled_at == cycles) & bad, k, stalled_at)
         keep = stalled_at == cycles
+        if progress:
+            _report_every(k, cycles)
         return (jnp.where(keep, y_end, y), stalled_at), ys[::stride]
 
     y0 = jnp.stack([jnp.asarray(v, dtype=jnp.float64) for v in y0])

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from ..cycles import cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 
@@ -77,12 +78,17 @@ class Orders(Result):
         return json_safe({"engine": self.engine_name, "orders": self.to_list()})
 
     def plot(self, ax: Any = None) -> Any:
-        """Bars of the speed amplitude [rpm] by engine order on ``ax`` (a new figure if None);
+        """Bars of the speed amplitude [rad/s] by engine order on ``ax`` (a new figure if None);
         returns the Axes."""
         from ..plotting.speed import plot_orders
 
-        amp = np.asarray(self.speed_amplitude_rad_s) * RPM_PER_RAD_S
+        amp = np.asarray(self.speed_amplitude_rad_s)
         return plot_orders(np.asarray(self.order), amp, f"{self.engine_name}: speed harmonics", ax=ax)
+
+
+def _plural(n: int, noun: str) -> str:
+    """``1 cycle``, ``2 cycles``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def _peak(y0, y1, y2, sign):
@@ -93,14 +99,44 @@ def _peak(y0, y1, y2, sign):
     return jnp.where(ok, y1 - (y0 - y2) ** 2 / (8 * safe), y1)
 
 
+@functools.partial(jax.jit, static_argnums=3)
+def _extremes(x, slopes, cycle_rad, periodic: bool):
+    """(max, min) of each row of x (rows: consecutive cycles sampled uniformly in angle)
+    with the row's linear trend ``slopes`` [per rad] removed (:func:`rotor.cycles.cycle_ramp`),
+    refined by a parabola through the extreme sample and its neighbours (the neighbours in
+    the next and previous rows detrended by the same row's line)."""
+    C, P = x.shape
+    h = cycle_rad / P
+    xd = x - cycle_ramp(slopes, P, cycle_rad)
+    flat = x.reshape(-1)
+    rows = jnp.arange(C)
+
+    def line(j):  # the row's trend at sample j of the row (j may be −1 or P)
+        return slopes * (j * h - cycle_rad / 2)
+
+    out = []
+    for sign, arg in ((1.0, jnp.argmax), (-1.0, jnp.argmin)):
+        j = arg(xd, axis=1)
+        y1 = xd[rows, j]
+        if periodic:
+            out.append(_peak(xd[rows, (j - 1) % P], y1, xd[rows, (j + 1) % P], sign))
+        else:
+            i = j + rows * P
+            interior = (i > 0) & (i < flat.size - 1)
+            left = flat[jnp.clip(i - 1, 0, flat.size - 1)] - line(j - 1)
+            right = flat[jnp.clip(i + 1, 0, flat.size - 1)] - line(j + 1)
+            out.append(jnp.where(interior, _peak(left, y1, right, sign), y1))
+    return out[0], out[1]
+
+
 @functools.partial(jax.jit, static_argnums=1)
-def _extremes(x, periodic: bool):
-    """(max, min) of each row of x (rows: cycles) with parabolic refinement at the sample."""
+def _range(x, periodic: bool):
+    """(max, min) over all of x (rows: cycles) with parabolic refinement at the sample."""
     C, P = x.shape
     flat = x.reshape(-1)
     out = []
     for sign, arg in ((1.0, jnp.argmax), (-1.0, jnp.argmin)):
-        i = arg(x, axis=1) + jnp.arange(C) * P
+        i = arg(flat)
         if periodic:
             left = flat[jnp.where(i % P == 0, i + P - 1, i - 1)]
             right = flat[jnp.where(i % P == P - 1, i - P + 1, i + 1)]
@@ -128,10 +164,15 @@ class SpeedResult(Result):
     ``uniform_cycles``: how many whole cycles are sampled uniformly in θ; ``engine_name``;
     ``wall_s``: wall-clock time of the run [s].
 
+    **Irregularity:** ``delta_per_cycle`` (each complete cycle's δ with its linear trend
+    removed, as :func:`rotor.analyze_log` defines it), ``delta`` (the last cycle's; for a
+    steady state its one periodic cycle's, the classic (ω_max − ω_min)/ω_mean) and
+    ``speed_range_ratio`` ((ω_max − ω_min)/ω_mean over the whole run, drift included).
+
     **A steady state** also has ``period_s`` (the cycle's duration) [s]; either
     ``load_torque_Nm`` (the load that balances the engine's mean torque minus friction)
     [N·m] or ``fuel_scale`` (the fuelling that carries a speed-dependent load) [-];
-    ``excess_work_J`` (seed 004 §3.2.12: the largest swing of the work of the textbook
+    ``excess_work_J`` (Shishkov, "Dinamika dvigatelei", SUSU 2014, §3.2.12: the largest swing of the work of the textbook
     total torque) [J] and ``textbook_delta`` (its δ ≈ L_excess/(J·ω²)) [-];
     ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting only) [-]; ``converged``: whether
     the solver reached the periodic solution and the kinetic energy stays above 10⁻⁴ of
@@ -223,18 +264,32 @@ class SpeedResult(Result):
 
     @property
     def delta_per_cycle(self) -> Float[Array, " cycles"]:
-        """δ of each complete cycle, (ω_max − ω_min)/ω_mean [-], shape (cycles,)."""
+        """δ of each complete cycle [-], shape (cycles,): (ω_max − ω_min)/ω_mean of the cycle's
+        speed with its linear trend removed (the trend from the neighbouring cycles' mean
+        speeds, :mod:`rotor.cycles`: the definition and code of :func:`rotor.analyze_log`),
+        so that a run-up or a run-down adds nothing. A steady state's single periodic cycle
+        has no trend: its classic δ."""
         self._need_cycles()
-        hi, lo = _extremes(self._cycle_matrix(self.omega), periodic=self.kind == "steady")
-        return (hi - lo) / self.cycle_mean_omega
+        mean = self.cycle_mean_omega
+        slopes = cycle_slopes(mean, self.cycle_rad)
+        hi, lo = _extremes(self._cycle_matrix(self.omega), slopes, self.cycle_rad, self.kind == "steady")
+        return cycle_delta(hi, lo, mean)
 
     @property
     def delta(self) -> Array:
-        """δ over the whole run (all complete cycles), (ω_max − ω_min)/ω_mean [-]."""
+        """Speed irregularity δ of the last complete cycle, its linear trend removed [-]
+        (``delta_per_cycle[-1]``; for a steady state its one periodic cycle). The range of
+        the speed over the whole run is :attr:`speed_range_ratio`."""
+        return self.delta_per_cycle[-1]
+
+    @property
+    def speed_range_ratio(self) -> Array:
+        """(ω_max − ω_min)/ω_mean over all complete cycles of the run, drift included [-];
+        equal to δ for a steady state, not an irregularity for a transient."""
         self._need_cycles()
-        hi, lo = _extremes(self._cycle_matrix(self.omega), periodic=self.kind == "steady")
+        hi, lo = _range(self._cycle_matrix(self.omega), self.kind == "steady")
         mean = self.mean_omega if self.kind == "steady" else jnp.mean(self.cycle_mean_omega)
-        return (jnp.max(hi) - jnp.min(lo)) / mean
+        return (hi - lo) / mean
 
     @property
     def min_rpm(self) -> Array:
@@ -256,25 +311,38 @@ class SpeedResult(Result):
         self._need_cycles()
         P = self.points_per_cycle
         revs = self.strokes / 2  # revolutions per cycle
-        w = self._cycle_matrix(self.omega)
+        if isinstance(cycle, str) and cycle != "mean":
+            raise ValueError(f"cycle = {cycle!r}: a cycle number (from 0; −1 the last) or 'mean'")
+        if not isinstance(cycle, str) and not -self.uniform_cycles <= cycle < self.uniform_cycles:
+            raise ValueError(
+                f"cycle = {cycle!r}: the run has {_plural(self.uniform_cycles, 'complete cycle')}; "
+                f"give 0 … {self.uniform_cycles - 1}, a negative index from the end, or 'mean'"
+            )
+        # each cycle detrended as in rotor.analyze_log (rotor.cycles): a run-up leaks into no order
         m = self._cycle_matrix(self.torque)
+        Ws = cycle_spectrum(self._cycle_matrix(self.omega), self.cycle_mean_omega, self.cycle_rad)
+        Ms = cycle_spectrum(m, jnp.mean(m, axis=1), self.cycle_rad)
         if cycle == "mean":
-            W, M = jnp.mean(jnp.fft.rfft(w, axis=1), axis=0), jnp.mean(jnp.fft.rfft(m, axis=1), axis=0)
-        elif isinstance(cycle, str):
-            raise ValueError(f"cycle = {cycle!r}: a cycle number or 'mean'")
+            W, M = jnp.mean(Ws, axis=0), jnp.mean(Ms, axis=0)
         else:
-            W, M = jnp.fft.rfft(w[cycle]), jnp.fft.rfft(m[cycle])
+            W, M = Ws[cycle], Ms[cycle]
         k_max = min(int(np.floor(max_order * revs + 1e-9)), P // 2 - 1)
         k = np.arange(1, k_max + 1)
-        W, M = W[1 : k_max + 1] * 2 / P, M[1 : k_max + 1] * 2 / P
+        W, M = W[1 : k_max + 1], M[1 : k_max + 1]
         return Orders(k / revs, jnp.abs(W), jnp.angle(W), jnp.abs(M), jnp.angle(M), self.engine_name)
 
     # ------------------------------------------------------------------ people
     def to_json_dict(self, max_order: float = 6.0) -> dict:
         """What ``rotor steady --json`` and ``rotor simulate --json`` print: engine, kind,
-        method, fidelity, cycles, mean/min/max rpm, δ, stall, wall time, the steady state's
-        balance and textbook figures, and the orders up to ``max_order`` [per revolution]
-        (speed amplitude [rad/s], torque amplitude [N·m])."""
+        method, fidelity, cycles, mean/min/max rpm; ``delta`` (δ of the last complete cycle,
+        its linear trend removed; ``delta_of`` says so in words); for a transient also
+        ``delta_max`` (the largest per-cycle δ) with ``delta_max_cycle`` (counted from 1) and
+        ``speed_range_ratio`` ((ω_max − ω_min)/ω_mean over the whole run, drift included);
+        the stall (``stall_cycle`` from 1, ``stall_angle_deg`` within that cycle,
+        ``stall_angle_total_deg`` from the start); wall time; the steady state's balance and
+        textbook figures; and the orders of the last cycle, detrended, up to ``max_order``
+        [per revolution] (speed amplitude [rad/s], torque amplitude [N·m])."""
+        steady = self.kind == "steady"
         out: dict[str, Any] = {
             "engine": self.engine_name,
             "kind": self.kind,
@@ -284,12 +352,30 @@ class SpeedResult(Result):
             "mean_rpm": float(self.mean_rpm),
             "min_rpm": float(self.min_rpm),
             "max_rpm": float(self.max_rpm),
-            "delta": float(self.delta) if self.uniform_cycles else None,
-            "stalled": bool(self.stalled),
-            "stall_time_s": None if self.stall_time_s is None else float(self.stall_time_s),
-            "stall_angle_deg": None if self.stall_angle_rad is None else float(np.rad2deg(self.stall_angle_rad)),
-            "wall_s": float(self.wall_s),
+            "delta": None,
+            "delta_of": "the periodic cycle" if steady else "the last complete cycle, its linear trend removed",
         }
+        if self.uniform_cycles:
+            per_cycle = np.asarray(self.delta_per_cycle)
+            out["delta"] = float(per_cycle[-1])
+            if not steady:
+                out["delta_max"] = float(per_cycle.max())
+                out["delta_max_cycle"] = int(per_cycle.argmax()) + 1
+                out["speed_range_ratio"] = float(self.speed_range_ratio)
+        stall_deg = None if self.stall_angle_rad is None else float(np.rad2deg(self.stall_angle_rad))
+        cycle_deg = float(np.rad2deg(self.cycle_rad))
+        out.update(
+            {
+                "stalled": bool(self.stalled),
+                "stall_time_s": None if self.stall_time_s is None else float(self.stall_time_s),
+                "stall_cycle": None if stall_deg is None else int(np.floor(stall_deg / cycle_deg + 1e-9)) + 1,
+                "stall_angle_deg": None
+                if stall_deg is None
+                else stall_deg - cycle_deg * np.floor(stall_deg / cycle_deg + 1e-9),
+                "stall_angle_total_deg": stall_deg,
+                "wall_s": float(self.wall_s),
+            }
+        )
         for key in ("load_torque_Nm", "fuel_scale", "excess_work_J", "textbook_delta", "periodicity_error"):
             v = getattr(self, key)
             if v is not None:
@@ -304,29 +390,42 @@ class SpeedResult(Result):
         return json_safe(out)
 
     def summary(self, max_order: float = 6.0) -> str:
-        """What ``rotor steady`` and ``rotor simulate`` print: speeds, δ, the steady state's
-        balance, a stall, and the orders up to ``max_order`` [per revolution]."""
+        """What ``rotor steady`` and ``rotor simulate`` print: speeds, δ (and which), the
+        steady state's balance, a stall, and the orders up to ``max_order`` [per revolution]."""
         s = self.to_json_dict(max_order)
         lines = [
-            f"{s['engine']}: {s['kind']} run, method {s['method']}, {s['fidelity']} inertia",
+            f"{s['engine']}: {s['kind']} run, method {s['method']}, {s['fidelity']} inertia, "
+            f"{_plural(s['cycles'], 'complete cycle')}",
             f"  mean speed      {s['mean_rpm']:10.2f} rpm   (min {s['min_rpm']:.2f}, max {s['max_rpm']:.2f})",
         ]
         if s["delta"] is not None:
-            lines.append(f"  irregularity δ  {s['delta']:10.5f}      (1/δ = {1 / s['delta']:.1f})")
+            lines.append(f"  irregularity δ  {s['delta']:10.5f}      (1/δ = {1 / s['delta']:.1f}; {s['delta_of']})")
+        if "delta_max" in s and s["cycles"] > 1:
+            lines.append(f"  largest δ       {s['delta_max']:10.5f}      (cycle {s['delta_max_cycle']}, trend removed)")
+        if "speed_range_ratio" in s:
+            lines.append(
+                f"  speed range     {s['speed_range_ratio']:10.5f}      ((max − min)/mean over the run, drift included)"
+            )
         if "textbook_delta" in s:
             lines.append(
-                f"  textbook δ      {s['textbook_delta']:10.5f}      (seed 004: L_excess / (J·ω²), "
+                f"  textbook δ      {s['textbook_delta']:10.5f}      (Shishkov (2014) §3.2.12: L_excess / (J·ω²), "
                 f"L_excess = {s['excess_work_J']:.1f} J)"
             )
         if "load_torque_Nm" in s:
-            lines.append(f"  load torque     {s['load_torque_Nm']:10.2f} N·m (balances the mean engine torque)")
+            lines.append(
+                f"  load torque     {s['load_torque_Nm']:10.2f} N·m (no load given: balancing the mean engine torque)"
+            )
         if "fuel_scale" in s:
-            lines.append(f"  fuel scale      {s['fuel_scale']:10.4f}      (carries the load)")
+            lines.append(f"  fuel scale      {s['fuel_scale']:10.4f}      (fuelling scaled to carry the given load)")
         if s["stalled"]:
-            lines.append(f"  STALLED at t = {s['stall_time_s']:.4f} s, crank angle {s['stall_angle_deg']:.1f}°")
+            lines.append(
+                f"  STALLED at t = {s['stall_time_s']:.4f} s in cycle {s['stall_cycle']}, crank angle "
+                f"{s['stall_angle_deg']:.1f}° of the cycle"
+            )
         if self.incomplete:
             lines.append(f"  note: {self.incomplete}")
         if s["orders"]:
+            lines.append("  orders of the last cycle (trend removed):")
             lines.append("  order  speed amplitude [rad/s]  torque amplitude [N·m]")
             for o in s["orders"]:
                 lines.append(
@@ -357,9 +456,10 @@ class SpeedResult(Result):
     def plot(self, ax: Any = None, kind: str = "cycle") -> Any:
         """Draw on ``ax`` (a new figure if None) and return it.
 
-        ``kind``: ``"cycle"`` (rpm over the last cycle against crank angle), ``"time"``
-        (rpm against time over the run), ``"torque"`` (engine and load torque over the
-        last cycle) or ``"orders"`` (speed harmonics by engine order).
+        ``kind``: ``"cycle"`` (rpm over the last cycle against crank angle, titled with
+        its δ), ``"time"`` (rpm against time over the run), ``"torque"`` (engine and load
+        torque over the last cycle) or ``"orders"`` (speed harmonics [rad/s] of the last
+        cycle by engine order, detrended like δ).
         """
         from ..plotting.speed import plot_cycle_torque, plot_orders, plot_speed, plot_speed_time
 
@@ -372,10 +472,11 @@ class SpeedResult(Result):
         if kind == "time":
             stall = self.stall_time_s if self.stalled else None
             return plot_speed_time(np.asarray(self.t), rpm, title, stall_time_s=stall, ax=ax)
+        which = "" if self.kind == "steady" else " of the last cycle, trend removed"
         if kind == "orders":
             o = self.orders()
-            amp = np.asarray(o.speed_amplitude_rad_s) * RPM_PER_RAD_S
-            return plot_orders(o.order, amp, f"{title}; δ = {float(self.delta):.4g}", ax=ax)
+            amp = np.asarray(o.speed_amplitude_rad_s)
+            return plot_orders(o.order, amp, f"{title}\norders and δ{which}: δ = {float(self.delta):.4g}", ax=ax)
         P, C = self.points_per_cycle, self.uniform_cycles
         if C < 1:
             raise ValueError("the run holds no complete cycle to plot against crank angle")
@@ -383,7 +484,8 @@ class SpeedResult(Result):
         angle = np.arange(P) * cycle_deg / P
         if kind == "cycle":
             mean_rpm = float(self.cycle_mean_omega[-1]) * RPM_PER_RAD_S
-            title = f"{title}; δ = {float(self.delta_per_cycle[-1]):.4g}"
+            trend = "" if self.kind == "steady" else " (trend removed)"
+            title = f"{title}\nlast cycle, its δ{trend} = {float(self.delta):.4g}"
             return plot_speed(angle, rpm[sl], mean_rpm, title, cycle_deg, ax=ax)
         torque, load = np.asarray(self.torque)[sl], np.asarray(self.load_torque)[sl]
         return plot_cycle_torque(angle, torque, load, title, cycle_deg, ax=ax)

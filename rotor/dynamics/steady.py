@@ -12,10 +12,11 @@ Found directly, never by integrating until transients die:
   required mean speed by a two-dimensional Newton iteration (``method="shooting"``),
   started from the closed-form solution of the linearised losses.
 
-Balance: with no load or a constant load, the load torque is set to the engine's cycle-mean
-torque minus friction (``result.load_torque_Nm``); with a load that depends on speed,
-the fuelling is scaled until the engine carries it (``result.fuel_scale``, 1 = the
-engine file's pressure).
+Balance: with no load, the load torque is set to the engine's cycle-mean torque minus
+friction (``result.load_torque_Nm``, and the summary says so); with a load given (a
+constant one or one that depends on speed) the load is carried as given: the fuelling is
+scaled until the engine's mean torque meets it (``result.fuel_scale``, 1 = the engine
+file's pressure). A given load is never replaced.
 
 A periodic solution with a given mean speed always exists in theory, but when the
 kinetic energy at its minimum is below 10⁻⁴ of its mean (ω_min < 1 % of ω_mean) the
@@ -54,7 +55,7 @@ from .equation import (
     linear_parts,
     wrap_periodic,
 )
-from .loads import ConstantLoad, Load
+from .loads import Load
 from .result import SpeedResult
 
 __all__ = ["steady_state"]
@@ -216,10 +217,11 @@ def steady_state(
     - ``engine``: a :class:`rotor.Engine`.
     - ``rpm``: time-mean crank speed (angle travelled / time taken) [rpm]; default the
       engine file's ``[operating] rpm``.
-    - ``load``: None, a :class:`rotor.ConstantLoad` (both balanced: the load torque
-      becomes the engine's mean torque minus friction), or a speed-dependent load
-      (:class:`rotor.PolynomialLoad`, :class:`rotor.PropellerLoad`,
-      :class:`rotor.TableLoad`; the fuelling is scaled to carry it).
+    - ``load``: None (the load torque becomes the engine's mean torque minus friction:
+      ``result.load_torque_Nm``), or a load to carry, :class:`rotor.ConstantLoad` [N·m] or
+      speed-dependent (:class:`rotor.PolynomialLoad`, :class:`rotor.PropellerLoad`,
+      :class:`rotor.TableLoad`): the fuelling is scaled until the engine carries it
+      (``result.fuel_scale``); a motored engine (no combustion) cannot, and is refused.
     - ``fidelity``: ``"variable"`` (default), ``"series"`` (λ-series kinematics),
       ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.dynamics.crank_train`).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's, if any) or False.
@@ -255,7 +257,7 @@ def steady_state(
     s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
     fr = friction_coefficients(engine, friction)
     omega_m = xp.asarray(rpm, dtype=xp.float64) / RPM_PER_RAD_S
-    balance = "load" if load is None or isinstance(load, ConstantLoad) else "fuel"
+    balance = "load" if load is None else "fuel"  # a given load is carried, never replaced
     speed_load = None if balance == "load" else load
     lin = linear_losses(speed_load, fr)
     if method == "closed" and lin is None:
@@ -290,8 +292,8 @@ def _check_combustion(train, balance):
     work = concrete(jnp.sum(train.imep_combustion_pa))
     if balance == "fuel" and work is not None and not work > 0:
         raise EngineError(
-            "a speed-dependent load needs a firing engine: the fuelling is scaled to carry it, but this engine's "
-            "pressure has no combustion; give a ConstantLoad (or none) instead"
+            "a given load needs a firing engine: the fuelling is scaled to carry it, but this engine's pressure has "
+            "no combustion; give no load (load=None, --load none) to balance the mean engine torque instead"
         )
 
 
@@ -306,7 +308,7 @@ def _finish_arrays(engine, scene, E, t, omega_m):
     m_eng = scene.engine_torque(val, sc, omega, 0.0)
     m_loss = scene.loss(omega, t)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
-    # seed 004 §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
+    # Shishkov, "Dinamika dvigatelei" (SUSU 2014) §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
     # the gas torque at this point's fuelling plus the reciprocating inertia torque
     gas = val[:, COL_MOTORED] + jnp.sum(sc * val[:, COL_COMBUSTION:], axis=1)
     total = gas + train.textbook_k * omega_m**2

@@ -10,9 +10,9 @@ time, ``"grid"`` otherwise.
 
 from __future__ import annotations
 
-import math
 import sys
 import time
+import warnings
 from typing import Any, Literal
 
 import equinox as eqx
@@ -26,8 +26,9 @@ from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..errors import EngineError
 from ..units import RPM_PER_RAD_S
-from .crank_train import crank_train
+from .crank_train import COL_COMBUSTION, COL_MOTORED, crank_train
 from .equation import (
+    PROGRESS,
     Scene,
     angle_run,
     closed_run,
@@ -56,13 +57,18 @@ class Progress:
     """
 
     def __init__(self, total: int, enabled: bool | None):
-        self.total, self.start, self.shown = total, time.perf_counter(), False
+        self.total, self.start, self.shown, self.last = total, time.perf_counter(), False, 0
         self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
+
+    def fraction(self, done: float) -> None:
+        """Show that the fraction ``done`` (0…1) of the run is done."""
+        self.update(int(round(done * self.total)))
 
     def update(self, done: int) -> None:
         """Show that ``done`` of the cycles are done (once the run has taken ~2 s)."""
-        if not self.enabled:
+        if not self.enabled or (self.shown and done < self.last):
             return
+        self.last = done
         elapsed = time.perf_counter() - self.start
         if elapsed < 2.0 and done < self.total:
             return
@@ -86,15 +92,23 @@ def _known(x, default):
     return default if c is None else c.item()
 
 
-def _chunks(cycles: int, progress: bool) -> list[int]:
-    if not progress or cycles < 20:
-        return [cycles]
-    n = 20
-    size = math.ceil(cycles / n)
-    out = [size] * (cycles // size)
-    if cycles % size:
-        out.append(cycles % size)
-    return out
+def _warn_runaway(train, scales, fr, rpm):
+    """Warn where nothing resists the engine: no load, no governor and a mean engine
+    torque above friction at the start speed (the run accelerates)."""
+    if any(isinstance(x, jax.core.Tracer) for x in (rpm, scales, fr, train.values)):
+        return  # under jit/grad/vmap: no values to judge
+    vals, s0, (fa, fb, fc) = np.asarray(train.values), np.asarray(scales)[0], np.asarray(fr, dtype=np.float64)
+    engine_Nm = float(np.mean(vals[:, COL_MOTORED]) + np.sum(s0 * np.mean(vals[:, COL_COMBUSTION:], axis=0)))
+    w = float(rpm) / RPM_PER_RAD_S
+    friction_Nm = float(fa + fb * w + fc * w**2)
+    if engine_Nm - friction_Nm > 1e-3 * max(abs(engine_Nm), 1.0):
+        warnings.warn(
+            f"simulate: no load and no governor, and the mean engine torque ({engine_Nm:.1f} N·m) exceeds friction "
+            f"({friction_Nm:.1f} N·m) at {float(rpm):g} rpm: the engine will accelerate and δ will not be that of an "
+            "operating point; give a load (e.g. rotor.ConstantLoad(rotor.steady_state(engine, rpm).load_torque_Nm), "
+            "the one that balances it) or a governor",
+            stacklevel=3,
+        )
 
 
 def _check_scales(combustion, cycles, n):
@@ -199,9 +213,65 @@ def simulate(
             "a start from rest needs method='time' (or 'auto')"
         )
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
+    if load is None and governor is None:
+        _warn_runaway(train, scales, fr, rpm)
+    # the progress bar hears from inside the one compiled run (a host callback), so showing it
+    # compiles the same kernels once, never per chunk
+    bar = Progress(cycles, progress)
+    PROGRESS["report"] = bar.fraction if bar.enabled else None
+    try:
+        return _run(
+            engine,
+            train,
+            scene,
+            cycles,
+            method,
+            fidelity,
+            P,
+            stride,
+            rpm,
+            rtol_a,
+            at_rest,
+            lin,
+            governor,
+            steps_per_cycle,
+            step_deg,
+            grid_deg,
+            stop_at_stall,
+            max_time_s,
+            bar,
+            wall,
+        )
+    finally:
+        PROGRESS["report"] = None
+        bar.close()
+
+
+def _run(
+    engine,
+    train,
+    scene,
+    cycles,
+    method,
+    fidelity,
+    P,
+    stride,
+    rpm,
+    rtol_a,
+    at_rest,
+    lin,
+    governor,
+    steps_per_cycle,
+    step_deg,
+    grid_deg,
+    stop_at_stall,
+    max_time_s,
+    bar,
+    wall,
+):
+    """The run of :func:`simulate` once its arguments are checked."""
     omega0, E0, e_switch = _start(train, rpm)
     theta_step = train.cycle_rad / P
-    bar = Progress(cycles, progress)
     pieces: list[tuple[Any, ...]] = []  # (theta, t, E or None, omega or None, z, rows kept or None)
     done, t_now, E_now, z_now = 0, jnp.asarray(0.0), E0, jnp.asarray(0.0)
     handover = None  # (theta, t, omega, z) where the time domain takes over
@@ -209,8 +279,8 @@ def simulate(
     if method == "closed":
         assert lin is not None  # checked above
         a, c = lin
-        for size in _chunks(cycles, bar.enabled):
-            E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride)
+        for size in (cycles,):
+            E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride, bar.enabled)
             k = int(_known(stalled_at, size))
             pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, None, k))
             done += k
@@ -231,10 +301,10 @@ def simulate(
                 f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
                 f"(step_deg = {step_deg:g}); raise step_deg or steps_per_cycle"
             )
-        for size in _chunks(cycles, bar.enabled):
+        for size in (cycles,):
             th0 = done * train.cycle_rad
             (E, t, z), y_end, stalled_at = grid_run(
-                scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc, spc // P, e_switch
+                scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc, spc // P, e_switch, bar.enabled
             )
             k = int(_known(stalled_at, size))
             pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, z, k))
@@ -250,11 +320,11 @@ def simulate(
         extras["steps_per_cycle"] = spc
     elif method == "angle":
         steps = 0
-        for size in _chunks(cycles, bar.enabled):
+        for size in (cycles,):
             theta_out = done * train.cycle_rad + np.arange(1, size * P + 1) * theta_step
             th0 = done * train.cycle_rad
             (E, t, z), end, stopped, ok, n_steps = angle_run(
-                scene, th0, (E_now, t_now, z_now), theta_out, rtol_a, e_switch, 4000 * size + 10000
+                scene, th0, (E_now, t_now, z_now), theta_out, rtol_a, e_switch, 4000 * size + 10000, bar.enabled
             )
             steps += int(_known(n_steps, 0))
             stopped = bool(_known(stopped, False))
@@ -289,7 +359,6 @@ def simulate(
         extras["solver_steps"] = steps
     else:
         handover = (0.0, 0.0, omega0, 0.0)
-    bar.close()
 
     stalled = False
     stall_t = stall_th = None

@@ -1,4 +1,7 @@
-"""Articulated (master and slave) rods: kinematics of a slave piston (seeds 000, 001).
+"""Articulated (master and slave) rods: kinematics of a slave piston (V. N. Lukanin (ed.),
+"Internal combustion engines, vol. 2: Dynamics and design", 2009; A. I. Yamanin &
+A. V. Zharov, "Dynamics of piston engines"; V. A. Lashko, "Matrix methods in calculations of
+torsional vibrations of power plants with ICE", for the reduced inertia).
 
 The slave rod hangs on a knuckle pin fixed to the master rod at distance r₁ from the
 big-end centre, at an angle γ_k from the master rod's axis. Positions are written in

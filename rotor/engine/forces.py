@@ -1,4 +1,6 @@
-"""Forces and torques of the crank mechanism (seed 004 §3.2.2, signs as there).
+"""Forces and torques of the crank mechanism (the textbook dynamic calculation of Shishkov,
+"Dinamika dvigatelei" [Engine dynamics: guide to the course project], South Ural State
+University, 2014, §3.2.2, after Kolchin & Demidov; signs as there).
 
 Per cylinder, at crank speed ω (the textbook calculation holds ω constant):
 
@@ -91,8 +93,8 @@ def reciprocating_inertia_torque(engine: Engine, theta: ArrayLike, omega: ArrayL
 
 def total_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str = "exact") -> Array:
     """Textbook total torque of the engine at constant speed [N·m]: gas torque plus the
-    reciprocating inertia torque, summed over the cylinders at their phases (seed 004
-    §3.2.3 and §3.2.11; the total tangential force is this divided by R).
+    reciprocating inertia torque, summed over the cylinders at their phases (Shishkov
+    (2014) §3.2.3 and §3.2.11; the total tangential force is this divided by R).
 
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``omega``: crank speed
     [rad/s]; ``model``: piston kinematics, ``"exact"`` or ``"series"``.
@@ -103,7 +105,7 @@ def total_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str 
 def crank_forces(
     engine: Engine, theta: ArrayLike, omega: ArrayLike, cylinder: int = 1, model: str = "exact"
 ) -> dict[str, Array]:
-    """The seed 004 forces of one cylinder at constant crank speed.
+    """The textbook forces of one cylinder at constant crank speed (Shishkov (2014) §3.2.2).
 
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`.
@@ -119,7 +121,7 @@ def crank_forces(
         raise ValueError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
     i = cylinder - 1
     if i in engine.slave_index():
-        raise ValueError(f"cylinder {cylinder} is driven by a slave rod: the seed 004 table is for ordinary rods")
+        raise ValueError(f"cylinder {cylinder} is driven by a slave rod: the textbook table is for ordinary rods")
     g = engine.geometry
     theta = jnp.asarray(theta, dtype=jnp.float64)
     alpha = engine.mechanical_angles(theta)[..., i]
@@ -187,7 +189,7 @@ def indicated_power_w(engine: Engine, omega: ArrayLike | None = None) -> Array:
 
 
 def table_angles_deg(engine: Engine, step_deg: float) -> np.ndarray:
-    """Angles 0, step, …, cycle (inclusive, as in seed 004's tables) [deg]."""
+    """Angles 0, step, …, cycle (inclusive, as in the tables of Shishkov (2014)) [deg]."""
     cycle = 360.0 * engine.strokes / 2
     if not (np.isfinite(step_deg) and 0 < step_deg <= cycle):
         raise ValueError(f"step must be a positive angle up to {cycle:g} degrees, got {step_deg!r}")

@@ -1,4 +1,7 @@
-"""Reduced moment of inertia of the crank train, I(θ), and its derivative (seeds 001, 003).
+"""Reduced moment of inertia of the crank train, I(θ), and its derivative (V. A. Lashko,
+"Matrix methods in calculations of torsional vibrations of power plants with ICE", for
+articulated rods; V. F. Anisimov, M. P. Yelenich & V. V. Melnyk, "Modelling a piston engine
+by the irregularity of crankshaft rotation", for the A·cos²α + B·cosα + C form).
 
 The kinetic energy of the moving parts at crank speed ω is ½·I(θ)·ω², with
 
@@ -12,14 +15,14 @@ velocity per unit ω.
 Models (``model=``):
 
 - ``"exact"``: the expression above (default).
-- ``"coefficients"``: each cylinder's I_cyl(α) replaced by the seed 003 form
-  A·cos²α + B·cosα + C, with A, B, C chosen so that the mean and the first and second
+- ``"coefficients"``: each cylinder's I_cyl(α) replaced by the form of Anisimov
+  et al., A·cos²α + B·cosα + C, with A, B, C chosen so that the mean and the first and second
   harmonics of the exact I_cyl are kept (see :func:`inertia_coefficients`). For a
   central two-mass cylinder A ≈ −m_rec·R², B ≈ m_rec·R²·λ/2, C ≈ m_rot·R² + m_rec·R²·(1 + λ²/8);
   it neglects the 3rd and 4th harmonics, of relative size λ/2 and λ²/8 of m_rec·R².
-  (The coefficients printed in seed 003 are the moment of the masses about the crank
+  (The coefficients printed in that paper are the moment of the masses about the crank
   axis, m·x², which contains L²-terms and is not the kinetic-energy inertia; rotor keeps
-  the seed's form but fits it to the kinetic energy.)
+  the paper's form but fits it to the kinetic energy.)
 - ``"mean"``: the cycle mean of I(θ), a constant.
 
 I'(θ) comes from automatic differentiation of the same expression.
@@ -89,7 +92,8 @@ def cylinder_inertia(engine: Engine, theta: ArrayLike) -> Float[Array, "... cyli
 
 
 def inertia_coefficients(engine: Engine) -> tuple[Array, Array, Array]:
-    """The seed 003 coefficients of each cylinder: I_cyl(α) ≈ A·cos²α + B·cosα + C.
+    """The coefficients of each cylinder in the form of Anisimov, Yelenich & Melnyk:
+    I_cyl(α) ≈ A·cos²α + B·cosα + C.
 
     Chosen so that the form has the same mean and the same first and second cosine
     harmonics as the exact I_cyl(α), α being the cylinder's own crank angle: with
@@ -117,7 +121,8 @@ def reduced_inertia(engine: Engine, theta: ArrayLike, model: str = "exact") -> A
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`.
     - ``theta``: engine crank angle [rad], any shape.
-    - ``model``: ``"exact"`` (default), ``"coefficients"`` (seed 003 form) or ``"mean"``.
+    - ``model``: ``"exact"`` (default), ``"coefficients"`` (the A·cos²α + B·cosα + C
+      form of Anisimov et al.) or ``"mean"``.
 
     **Returns:** I(θ), shape of ``theta`` [kg·m²].
     """

@@ -1,4 +1,8 @@
-"""Kinematics of the crank mechanism (seeds 000, 002, 004).
+"""Kinematics of the crank mechanism: V. N. Lukanin (ed.), "Internal combustion engines,
+vol. 2: Dynamics and design" (2009) and A. I. Yamanin & A. V. Zharov, "Dynamics of piston
+engines", for the exact and offset (desaxial) forms; the Russian Wikipedia article
+"Кривошипно-шатунный механизм" (crank mechanism) for the piston motion equations;
+Shishkov, "Dinamika dvigatelei" (SUSU, 2014) §3.2.1 for the λ-series.
 
 Conventions: ``theta`` is the crank angle [rad] of the throw measured from the cylinder
 axis in the direction of rotation (0 = the throw points at the cylinder head). The
@@ -10,7 +14,7 @@ same functions serve a constant and a varying crank speed: the piston velocity i
 ``ds/dθ · ω`` [m/s] and its acceleration ``d²s/dθ² · ω² + ds/dθ · ε`` [m/s²].
 
 ``model="exact"`` is the reference. ``model="series"`` is the textbook λ-series
-(seed 000 and seed 004 §3.2.1), accurate to O(λ³) for a central mechanism and to
+(Lukanin 2009; Yamanin & Zharov; Shishkov (2014) §3.2.1), accurate to O(λ³) for a central mechanism and to
 O(λ³ + λ²z²) for an offset one.
 """
 
@@ -68,7 +72,7 @@ def _check_model(model: str) -> None:
 def rod_motion(
     theta: ArrayLike, crank_radius_m: ArrayLike, rod_length_m: ArrayLike, pin_offset_m: ArrayLike = 0.0
 ) -> RodMotion:
-    """Exact rod angle β(θ) and its derivatives (seed 000).
+    """Exact rod angle β(θ) and its derivatives (Lukanin 2009; Yamanin & Zharov).
 
     **Arguments:**
     - ``theta``: crank angle from the cylinder axis [rad].
@@ -94,7 +98,8 @@ def piston_motion(
     pin_offset_m: ArrayLike = 0.0,
     model: str = "exact",
 ) -> PistonMotion:
-    """Piston displacement from TDC, ds/dθ and d²s/dθ² (seeds 000, 002, 004).
+    """Piston displacement from TDC, ds/dθ and d²s/dθ² (Lukanin; Yamanin & Zharov;
+    Wikipedia; Shishkov §3.2.1).
 
     Exact: s = R[√((1+1/λ)² − z²) − cos θ − cos β / λ], ds/dθ = R sin(θ+β)/cos β,
     d²s/dθ² = R[cos(θ+β)/cos β + λ cos²θ / cos³β].

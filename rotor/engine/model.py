@@ -202,7 +202,8 @@ class Operating(eqx.Module):
 
 
 class Articulated(eqx.Module):
-    """``[articulated]``: slave rods hinged on a master rod (V and radial engines, seeds 000/001).
+    """``[articulated]``: slave rods hinged on a master rod (V and radial engines;
+    Lukanin 2009, Yamanin & Zharov, Lashko).
 
     **Fields:** ``slaves``: cylinder numbers driven by a slave rod; ``masters``: the
     master cylinder of each (same crank throw); ``knuckle_radius_m``: big-end centre to

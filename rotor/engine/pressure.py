@@ -9,7 +9,8 @@ and 2π (360°) = firing TDC; for a two-stroke engine over 0…2π with 0 = firi
 Tables are interpolated with a periodic monotone cubic (PCHIP, Fritsch–Carlson
 slopes with Brodlie's weights): it passes through every point, is continuously
 differentiable including across the end of the cycle, and never overshoots, so a
-step in the table (the seed's drop at 540° when the exhaust opens) does not ring.
+step in the table (the drop at 540° when the exhaust opens in
+the 4ChN15/20.5 table of Shishkov, "Dinamika dvigatelei", SUSU 2014) does not ring.
 """
 
 from __future__ import annotations

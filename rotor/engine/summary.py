@@ -27,9 +27,11 @@ class EngineSummary(Result):
     [-]; ``mean_piston_speed_m_s`` [m/s]; ``imep_pa`` [Pa]; ``mean_gas_torque_Nm`` [N·m];
     ``indicated_power_w`` [W]; ``total_torque_min_Nm``, ``total_torque_max_Nm``: range of
     the textbook total torque (gas + reciprocating inertia at constant speed) [N·m];
-    ``excess_work_J``: the largest swing of ∫(M − M_mean)dθ (seed 004 §3.2.12) [J];
+    ``excess_work_J``: the largest swing of ∫(M − M_mean)dθ (the flywheel's excess work,
+    Shishkov, "Dinamika dvigatelei", SUSU 2014, §3.2.12) [J];
     ``inertia_mean_kgm2``, ``inertia_min_kgm2``, ``inertia_max_kgm2``: of the reduced
-    inertia I(θ) [kg·m²]; ``inertia_coefficients_kgm2``: cylinder 1's seed 003 A, B, C
+    inertia I(θ) [kg·m²]; ``inertia_coefficients_kgm2``: cylinder 1's A, B, C of I ≈ A·cos²α + B·cosα + C
+    (Anisimov, Yelenich & Melnyk)
     [kg·m²]. **Curves** (not in the JSON): ``angle_deg`` [deg], ``total_torque_Nm`` [N·m]
     and ``inertia_kgm2`` [kg·m²] over one cycle.
     """
@@ -76,14 +78,14 @@ class EngineSummary(Result):
                 "total torque (gas + inertia)",
                 f"{self.total_torque_min_Nm:.0f} ... {self.total_torque_max_Nm:.0f} N*m",
             ),
-            ("excess work (seed 004, 3.2.12)", f"{self.excess_work_J:.1f} J"),
+            ("excess work (Shishkov 3.2.12)", f"{self.excess_work_J:.1f} J"),
             (
                 "reduced inertia I(theta)",
                 f"mean {self.inertia_mean_kgm2:.4f}, {self.inertia_min_kgm2:.4f} ... "
                 f"{self.inertia_max_kgm2:.4f} kg*m^2",
             ),
             (
-                "seed 003 form, cylinder 1",
+                "A cos^2 + B cos + C, cylinder 1",
                 "A = {A:.5f}, B = {B:.5f}, C = {C:.5f} kg*m^2".format(**self.inertia_coefficients_kgm2),
             ),
         ]
@@ -118,7 +120,7 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
 
     **Returns:** an :class:`EngineSummary`: displacement, crank radius, λ, mean piston
     speed, IMEP, mean gas torque, indicated power, the range of the textbook total torque
-    and its excess work (the largest swing of ∫(M − M_mean)dθ, seed 004 §3.2.12), and the
+    and its excess work (the largest swing of ∫(M − M_mean)dθ, Shishkov (2014) §3.2.12), and the
     mean, minimum and maximum of the reduced inertia I(θ).
     """
     rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
@@ -166,7 +168,7 @@ class EngineCurves(Result):
     angle of cylinder 1 over the cycle, ends included [deg]; ``gas_torque_Nm``,
     ``inertia_torque_Nm`` (the reciprocating masses' textbook inertia torque) and
     ``total_torque_Nm`` [N·m]; ``inertia_exact_kgm2``, ``inertia_coefficients_kgm2`` (the
-    seed 003 form) and ``inertia_mean_kgm2`` (its cycle mean) of I(θ) [kg·m²].
+    A·cos²α + B·cosα + C form of Anisimov et al.) and ``inertia_mean_kgm2`` (its cycle mean) of I(θ) [kg·m²].
     """
 
     engine_name: str
@@ -198,7 +200,7 @@ class EngineCurves(Result):
             ("inertia torque", self.inertia_torque_Nm, "N·m", ".1f"),
             ("total torque", self.total_torque_Nm, "N·m", ".1f"),
             ("I(θ) exact", self.inertia_exact_kgm2, "kg·m²", ".5f"),
-            ("I(θ) seed 003", self.inertia_coefficients_kgm2, "kg·m²", ".5f"),
+            ("I(θ) A·cos² + B·cos + C", self.inertia_coefficients_kgm2, "kg·m²", ".5f"),
         ):
             y = np.asarray(y)[:-1]
             lines.append(f"  {label:15s} mean {y.mean():{fmt}}, {y.min():{fmt}} … {y.max():{fmt}} {unit}")
@@ -228,8 +230,8 @@ class EngineCurves(Result):
 
     def plot(self, ax: Any = None, which: str = "torque") -> Any:
         """``which="torque"``: total torque (gas + reciprocating inertia), its parts and its
-        mean over the cycle; ``"inertia"``: I(θ) over a revolution, exact, the seed 003
-        form and the mean. On ``ax`` (or a new figure); returns the Axes."""
+        mean over the cycle; ``"inertia"``: I(θ) over a revolution, exact, the
+        A·cos²α + B·cosα + C form and the mean. On ``ax`` (or a new figure); returns the Axes."""
         from ..plotting.engine import plot_inertia, plot_torque
 
         if which == "torque":
@@ -256,8 +258,8 @@ class EngineCurves(Result):
 
 
 def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int = 2) -> EngineCurves:
-    """Torque (gas, reciprocating inertia, total) and the reduced inertia I(θ) (exact, seed
-    003 form, mean) over one cycle at constant speed: what ``rotor plot`` draws.
+    """Torque (gas, reciprocating inertia, total) and the reduced inertia I(θ) (exact, the
+    A·cos²α + B·cosα + C form, mean) over one cycle at constant speed: what ``rotor plot`` draws.
 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``rpm``: crank speed [rev/min]
     (default ``[operating] rpm``); ``points_per_deg``: samples per degree [1/deg].

@@ -1,4 +1,6 @@
-"""The one-cylinder kinematic and dynamic table of a crank mechanism (seed 004, appendix 5)."""
+"""The one-cylinder kinematic and dynamic table of a crank mechanism, as in the course-project
+calculation of Shishkov, "Dinamika dvigatelei" (Engine dynamics: guide to the course project),
+South Ural State University, 2014, appendix 5 (after Kolchin & Demidov and Popyk)."""
 
 from __future__ import annotations
 
@@ -66,7 +68,7 @@ class CrankTable(Result):
     def _title(self) -> str:
         return (
             f"{self.engine_name}: cylinder {self.cylinder} at {self.rpm:g} rpm, "
-            f"{self.kinematics} kinematics (seed 004 uses the lambda series)"
+            f"{self.kinematics} kinematics (the textbook uses the lambda series)"
         )
 
     def _header(self) -> list[str]:
@@ -88,7 +90,7 @@ class CrankTable(Result):
         return buf.getvalue()
 
     def to_text(self) -> str:
-        """A fixed-width table as in seed 004 (forces in kN), with a header of the inputs."""
+        """A fixed-width table as in Shishkov (2014) (forces in kN), with a header of the inputs."""
         lines = [self._title(), *self._header()]
         widths = [max(len(h), len(u) + 2, 9 if d < 3 else 10) for _, h, u, _, d in _TEXT]
         lines.append(" ".join(h.rjust(w) for (_, h, _, _, _), w in zip(_TEXT, widths)))
@@ -153,13 +155,14 @@ class CrankTable(Result):
 def crank_table(
     engine: Engine, rpm: float | None = None, step_deg: float = 10.0, kinematics: str = "series", cylinder: int = 1
 ) -> CrankTable:
-    """Seed 004's kinematic and dynamic table of one cylinder over a cycle.
+    """The textbook kinematic and dynamic table of one cylinder over a cycle (Shishkov (2014),
+    appendix 5).
 
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`.
     - ``rpm``: crank speed [rev/min]; default the engine's ``[operating] rpm``.
     - ``step_deg``: angle step [deg]; must divide the cycle (720° or 360°).
-    - ``kinematics``: ``"series"`` (the λ-series of seed 004 §3.2.1, the default, so that
+    - ``kinematics``: ``"series"`` (the λ-series of Shishkov (2014) §3.2.1, the default, so that
       the table is the textbook's) or ``"exact"``. The rod angle is exact in both.
     - ``cylinder``: cylinder number (1…n).
 

@@ -20,8 +20,8 @@ The pipeline of :func:`analyze_log`:
    δ = (ω_max − ω_min)/ω_mean of the speed rebuilt from its orders up to ``max_order``
    (the tooth-resolved speed carries the timer's jitter, which max − min would pick up).
    A cycle's linear trend (from the mean speeds of its neighbours) is taken out before
-   the transform and put back for δ, so a run-up or a coast-down does not leak into
-   every order.
+   the transform and δ, so a run-up or a coast-down does not leak into every order nor
+   into δ: the same definition and code as a simulated run's (:mod:`rotor.cycles`).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from jaxtyping import ArrayLike
 
+from ..cycles import cycle_delta, cycle_spectrum
 from ..errors import LogError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
@@ -521,7 +522,7 @@ def analyze_log(
     name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
     revs = strokes // 2
     cycle = TWO_PI * revs
-    notes = []
+    notes = list(log.notes)  # e.g. a header line that was skipped
     track = te = edges = None
     if log.kind == "speed":
         t = log["time"]
@@ -695,10 +696,9 @@ def analyze_log(
     ends_t = t_of(np.concatenate([starts, [starts[-1] + cycle]]))
     t_start = ends_t[:-1]
     mean_omega = cycle / np.diff(ends_t)
-    # linear trend of each cycle from its neighbours' mean speeds (none for a single cycle)
-    slope = np.gradient(mean_omega) / cycle if C > 1 else np.zeros(1)
-    ramp = slope[:, None] * (psi[None, :] - cycle / 2)
-    X = np.fft.rfft(omega - ramp, axis=1) * (2.0 / P)
+    # each cycle's harmonics with its linear trend (from its neighbours' mean speeds) removed: the same code as
+    # a simulated run's (rotor.cycles), so that logged and simulated orders and δ compare
+    X = cycle_spectrum(omega, mean_omega, cycle)
     kmax = int(np.floor(max_order * revs + 1e-9))
     k = np.arange(1, kmax + 1)
     orders = k / revs
@@ -712,8 +712,8 @@ def analyze_log(
     Xf = np.zeros((C, fine // 2 + 1), complex)
     Xf[:, : kmax + 1] = X[:, : kmax + 1] * gain[None, :] * (fine / 2.0)
     Xf[:, 0] = np.real(X[:, 0]) / 2.0 * fine
-    smooth = np.fft.irfft(Xf, n=fine, axis=1) + slope[:, None] * (np.arange(fine)[None, :] * cycle / fine - cycle / 2)
-    delta = (smooth.max(axis=1) - smooth.min(axis=1)) / mean_omega
+    smooth = np.fft.irfft(Xf, n=fine, axis=1)  # detrended, as δ is defined (rotor.cycles)
+    delta = cycle_delta(smooth.max(axis=1), smooth.min(axis=1), mean_omega)
     if te is not None and isinstance(tooth_errors, str) and not te.method.startswith("coast-down"):
         notes.append(_firing_run_note(te, cylinders, strokes, max_order, w.teeth))
     press = None

@@ -2,7 +2,11 @@
 
 A log is a table of numbers, one row per sample or per tooth edge, separated by commas,
 tabs, semicolons or blanks, with an optional header line; lines starting with ``#``
-are comments. The user names its columns, in file order, from:
+are comments. The header is the first line that is not a comment, and it holds names
+only: a first line that mixes numbers and text is refused (it may be data in another
+format, e.g. a decimal comma), as is a header of known names that contradicts the column
+spec; a header of other names is skipped when the spec names the columns, and
+``Log.notes`` says so. The user names its columns, in file order, from:
 
 ==================  =====================================================================
 ``time``            sample time [s] (with ``encoder_v``, ``pressure_v``, ``cam_v``,
@@ -77,12 +81,15 @@ class Log:
 
     **Attributes:** ``columns``: name → float64 array (one entry per row; no ``-``
     columns); ``lines``: the file line number of each row (1-based; ``None`` for arrays
-    given in Python), for messages; ``source``: the file name or ``"arrays"``.
+    given in Python), for messages; ``source``: the file name or ``"arrays"``; ``notes``:
+    what the reader did that the user should know (e.g. a header line of names it does not
+    know, skipped because the column spec names the columns).
     """
 
     columns: dict
     lines: np.ndarray | None = None
     source: str = "arrays"
+    notes: tuple = ()
 
     def __post_init__(self):
         _check(self)
@@ -180,7 +187,7 @@ def _check(log: Log) -> None:
             )
     n = log.rows
     if n < 3:
-        raise LogError(f"{log.source}: {n} rows; far too short for one revolution")
+        raise LogError(f"{log.source}: {n} row{'s' if n != 1 else ''}; far too short for one revolution")
 
 
 def _delimiter(line: str) -> str | None:
@@ -237,17 +244,51 @@ def read_log(
     if sep == " ":
         sep = None
     tokens = [t.strip() for t in (first[1].split(sep) if sep else first[1].split())]
-    header = not all(_is_number(t) for t in tokens if t != "")
+    numeric = [_is_number(t) for t in tokens if t != ""]
+    header = not any(numeric)
+    if not header and not all(numeric):
+        bad = next(t for t in tokens if t != "" and not _is_number(t))
+        raise LogError(
+            f"{path}: line {first[0]} ({_short(first[1])}) mixes numbers and text ({bad!r} is not a number): "
+            f"a header line holds column names only and a data line numbers only (decimal point '.'); "
+            f"start a line with '#' to make it a comment"
+        )
     ncols = len(tokens)
+    notes: list[str] = []
     if columns is None:
         if header and all(t in COLUMN_NAMES for t in tokens):
             columns = tokens
         elif ncols == 1 and not header:
             columns = ["tooth_time_s"]
+        elif header:
+            unknown = [t for t in tokens if t not in COLUMN_NAMES]
+            raise LogError(
+                f"{path}: line {first[0]} is a header whose names {', '.join(map(repr, unknown))} are not "
+                f"column names ({', '.join(COLUMN_NAMES)}); name the {ncols} columns (e.g. "
+                f"columns='time,encoder_v,pressure_v' or --columns time,encoder_v,pressure_v; '-' skips one)"
+            )
         else:
             raise LogError(
                 f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v' or "
                 f"--columns time,encoder_v,pressure_v; '-' skips one)"
+            )
+    elif header:
+        spec = parse_columns(columns)
+        clash = [
+            (i, h, n)
+            for i, (h, n) in enumerate(zip(tokens, spec))
+            if h in COLUMN_NAMES and h != "-" and n != "-" and h != n
+        ]
+        if clash:
+            i, h, n = clash[0]
+            raise LogError(
+                f"{path}: line {first[0]}: the header names column {i + 1} {h!r} but the column spec names "
+                f"it {n!r}; make them agree, or leave the spec out to use the header's names"
+            )
+        if not all(t in COLUMN_NAMES for t in tokens):
+            notes.append(
+                f"header line {first[0]} ({_short(first[1])}) skipped: the columns are named by the spec "
+                f"({', '.join(spec)})"
             )
     names = parse_columns(columns)
     if len(names) > ncols:
@@ -263,7 +304,12 @@ def read_log(
     if header:
         nums = nums[1:]
     cols = {names[i]: data[:, j] for j, i in enumerate(use)}
-    return Log(cols, nums[: data.shape[0]], source=os.path.basename(path))
+    return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes))
+
+
+def _short(line: str, width: int = 60) -> str:
+    """``line`` quoted, cut to about ``width`` characters, for a message."""
+    return repr(line if len(line) <= width else line[: width - 1] + "…")
 
 
 def _parse(path, text, sep, header, ncols, use) -> np.ndarray:

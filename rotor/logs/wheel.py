@@ -180,7 +180,7 @@ def locate_teeth(times: ArrayLike, wheel: str | Wheel, *, index_times: ArrayLike
     n = t.size
     if n < E + 3:
         raise LogError(
-            f"{n} tooth edges: a {wheel.spec} wheel gives {E} per revolution; the log must hold more than "
+            f"{n} tooth edge{'s' if n != 1 else ''}: a {wheel.spec} wheel gives {E} per revolution; the log must hold more than "
             f"one revolution ({E + 3} edges or more) to find its reference"
         )
     if np.any(np.diff(t) <= 0):
@@ -327,7 +327,7 @@ class ToothErrors(Result):
         to the engine."""
         lines = [
             f"tooth errors of a {self.wheel} wheel ({self.method}"
-            + (f", {self.revolutions} revolutions" if self.revolutions else "")
+            + (f", {self.revolutions} revolution{'s' if self.revolutions != 1 else ''}" if self.revolutions else "")
             + (f", from {self.source}" if self.source else "")
             + ")",
             f"  rms {np.rad2deg(self.rms_rad):.4f}°, largest {np.max(np.abs(self.errors_deg)):.4f}° "
@@ -515,7 +515,9 @@ def estimate_tooth_errors(
     if strokes == 4 and R % 2:
         R -= 1
     if R < 2:
-        raise LogError(f"tooth errors: {max(R, 0)} complete revolutions; need 2 or more to estimate them")
+        raise LogError(
+            f"tooth errors: {max(R, 0)} complete revolution{'s' if R != 1 else ''}; need 2 or more to estimate them"
+        )
     ref = ref[: R + 1]
     t0 = track.t[ref]
     theta = CubicSpline(t0, TWO_PI * track.rev[ref], bc_type="not-a-knot")

@@ -85,7 +85,7 @@ def plot_flywheel_design(
 
 def plot_textbook_flywheel(textbook: Any, ax: Any = None) -> Any:
     """Plot a :class:`rotor.TextbookFlywheel`: J₀, its split into the rods and pistons and
-    the ``[crankshaft]`` equivalent, and the seed's flywheel 0.85·J₀, as bars [kg·m²].
+    the ``[crankshaft]`` equivalent, and the textbook's flywheel 0.85·J₀, as bars [kg·m²].
 
     **Returns:** the Axes.
     """

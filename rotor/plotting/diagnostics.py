@@ -21,14 +21,16 @@ def plot_identification(
     imep_std_pa: Any,
     misfire: Any,
     title: str,
+    measured_imep_pa: Any = None,
     ax: Any = None,
 ) -> Any:
     """The plot of a :class:`rotor.Identification`, from what it hands over: the speed over
     the record, measured ``omega`` and the model's ``omega_model`` ((cycles, P) [rad/s]); the
     identified gas torque of each cylinder ``cylinder_torques`` ((cycles, P, cylinders)
     [N·m]); each cylinder's IMEP per cycle ``imep_pa`` ± ``imep_std_pa`` ((cycles, cylinders)
-    [Pa]) with the ``misfire`` flags ((cycles, cylinders) bool) marked. ``title``: of the
-    speed panel. ``ax``: three Axes, or None for a new figure.
+    [Pa]) with the ``misfire`` flags ((cycles, cylinders) bool) marked, and cylinder 1's IMEP
+    per cycle from a pressure channel ``measured_imep_pa`` ((cycles,) [Pa], or None) over
+    it. ``title``: of the speed panel. ``ax``: three Axes, or None for a new figure.
 
     **Returns:** the array of three Axes.
     """
@@ -73,6 +75,18 @@ def plot_identification(
             capsize=2,
             label=f"cylinder {c + 1}",
         )
+    if measured_imep_pa is not None:
+        measured = np.asarray(measured_imep_pa, dtype=np.float64).reshape(-1)
+        ax_i.plot(
+            np.arange(measured.size),
+            measured / PA_PER_BAR,
+            "s--",
+            ms=4,
+            lw=0.8,
+            color="k",
+            mfc="none",
+            label="cylinder 1, pressure channel",
+        )
     mk, mc = np.nonzero(misfire)
     if mk.size:
         ax_i.plot(mk, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
@@ -80,7 +94,7 @@ def plot_identification(
     ax_i.set_ylabel("IMEP [bar]")
     ax_i.grid(True, alpha=0.3)
     ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
-    ax_i.legend(fontsize=8, ncol=min(5, cylinders + 1))
+    ax_i.legend(fontsize=8, ncol=min(5, cylinders + 2))
     return axes
 
 

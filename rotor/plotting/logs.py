@@ -48,7 +48,9 @@ def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
     rpm = a.omega * RPM_PER_RAD_S
     for row in rpm:
         ax_w.plot(ang, row, lw=0.6, color="0.6", alpha=0.6)
-    ax_w.plot(ang, rpm.mean(axis=0), lw=1.8, color="C0", label=f"mean of {a.cycles} cycles")
+    ax_w.plot(
+        ang, rpm.mean(axis=0), lw=1.8, color="C0", label=f"mean of {a.cycles} cycles" if a.cycles != 1 else "1 cycle"
+    )
     ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
     ax_w.set_ylabel("speed [rpm]")
     ax_w.legend(fontsize=8)
@@ -60,7 +62,7 @@ def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
     ax_c.set_ylabel("mean speed [rpm]", color="C0")
     twin = ax_c.twinx()
     twin.plot(k, a.delta, "s--", color="C3", ms=4)
-    twin.set_ylabel("δ [-]", color="C3")
+    twin.set_ylabel("δ per cycle, trend removed [-]", color="C3")
     ax_c.grid(True, alpha=0.3)
     ax_c.set_title("cycle to cycle")
     m, s = (

@@ -81,19 +81,20 @@ def plot_cycle_torque(
     return ax
 
 
-def plot_orders(order: ArrayLike, amplitude_rpm: ArrayLike, title: str, ax: Any = None) -> Any:
-    """Bars of the speed harmonic amplitudes by engine order.
+def plot_orders(order: ArrayLike, amplitude_rad_s: ArrayLike, title: str, ax: Any = None) -> Any:
+    """Bars of the speed harmonic amplitudes by engine order, in rad/s as in the text and
+    JSON outputs.
 
-    **Arguments:** ``order``: engine orders [per revolution]; ``amplitude_rpm``: speed
-    amplitude of each [rev/min]; ``title``; ``ax``.
+    **Arguments:** ``order``: engine orders [per revolution]; ``amplitude_rad_s``: speed
+    amplitude of each [rad/s]; ``title``; ``ax``.
 
     **Returns:** the Axes.
     """
     order = np.asarray(order)
     ax = new_axes(ax)
-    ax.bar(order, amplitude_rpm, width=0.3)
+    ax.bar(order, amplitude_rad_s, width=0.3)
     ax.set_xlabel("engine order [per revolution]")
-    ax.set_ylabel("speed amplitude [rpm]")
+    ax.set_ylabel("speed amplitude [rad/s]")
     ax.set_xticks(order[1::2] if len(order) > 12 else order)
     ax.grid(True, alpha=0.3, axis="y")
     ax.set_title(title)
