@@ -73,3 +73,60 @@ def arrays_only(tree):
         return x
 
     return jax.tree_util.tree_map(leaf, tree)
+
+
+# ----------------------------------------------------------------------------- sizes
+MEMORY_ENV = "ROTOR_MEMORY_LIMIT_GB"
+"""Environment variable that caps the memory one array of rotor may take [GB] (default:
+half of the memory available when the check runs)."""
+
+
+def memory_budget_bytes() -> int:
+    """The most memory one computation of rotor plans to take [bytes].
+
+    ``ROTOR_MEMORY_LIMIT_GB`` if set, else half of what the operating system reports as
+    available (``MemAvailable`` on Linux, the physical memory elsewhere), at least 256 MB."""
+    import os
+
+    env = os.environ.get(MEMORY_ENV)
+    if env:
+        try:
+            gb = float(env)
+        except ValueError:
+            raise EngineError(f"{MEMORY_ENV} = {env!r}: must be a number of gigabytes, e.g. 4") from None
+        if not (np.isfinite(gb) and gb > 0):
+            raise EngineError(f"{MEMORY_ENV} = {env!r}: must be a positive number of gigabytes")
+        return int(gb * 1e9)
+    available = None
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    available = int(line.split()[1]) * 1024
+                    break
+    except OSError:
+        pass
+    if available is None:
+        try:
+            available = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        except (ValueError, OSError, AttributeError):
+            available = 8 * 1024**3
+    return max(int(available // 2), 256 * 1024**2)
+
+
+def check_size(n_bytes: float, what: str, way_out: str, *, error: type[Exception] = EngineError) -> None:
+    """Refuse, before allocating, a computation that needs more memory than
+    :func:`memory_budget_bytes`.
+
+    **Arguments:** ``n_bytes``: the memory it would take [bytes]; ``what``: what would be
+    allocated, in words (e.g. ``"cycles = 100000 at 720 samples per cycle"``); ``way_out``:
+    what the user can do (e.g. ``"keep fewer cycles with keep_cycles="``); ``error``: the
+    exception class raised. The message is one line with the need, the limit and the way out.
+    """
+    budget = memory_budget_bytes()
+    if not np.isfinite(n_bytes) or n_bytes > budget:
+        need = "more than can be counted" if not np.isfinite(n_bytes) else f"{n_bytes / 1e9:.3g} GB"
+        raise error(
+            f"{what} needs {need} of memory, over the {budget / 1e9:.3g} GB this machine allows "
+            f"(half of what is available, or {MEMORY_ENV}); {way_out}"
+        )
