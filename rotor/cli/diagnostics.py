@@ -77,6 +77,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=0.5,
         help="misfire threshold of the contribution index (default 0.5)",
     )
+    p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
     add_json(p)
     add_plot(p, "the diagnosis plot")
     p.set_defaults(func=cmd_diagnose)
@@ -99,7 +100,14 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
         folder = os.path.dirname(os.path.abspath(args.save_calibration))
         if not os.path.isdir(folder):
             raise EngineError(f"--save-calibration {args.save_calibration}: no folder {folder}")
-        new = calibrate(engine, args.log, wheel=args.wheel, columns=args.columns, pressure_gain=args.pressure_gain)
+        new = calibrate(
+            engine,
+            args.log,
+            wheel=args.wheel,
+            columns=args.columns,
+            pressure_gain=args.pressure_gain,
+            edge=args.edge,
+        )
         new.save(args.save_calibration)
         written.append(args.save_calibration)
         if cal is None:
@@ -116,6 +124,7 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
             scaling=args.scaling,
             threshold=args.threshold,
             calibration_source=cal_source,
+            edge=args.edge,
         )
     except ArithmeticError as e:  # a one-line error, not a traceback
         raise EngineError(f"{args.log}: the diagnosis failed ({e})") from None

@@ -22,7 +22,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--columns",
         metavar="NAMES",
         help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, tooth_time_s, rpm, "
-        "- (skip), e.g. time,pressure_v,encoder_v",
+        "- (skip), e.g. time,pressure_v,encoder_v; a time in ms or µs: time_ms, time_us, tooth_time_ms, "
+        "tooth_time_us",
     )
     p.add_argument("--strokes", type=int, choices=(2, 4), default=4)
     p.add_argument(
@@ -72,7 +73,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "wheel",
     )
     p.add_argument("--save-tooth-errors", metavar="FILE", help="write the tooth errors applied as JSON")
-    p.add_argument("--max-order", type=positive_float, help="highest order reported and used for δ (default teeth/4)")
+    p.add_argument(
+        "--max-order",
+        type=positive_float,
+        help="highest order reported and used for δ (default teeth/4; 0.5 or more for a four-stroke, 1 for a two-stroke)",
+    )
     p.add_argument(
         "--points-per-cycle",
         type=whole,

@@ -59,6 +59,29 @@ is given (``calibration="preset"``, the default; ``None``: the engine file as it
 calibration stores its engine's name, cylinders, strokes and geometry, and one of another
 engine is refused.
 
+**Does the engine match the log?** :func:`diagnose` says so in ``Diagnosis.mismatch``
+(also among its ``warnings``, in the text and the JSON) where:
+
+- a cylinder's identified mean IMEP over its normal firings exceeds :data:`IMEP_FACTOR_MAX`
+  (3) times the engine file's, or :data:`IMEP_MAX_PA` (40 bar) in any case: the highest
+  brake mean effective pressures of production engines are about 10 bar (naturally
+  aspirated spark ignition) to 20–25 bar (turbocharged diesels; Heywood, *Internal
+  Combustion Engine Fundamentals*, ch. 2), the indicated a bar or two above;
+- the log's mean speed is more than :data:`SPEED_FACTOR_MAX` (2) times the engine file's
+  operating speed, or its mean piston speed exceeds :data:`PISTON_SPEED_MAX_M_S`
+  (25 m/s, beyond racing engines; most engines stay under about 15 m/s at rated speed,
+  Heywood, ch. 2);
+- an engine of several cylinders with no misfire found and a fit of R² below
+  :data:`PATTERN_R2` (0.9), whose speed fluctuates more than :data:`PATTERN_FACTOR` (3)
+  times as much at some order below its firing order (half its cylinders per revolution
+  for a four-stroke) as at the firing order: the cylinders' firing pattern is not in the
+  speed (a log of another engine, e.g. a single cylinder). (Uneven cylinders alone raise
+  the low orders too, but the identification explains them: its R² stays high.)
+
+A poor fit (R² below :data:`rotor.diagnostics.identification.POOR_FIT_R2`) is a warning of
+its own. A single-cylinder recording diagnosed as the four-cylinder ``4chn15`` (3000 rpm)
+trips all three (IMEP 120–360 bar).
+
 Measured figures: ``benchmarks/diagnose_real.py`` (``benchmarks/results/diagnose_real.json``)
 and ``docs/diagnostics.md``.
 """
@@ -94,6 +117,12 @@ __all__ = [
     "measured_imep",
     "preset_calibration",
     "CALIBRATION_FORMAT",
+    "IMEP_FACTOR_MAX",
+    "IMEP_MAX_PA",
+    "SPEED_FACTOR_MAX",
+    "PISTON_SPEED_MAX_M_S",
+    "PATTERN_FACTOR",
+    "PATTERN_R2",
 ]
 
 CALIBRATION_FORMAT = "rotor-calibration"
@@ -102,6 +131,12 @@ BIN_DEG = 0.5  # the pressure signal is averaged in bins of this width per cycle
 DEFAULT_MAX_ORDER = 4.0
 SCALINGS = ("charge", "none")
 SIGMA_RANGE = (0.05, 5.0)  # the charge scale's physical range: intake pressure × σ (a deep throttle … a big boost)
+IMEP_FACTOR_MAX = 3.0  # identified IMEP over the engine file's: above, the engine does not match the log
+IMEP_MAX_PA = 40e5  # no engine reaches this IMEP [Pa] (see the module doc)
+SPEED_FACTOR_MAX = 2.0  # the log's mean speed over the engine file's operating speed
+PISTON_SPEED_MAX_M_S = 25.0  # mean piston speed beyond racing engines [m/s]
+PATTERN_FACTOR = 3.0  # a lower order this many times the firing order's amplitude: the pattern is not seen
+PATTERN_R2 = 0.9  # … looked for only where the fit explains less than this of the speed fluctuation
 PRESETS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "presets")
 
 
@@ -293,6 +328,10 @@ class Calibration(Result):
         """Read a file written by :meth:`save` from ``path``; a malformed file raises
         :class:`rotor.EngineError` naming the file and the key."""
         path = os.fspath(path)
+        if os.path.isdir(path):
+            raise EngineError(f"{path}: is a folder, not a calibration file")
+        if not os.path.exists(path):
+            raise EngineError(f"{path}: No such file or directory (no calibration file there)")
         d = load_json(path, what="a calibration file", error=EngineError)
         return cls.from_json_dict(d, where=path)  # type: ignore[arg-type]  # checked there
 
@@ -528,6 +567,85 @@ def _mean_scale(ident):
     return float(np.mean(ident.scale[ok]))
 
 
+def _check_types(fn, engine, log, calibration, wheel, tdc_deg):
+    """TypeError naming the argument of ``fn`` (diagnose or calibrate) of the wrong type."""
+    from ..dynamics.result import SpeedResult
+    from ..engine.model import Engine
+
+    if not isinstance(engine, Engine):
+        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, os.PathLike)) else ""
+        raise TypeError(f"{fn}(engine): expected a rotor.Engine{hint}, got {type(engine).__name__} {engine!r:.60}")
+    if not isinstance(log, (str, os.PathLike, LogAnalysis, SpeedResult, np.ndarray)) and not (
+        fn == "diagnose" and isinstance(log, (list, tuple))
+    ):
+        raise TypeError(
+            f"{fn}(log): a log file's name (str or os.PathLike), a rotor.LogAnalysis"
+            + (", a rotor.SpeedResult or a speed array (cycles, points) [rad/s]" if fn == "diagnose" else "")
+            + f"; got {type(log).__name__}"
+        )
+    if calibration is not None and not isinstance(calibration, (Calibration, str, os.PathLike)):
+        raise TypeError(
+            f"{fn}(calibration): a rotor.Calibration, a calibration file's name, 'preset' or None; "
+            f"got {type(calibration).__name__}"
+        )
+    if wheel is not None and not isinstance(wheel, str):
+        from ..logs.wheel import Wheel
+
+        if not isinstance(wheel, Wheel):
+            raise TypeError(f"{fn}(wheel): a spec such as '60-2', a rotor.Wheel or None; got {type(wheel).__name__}")
+    if tdc_deg is not None and (
+        isinstance(tdc_deg, bool) or not isinstance(tdc_deg, (int, float, np.integer, np.floating))
+    ):
+        raise TypeError(f"{fn}(tdc_deg): a number [deg] or None; got {type(tdc_deg).__name__}")
+
+
+def _mismatch(engine, ident, misfire):
+    """Lines saying where ``engine`` does not match the log it identified (see the module doc)."""
+    from ..engine.forces import imep_pa
+
+    out = []
+    nominal = float(imep_pa(engine))
+    ok = ident.identified & ~np.asarray(misfire)
+    bad = []
+    for c in range(ident.cylinders):
+        if ok[:, c].any():
+            m = float(np.mean(ident.imep_pa[ok[:, c], c]))
+            if m > IMEP_MAX_PA or (nominal > 0 and m > IMEP_FACTOR_MAX * nominal):
+                bad.append((c + 1, m))
+    if bad:
+        shown = ", ".join(f"cylinder {c} {m / PA_PER_BAR:.3g} bar" for c, m in bad[:4]) + (
+            ", …" if len(bad) > 4 else ""
+        )
+        out.append(
+            f"implausible IMEP for {engine.name!r}: {shown}, against the engine file's {nominal / PA_PER_BAR:.3g} bar "
+            f"(over {IMEP_FACTOR_MAX:g}× it, or over {IMEP_MAX_PA / PA_PER_BAR:g} bar, which no engine reaches): "
+            f"is it the engine of this log?"
+        )
+    rpm = float(np.mean(ident.mean_omega)) * RPM_PER_RAD_S
+    op = float(engine.operating.rpm)
+    piston = 2.0 * float(engine.geometry.stroke_m) * rpm / 60.0
+    if rpm > SPEED_FACTOR_MAX * op or piston > PISTON_SPEED_MAX_M_S:
+        out.append(
+            f"the log runs at {rpm:.0f} rpm, {rpm / op:.2g}× the engine file's operating speed {op:.0f} rpm "
+            f"(mean piston speed {piston:.3g} m/s): outside the engine's range"
+        )
+    n = ident.cylinders
+    if n > 1 and not np.asarray(misfire).any() and float(ident.fit_r2) < PATTERN_R2:
+        omega = np.asarray(ident.omega, dtype=np.float64)
+        P = omega.shape[1]
+        if P > 2 * n:
+            amp = np.mean(np.abs(np.fft.rfft(omega - omega.mean(axis=1, keepdims=True), axis=1)), axis=0) * 2 / P
+            revs = engine.strokes // 2
+            k_low = int(np.argmax(amp[1:n])) + 1
+            if amp[k_low] > PATTERN_FACTOR * amp[n]:
+                out.append(
+                    f"the firing pattern of {n} cylinders is not seen: the speed fluctuates {amp[k_low] / amp[n]:.3g}× "
+                    f"more at order {k_low / revs:g} than at the firing order {n / revs:g}, and no misfire "
+                    f"explains it: is it a log of this engine?"
+                )
+    return tuple(out)
+
+
 # ----------------------------------------------------------------------------- calibrate
 def calibrate(
     engine: Engine,
@@ -541,6 +659,7 @@ def calibrate(
     refine: bool = True,
     tooth_errors: str | os.PathLike | ToothErrors | None = "estimate",
     load_per: str = "block",
+    edge: str = "rising",
 ) -> Calibration:
     """Calibrate inertia, losses, TDC, tooth errors and the pressure offset from a recording
     with a cylinder-pressure channel (see the module doc).
@@ -556,12 +675,18 @@ def calibrate(
     - ``scaling``: ``"charge"`` (default) or ``"none"`` (see the module doc).
     - ``refine``: find the identification inertia (default) or keep the energy balance's.
     - ``tooth_errors``, ``load_per``: passed to :func:`rotor.analyze_log` and :func:`diagnose`.
+    - ``edge``: ``"rising"`` (default) or ``"falling"`` edges of an analog wheel signal.
 
     **Returns:** :class:`Calibration`. Raises :class:`rotor.EngineError` /
     :class:`rotor.LogError` for what cannot be calibrated.
     """
     from ..logs.analysis import analyze_log
 
+    _check_types("calibrate", engine, log, None, wheel, None)
+    if pressure_gain is not None and (
+        isinstance(pressure_gain, bool) or not isinstance(pressure_gain, (int, float, np.integer, np.floating))
+    ):
+        raise TypeError(f"calibrate(pressure_gain): a number [Pa per signal unit] or None, not {pressure_gain!r}")
     _check_single(engine, "calibrate")
     _check_scaling(scaling, engine, ": use scaling='none'")
     if pressure_gain is not None and not (np.isfinite(pressure_gain) and pressure_gain > 0):
@@ -580,6 +705,7 @@ def calibrate(
             tooth_errors=tooth_errors,
             compression_ratio=None if cr is None else float(cr),
             rod_ratio=None if cr is None else rod_ratio,
+            edge=edge,
         )
     if a.pressure is None:
         raise EngineError(
@@ -672,7 +798,9 @@ class Diagnosis(Identification):
     ``charge_scale`` σ [-] and ``charge_iterations`` (identifications it took);
     ``no_firing`` (the record holds no firing: every firing a misfire);
     ``measured_imep_pa`` (cycles,) [Pa]: the IMEP of each cycle from the recording's
-    pressure channel with the calibration's gain (single cylinder), or None.
+    pressure channel with the calibration's gain (single cylinder), or None;
+    ``mismatch``: one line per sign that the engine does not match the log (see the module
+    doc; also among ``warnings``).
 
     ``summary()`` and ``to_json_dict()`` are what ``rotor diagnose`` prints.
     """
@@ -685,6 +813,13 @@ class Diagnosis(Identification):
     charge_iterations: int = 0
     no_firing: bool = False
     measured_imep_pa: np.ndarray | None = None
+    mismatch: tuple = ()
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """The identification's warnings (a poor fit) and :attr:`mismatch`: where the engine
+        does not match the log (see the module doc). Empty when there is nothing to warn about."""
+        return Identification.warnings.fget(self) + tuple(self.mismatch)  # type: ignore[attr-defined]
 
     @property
     def source(self) -> str | None:
@@ -714,8 +849,10 @@ class Diagnosis(Identification):
         from ..plotting.diagnostics import plot_identification
 
         title = f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}"
-        if self.warnings:
+        if Identification.warnings.fget(self):  # type: ignore[attr-defined]
             title += " (poor fit)"
+        if self.mismatch:
+            title += " (the engine does not match the log?)"
         return plot_identification(
             omega=self.omega,
             omega_model=self.omega_model,
@@ -769,6 +906,7 @@ class Diagnosis(Identification):
                 "rms_residual_rad_s": self.rms_residual,
                 "r2": self.fit_r2,
                 "warnings": list(self.warnings),
+                "mismatch": list(self.mismatch),
                 "threshold": self.threshold,
                 "notes": list(self.notes) + (list(a.notes) if a is not None else []),
                 "written": list(written),
@@ -790,6 +928,7 @@ def diagnose(
     scaling: str | None = None,
     max_iterations: int = 8,
     calibration_source: str | None = None,
+    edge: str = "rising",
     **identify_kwargs: Any,
 ) -> Diagnosis:
     """Per-firing IMEP, load and misfires of a recording from its crank speed alone, with a
@@ -811,6 +950,7 @@ def diagnose(
       :func:`rotor.identify`.
     - ``calibration_source``: how the result names where the calibration came from
       (default ``"preset <path>"``, ``"file <path>"`` or ``"given"``).
+    - ``edge``: ``"rising"`` (default) or ``"falling"`` edges of an analog wheel signal.
 
     **Returns:** a :class:`Diagnosis`: the :class:`rotor.Identification` with the
     calibration used, where it came from, the charge scale σ, the
@@ -826,6 +966,7 @@ def diagnose(
     from .identification import identify
     from .misfire import FLOOR_SCALE
 
+    _check_types("diagnose", engine, log, calibration, wheel, tdc_deg)
     cal_source = None
     if isinstance(calibration, str) and calibration == "preset":
         found = preset_calibration(engine)
@@ -861,6 +1002,7 @@ def diagnose(
             tooth_errors=te,
             compression_ratio=None if cr is None else float(cr),
             rod_ratio=None if cr is None else rod_ratio,
+            edge=edge,
         )
         if str(analysis.tdc_method).startswith("unknown"):
             raise EngineError(
@@ -932,6 +1074,7 @@ def diagnose(
     fields["notes"] = ident.notes + tuple(extra)
     if no_firing:
         fields["misfire"] = ident.misfire | ident.identified
+    mismatch = _mismatch(engine, ident, fields["misfire"])
     return Diagnosis(
         **fields,
         calibration=calibration,
@@ -942,4 +1085,5 @@ def diagnose(
         charge_iterations=iters,
         no_firing=no_firing,
         measured_imep_pa=measured,
+        mismatch=mismatch,
     )

@@ -689,7 +689,12 @@ def identify(
     **Returns:** :class:`Identification`. Raises :class:`rotor.EngineError` for input that
     cannot be identified.
     """
+    from ..engine.model import Engine as EngineType
+
     wall = time.perf_counter()
+    if not isinstance(engine, EngineType):
+        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, str) else ""
+        raise TypeError(f"identify(engine): expected a rotor.Engine{hint}, got {type(engine).__name__} {engine!r:.60}")
     if parameters not in PARAMETERS:
         raise EngineError(
             f"parameters = {parameters!r}: only 'imep_scale' (one combustion scale per firing) is "

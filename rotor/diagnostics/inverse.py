@@ -383,7 +383,9 @@ def _speed_input(engine, speed, cycle_rad, t_start_s, periodic):
                 "cycle-angle grid"
             )
         t0 = 0.0 if t_start_s is None else float(t_start_s)
-    if omega.shape[1] < MIN_POINTS or omega.shape[0] < 1:
+    if omega.shape[0] < 1:
+        raise EngineError(f"speed has shape {omega.shape}: no cycle; needs at least one")
+    if omega.shape[1] < MIN_POINTS:
         raise EngineError(f"speed has {omega.shape[1]} points per cycle: needs {MIN_POINTS} or more")
     if not np.all(np.isfinite(omega)):
         bad = np.argwhere(~np.isfinite(omega))[0]

@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from jaxtyping import ArrayLike
 
+from ..checks import check_size
 from ..engine.forces import cylinder_pressure  # compiled once per shape
 from ..errors import EngineError
 from ..logs.wheel import ToothErrors, Wheel, parse_wheel
@@ -70,6 +71,7 @@ WHEEL_SEED = 0  # the wheel's tooth errors: one wheel for every recording, whate
 MIN_SAMPLES_PER_PITCH = 10  # below this the pulses get too few samples for the edge finder
 
 
+SAMPLE_ARRAYS = 12  # float64 arrays of one value per row held at once while writing, for the size check
 PRESSURE_POINTS_PER_REV = 2880  # the pressure is computed every 0.125° and interpolated
 
 
@@ -184,6 +186,12 @@ def simulated_recording(
     noise_v = _number("noise_v", noise_v, nonnegative=True)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise EngineError(f"seed = {seed!r}: a whole number")
+    rows = (cycles + 1) * (eng.strokes // 2) * 60.0 / rpm * fs
+    check_size(
+        rows * 8.0 * SAMPLE_ARRAYS,
+        f"a simulated recording of {cycles} cycles at {rpm:g} rpm and {fs:g} Hz ({rows:.3g} rows)",
+        "record fewer cycles or sample slower (cycles=, sample_rate_hz=)",
+    )
     try:
         w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
     except ValueError as e:

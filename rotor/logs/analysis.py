@@ -34,20 +34,42 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from jaxtyping import ArrayLike
 
+from ..checks import check_size
 from ..cycles import cycle_delta, cycle_spectrum
 from ..errors import LogError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 from .edges import Edges, find_edges
+from .plausibility import check_speed_time_base, check_time_base, check_time_resolution
 from .reader import Log, read_log
 from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, locate_teeth, parse_wheel
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
 
-__all__ = ["LogAnalysis", "analyze_log", "tdc_from_pressure"]
+__all__ = [
+    "LogAnalysis",
+    "analyze_log",
+    "tdc_from_pressure",
+    "NoCompressionPeak",
+    "PEAK_TO_NOISE_MIN",
+    "PEAK_WIDTH_MAX_DEG",
+]
 
 TWO_PI = 2.0 * np.pi
+PEAK_TO_NOISE_MIN = 20.0
+"""A compression peak must stand this many times the signal's noise above the median of
+the averaged firing revolution [-] (see :func:`tdc_from_pressure`)."""
+PEAK_WIDTH_MAX_DEG = 120.0
+"""… and the averaged revolution may lie above half the peak's height for at most this
+much of it [deg] (a compression peak is narrow: 55–81° on the tue-4gb10 recordings, whose peaks stand
+100–480 times their noise above the median)."""
+ANALYSIS_ARRAYS = 8
+"""Float64 arrays of (cycles × points per cycle) the analysis holds at once, for the size check."""
+
+
+class NoCompressionPeak(LogError):
+    """A pressure channel without a clear compression peak: not used for TDC."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -297,6 +319,14 @@ def tdc_from_pressure(
     averaged trace's peak, which combustion puts some degrees late (a motored cycle's
     peak is within a degree of TDC).
 
+    **A clear compression peak** is needed, or :class:`NoCompressionPeak` (a
+    :class:`LogError`) is raised and no TDC is given: the averaged firing revolution's peak
+    must stand :data:`PEAK_TO_NOISE_MIN` (20) times the signal's noise above its median
+    (the noise: the median absolute sample-to-sample difference of the raw signal / 0.954,
+    the standard deviation of white noise), and the revolution may lie above half the
+    peak's height for at most :data:`PEAK_WIDTH_MAX_DEG` (120°). A flat channel, pure
+    noise, or a periodic signal that is not a pressure (a wheel signal) fails.
+
     **Returns:** (TDC wheel angle modulo 2π [rad], firing parity 0 or 1 of the
     revolutions counted from wheel angle 0 that hold it, the method in words).
     """
@@ -336,6 +366,7 @@ def tdc_from_pressure(
         raise LogError("pressure channel: too few samples in the firing revolutions")
     x = grid + step / 2
     avg = np.interp(x, x[ok], sums[ok] / cnt[ok])
+    _check_compression_peak(p, avg, step)
     j = int(np.argmax(avg))
     jj = int(np.clip(j, 1, avg.size - 2))
     y0, y1, y2 = avg[jj - 1 : jj + 2]
@@ -375,6 +406,27 @@ def tdc_from_pressure(
     tdc_abs = centre + TWO_PI * int(fire[0]) + tdc_rel
     parity = int(np.floor(tdc_abs / TWO_PI)) % 2
     return float(np.mod(tdc_abs, TWO_PI)), parity, method
+
+
+def _check_compression_peak(p, avg, step):
+    """Raise NoCompressionPeak unless ``avg`` (the averaged firing revolution on a grid of
+    ``step`` [rad]) has a clear, narrow peak above the noise of the raw signal ``p``."""
+    noise = float(np.median(np.abs(np.diff(p)))) / 0.954  # white noise: median |Δ| = 0.954 σ
+    med = float(np.median(avg))
+    height = float(np.max(avg)) - med
+    if not height > PEAK_TO_NOISE_MIN * noise or not height > 1e-9 * max(abs(med), 1e-300):
+        raise NoCompressionPeak(
+            f"pressure channel: no clear compression peak (the averaged firing revolution peaks "
+            f"{height:.3g} above its median, the signal's noise is {noise:.3g}; {PEAK_TO_NOISE_MIN:g}× the "
+            f"noise is needed): not used for TDC"
+        )
+    width = float(np.count_nonzero(avg > med + 0.5 * height)) * np.rad2deg(step)
+    if width > PEAK_WIDTH_MAX_DEG:
+        raise NoCompressionPeak(
+            f"pressure channel: no clear compression peak (the averaged firing revolution lies above half "
+            f"its peak's height for {width:.0f}°, a compression peak for under {PEAK_WIDTH_MAX_DEG:g}°: is it "
+            f"the pressure column?): not used for TDC"
+        )
 
 
 def _speed_parity(omega_of, phi0, phi1, tdc):
@@ -445,6 +497,53 @@ def _firing_run_note(te, cylinders, strokes, max_order, teeth):
     return s
 
 
+def _named(log_name, fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` with a LogError's message prefixed by the log's name ``log_name``."""
+    try:
+        return fn(*args, **kwargs)
+    except LogError as e:
+        text = str(e)
+        if text.startswith(f"{log_name}:"):
+            raise
+        raise LogError(f"{log_name}: {text}") from None
+
+
+def _other_edge_fits(log, wheel, edge, index_times):
+    """Whether the wheel fits the other edges of the log's analog wheel signal."""
+    try:
+        other = find_edges(log["time"], log["encoder_v"], edge="falling" if edge == "rising" else "rising")
+        locate_teeth(other.times, wheel, index_times=index_times)
+    except LogError:
+        return False
+    return True
+
+
+def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise):
+    """TypeError naming the argument of :func:`analyze_log` that has the wrong type."""
+    from ..engine.model import Engine
+
+    if not isinstance(source, (str, os.PathLike, Log)):
+        raise TypeError(
+            f"source = {source!r}: a log file's name (str or os.PathLike) or a rotor.Log, not {type(source).__name__}"
+        )
+    if wheel is not None and not isinstance(wheel, (str, Wheel, int, np.integer)):
+        raise TypeError(f"wheel = {wheel!r}: a spec such as '60-2' or a rotor.Wheel, not {type(wheel).__name__}")
+    for key, v in (("tdc_deg", tdc_deg), ("max_order", max_order)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating))):
+            raise TypeError(f"{key} = {v!r}: a number or None, not {type(v).__name__}")
+    if engine is not None and not isinstance(engine, Engine):
+        raise TypeError(
+            f"engine = {engine!r}: a rotor.Engine (e.g. rotor.load_engine('4chn15')) or None, not {type(engine).__name__}"
+        )
+    if tooth_errors is not None and not isinstance(tooth_errors, (str, os.PathLike, ToothErrors)):
+        raise TypeError(
+            f"tooth_errors = {tooth_errors!r}: 'estimate', 'none', None, a rotor.ToothErrors or a JSON file's "
+            f"name, not {type(tooth_errors).__name__}"
+        )
+    if not isinstance(denoise, (bool, np.bool_)):
+        raise TypeError(f"denoise = {denoise!r}: True or False")
+
+
 # ---------------------------------------------------------------------- analysis
 def analyze_log(
     source: str | os.PathLike | Log,
@@ -505,11 +604,23 @@ def analyze_log(
       for TDC from the pressure by a polytropic fit (:func:`tdc_from_pressure`);
       without them TDC is the pressure peak, some degrees late when the engine fires.
 
-    **Returns:** :class:`LogAnalysis`. Raises :class:`rotor.logs.reader.LogError` with the row,
-    column or time of anything that cannot be analysed.
+    **Plausibility** (:mod:`rotor.logs.plausibility`): a time base that implies under 10 or
+    over 30,000 rpm (a time column in ms or µs), and time stamps too coarse for the tooth
+    period (float32), are refused; a ``max_order`` below the cycle's lowest order (0.5 for
+    a four-stroke, 1 for a two-stroke) keeps no order and is refused; ``points_per_cycle``
+    is checked against the memory budget (:func:`rotor.checks.check_size`) before the grid
+    is allocated. A pressure channel without a clear compression peak is not used for TDC
+    (:func:`tdc_from_pressure`; TDC is then unknown, and a note says why). Where the
+    wheel does not fit the rising edges of an analog signal but fits its falling ones, the
+    error says to give ``edge="falling"``.
+
+    **Returns:** :class:`LogAnalysis`. Raises :class:`rotor.logs.reader.LogError` with the
+    file, row, column or time of anything that cannot be analysed, and ``TypeError`` for an
+    argument of the wrong type.
     """
     from scipy.interpolate import CubicSpline, PchipInterpolator
 
+    _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise)
     if strokes not in (2, 4):
         raise LogError(f"strokes = {strokes!r}: 2 or 4")
     if not (isinstance(cylinders, (int, np.integer)) and not isinstance(cylinders, bool) and cylinders >= 1):
@@ -518,6 +629,17 @@ def analyze_log(
         raise LogError(f"tdc_deg = {tdc_deg!r}: need a finite angle from the gap to TDC [deg]")
     if max_order is not None and not (np.isfinite(float(max_order)) and max_order > 0):
         raise LogError(f"max_order = {max_order!r}: need a positive order")
+    if max_order is not None and max_order < 2.0 / strokes - 1e-9:
+        raise LogError(
+            f"max_order = {max_order:g} (--max-order) keeps no order: the lowest order of a {strokes}-stroke "
+            f"cycle is {2.0 / strokes:g} (one per cycle); give {2.0 / strokes:g} or more"
+        )
+    if points_per_cycle is not None and not (
+        isinstance(points_per_cycle, (int, np.integer)) and not isinstance(points_per_cycle, bool)
+    ):
+        raise TypeError(f"points_per_cycle = {points_per_cycle!r}: a whole number of grid points per cycle, or None")
+    if points_per_cycle is not None and points_per_cycle < 1:
+        raise LogError(f"points_per_cycle = {points_per_cycle!r} (--points-per-cycle): 1 or more")
     log = source if isinstance(source, Log) else read_log(source, columns)
     name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
     revs = strokes // 2
@@ -526,6 +648,7 @@ def analyze_log(
     track = te = edges = None
     if log.kind == "speed":
         t = log["time"]
+        check_speed_time_base(t, log["rpm"], name)
         omega_s = log["rpm"] / RPM_PER_RAD_S
         phi_s = np.concatenate([[0.0], np.cumsum(0.5 * (omega_s[1:] + omega_s[:-1]) * np.diff(t))])
         t_of = CubicSpline(phi_s, t)
@@ -549,12 +672,30 @@ def analyze_log(
         if log.kind == "teeth":
             times = log["tooth_time_s"]
         else:
-            edges = find_edges(log["time"], log["encoder_v"], edge=edge)
+            edges = _named(name, find_edges, log["time"], log["encoder_v"], edge=edge)
             times = edges.times
+        check_time_base(times, w.teeth, name, log.kind)
+        resolution = check_time_resolution(
+            times,
+            name,
+            sample_times=log["time"] if "time" in log else None,
+            column="tooth_time_s" if log.kind == "teeth" else "time",
+        )
+        if resolution is not None:
+            notes.append(resolution)
         index_times = None
         if "index_v" in log:
-            index_times = find_edges(log["time"], log["index_v"], name="index_v").times
-        track = locate_teeth(times, w, index_times=index_times)
+            index_times = _named(name, find_edges, log["time"], log["index_v"], name="index_v").times
+        try:
+            track = _named(name, locate_teeth, times, w, index_times=index_times)
+        except LogError as e:
+            if log.kind == "encoder" and _other_edge_fits(log, w, edge, index_times):
+                other = "falling" if edge == "rising" else "rising"
+                raise LogError(
+                    f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges but fits its {other} "
+                    f"ones (an inverted signal?): give edge={other!r} (--edge {other})"
+                ) from e
+            raise
         span_rev = float((track.t.size - 1) / w.edges_per_rev)
         if span_rev < revs:
             raise LogError(
@@ -609,6 +750,15 @@ def analyze_log(
             )
     else:
         P = max(pitch_pts * revs, need + need % 2)
+    fine_est = max(16 * int(np.floor(max_order * revs + 1e-9)), P)
+    cycles_est = int(np.ceil((phi_hi - phi_lo) / cycle)) + 1
+    check_size(
+        float(cycles_est) * float(fine_est) * 8.0 * ANALYSIS_ARRAYS,
+        f"{name}: {cycles_est} cycles at {P} points per cycle" + (f" (δ on {fine_est})" if fine_est > P else ""),
+        "give fewer points per cycle (--points-per-cycle, points_per_cycle=; default 2 per tooth pitch) or a "
+        "lower max_order (--max-order)",
+        error=LogError,
+    )
 
     # --- TDC and the firing revolution
     pressure = None
@@ -618,14 +768,22 @@ def analyze_log(
         pressure = (phi_of(t_s[inside]), p_s[inside])
     parity_method = "two-stroke: every revolution"
     parity = None
+    pressure_ok = pressure is not None
+    no_peak = ""
     if tdc_deg is not None:
         tdc = float(np.deg2rad(tdc_deg))
         tdc_method = "given"
     elif pressure is not None:
-        tdc, p_parity, tdc_method = tdc_from_pressure(
-            *pressure, compression_ratio=compression_ratio, rod_ratio=rod_ratio
-        )
-        if compression_ratio is None:
+        try:
+            tdc, p_parity, tdc_method = tdc_from_pressure(
+                *pressure, compression_ratio=compression_ratio, rod_ratio=rod_ratio
+            )
+        except NoCompressionPeak as e:
+            no_peak = str(e)
+            tdc, pressure_ok = 0.0, False
+            tdc_method = "unknown: the pressure channel has no clear compression peak; cycles start at the gap"
+            notes.append(f"{no_peak}; TDC not known: the orders' phases are relative to the gap (give tdc_deg)")
+        if compression_ratio is None and pressure_ok:
             notes.append(
                 "TDC is the pressure peak, which combustion puts late (13–27° on the tue-4gb10 "
                 "recordings): the orders' phases and the cycle start are late by as much; give the "
@@ -640,12 +798,18 @@ def analyze_log(
         notes.append(
             "TDC not known: the orders' phases are relative to the gap, not to TDC (give tdc_deg or a pressure channel)"
         )
+    if strokes == 4 and tdc_deg is not None and pressure is not None and firing in ("auto", "pressure"):
+        try:
+            _, p_parity, _ = tdc_from_pressure(*pressure)
+        except NoCompressionPeak as e:
+            no_peak, pressure_ok = str(e), False
+            notes.append(f"{no_peak}: the firing revolution comes from elsewhere")
     if strokes == 4:
         if firing in (0, 1):
             parity, parity_method = int(firing), "given"
-        elif firing in ("auto", "pressure") and pressure is not None:
-            if tdc_deg is not None:
-                _, p_parity, _ = tdc_from_pressure(*pressure)
+        elif firing == "pressure" and pressure is not None and not pressure_ok:
+            raise LogError(f"{name}: firing='pressure': {no_peak}; give firing=0 or 1 (--firing), or a cam channel")
+        elif firing in ("auto", "pressure") and pressure_ok and pressure is not None:
             # p_parity: the revolutions holding the TDC found from the pressure (a given TDC lies in the same
             # compression)
             parity, parity_method = p_parity, "pressure: revolutions with the compression peak"

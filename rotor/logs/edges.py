@@ -65,6 +65,8 @@ def signal_levels(v: ArrayLike, name: str = "encoder_v") -> tuple[float, float]:
     Raises :class:`LogError` if the signal has no two distinct levels.
     """
     v = np.asarray(v, dtype=np.float64)
+    if v.size < 3:
+        raise LogError(f"column {name!r}: {v.size} samples; no pulses")
     p1, p99 = np.percentile(v, [1.0, 99.0])
     mid = 0.5 * (p1 + p99)
     core = v[(v >= p1) & (v <= p99)]
@@ -83,6 +85,17 @@ def signal_levels(v: ArrayLike, name: str = "encoder_v") -> tuple[float, float]:
             f"{near:.0%} of the samples lie near them)"
         )
     return low, high
+
+
+def _samples(x: ArrayLike, what: str) -> np.ndarray:
+    """``x`` as a 1-d float64 array; a TypeError naming ``what`` otherwise."""
+    try:
+        a = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"find_edges({what}): an array of numbers, not {type(x).__name__} {x!r:.40}") from None
+    if a.ndim != 1:
+        raise LogError(f"find_edges({what}): a 1-d array, got shape {a.shape}")
+    return a
 
 
 def _runs(s):
@@ -120,8 +133,16 @@ def find_edges(
         raise LogError(f"edge = {edge!r}: 'rising' or 'falling'")
     if not (0 < band[0] < level < band[1] < 1):
         raise LogError(f"band = {band!r}, level = {level!r}: need 0 < off < level < on < 1")
-    t = np.asarray(t, dtype=np.float64)
-    v = np.asarray(v, dtype=np.float64)
+    t = _samples(t, "t")
+    v = _samples(v, "v")
+    if t.shape != v.shape:
+        raise LogError(f"{name}: {v.size} samples but {t.size} sample times; give one time per sample")
+    if t.size < 3 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+        raise LogError(
+            f"{name}: {t.size} sample{'s' if t.size != 1 else ''}"
+            + (" (not all finite)" if t.size >= 3 else "")
+            + "; a wheel signal needs many samples per tooth"
+        )
     inverted = edge == "falling"
     if inverted:
         v = -v

@@ -21,8 +21,22 @@ spec; a header of other names is skipped when the spec names the columns, and
 ``-``               a column to skip
 ==================  =====================================================================
 
+A time column in other units says so in its name: ``time_ms``, ``time_us`` (sample time in
+milliseconds, microseconds) and ``tooth_time_ms``, ``tooth_time_us``; they are converted
+to seconds on reading (``Log.notes`` says so) and named ``time`` and ``tooth_time_s``.
+
 Columns after the last named one are ignored. A file whose header line already holds
 these names needs no spec; a file with one column is read as ``tooth_time_s``.
+
+**What is refused, before reading:** a path that is no file (missing, a folder,
+unreadable); a file that holds NUL bytes in its first 64 kB (a binary or zero-filled
+file, not a text log); a file too large to read in the memory budget
+(:func:`rotor.checks.memory_budget_bytes`; reading takes about
+:data:`READ_BYTES_PER_FILE_BYTE` bytes per byte of text). A UTF-8 byte-order mark is
+skipped. **Decimal commas** (``0,001;1,23``, separated by semicolons, tabs or blanks) are
+read as decimal points, and ``Log.notes`` says so; a file that mixes decimal commas and
+points in its first lines is refused, as is a comma-separated file (the comma cannot be
+both).
 """
 
 from __future__ import annotations
@@ -30,14 +44,20 @@ from __future__ import annotations
 import dataclasses
 import io
 import os
+import re
 from collections.abc import Sequence
 
 import numpy as np
 from jaxtyping import ArrayLike
 
+from ..checks import check_size
 from ..errors import LogError
 
-__all__ = ["COLUMN_NAMES", "Log", "parse_columns", "read_log"]
+__all__ = ["COLUMN_NAMES", "UNIT_COLUMNS", "Log", "parse_columns", "read_log", "READ_BYTES_PER_FILE_BYTE"]
+
+READ_BYTES_PER_FILE_BYTE = 12
+"""Memory that reading a log takes per byte of the file [bytes]: the text, its lines, the
+parser's copy and the columns as float64 (measured on the tue-4gb10 files: about 8)."""
 
 COLUMN_NAMES = {
     "time": "sample time [s]",
@@ -47,8 +67,37 @@ COLUMN_NAMES = {
     "index_v": "once-per-revolution index signal [V]",
     "tooth_time_s": "tooth edge time [s]",
     "rpm": "instantaneous speed [rev/min]",
+    "time_ms": "sample time [ms] (read as 'time' in seconds)",
+    "time_us": "sample time [µs] (read as 'time' in seconds)",
+    "tooth_time_ms": "tooth edge time [ms] (read as 'tooth_time_s')",
+    "tooth_time_us": "tooth edge time [µs] (read as 'tooth_time_s')",
     "-": "skipped",
 }
+
+UNIT_COLUMNS = {
+    "time_ms": ("time", 1e-3),
+    "time_us": ("time", 1e-6),
+    "tooth_time_ms": ("tooth_time_s", 1e-3),
+    "tooth_time_us": ("tooth_time_s", 1e-6),
+}
+"""Column names of a time in other units: name → (the name it is read as, seconds per unit)."""
+
+
+def _canonical(name: str) -> str:
+    return UNIT_COLUMNS[name][0] if name in UNIT_COLUMNS else name
+
+
+def _to_seconds(cols: dict, notes: list) -> dict:
+    """``cols`` with the time columns in other units converted to seconds under their SI names."""
+    out = {}
+    for k, v in cols.items():
+        if k in UNIT_COLUMNS:
+            canon, factor = UNIT_COLUMNS[k]
+            out[canon] = v * factor
+            notes.append(f"column {k!r} read as {canon!r} in seconds (× {factor:g})")
+        else:
+            out[k] = v
+    return out
 
 
 def parse_columns(spec: str | Sequence[str]) -> tuple[str, ...]:
@@ -58,8 +107,13 @@ def parse_columns(spec: str | Sequence[str]) -> tuple[str, ...]:
     """
     if isinstance(spec, str):
         names = [s.strip() for s in spec.split(",")]
-    else:
+    elif isinstance(spec, Sequence) and not isinstance(spec, bytes):
         names = [str(s).strip() for s in spec]
+    else:
+        raise TypeError(
+            f"columns = {spec!r}: the column names as a string ('time,encoder_v') or a list of strings, "
+            f"not {type(spec).__name__}"
+        )
     if not names or all(n in ("", "-") for n in names):
         raise LogError(f"columns {spec!r}: name at least one column ({', '.join(n for n in COLUMN_NAMES if n != '-')})")
     seen = set()
@@ -69,8 +123,14 @@ def parse_columns(spec: str | Sequence[str]) -> tuple[str, ...]:
                 f"columns {spec!r}: column {i + 1} is named {n!r}; known names: "
                 f"{', '.join(COLUMN_NAMES)} ('-' skips a column)"
             )
-        if n != "-" and n in seen:
-            raise LogError(f"columns {spec!r}: {n!r} is named twice")
+        c = _canonical(n)
+        if n != "-" and c in seen:
+            raise LogError(
+                f"columns {spec!r}: {n!r} is named twice"
+                if n == c or n in seen
+                else f"columns {spec!r}: {n!r} names the {c!r} column a second time"
+            )
+        seen.add(c)
         seen.add(n)
     return tuple(names)
 
@@ -101,11 +161,16 @@ class Log:
         parse_columns(list(columns))
         cols = {}
         for k, v in columns.items():
-            a = np.asarray(v, dtype=np.float64)
+            try:
+                a = np.asarray(v, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise TypeError(f"column {k!r}: an array of numbers, not {type(v).__name__}") from None
             if a.ndim != 1:
                 raise LogError(f"column {k!r}: expected a 1-d array, got shape {a.shape}")
             cols[k] = a
-        return cls(cols)
+        notes: list[str] = []
+        cols = _to_seconds(cols, notes)
+        return cls(cols, notes=tuple(notes))
 
     @property
     def kind(self) -> str:
@@ -173,9 +238,17 @@ def _check(log: Log) -> None:
             bad = np.flatnonzero(d <= 0)
             if bad.size:
                 i = int(bad[0]) + 1
+                same = cols[k][i] == cols[k][i - 1]
                 raise LogError(
                     f"{log.where(i)}, column {k!r}: {cols[k][i]:.9g} s is not after the previous row's "
                     f"{cols[k][i - 1]:.9g} s (time must increase)"
+                    + (
+                        "; equal stamps: the time's resolution may be too coarse (float32 near "
+                        f"{abs(cols[k][i]):.4g} s resolves {_f32_spacing(cols[k][i]):.2g} s): store time as "
+                        "float64 or as offsets from the start"
+                        if same
+                        else ""
+                    )
                 )
     if "rpm" in cols:
         bad = np.flatnonzero(cols["rpm"] <= 0)
@@ -188,6 +261,11 @@ def _check(log: Log) -> None:
     n = log.rows
     if n < 3:
         raise LogError(f"{log.source}: {n} row{'s' if n != 1 else ''}; far too short for one revolution")
+
+
+def _f32_spacing(x: float) -> float:
+    """The spacing of float32 numbers near ``x`` [same unit as x]."""
+    return float(np.spacing(np.float32(abs(x))))
 
 
 def _delimiter(line: str) -> str | None:
@@ -228,14 +306,19 @@ def read_log(
 
     **Returns:** a :class:`Log`. Raises :class:`LogError` naming the line and column of
     anything it cannot use: a cell that is not a number, NaN, time not increasing, a
-    column the spec names but the file lacks.
+    column the spec names but the file lacks; and naming ``path`` for a file that is
+    missing, a folder, unreadable, binary or too large for the memory budget (see the
+    module doc). A ``TypeError`` for a ``path`` or ``columns`` of the wrong type.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path = {path!r}: the log's file name (a str or os.PathLike), not {type(path).__name__}")
     path = os.fspath(path)
-    try:
-        with open(path, encoding="utf-8", errors="replace") as f:
-            text = f.read()
-    except IsADirectoryError:
-        raise LogError(f"{path}: is a folder, not a log file") from None
+    if not isinstance(path, str):
+        path = os.fsdecode(path)
+    if delimiter is not None and delimiter not in (",", "\t", ";", " "):
+        raise LogError(f"delimiter = {delimiter!r}: ',', '\\t', ';' or ' ' (blanks)")
+    text = _read_text(path)
+    notes: list[str] = []
     lines = _data_lines(text)
     first = next(lines, None)
     if first is None:
@@ -243,6 +326,13 @@ def read_log(
     sep = delimiter if delimiter is not None else _delimiter(first[1])
     if sep == " ":
         sep = None
+    second = next(lines, None)
+    if sep != "," and _decimal_commas(path, [first] + ([second] if second else []), sep):
+        text = text.replace(",", ".")
+        notes.append(
+            f"decimal commas read as decimal points (line {(second or first)[0]}: {_short((second or first)[1])})"
+        )
+        first = next(_data_lines(text))
     tokens = [t.strip() for t in (first[1].split(sep) if sep else first[1].split())]
     numeric = [_is_number(t) for t in tokens if t != ""]
     header = not any(numeric)
@@ -254,7 +344,6 @@ def read_log(
             f"start a line with '#' to make it a comment"
         )
     ncols = len(tokens)
-    notes: list[str] = []
     if columns is None:
         if header and all(t in COLUMN_NAMES for t in tokens):
             columns = tokens
@@ -303,8 +392,68 @@ def read_log(
     nums = np.fromiter((n for n, _ in _data_lines(text)), dtype=np.int64)
     if header:
         nums = nums[1:]
-    cols = {names[i]: data[:, j] for j, i in enumerate(use)}
+    cols = _to_seconds({names[i]: data[:, j] for j, i in enumerate(use)}, notes)
     return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes))
+
+
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+_DECIMAL_POINT = re.compile(r"^[+-]?(?:\d+\.\d*|\.\d+)(?:[eE][+-]?\d+)?$")
+
+
+def _decimal_commas(path: str, lines: list, sep: str | None) -> bool:
+    """Whether the first data lines (``(number, text)`` pairs, split at ``sep``) write
+    numbers with a decimal comma; a LogError if they mix decimal commas and points."""
+    comma = point = None
+    for n, line in lines:
+        for tok in (t.strip() for t in (line.split(sep) if sep else line.split())):
+            if comma is None and _DECIMAL_COMMA.match(tok):
+                comma = (n, tok)
+            elif point is None and _DECIMAL_POINT.match(tok):
+                point = (n, tok)
+    if comma is not None and point is not None:
+        raise LogError(
+            f"{path}: line {comma[0]} writes {comma[1]!r} with a decimal comma and line {point[0]} {point[1]!r} "
+            f"with a decimal point; write every number one way (a decimal point is safest)"
+        )
+    return comma is not None
+
+
+def _read_text(path: str) -> str:
+    """The text of the log at ``path``, after the checks of the module doc (a LogError naming
+    ``path`` for a missing, unreadable, binary or too large file)."""
+    if os.path.isdir(path):
+        raise LogError(f"{path}: is a folder, not a log file")
+    try:
+        size = os.path.getsize(path)
+        with open(path, "rb") as f:
+            head = f.read(65536)
+    except FileNotFoundError:
+        raise LogError(f"{path}: No such file or directory (no log there)") from None
+    except PermissionError:
+        raise LogError(f"{path}: cannot be read (permission denied)") from None
+    except OSError as e:
+        raise LogError(f"{path}: cannot be read ({e.strerror or e})") from None
+    if b"\0" in head:
+        raise LogError(
+            f"{path}: not a text log: it holds NUL bytes (a binary or zero-filled file); give a CSV/TSV/text "
+            f"table of numbers"
+        )
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise LogError(f"{path}: is UTF-16 text; save it as UTF-8 (or ASCII)")
+    check_size(
+        float(size) * READ_BYTES_PER_FILE_BYTE,
+        f"{path}: reading this {size / 1e6:.3g} MB log",
+        "split it into shorter logs, or set ROTOR_MEMORY_LIMIT_GB [GB] higher on a machine with the memory",
+        error=LogError,
+    )
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:
+            text = f.read()
+    except OSError as e:
+        raise LogError(f"{path}: cannot be read ({e.strerror or e})") from None
+    if "\0" in text:
+        raise LogError(f"{path}: not a text log: it holds NUL bytes (a binary file); give a CSV/TSV/text table")
+    return text
 
 
 def _short(line: str, width: int = 60) -> str:
@@ -342,6 +491,8 @@ def _parse(path, text, sep, header, ncols, use) -> np.ndarray:
             out.append(line)
         body = "".join(out)
         kw["skiprows"] = 0
+    if not any(True for _ in _data_lines(body)):
+        raise LogError(f"{path}: no data rows (only a header line)")
     try:
         df = pd.read_csv(io.StringIO(body), **kw)
         arr = df.to_numpy(dtype=np.float64)

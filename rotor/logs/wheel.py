@@ -175,7 +175,16 @@ def locate_teeth(times: ArrayLike, wheel: str | Wheel, *, index_times: ArrayLike
     than a revolution, no gap is found, or the edges between two gaps are not N−M.
     """
     wheel = parse_wheel(wheel)
-    t = np.asarray(times, dtype=np.float64)
+    try:
+        t = np.asarray(times, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"locate_teeth(times): an array of edge times [s], not {type(times).__name__}") from None
+    if t.ndim != 1:
+        raise LogError(f"tooth edge times: a 1-d array, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise LogError(
+            f"tooth edge {int(np.flatnonzero(~np.isfinite(t))[0])}: time {t[~np.isfinite(t)][0]} is not finite"
+        )
     E = wheel.edges_per_rev
     n = t.size
     if n < E + 3:
@@ -370,6 +379,10 @@ class ToothErrors(Result):
         """Read a file written by :meth:`save` from ``path``; a malformed file raises
         :class:`rotor.LogError` naming the file and the key."""
         path = os.fspath(path)
+        if os.path.isdir(path):
+            raise LogError(f"{path}: is a folder, not a tooth-error file")
+        if not os.path.exists(path):
+            raise LogError(f"{path}: No such file or directory (no tooth-error file there)")
         d = load_json(path, what="a tooth-error file", error=LogError)
         if not isinstance(d, dict) or "wheel" not in d or "errors_rad" not in d:
             raise LogError(f"{path}: not a tooth-error file (needs 'wheel' and 'errors_rad')")
