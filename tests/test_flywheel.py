@@ -314,7 +314,7 @@ def test_no_flywheel_needed_and_shaft_alone(diesel):
     )
     assert d.points[0].inertia_kgm2 == 0.0 and d.binding_index == 1
     big = rotor.design_flywheel(diesel, 0.01, shaft_inertia_kgm2=100.0)
-    assert big.flywheel_kgm2 < 0 and "alone meets the target" in big.summary()
+    assert big.flywheel_kgm2 == 0.0 and not big.flywheel_needed and "alone meets the target" in big.summary()
 
 
 @pytest.mark.parametrize(
@@ -353,6 +353,9 @@ def test_design_speaks_the_result_protocol(diesel):
         "delta_achieved",
         "shaft_inertia_kgm2",
         "flywheel_kgm2",
+        "flywheel_needed",
+        "delta_shaft_alone",
+        "note",
         "textbook",
         "fidelity",
         "points",

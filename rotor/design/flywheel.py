@@ -42,6 +42,7 @@ from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
 from ..engine.model import Engine
+from ..engine.plausible import PLAUSIBLE, check_results_finite, check_speed_rpm, require_engine, require_number
 from ..errors import EngineError, NoSteadyStateError, SolverError
 from ..plotting.design import plot_disc_flywheel, plot_flywheel_design, plot_textbook_flywheel
 from ..results import Result, json_safe
@@ -62,6 +63,14 @@ __all__ = [
     "with_crankshaft_inertia",
 ]
 
+MAX_INERTIA_KGM2 = PLAUSIBLE[("crankshaft", "inertia_kgm2")][1]
+"""The largest crankshaft inertia rotor takes [kg·m²] (see :data:`rotor.engine.plausible.PLAUSIBLE`)."""
+DENSITY_RANGE_KG_M3 = (100.0, 25000.0)
+"""Plausible flywheel material densities [kg/m³]: from foams and wood to tungsten alloys."""
+MAX_DISC_DIAMETER_M = 20.0
+"""The largest disc :func:`lightest_disc` makes [m]: a limit that allows more is a unit mistake."""
+MAX_SWEEP_SPEEDS = 2000
+"""The most speeds a δ sweep takes (each is one steady state: 2000 take about a minute)."""
 TEXTBOOK_SHARE = 0.85  # Shishkov (2014) §3.2.12: J_flywheel = 0.85·J₀
 CAST_IRON_KG_M3 = 7200.0
 
@@ -91,12 +100,20 @@ def _points(points: PointsArg, engine: Engine) -> list[OperatingPoint]:
         points = [float(engine.operating.rpm)]
     if isinstance(points, (int, float, OperatingPoint)):
         points = [points]
+    if isinstance(points, (str, bytes)) or not isinstance(points, (Sequence, np.ndarray)):
+        raise TypeError(
+            f"points: expected rpm values, OperatingPoints or a list of them, got {type(points).__name__} {points!r:.40}"
+        )
     out = []
-    for p in points:
-        p = p if isinstance(p, OperatingPoint) else OperatingPoint(*p) if isinstance(p, tuple) else OperatingPoint(p)
-        rpm = float(p.rpm)
-        if not (math.isfinite(rpm) and rpm > 0):
-            raise EngineError(f"operating point rpm = {p.rpm!r}: must be a positive, finite speed in rpm")
+    for given in points:
+        p = (
+            given
+            if isinstance(given, OperatingPoint)
+            else OperatingPoint(*given)
+            if isinstance(given, tuple)
+            else OperatingPoint(cast(float, given))
+        )
+        rpm = check_speed_rpm(p.rpm, "operating point rpm")
         try:
             scale = np.asarray(p.imep_scale, dtype=float)
         except (TypeError, ValueError):
@@ -121,7 +138,7 @@ def _points(points: PointsArg, engine: Engine) -> list[OperatingPoint]:
 
 
 def _check_delta(delta: float) -> float:
-    d = float(delta)
+    d = require_number(delta, "delta")
     if not (math.isfinite(d) and 0 < d < 1):
         raise EngineError(
             f"delta = {delta!r}: the target irregularity (ω_max − ω_min)/ω_mean must lie in (0, 1), e.g. 0.01 for 1 %"
@@ -183,8 +200,18 @@ class TextbookFlywheel(Result):
         return _one_row(self)
 
     def to_json_dict(self) -> dict:
-        """The fields as plain JSON."""
-        return json_safe(asdict(self))
+        """The fields as plain JSON; ``crankshaft_inertia_kgm2`` is null, with a ``note``,
+        where J₀ is smaller than the rods' and pistons' own inertia (the textbook does not
+        apply: a [crankshaft] inertia is never negative)."""
+        d: dict[str, Any] = asdict(self)
+        d["note"] = None
+        if not self.crankshaft_inertia_kgm2 > 0:
+            d["crankshaft_inertia_kgm2"] = None
+            d["note"] = (
+                f"not applicable: J₀ = {self.total_inertia_kgm2:.4g} kg·m² is smaller than the rods' and pistons' "
+                f"own mean inertia ({self.mechanism_inertia_kgm2:.4g} kg·m²)"
+            )
+        return json_safe(d)
 
     def plot(self, ax: Any = None) -> Any:
         """The split of J₀ [kg·m²] (bars); see :func:`rotor.plotting.plot_textbook_flywheel`."""
@@ -240,8 +267,9 @@ def textbook_flywheel(
     **Raises:** :class:`rotor.EngineError` for a bad argument; :class:`rotor.NoSteadyStateError`
     where the engine has no steady state at this point with its own inertia.
     """
+    require_engine(engine, "textbook_flywheel(engine)").check()
     delta = _check_delta(delta)
-    _number("diameter_strokes", diameter_strokes, 0.0)
+    _number("diameter_strokes", diameter_strokes, 0.0, hi=100.0)
     (point,) = _points([OperatingPoint(float(engine.operating.rpm) if rpm is None else rpm, imep_scale, load)], engine)
     ev = DeltaOfInertia(engine, fidelity, friction, grid_deg)
     _, excess = ev.state(float(engine.crankshaft.inertia_kgm2), point)
@@ -453,26 +481,36 @@ def lightest_disc(
     ``bore_m`` [m]; the limits: outer diameter [m], width [m], rim speed [m/s]; at least
     one of the outer diameter or the rim speed must be given.
     """
-    J = float(inertia_kgm2)
+    J = require_number(inertia_kgm2, "lightest_disc(inertia_kgm2)", "kg·m²")
     if not (math.isfinite(J) and J > 0):
         raise EngineError(
             f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
             "the target: no flywheel is needed)"
         )
-    for name, x in (("density_kg_m3", density_kg_m3), ("peak_rpm", peak_rpm)):
-        if not (math.isfinite(float(x)) and float(x) > 0):
+    if J > MAX_INERTIA_KGM2:
+        raise EngineError(f"flywheel inertia {J:.4g} kg·m²: above the plausible {MAX_INERTIA_KGM2:g} kg·m²")
+    for name, x, unit in (("density_kg_m3", density_kg_m3, "kg/m³"), ("peak_rpm", peak_rpm, "rpm")):
+        v = require_number(x, name, unit)
+        if not (v is not None and math.isfinite(v) and v > 0):
             raise EngineError(f"{name} = {x!r}: must be positive")
-    for name, v in (
-        ("max_outer_diameter_m", max_outer_diameter_m),
-        ("max_width_m", max_width_m),
-        ("max_rim_speed_m_s", max_rim_speed_m_s),
+    rho = float(density_kg_m3)
+    lo, hi = DENSITY_RANGE_KG_M3
+    if not lo <= rho <= hi:
+        raise EngineError(
+            f"density_kg_m3 = {rho:g}: outside the plausible {lo:g} … {hi:g} kg/m³ of a flywheel's material "
+            "(cast iron 7200, steel 7850)"
+        )
+    check_speed_rpm(peak_rpm, "peak_rpm")
+    for name, given, unit in (
+        ("max_outer_diameter_m", max_outer_diameter_m, "m"),
+        ("max_width_m", max_width_m, "m"),
+        ("max_rim_speed_m_s", max_rim_speed_m_s, "m/s"),
     ):
-        if v is not None and not (math.isfinite(float(v)) and float(v) > 0):
-            raise EngineError(f"{name} = {v!r}: a limit must be positive (or left out)")
-    try:
-        bore_m = float(bore_m)
-    except (TypeError, ValueError):
-        bore_m = float("nan")
+        limit = require_number(given, name, unit, optional=True)
+        if limit is not None and not (math.isfinite(limit) and limit > 0):
+            raise EngineError(f"{name} = {given!r}: a limit must be positive (or left out)")
+    bore = require_number(bore_m, "bore_m", "m")
+    bore_m = bore
     if not (bore_m >= 0 and math.isfinite(bore_m)):
         raise EngineError("bore_m: must be a number ≥ 0 [m]")
     omega = rpm_to_rad_s(float(peak_rpm))
@@ -488,12 +526,17 @@ def lightest_disc(
         )
     limited_by = min(bounds, key=lambda k: bounds[k])
     D = bounds[limited_by]
+    if D > MAX_DISC_DIAMETER_M:
+        raise EngineError(
+            f"the {limited_by} limit allows an outer diameter of {D:.4g} m, more than any flywheel "
+            f"({MAX_DISC_DIAMETER_M:g} m): check the unit of the limit (max_outer_diameter_m is metres, "
+            "max_rim_speed_m_s metres per second), or give a tighter one"
+        )
     if not D**4 - bore_m**4 > 0 or D <= bore_m:
         raise EngineError(
             f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the "
             f"bore {bore_m:.4g} m"
         )
-    rho = float(density_kg_m3)
     width = 32 * J / (rho * math.pi * (D**4 - bore_m**4))
     if max_width_m is not None and width > max_width_m:
         need_D = (32 * J / (rho * math.pi * max_width_m) + bore_m**4) ** 0.25
@@ -508,6 +551,15 @@ def lightest_disc(
             f"{width * 1e3:.1f} mm, {larger}, or a looser δ target"
         )
     mass = rho * math.pi * width * (D**2 - bore_m**2) / 4
+    check_results_finite(
+        f"the lightest disc for {J:.4g} kg·m²",
+        {"width_m": width, "mass_kg": mass, "rim_speed_m_s": omega * D / 2},
+    )
+    if not (width > 0 and mass > 0):
+        raise EngineError(
+            f"the lightest disc for {J:.4g} kg·m² at an outer diameter of {D:.4g} m is {width:g} m wide: "
+            "too thin to make; give a smaller outer diameter or rim-speed limit"
+        )
     return DiscFlywheel(
         outer_diameter_m=D,
         bore_m=float(bore_m),
@@ -575,7 +627,10 @@ class FlywheelDesign(Result):
       the design's total mean inertia (the fairer ratio when the rods and pistons are a
       large share);
     - ``shaft_inertia_kgm2``: the crankshaft's own inertia without the flywheel [kg·m²];
-      ``flywheel_kgm2``: the design less it (what the flywheel must add) [kg·m²];
+      ``flywheel_kgm2``: the design less it (what the flywheel must add) [kg·m²], never
+      negative: 0 with ``flywheel_needed`` False where the shaft alone meets every target
+      (then ``delta_shaft_alone``, δ at the binding point with the shaft alone [-], and
+      ``note`` say so); ``delta_shaft_alone`` is None without a shaft inertia;
     - ``disc``: a :class:`DiscFlywheel` or None; ``points``: a :class:`PointResult` per
       point; ``loads``: each point's load (None: balanced);
     - ``fidelity``, ``friction``, ``grid_deg`` [deg]: as given to :func:`rotor.steady_state`;
@@ -598,6 +653,20 @@ class FlywheelDesign(Result):
     friction: FrictionArg = None
     grid_deg: float = 0.25
     diameter_strokes: float = 2.5
+    flywheel_needed: bool = True
+    delta_shaft_alone: float | None = None
+
+    @property
+    def note(self) -> str | None:
+        """Why there is no flywheel, in words; None where one is needed."""
+        if self.flywheel_needed:
+            return None
+        got = "" if self.delta_shaft_alone is None else f" gives δ = {self.delta_shaft_alone:.4g} and"
+        return (
+            f"no flywheel needed: the crankshaft's own inertia alone ({self.shaft_inertia_kgm2:g} kg·m²){got} "
+            f"meets the target δ = {self.delta_target:g} at {self.binding_rpm:g} rpm, which needs only "
+            f"{self.crankshaft_inertia_kgm2:.4g} kg·m²"
+        )
 
     @property
     def engine_name(self) -> str:
@@ -621,21 +690,28 @@ class FlywheelDesign(Result):
         return t.total_inertia_kgm2 / (self.crankshaft_inertia_kgm2 + t.mechanism_inertia_kgm2)
 
     def to_json_dict(self) -> dict:
-        """The design as plain JSON (what ``rotor flywheel --json`` prints, less the plots)."""
+        """The design as plain JSON (what ``rotor flywheel --json`` prints, less the plots).
+
+        The textbook's ``[crankshaft]`` equivalent and its ratio are null where J₀ is smaller
+        than the rods' and pistons' own inertia (the textbook does not apply: see its note)."""
+        applicable = self.textbook_inertia_kgm2 > 0
         d = {
             "engine": self.engine_name,
             "delta_target": self.delta_target,
             "crankshaft_inertia_kgm2": self.crankshaft_inertia_kgm2,
-            "textbook_inertia_kgm2": self.textbook_inertia_kgm2,
-            "textbook_ratio": self.textbook_ratio,
+            "textbook_inertia_kgm2": self.textbook_inertia_kgm2 if applicable else None,
+            "textbook_ratio": self.textbook_ratio if applicable else None,
             "textbook_total_ratio": self.textbook_total_ratio,
             "binding_rpm": self.binding_rpm,
             "delta_achieved": self.delta_achieved,
             "shaft_inertia_kgm2": self.shaft_inertia_kgm2,
             "flywheel_kgm2": self.flywheel_kgm2,
-            "textbook": asdict(self.textbook),
+            "flywheel_needed": self.flywheel_needed,
+            "delta_shaft_alone": self.delta_shaft_alone,
+            "note": self.note,
+            "textbook": self.textbook.to_json_dict(),
             "fidelity": self.fidelity,
-            "points": [asdict(p) for p in self.points],
+            "points": [{**asdict(p), "textbook": p.textbook.to_json_dict()} for p in self.points],
             "disc": None if self.disc is None else asdict(self.disc),
             "grid_deg": self.grid_deg,
             "diameter_strokes": self.diameter_strokes,
@@ -723,9 +799,7 @@ class FlywheelDesign(Result):
                     f"{self.flywheel_kgm2:.4f} kg·m² (the textbook's 0.85·J₀ is {r:.3f} × it, {100 * (r - 1):+.1f} %)"
                 )
             else:
-                lines.append(
-                    f"  a shaft of {self.shaft_inertia_kgm2:g} kg·m² alone meets the target: no flywheel is needed"
-                )
+                lines.append(f"  {self.note} (the shaft alone meets the target)")
         if self.disc is not None:
             lines.append("  " + self.disc.summary())
         return "\n".join(lines)
@@ -742,14 +816,22 @@ class FlywheelDesign(Result):
         if rpm_range is None:
             lo, hi = 0.8 * rpms.min(), 1.2 * rpms.max()
         else:
-            try:
-                lo, hi = (float(v) for v in rpm_range)
-            except (TypeError, ValueError):
-                lo, hi = math.nan, math.nan
-            if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+            if (
+                isinstance(rpm_range, (str, bytes))
+                or not isinstance(rpm_range, (Sequence, np.ndarray))
+                or len(rpm_range) != 2
+            ):
+                raise EngineError(f"rpm_range = {rpm_range!r:.40}: give (low, high) speeds with 0 < low ≤ high [rpm]")
+            lo, hi = (check_speed_rpm(v, "rpm_range") for v in rpm_range)
+            if not lo <= hi:
                 raise EngineError(f"rpm_range = {rpm_range!r}: give (low, high) speeds with 0 < low ≤ high [rpm]")
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise EngineError(f"n = {n!r}: the number of sweep speeds must be an integer ≥ 1")
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+            raise TypeError(f"delta_sweep(n): expected a whole number of sweep speeds, got {type(n).__name__}")
+        if not 1 <= n <= MAX_SWEEP_SPEEDS:
+            raise EngineError(
+                f"n = {n!r}: the number of sweep speeds must lie in 1 … {MAX_SWEEP_SPEEDS} (each is a steady "
+                "state; 25 draw a smooth curve)"
+            )
         cylinders = self.engine.cylinders
         sweep = np.linspace(lo, hi, n)
         ev = DeltaOfInertia(self.engine, self.fidelity, self.friction, self.grid_deg)
@@ -834,6 +916,7 @@ def design_flywheel(
     (a :class:`rotor.SolverError`) for an operating point with no steady state, and
     :class:`rotor.SolverError` where Newton's method finds no inertia.
     """
+    require_engine(engine, "design_flywheel(engine)").check()
     pts = _points(points, engine)
     if delta is None and any(p.delta is None for p in pts):
         raise EngineError("no δ target: give delta, or one in every OperatingPoint")
@@ -897,7 +980,14 @@ def design_flywheel(
             )
         )
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
-    flywheel = J_design - float(shaft_inertia_kgm2)
+    shaft = float(shaft_inertia_kgm2)
+    needed = J_design > shaft
+    flywheel = J_design - shaft if needed else 0.0  # never negative: a shaft that is enough needs none
+    delta_shaft = None
+    if shaft > 0:  # δ at the binding point with the shaft alone, no flywheel
+        delta_shaft = ev.delta(shaft, pts[i_bind])
+        if not math.isfinite(delta_shaft):
+            delta_shaft = None
     disc = None
     if (max_outer_diameter_m is not None or max_rim_speed_m_s is not None) and flywheel > 0:
         disc = lightest_disc(
@@ -916,8 +1006,10 @@ def design_flywheel(
         binding_rpm=pts[i_bind].rpm,
         binding_index=i_bind,
         delta_achieved=point_results[i_bind].delta,
-        shaft_inertia_kgm2=float(shaft_inertia_kgm2),
+        shaft_inertia_kgm2=shaft,
         flywheel_kgm2=flywheel,
+        flywheel_needed=needed,
+        delta_shaft_alone=delta_shaft,
         textbook=tb_worst,
         points=tuple(point_results),
         loads=tuple(cast("Load | None", p.load) for p in pts),  # parsed by _points
@@ -929,13 +1021,12 @@ def design_flywheel(
     )
 
 
-def _number(name: str, v: Any, lo: float, strict: bool = True) -> float:
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        x = float("nan")
+def _number(name: str, v: Any, lo: float, strict: bool = True, hi: float = math.inf, unit: str = "") -> float:
+    x = require_number(v, name, unit)
     if not (math.isfinite(x) and (x > lo if strict else x >= lo)):
         raise EngineError(f"{name} = {v!r}: must be a number {'>' if strict else '≥'} {lo:g}")
+    if x > hi:
+        raise EngineError(f"{name} = {v!r}: lies above the plausible {hi:g} {unit} (check its unit)")
     return x
 
 
@@ -948,11 +1039,11 @@ def _check_design_args(
     max_width_m: float | None,
     bore_m: float,
 ) -> None:
-    _number("shaft_inertia_kgm2", shaft, 0.0, strict=False)
-    _number("diameter_strokes", diameter_strokes, 0.0)
-    _number("grid_deg", grid_deg, 0.0)
+    _number("shaft_inertia_kgm2", shaft, 0.0, strict=False, hi=MAX_INERTIA_KGM2, unit="kg·m²")
+    _number("diameter_strokes", diameter_strokes, 0.0, hi=100.0)
+    _number("grid_deg", grid_deg, 0.0, unit="deg")
     if max_rpm is not None:
-        _number("max_rpm", max_rpm, 0.0)
+        _number("max_rpm", max_rpm, 0.0, hi=PLAUSIBLE[("operating", "rpm")][1], unit="rev/min")
     if not disc and (max_width_m is not None or bore_m):
         raise EngineError(
             "a width limit or a bore shapes the lightest disc, which needs an outer-diameter or a "

@@ -28,7 +28,7 @@ Fidelity (``fidelity=``):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
 import jax
@@ -36,16 +36,27 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..checks import arrays_only
+from ..checks import arrays_only, check_size, concrete
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
+from ..engine.plausible import require_engine, require_number
 from ..errors import EngineError
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
 
-__all__ = ["CrankTrain", "crank_train", "FIDELITIES", "COL_I", "COL_K", "COL_MOTORED", "COL_COMBUSTION"]
+__all__ = [
+    "CrankTrain",
+    "crank_train",
+    "check_engine",
+    "check_tables",
+    "FIDELITIES",
+    "COL_I",
+    "COL_K",
+    "COL_MOTORED",
+    "COL_COMBUSTION",
+]
 
 FIDELITIES = ("variable", "series", "coefficients", "constant")
 # the columns of CrankTrain.values and .slopes: I(θ) [kg·m²]; k(θ), the coefficient of ω² in
@@ -54,7 +65,18 @@ FIDELITIES = ("variable", "series", "coefficients", "constant")
 COL_I, COL_K, COL_MOTORED, COL_COMBUSTION = 0, 1, 2, 3
 
 
-def check_fidelity(fidelity, engine=None):
+def check_engine(engine: Any, call: str = "crank_train(engine)") -> None:
+    """Check ``engine`` again before a solver uses it (see :meth:`rotor.Engine.check`): a
+    :class:`TypeError` naming ``call`` if it is not an engine, a :class:`rotor.EngineError`
+    for a field that ``eqx.tree_at`` put in unchecked. Traced fields pass."""
+    require_engine(engine, call).check()
+
+
+def check_fidelity(fidelity: str, engine: Engine | None = None) -> None:
+    """Refuse an unknown ``fidelity``, or one ``engine`` cannot use; checks ``engine``
+    again (:func:`check_engine`) when it is given."""
+    if engine is not None:
+        check_engine(engine, "engine")
     if fidelity not in FIDELITIES:
         raise EngineError(f"fidelity = {fidelity!r}: must be one of {', '.join(map(repr, FIDELITIES))}")
     if fidelity == "series" and engine is not None and engine.articulated is not None:
@@ -64,10 +86,24 @@ def check_fidelity(fidelity, engine=None):
         )
 
 
-def grid_points(strokes: int, grid_deg: float) -> int:
+# memory of the tables per grid point and column while they are built [bytes]: values
+# and slopes, and the intermediates of the per-cylinder shifts and derivatives
+BYTES_PER_NODE_COLUMN = 8 * 48
+
+
+def grid_points(strokes: int, grid_deg: float, cylinders: int = 1) -> int:
+    """Nodes of the cycle grid at ``grid_deg`` [deg] for a ``strokes``-stroke engine of
+    ``cylinders`` cylinders; refuses a step that does not divide the cycle, or a grid whose
+    tables would not fit in memory (:func:`rotor.checks.check_size`)."""
+    grid_deg = require_number(grid_deg, "grid_deg", "deg")
     cycle = 180.0 * strokes
-    n = int(round(cycle / grid_deg))
-    if not (np.isfinite(grid_deg) and grid_deg > 0 and np.isclose(n * grid_deg, cycle) and n >= 16):
+    ok = np.isfinite(grid_deg) and grid_deg > 0
+    n_real = cycle / grid_deg if ok else 0.0
+    if ok and n_real > 1e6:  # before counting nodes: a grid of 1e-300° has more than int can say
+        need = n_real * (COL_COMBUSTION + cylinders) * BYTES_PER_NODE_COLUMN
+        check_size(need, f"grid_deg = {grid_deg:g}° ({n_real:.3g} nodes per cycle)", "use a larger grid_deg, e.g. 0.25")
+    n = int(round(n_real)) if ok else 0
+    if not (ok and np.isclose(n * grid_deg, cycle) and n >= 16):
         raise EngineError(f"grid_deg = {grid_deg!r}: must divide the {cycle:g}° cycle into 16 or more equal steps")
     return n
 
@@ -261,14 +297,53 @@ def crank_train(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.
     - ``fidelity``: ``"variable"`` (default), ``"series"``, ``"coefficients"`` or ``"constant"``.
     - ``grid_deg``: node spacing [deg]; must divide the cycle (default 0.25°).
     """
-    check_fidelity(fidelity, engine)
-    return train_from_engine(engine, fidelity, grid_points(engine.strokes, grid_deg))
+    check_fidelity(fidelity, require_engine(engine, "crank_train(engine)"))
+    return train_from_engine(engine, fidelity, grid_points(engine.strokes, grid_deg, engine.cylinders))
 
 
 def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
-    """:func:`crank_train` with the node count given (usable inside jit)."""
+    """:func:`crank_train` with the node count given (usable inside jit). A concrete
+    ``engine`` is checked again first (:meth:`rotor.Engine.check`) and its tables after:
+    every value finite and I(θ) > 0, or a :class:`rotor.EngineError` naming the column."""
+    check_engine(engine, "train_from_engine(engine)")
     engine = arrays_only(engine)
     values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)
+    check_tables(values, slopes, mean_i, engine)
     return CrankTrain(
         values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes, fidelity
     )
+
+
+_COLUMN_CAUSE = {
+    COL_I: ("the reduced inertia I(θ)", "kg·m²", "[crankshaft] inertia_kgm2, [masses] and [geometry]"),
+    COL_K: ("the reciprocating inertia torque per ω²", "kg·m²", "[masses] reciprocating_kg and [geometry]"),
+    COL_MOTORED: ("the motored gas torque", "N·m", "[pressure] and [geometry] bore_m"),
+}
+
+
+def check_tables(values: Any, slopes: Any, mean_inertia: Any, engine: Engine) -> None:
+    """Refuse tables of a concrete ``engine`` with a value that is not finite, or an
+    inertia I(θ) [kg·m²] that is not positive: a :class:`rotor.EngineError` naming the
+    column and the inputs it comes from. Traced tables pass."""
+    v, d, mi = concrete(values), concrete(slopes), concrete(mean_inertia)
+    if v is None or d is None or mi is None:
+        return
+    for col in range(v.shape[1]):
+        what, unit, cause = _COLUMN_CAUSE.get(
+            col, (f"cylinder {col - COL_COMBUSTION + 1}'s combustion torque", "N·m", "[pressure] and [geometry]")
+        )
+        for table, name in ((v, ""), (d, " (its slope)")):
+            bad = ~np.isfinite(table[:, col])
+            if np.any(bad):
+                i = int(np.argmax(bad))
+                deg = np.rad2deg(i * engine.cycle_rad / v.shape[0])
+                raise EngineError(
+                    f"engine {engine.name!r}: {what}{name} is {table[i, col]:g} {unit} at {deg:g}°: not a finite "
+                    f"number; check {cause}"
+                )
+    low = float(np.min(v[:, COL_I]))
+    if not (low > 0 and np.isfinite(mi) and mi > 0):
+        raise EngineError(
+            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {low:g} kg·m² (mean {float(mi):g}): it must "
+            "stay positive; check [crankshaft] inertia_kgm2 and [masses]"
+        )

@@ -5,6 +5,8 @@ kinematics (:mod:`.kinematics`, :mod:`.articulated`, :mod:`.mechanism`), the red
 inertia I(θ) (:mod:`.inertia`), cylinder pressure sources (:mod:`.pressure`), forces and
 torques at a given speed (:mod:`.forces`), friction (:mod:`.friction`), the textbook
 one-cylinder table (:mod:`.table`) and the one-screen engine summary (:mod:`.summary`).
+:mod:`.plausible` holds what an engine's numbers may be: their Python types at the API
+edge and the plausible range of every input (a bore of 1e300 m is finite, not an engine).
 
 May import: the ground floor (:mod:`rotor.units`, :mod:`rotor.errors`,
 :mod:`rotor.checks`, :mod:`rotor.fileio`, :mod:`rotor.results`) and :mod:`rotor.plotting`

@@ -15,6 +15,7 @@ import os
 import tomllib
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -23,7 +24,10 @@ from .friction import Friction
 from .model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
 from .pressure import PRESSURE_KINDS
 
-__all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path"]
+__all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path", "MAX_FILE_BYTES"]
+
+MAX_FILE_BYTES = 16 * 1024**2
+"""The largest engine file read [bytes]: a pressure table of a million points fits well within."""
 
 _NUM, _NUMS, _INTS, _STR, _INT = (
     "a number",
@@ -185,25 +189,56 @@ def load_engine(path_or_name: str | os.PathLike[str]) -> Engine:
 
     **Returns:** a validated :class:`rotor.Engine`.
 
-    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) for a missing or malformed
-    file, naming the file, the key and the problem.
+    The file is UTF-8 text (a byte-order mark at its start is accepted), at most
+    :data:`MAX_FILE_BYTES` long.
+
+    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) for a missing, empty or
+    malformed file, a directory, or text that is not UTF-8, naming the file (the user's
+    path), the key and the problem; a :class:`TypeError` if ``path_or_name`` is not a
+    string or path.
     """
-    text_source = None
+    if isinstance(path_or_name, bytes) or not isinstance(path_or_name, (str, os.PathLike)):
+        raise TypeError(
+            f"load_engine(path_or_name): expected a path or a preset name (a str or os.PathLike), got "
+            f"{type(path_or_name).__name__} {path_or_name!r:.40}"
+        )
     path = Path(path_or_name)
     name = str(path_or_name)
     if path.suffix != ".toml" and name in preset_names():
-        text_source = preset_path(name)
+        text_source: Path | Any = preset_path(name)
         label = f"preset {name!r}"
     elif path.is_file():
         text_source = path
         label = str(path)
+    elif path.is_dir():
+        raise EngineError(f"{name}: is a directory, not an engine file; give the .toml file inside it or a preset name")
+    elif path.suffix == ".toml" or os.sep in name:
+        raise EngineError(
+            f"{name}: neither an engine file nor a preset (no such file); presets: {', '.join(preset_names())}"
+        )
     else:
         raise EngineError(f"{name}: neither an engine file nor a preset; presets: {', '.join(preset_names())}")
     try:
+        size = text_source.stat().st_size if isinstance(text_source, Path) else 0
+        if size > MAX_FILE_BYTES:
+            raise EngineError(
+                f"{label}: {size / 1e6:.3g} MB is far too large for an engine file (at most "
+                f"{MAX_FILE_BYTES / 1e6:g} MB): is it the engine's TOML file?"
+            )
         raw = text_source.read_bytes()
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise EngineError(f"{label}: not a TOML file (not UTF-8 text)") from None
+        text = raw.decode("utf-8-sig")  # a byte-order mark at the start is accepted
+        if not text.strip():
+            raise EngineError(
+                f"{label}: the file is empty; an engine file needs name, strokes, cylinders and the tables "
+                "[geometry], [masses], [crankshaft], [layout] and [operating] (see `rotor presets`)"
+            )
+        if "\x00" in text:
+            raise EngineError(f"{label}: not a TOML file (it holds NUL bytes: a binary file?)")
+        data = tomllib.loads(text)
+    except UnicodeDecodeError as e:
+        raise EngineError(
+            f"{label}: not a TOML file: byte {e.start} is not UTF-8 text (save the file as UTF-8)"
+        ) from None
     except tomllib.TOMLDecodeError as e:
         raise EngineError(f"{label}: not a valid TOML file: {e}") from None
     except OSError as e:
@@ -211,4 +246,6 @@ def load_engine(path_or_name: str | os.PathLike[str]) -> Engine:
     try:
         return engine_from_dict(data)
     except EngineError as e:
+        raise EngineError(f"{label}: {e}") from None
+    except TypeError as e:  # every value was typed on the way in: this is not the user's
         raise EngineError(f"{label}: {e}") from None

@@ -27,8 +27,11 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
 
+from ..checks import check_size
+from ..errors import EngineError
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
+from .plausible import require_engine, require_number
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -52,6 +55,7 @@ def cylinder_pressure(engine, theta):
 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
     """
+    require_engine(engine, "cylinder_pressure(engine)")
     phi = engine.cycle_angles(theta)
     return engine.pressure(phi, engine.geometry, engine.strokes)
 
@@ -63,6 +67,7 @@ def cylinder_gas_torques(engine, theta, model: str = "exact"):
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``model``: piston
     kinematics, ``"exact"`` or ``"series"``.
     """
+    require_engine(engine, "cylinder_gas_torques(engine)")
     ds = engine_piston_motion(engine, theta, model).ds
     force = (cylinder_pressure(engine, theta) - engine.pressure.crankcase_pa) * engine.geometry.piston_area_m2
     return force * ds
@@ -74,6 +79,7 @@ def gas_torque(engine, theta, model: str = "exact"):
 
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``model``: ``"exact"``/``"series"``.
     """
+    require_engine(engine, "gas_torque(engine)")
     return jnp.sum(cylinder_gas_torques(engine, theta, model), axis=-1)
 
 
@@ -86,6 +92,7 @@ def reciprocating_inertia_torque(engine: Engine, theta: ArrayLike, omega: ArrayL
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``omega``: crank speed
     [rad/s]; ``model``: ``"exact"``/``"series"``.
     """
+    require_engine(engine, "reciprocating_inertia_torque(engine)")
     pm = engine_piston_motion(engine, theta, model)
     m_rec, _ = engine.masses.two_mass_split(engine.geometry.rod_length_m)
     return jnp.sum(-m_rec * omega**2 * pm.d2s * pm.ds, axis=-1)
@@ -99,6 +106,7 @@ def total_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str 
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``omega``: crank speed
     [rad/s]; ``model``: piston kinematics, ``"exact"`` or ``"series"``.
     """
+    require_engine(engine, "total_torque(engine)")
     return gas_torque(engine, theta, model) + reciprocating_inertia_torque(engine, theta, omega, model)
 
 
@@ -117,6 +125,7 @@ def crank_forces(
     **Returns:** a dict of arrays: ``s_m``, ``v_m_s``, ``j_m_s2``, ``pg_N``, ``pj_N``,
     ``psum_N``, ``n_N``, ``k_N``, ``z_N``, ``t_N``, ``m_Nm`` (SI units as named).
     """
+    require_engine(engine, "crank_forces(engine)")
     if not 1 <= cylinder <= engine.cylinders:
         raise ValueError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
     i = cylinder - 1
@@ -163,6 +172,7 @@ def imep_pa(engine):
     ∮ p·A·(ds/dφ)·dφ over the cycle on a grid of 0.25° (the tests check it against the
     mean gas torque, the same work reached through the forces).
     """
+    require_engine(engine, "imep_pa(engine)")
     phi = _cycle_grid(engine)
     g = engine.geometry
     # one cylinder at its own cycle angle: cycle angle φ is its mechanical angle (TDC at 0)
@@ -175,6 +185,7 @@ def imep_pa(engine):
 @eqx.filter_jit
 def mean_gas_torque(engine):
     """Cycle mean of the engine's gas torque [N·m] = n·IMEP·V_h / (cycle angle)."""
+    require_engine(engine, "mean_gas_torque(engine)")
     theta = _cycle_grid(engine)
     return jnp.mean(gas_torque(engine, theta))
 
@@ -184,16 +195,33 @@ def indicated_power_w(engine: Engine, omega: ArrayLike | None = None) -> Array:
 
     **Arguments:** ``omega``: crank speed [rad/s]; default the engine's ``[operating] rpm``.
     """
+    require_engine(engine, "indicated_power_w(engine)")
     omega = engine.operating.omega if omega is None else omega
     return mean_gas_torque(engine) * omega
 
 
+TABLE_ROW_BYTES = 4096
+"""Memory one row of a crank table takes while it is computed and written as text [bytes]:
+its twelve columns, the intermediates of every cylinder, and the text of the row."""
+
+
 def table_angles_deg(engine: Engine, step_deg: float) -> np.ndarray:
-    """Angles 0, step, …, cycle (inclusive, as in the tables of Shishkov (2014)) [deg]."""
+    """Angles 0, step, …, cycle (inclusive, as in the tables of Shishkov (2014)) [deg].
+
+    **Arguments:** ``engine``; ``step_deg``: the angle step [deg], dividing the cycle.
+    A step so small that the table would not fit in memory is refused before anything is
+    allocated (:func:`rotor.checks.check_size`)."""
+    step_deg = require_number(step_deg, "step_deg", "deg")
     cycle = 360.0 * engine.strokes / 2
     if not (np.isfinite(step_deg) and 0 < step_deg <= cycle):
-        raise ValueError(f"step must be a positive angle up to {cycle:g} degrees, got {step_deg!r}")
+        raise EngineError(f"step must be a positive angle up to {cycle:g} degrees, got {step_deg!r}")
+    rows = cycle / step_deg + 1
+    check_size(
+        rows * TABLE_ROW_BYTES,
+        f"a table at a step of {step_deg:g}° ({rows:.3g} rows)",
+        "use a larger step (--step), e.g. 1 or 10 degrees",
+    )
     n = int(round(cycle / step_deg))
     if not np.isclose(n * step_deg, cycle):
-        raise ValueError(f"step {step_deg:g}° must divide the {cycle:g}° cycle evenly")
+        raise EngineError(f"step {step_deg:g}° must divide the {cycle:g}° cycle evenly")
     return np.linspace(0.0, cycle, n + 1)

@@ -22,7 +22,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
 
-from ..checks import as_f64, check_finite, check_positive
+from ..checks import check_finite, check_positive
+from .plausible import check_fields_plausible, number
 
 __all__ = ["Friction"]
 
@@ -47,15 +48,20 @@ class Friction(eqx.Module):
     - ``fmep_per_speed2_pa_s2_per_m2``: c [Pa·s²/m²] (default 0).
     """
 
-    fmep_pa: jnp.ndarray = eqx.field(converter=as_f64)
-    fmep_per_speed_pa_s_per_m: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
-    fmep_per_speed2_pa_s2_per_m2: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    fmep_pa: jnp.ndarray = eqx.field(converter=number("friction", "fmep_pa"))
+    fmep_per_speed_pa_s_per_m: jnp.ndarray = eqx.field(
+        converter=number("friction", "fmep_per_speed_pa_s_per_m"), default=0.0
+    )
+    fmep_per_speed2_pa_s2_per_m2: jnp.ndarray = eqx.field(
+        converter=number("friction", "fmep_per_speed2_pa_s2_per_m2"), default=0.0
+    )
     table: ClassVar[str] = "friction"
 
     def __check_init__(self):
         for key in ("fmep_pa", "fmep_per_speed_pa_s_per_m", "fmep_per_speed2_pa_s2_per_m2"):
             check_finite(self.table, key, getattr(self, key))
             check_positive(self.table, key, getattr(self, key), allow_zero=True)
+        check_fields_plausible(self)
 
     def fmep(self, piston_speed_m_s: ArrayLike) -> Array:
         """FMEP [Pa] at mean piston speed c_m [m/s]."""

@@ -39,6 +39,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .articulated import knuckle_velocity_sq, slave_piston_motion
 from .kinematics import piston_motion, rod_motion
 from .mechanism import slave_geometry
+from .plausible import require_engine
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -78,6 +79,7 @@ def cylinder_inertia(engine: Engine, theta: ArrayLike) -> Float[Array, "... cyli
 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
     """
+    require_engine(engine, "cylinder_inertia(engine)")
     alpha = engine.mechanical_angles(theta)
     out = ordinary_cylinder_inertia(alpha, engine.geometry, engine.masses)
     art = engine.articulated
@@ -101,6 +103,7 @@ def inertia_coefficients(engine: Engine) -> tuple[Array, Array, Array]:
 
     **Returns:** ``(A, B, C)`` [kg·m²], each of shape ``(cylinders,)``.
     """
+    require_engine(engine, "inertia_coefficients(engine)")
     theta = jnp.linspace(0.0, 2 * jnp.pi, _FOURIER_POINTS, endpoint=False)
     ci = cylinder_inertia(engine, theta)  # (points, cylinders)
     alpha = engine.mechanical_angles(theta)  # each cylinder's own angle
@@ -126,6 +129,7 @@ def reduced_inertia(engine: Engine, theta: ArrayLike, model: str = "exact") -> A
 
     **Returns:** I(θ), shape of ``theta`` [kg·m²].
     """
+    require_engine(engine, "reduced_inertia(engine)")
     _check_model(model)
     theta = jnp.asarray(theta, dtype=jnp.float64)
     J = engine.crankshaft.inertia_kgm2
@@ -152,5 +156,6 @@ def mean_reduced_inertia(engine: Engine) -> Array:
 
     For a central two-mass engine this is J + n·(m_rot·R² + m_rec·R²·(½ + λ²/8 + O(λ⁴))).
     """
+    require_engine(engine, "mean_reduced_inertia(engine)")
     theta = jnp.linspace(0.0, 2 * jnp.pi, _FOURIER_POINTS, endpoint=False)
     return jnp.mean(reduced_inertia(engine, theta))

@@ -4,7 +4,18 @@
 numeric field is a float64 JAX array, so ``jax.grad`` works over any of them (use
 ``eqx.tree_at`` to replace one). Each module checks its own values when it is built
 and :class:`Engine` checks how the tables fit together; a problem raises
-:class:`rotor.EngineError` (a ``ValueError``) that names the key.
+:class:`rotor.EngineError` (a ``ValueError``) that names the key, and a value of the
+wrong Python type (a string where a number belongs) a :class:`TypeError`.
+
+Finite is not enough: every input must lie in the plausible range of a piston engine,
+from a model engine to the largest ship diesels (:data:`rotor.engine.plausible.PLAUSIBLE`:
+a bore of 1 mm … 2 m, a stroke of 1 mm … 5 m, masses up to 100 t, a crankshaft inertia
+of 1e-12 … 1e8 kg·m², speeds of 0.1 … 100 000 rpm, pressures up to 1 GPa, a compression
+ratio of 1.5 … 100, …), and what is computed from the inputs (the piston area, the
+displacement, the clearance volume, the inertia of the rods and pistons, the inertia and
+gas forces at the operating speed) must come out finite, or the error names the input
+that made it overflow. ``eqx.tree_at`` skips these checks; :meth:`Engine.check` runs
+them again, and every solver calls it on an engine with concrete fields.
 
 Angles: ``throw_angles_deg[i]`` is the crank angle at which throw i points along an
 unbanked cylinder axis (its TDC); ``bank_angles_deg[i]`` is the angle of cylinder i's
@@ -19,6 +30,7 @@ import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
@@ -27,6 +39,7 @@ from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
 from ..errors import EngineError
 from ..units import RAD_S_PER_RPM
 from .friction import Friction
+from .plausible import check_fields_plausible, finite_derived, number
 from .pressure import NoPressure, PressureSource
 
 __all__ = [
@@ -51,16 +64,17 @@ class Geometry(eqx.Module):
     rod, centre to centre [m]; ``pin_offset_m``: desaxial offset k of the piston pin [m].
     """
 
-    bore_m: jnp.ndarray = eqx.field(converter=as_f64)
-    stroke_m: jnp.ndarray = eqx.field(converter=as_f64)
-    rod_length_m: jnp.ndarray = eqx.field(converter=as_f64)
-    pin_offset_m: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    bore_m: jnp.ndarray = eqx.field(converter=number("geometry", "bore_m"))
+    stroke_m: jnp.ndarray = eqx.field(converter=number("geometry", "stroke_m"))
+    rod_length_m: jnp.ndarray = eqx.field(converter=number("geometry", "rod_length_m"))
+    pin_offset_m: jnp.ndarray = eqx.field(converter=number("geometry", "pin_offset_m"), default=0.0)
     table: ClassVar[str] = "geometry"
 
     def __check_init__(self):
         for key in ("bore_m", "stroke_m", "rod_length_m"):
             check_positive(self.table, key, getattr(self, key))
         check_finite(self.table, "pin_offset_m", self.pin_offset_m)
+        check_fields_plausible(self)
         R, L, k = concrete(self.crank_radius_m), concrete(self.rod_length_m), concrete(self.pin_offset_m)
         if R is not None and L is not None and k is not None and not L > R + abs(k):
             extra = f" plus the pin offset |k| = {abs(k):g} m" if k != 0 else ""
@@ -103,13 +117,15 @@ class Masses(eqx.Module):
     ``rotating_kg`` the throw's unbalanced mass alone.
     """
 
-    reciprocating_kg: jnp.ndarray = eqx.field(converter=as_f64)
-    rotating_kg: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
-    rod_kg: jnp.ndarray | None = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
+    reciprocating_kg: jnp.ndarray = eqx.field(converter=number("masses", "reciprocating_kg"))
+    rotating_kg: jnp.ndarray = eqx.field(converter=number("masses", "rotating_kg"), default=0.0)
+    rod_kg: jnp.ndarray | None = eqx.field(converter=number("masses", "rod_kg", optional=True), default=None)
     rod_cg_from_big_end_m: jnp.ndarray | None = eqx.field(
-        converter=lambda x: None if x is None else as_f64(x), default=None
+        converter=number("masses", "rod_cg_from_big_end_m", optional=True), default=None
     )
-    rod_inertia_kgm2: jnp.ndarray | None = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
+    rod_inertia_kgm2: jnp.ndarray | None = eqx.field(
+        converter=number("masses", "rod_inertia_kgm2", optional=True), default=None
+    )
     table: ClassVar[str] = "masses"
 
     def __check_init__(self):
@@ -128,6 +144,7 @@ class Masses(eqx.Module):
             check_positive(t, "rod_kg", self.rod_kg)
             check_positive(t, "rod_cg_from_big_end_m", self.rod_cg_from_big_end_m, allow_zero=True)
             check_positive(t, "rod_inertia_kgm2", self.rod_inertia_kgm2, allow_zero=True)
+        check_fields_plausible(self)
 
     @property
     def full_rod(self) -> bool:
@@ -153,11 +170,12 @@ class Crankshaft(eqx.Module):
     """``[crankshaft]``: ``inertia_kgm2``, the constant moment of inertia of the crankshaft,
     flywheel and everything rigidly attached [kg·m²] (not the rods and pistons)."""
 
-    inertia_kgm2: jnp.ndarray = eqx.field(converter=as_f64)
+    inertia_kgm2: jnp.ndarray = eqx.field(converter=number("crankshaft", "inertia_kgm2"))
     table: ClassVar[str] = "crankshaft"
 
     def __check_init__(self):
         check_positive(self.table, "inertia_kgm2", self.inertia_kgm2)
+        check_fields_plausible(self)
 
 
 class Layout(eqx.Module):
@@ -168,15 +186,18 @@ class Layout(eqx.Module):
     1…n in firing sequence (static).
     """
 
-    throw_angles_deg: jnp.ndarray = eqx.field(converter=as_f64)
+    throw_angles_deg: jnp.ndarray = eqx.field(converter=number("layout", "throw_angles_deg"))
     firing_order: tuple = eqx.field(static=True, converter=_tuple_of_ints)
-    bank_angles_deg: jnp.ndarray | None = eqx.field(converter=lambda x: None if x is None else as_f64(x), default=None)
+    bank_angles_deg: jnp.ndarray | None = eqx.field(
+        converter=number("layout", "bank_angles_deg", optional=True), default=None
+    )
     table: ClassVar[str] = "layout"
 
     def __check_init__(self):
         check_finite(self.table, "throw_angles_deg", self.throw_angles_deg)
         if self.bank_angles_deg is not None:
             check_finite(self.table, "bank_angles_deg", self.bank_angles_deg)
+        check_fields_plausible(self)
 
     @property
     def banks_deg(self):
@@ -189,11 +210,12 @@ class Layout(eqx.Module):
 class Operating(eqx.Module):
     """``[operating]``: ``rpm``, the operating speed [rev/min] (the one place rpm is stored)."""
 
-    rpm: jnp.ndarray = eqx.field(converter=as_f64)
+    rpm: jnp.ndarray = eqx.field(converter=number("operating", "rpm"))
     table: ClassVar[str] = "operating"
 
     def __check_init__(self):
         check_positive(self.table, "rpm", self.rpm)
+        check_fields_plausible(self)
 
     @property
     def omega(self):
@@ -216,10 +238,10 @@ class Articulated(eqx.Module):
 
     slaves: tuple = eqx.field(static=True, converter=_tuple_of_ints)
     masters: tuple = eqx.field(static=True, converter=_tuple_of_ints)
-    knuckle_radius_m: jnp.ndarray = eqx.field(converter=as_f64)
-    knuckle_angle_deg: jnp.ndarray = eqx.field(converter=as_f64)
-    rod_length_m: jnp.ndarray = eqx.field(converter=as_f64)
-    rod_knuckle_kg: jnp.ndarray = eqx.field(converter=as_f64, default=0.0)
+    knuckle_radius_m: jnp.ndarray = eqx.field(converter=number("articulated", "knuckle_radius_m"))
+    knuckle_angle_deg: jnp.ndarray = eqx.field(converter=number("articulated", "knuckle_angle_deg"))
+    rod_length_m: jnp.ndarray = eqx.field(converter=number("articulated", "rod_length_m"))
+    rod_knuckle_kg: jnp.ndarray = eqx.field(converter=number("articulated", "rod_knuckle_kg"), default=0.0)
     table: ClassVar[str] = "articulated"
 
     def __check_init__(self):
@@ -233,6 +255,7 @@ class Articulated(eqx.Module):
         check_finite(t, "knuckle_angle_deg", self.knuckle_angle_deg)
         check_positive(t, "rod_length_m", self.rod_length_m)
         check_positive(t, "rod_knuckle_kg", self.rod_knuckle_kg, allow_zero=True)
+        check_fields_plausible(self)
 
 
 def _firing_tdc_deg(xp, tdc_deg, order, strokes):
@@ -260,6 +283,36 @@ def _firing_tdc_deg(xp, tdc_deg, order, strokes):
     return angles, prev - tdc1, cycle
 
 
+MAX_CYLINDERS = 64
+"""The most cylinders an engine may have (the largest built have 28 or fewer)."""
+
+
+def _recheck(part: eqx.Module) -> None:
+    """Run ``part``'s field converters (the type checks) and every ``__check_init__`` of its
+    class hierarchy again, as equinox does when it is built."""
+    for f in dataclasses.fields(part):
+        convert = f.metadata.get("converter")
+        value = getattr(part, f.name)
+        if convert is not None and not isinstance(value, jax.core.Tracer):
+            convert(value)
+    for cls in type(part).__mro__:
+        check = cls.__dict__.get("__check_init__")
+        if check is not None:
+            check(part)
+
+
+def _peak_pressure_input(pressure: PressureSource) -> float | None:
+    """The largest pressure [Pa] among the concrete inputs of a pressure source."""
+    values = []
+    for f in dataclasses.fields(pressure):
+        if f.name.endswith("_pa"):
+            v = concrete(getattr(pressure, f.name))
+            if v is None:
+                return None
+            values.append(float(np.max(v)) if v.size else 0.0)
+    return max(values) if values else None
+
+
 class Engine(eqx.Module):
     """An engine: the whole engine file as one pytree.
 
@@ -281,10 +334,16 @@ class Engine(eqx.Module):
     friction: Friction | None = None
 
     def __check_init__(self):
+        self._check_types()
         if self.strokes not in (2, 4):
             raise EngineError(f"strokes = {self.strokes!r}: must be 2 or 4")
         if not (isinstance(self.cylinders, int) and self.cylinders >= 1):
             raise EngineError(f"cylinders = {self.cylinders!r}: must be a whole number, 1 or more")
+        if self.cylinders > MAX_CYLINDERS:
+            raise EngineError(
+                f"cylinders = {self.cylinders}: more than the {MAX_CYLINDERS} of any piston engine built "
+                "(the largest radials and ship diesels have 28 or fewer)"
+            )
         n = self.cylinders
         lay = self.layout
         for key, arr in (("throw_angles_deg", lay.throw_angles_deg), ("bank_angles_deg", lay.bank_angles_deg)):
@@ -314,6 +373,109 @@ class Engine(eqx.Module):
                 )
         if self.articulated is not None:
             self._check_articulated()
+        self._check_derived()
+
+    def _check_types(self):
+        if not isinstance(self.name, str):
+            raise TypeError(f"Engine(name = {self.name!r}): expected a string, got {type(self.name).__name__}")
+        for key in ("strokes", "cylinders"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise TypeError(f"Engine({key} = {v!r}): expected a whole number, got {type(v).__name__}")
+        for key, cls, optional in _TABLE_TYPES:
+            v = getattr(self, key)
+            if not (isinstance(v, cls) or (optional and v is None)):
+                name = "a rotor." + cls.__name__ + (" or None" if optional else "")
+                raise TypeError(f"Engine({key} = ...): expected {name}, got {type(v).__name__} {v!r:.40}")
+
+    def _check_derived(self):
+        """Quantities computed from the inputs must be finite and positive where they must:
+        a finite but absurd input (a bore of 1e300 m) overflows here and is named."""
+        g, m = self.geometry, self.masses
+        b, S, L = concrete(g.bore_m), concrete(g.stroke_m), concrete(g.rod_length_m)
+        if b is None or S is None or L is None:
+            return
+        bore = f"[geometry] bore_m = {fmt(b)}"
+        with np.errstate(all="ignore"):
+            area = np.pi * b**2 / 4
+            finite_derived("the piston area", area, "m²", bore)
+            finite_derived("the displacement", area * S * self.cylinders, "m³", f"{bore}, stroke_m = {fmt(S)}")
+            R = S / 2
+            masses = [
+                None if x is None else concrete(x)
+                for x in (m.reciprocating_kg, m.rotating_kg, m.rod_kg, m.rod_inertia_kgm2)
+            ]
+            if any(x is None for x in masses[:2]):
+                return
+            rod = 0.0 if masses[2] is None else masses[2] * (1 + R / L) ** 2 * R**2
+            rod_j = 0.0 if masses[3] is None else masses[3] * (R / L) ** 2
+            scale = (masses[0] * (1 + R / L) ** 2 + masses[1]) * R**2 + rod + rod_j
+            finite_derived(
+                "the rods' and pistons' inertia m·R²",
+                scale * self.cylinders,
+                "kg·m²",
+                f"[masses] reciprocating_kg = {fmt(masses[0])}, stroke_m = {fmt(S)}",
+                positive=False,
+            )
+            J = concrete(self.crankshaft.inertia_kgm2)
+            if J is not None:
+                finite_derived(
+                    "the reduced inertia I(θ)",
+                    J + scale * self.cylinders,
+                    "kg·m²",
+                    f"[crankshaft] inertia_kgm2 = {fmt(J)}",
+                )
+            rpm = concrete(self.operating.rpm)
+            if rpm is not None:
+                omega = rpm * RAD_S_PER_RPM
+                force = masses[0] * R * (1 + R / L) * omega**2
+                finite_derived(
+                    "the reciprocating inertia torque at the operating speed",
+                    force * R,
+                    "N·m",
+                    f"[operating] rpm = {fmt(rpm)}, [masses] reciprocating_kg = {fmt(masses[0])}",
+                    positive=False,
+                )
+            p_max = _peak_pressure_input(self.pressure)
+            if p_max is not None:
+                finite_derived(
+                    "the peak gas force p·A",
+                    p_max * area,
+                    "N",
+                    f"{bore} with pressures up to {p_max:g} Pa",
+                    positive=False,
+                )
+            ratio = getattr(self.pressure, "compression_ratio", None)
+            eps = None if ratio is None else concrete(ratio)
+            if eps is not None:
+                finite_derived(
+                    "the clearance volume V_h/(ε − 1)",
+                    area * S / (eps - 1),
+                    "m³",
+                    f"[pressure] compression_ratio = {fmt(eps)}",
+                )
+
+    def check(self) -> Engine:
+        """Check the whole engine again, every table and how they fit, as when it was built;
+        returns the engine.
+
+        ``eqx.tree_at`` replaces a field without running the tables' checks, so a zero
+        inertia or a NaN bore can be put into an engine that way; the solvers
+        (:func:`rotor.crank_train`, and through it :func:`rotor.steady_state`,
+        :func:`rotor.simulate` and the flywheel design) call this on every engine whose
+        fields are concrete numbers. Traced fields (inside ``jax.jit``) are not checked.
+
+        **Raises:** :class:`rotor.EngineError` naming the key and the problem, or a
+        :class:`TypeError` for a field that is not a number (or not a table).
+        """
+        self._check_types()
+        for part in (self.geometry, self.masses, self.crankshaft, self.layout, self.pressure, self.operating):
+            _recheck(part)
+        for optional_part in (self.articulated, self.friction):
+            if optional_part is not None:
+                _recheck(optional_part)
+        type(self).__check_init__(self)
+        return self
 
     def _check_articulated(self):
         art, n = self.articulated, self.cylinders
@@ -393,3 +555,15 @@ class Engine(eqx.Module):
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         fields.update(changes)
         return Engine(**fields)
+
+
+_TABLE_TYPES = (
+    ("geometry", Geometry, False),
+    ("masses", Masses, False),
+    ("crankshaft", Crankshaft, False),
+    ("layout", Layout, False),
+    ("pressure", PressureSource, False),
+    ("operating", Operating, False),
+    ("articulated", Articulated, True),
+    ("friction", Friction, True),
+)

@@ -23,9 +23,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
+from ..checks import check_finite, check_positive, concrete, fmt, where
 from ..errors import EngineError
 from .kinematics import piston_motion
+from .plausible import check_fields_plausible, number
 
 __all__ = [
     "PressureSource",
@@ -162,12 +163,13 @@ class NoPressure(PressureSource):
     **Fields:** ``crankcase_pa`` [Pa].
     """
 
-    crankcase_pa: jnp.ndarray = eqx.field(converter=as_f64, default=STANDARD_CRANKCASE_PA)
+    crankcase_pa: jnp.ndarray = eqx.field(converter=number("pressure", "crankcase_pa"), default=STANDARD_CRANKCASE_PA)
     kind: ClassVar[str] = "none"
     charge_scalable: ClassVar[bool] = False
 
     def __check_init__(self) -> None:
         check_positive(self.table, "crankcase_pa", self.crankcase_pa, allow_zero=True)
+        check_fields_plausible(self)
 
     def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
         """The crankcase pressure [Pa] at every cycle angle ``phi`` [rad]."""
@@ -196,9 +198,9 @@ class PressureTable(PressureSource):
     - ``crankcase_pa``: crankcase pressure [Pa].
     """
 
-    angle_deg: jnp.ndarray = eqx.field(converter=as_f64)
-    pressure_pa: jnp.ndarray = eqx.field(converter=as_f64)
-    crankcase_pa: jnp.ndarray = eqx.field(converter=as_f64, default=STANDARD_CRANKCASE_PA)
+    angle_deg: jnp.ndarray = eqx.field(converter=number("pressure", "angle_deg"))
+    pressure_pa: jnp.ndarray = eqx.field(converter=number("pressure", "pressure_pa"))
+    crankcase_pa: jnp.ndarray = eqx.field(converter=number("pressure", "crankcase_pa"), default=STANDARD_CRANKCASE_PA)
     kind: ClassVar[str] = "table"
     charge_scalable: ClassVar[bool] = False
 
@@ -223,6 +225,7 @@ class PressureTable(PressureSource):
                     f"does not come after point {i + 1} ({a[i]:g}°)"
                 )
         check_positive(t, "crankcase_pa", self.crankcase_pa, allow_zero=True)
+        check_fields_plausible(self)
 
     def validate_for(self, strokes: int) -> None:
         """The table must lie within and cover the ``strokes``-stroke cycle."""
@@ -274,14 +277,14 @@ class _SingleZone(PressureSource):
     """Gas exchange and polytropic compression/expansion shared by the parametric cycles
     (abstract: :class:`WiebeCycle` and :class:`MotoredCycle` are the concrete ones)."""
 
-    compression_ratio: jnp.ndarray = eqx.field(converter=as_f64)
-    intake_pa: jnp.ndarray = eqx.field(converter=as_f64)
-    exhaust_pa: jnp.ndarray = eqx.field(converter=as_f64)
-    compression_exponent: jnp.ndarray = eqx.field(converter=as_f64, default=1.35)
-    exhaust_open_deg: jnp.ndarray = eqx.field(converter=as_f64, default=500.0)
-    blowdown_deg: jnp.ndarray = eqx.field(converter=as_f64, default=60.0)
-    overlap_deg: jnp.ndarray = eqx.field(converter=as_f64, default=20.0)
-    crankcase_pa: jnp.ndarray = eqx.field(converter=as_f64, default=STANDARD_CRANKCASE_PA)
+    compression_ratio: jnp.ndarray = eqx.field(converter=number("pressure", "compression_ratio"))
+    intake_pa: jnp.ndarray = eqx.field(converter=number("pressure", "intake_pa"))
+    exhaust_pa: jnp.ndarray = eqx.field(converter=number("pressure", "exhaust_pa"))
+    compression_exponent: jnp.ndarray = eqx.field(converter=number("pressure", "compression_exponent"), default=1.35)
+    exhaust_open_deg: jnp.ndarray = eqx.field(converter=number("pressure", "exhaust_open_deg"), default=500.0)
+    blowdown_deg: jnp.ndarray = eqx.field(converter=number("pressure", "blowdown_deg"), default=60.0)
+    overlap_deg: jnp.ndarray = eqx.field(converter=number("pressure", "overlap_deg"), default=20.0)
+    crankcase_pa: jnp.ndarray = eqx.field(converter=number("pressure", "crankcase_pa"), default=STANDARD_CRANKCASE_PA)
 
     def _expansion(self) -> jnp.ndarray:
         """The polytropic exponent after firing TDC [-]."""
@@ -444,11 +447,13 @@ class WiebeCycle(_SingleZone):
     ``exhaust_open_deg``, ``blowdown_deg``, ``overlap_deg``, ``crankcase_pa``.
     """
 
-    imep_pa: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
-    expansion_exponent: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True, default=1.30)
-    start_deg: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
-    duration_deg: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True)
-    form_factor: jnp.ndarray = eqx.field(converter=as_f64, kw_only=True, default=2.0)
+    imep_pa: jnp.ndarray = eqx.field(converter=number("pressure", "imep_pa"), kw_only=True)
+    expansion_exponent: jnp.ndarray = eqx.field(
+        converter=number("pressure", "expansion_exponent"), kw_only=True, default=1.30
+    )
+    start_deg: jnp.ndarray = eqx.field(converter=number("pressure", "start_deg"), kw_only=True)
+    duration_deg: jnp.ndarray = eqx.field(converter=number("pressure", "duration_deg"), kw_only=True)
+    form_factor: jnp.ndarray = eqx.field(converter=number("pressure", "form_factor"), kw_only=True, default=2.0)
     kind: ClassVar[str] = "wiebe"
     charge_scalable: ClassVar[bool] = True
 
@@ -461,6 +466,7 @@ class WiebeCycle(_SingleZone):
         s = concrete(self.start_deg)
         if s is not None and not (180.0 < s < 540.0):
             raise EngineError(f"{where(t, 'start_deg')} = {fmt(s)}: combustion must start between 180° and 540°")
+        check_fields_plausible(self)
 
     def _expansion(self) -> jnp.ndarray:
         return self.expansion_exponent
@@ -509,6 +515,7 @@ class MotoredCycle(_SingleZone):
 
     def __check_init__(self) -> None:
         self._check_single_zone()
+        check_fields_plausible(self)
 
     def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
         """The motored pressure [Pa] at cycle angles ``phi`` [rad] in a cylinder of ``geometry``."""

@@ -8,12 +8,15 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
+from ..checks import check_size
+from ..errors import EngineError
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
 from .forces import gas_torque, imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
 from .kinematics import mean_piston_speed
 from .model import Engine
+from .plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
 
 __all__ = ["EngineSummary", "engine_summary", "EngineCurves", "engine_curves"]
 
@@ -123,7 +126,8 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
     and its excess work (the largest swing of ∫(M − M_mean)dθ, Shishkov (2014) §3.2.12), and the
     mean, minimum and maximum of the reduced inertia I(θ).
     """
-    rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
+    require_engine(engine, "engine_summary(engine)").check()
+    rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
     omega = rpm * RAD_S_PER_RPM
     g = engine.geometry
     theta = jnp.linspace(0.0, engine.cycle_rad, int(720 * engine.strokes / 2), endpoint=False)
@@ -132,25 +136,38 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
     torque = float(mean_gas_torque(engine))
     A, B, C = inertia_coefficients(engine)
     work = np.cumsum(np.asarray(total) - float(jnp.mean(total))) * (engine.cycle_rad / theta.shape[0])
+    figures = {
+        "displacement_m3": float(g.displacement_m3 * engine.cylinders),
+        "crank_radius_m": float(g.crank_radius_m),
+        "rod_ratio": float(g.rod_ratio),
+        "mean_piston_speed_m_s": float(mean_piston_speed(g.stroke_m, omega)),
+        "imep_pa": float(imep_pa(engine)),
+        "mean_gas_torque_Nm": torque,
+        "indicated_power_w": torque * omega,
+        "total_torque_min_Nm": float(jnp.min(total)),
+        "total_torque_max_Nm": float(jnp.max(total)),
+        "excess_work_J": float(work.max() - work.min()),
+        "inertia_mean_kgm2": float(mean_reduced_inertia(engine)),
+        "inertia_min_kgm2": float(jnp.min(inertia)),
+        "inertia_max_kgm2": float(jnp.max(inertia)),
+    }
+    coefficients = {"A": float(A[0]), "B": float(B[0]), "C": float(C[0])}
+    check_results_finite(
+        f"the summary of engine {engine.name!r} at {rpm:g} rpm",
+        {**figures, **{f"inertia coefficient {k}": v for k, v in coefficients.items()}},
+    )
+    if not figures["inertia_min_kgm2"] > 0:
+        raise EngineError(
+            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {figures['inertia_min_kgm2']:g} kg·m²; it "
+            "must stay positive: check [crankshaft] inertia_kgm2 and [masses]"
+        )
     return EngineSummary(
         name=engine.name,
         strokes=engine.strokes,
         cylinders=engine.cylinders,
         rpm=rpm,
-        displacement_m3=float(g.displacement_m3 * engine.cylinders),
-        crank_radius_m=float(g.crank_radius_m),
-        rod_ratio=float(g.rod_ratio),
-        mean_piston_speed_m_s=float(mean_piston_speed(g.stroke_m, omega)),
-        imep_pa=float(imep_pa(engine)),
-        mean_gas_torque_Nm=torque,
-        indicated_power_w=torque * omega,
-        total_torque_min_Nm=float(jnp.min(total)),
-        total_torque_max_Nm=float(jnp.max(total)),
-        excess_work_J=float(work.max() - work.min()),
-        inertia_mean_kgm2=float(mean_reduced_inertia(engine)),
-        inertia_min_kgm2=float(jnp.min(inertia)),
-        inertia_max_kgm2=float(jnp.max(inertia)),
-        inertia_coefficients_kgm2={"A": float(A[0]), "B": float(B[0]), "C": float(C[0])},
+        **figures,
+        inertia_coefficients_kgm2=coefficients,
         angle_deg=np.rad2deg(np.asarray(theta)),
         total_torque_Nm=np.asarray(total),
         inertia_kgm2=np.asarray(inertia),
@@ -158,6 +175,9 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
 
 
 _INERTIA_MODELS = ("exact", "coefficients", "mean")
+CURVE_ROW_BYTES = 4096
+"""Memory one angle of :func:`engine_curves` takes while it is computed [bytes] (every
+cylinder's intermediates and the seven curves)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -264,15 +284,25 @@ def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``rpm``: crank speed [rev/min]
     (default ``[operating] rpm``); ``points_per_deg``: samples per degree [1/deg].
     """
-    rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
-    if not (np.isfinite(rpm) and rpm > 0):
-        raise ValueError(f"rpm must be a positive number, got {rpm!r}")
+    require_engine(engine, "engine_curves(engine)").check()
+    rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
+    points_per_deg = require_whole(points_per_deg, "engine_curves(points_per_deg)")
     cycle_deg = 360 * engine.strokes / 2
-    deg = np.linspace(0, cycle_deg, int(cycle_deg * points_per_deg) + 1)
+    rows = cycle_deg * points_per_deg + 1
+    check_size(
+        rows * CURVE_ROW_BYTES,
+        f"curves at {points_per_deg} points per degree ({rows:.3g} angles)",
+        "use fewer points per degree, e.g. 2",
+    )
+    deg = np.linspace(0, cycle_deg, int(rows))
     theta = jnp.deg2rad(deg)
     gas = np.asarray(gas_torque(engine, theta))
     total = np.asarray(total_torque(engine, theta, rpm * RAD_S_PER_RPM))
     inertia = {m: np.asarray(reduced_inertia(engine, theta, m)) for m in _INERTIA_MODELS}
+    check_results_finite(
+        f"the curves of engine {engine.name!r} at {rpm:g} rpm",
+        {"gas_torque_Nm": gas, "total_torque_Nm": total, **{f"inertia_{m}_kgm2": v for m, v in inertia.items()}},
+    )
     return EngineCurves(
         engine_name=engine.name,
         rpm=rpm,

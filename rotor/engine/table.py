@@ -11,10 +11,12 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
+from ..errors import EngineError
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
 from .forces import crank_forces, table_angles_deg
 from .model import Engine
+from .plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
 
 __all__ = ["CrankTable", "crank_table", "TABLE_COLUMNS"]
 
@@ -168,30 +170,29 @@ def crank_table(
 
     **Returns:** a :class:`CrankTable`, rows at 0, step, …, cycle degrees.
     """
-    rpm = float(engine.operating.rpm) if rpm is None else float(rpm)
-    if not (np.isfinite(rpm) and rpm > 0):
-        raise ValueError(f"rpm must be a positive number, got {rpm!r}")
+    require_engine(engine, "crank_table(engine)").check()
+    rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
+    if kinematics not in ("series", "exact"):
+        raise EngineError(f"kinematics = {kinematics!r}: 'series' (the textbook's) or 'exact'")
+    cylinder = require_whole(cylinder, "cylinder")
+    if not 1 <= cylinder <= engine.cylinders:
+        raise EngineError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
     angles = table_angles_deg(engine, step_deg)
     omega = rpm * RAD_S_PER_RPM
     # the table is for the cylinder's own cycle angle: shift by its firing angle
     i = cylinder - 1
-    if not 1 <= cylinder <= engine.cylinders:
-        raise ValueError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
     offset = engine.firing_angles_rad[i] - (2 * np.pi if engine.strokes == 4 else 0.0)
     theta = jnp.deg2rad(jnp.asarray(angles)) + offset
     cols = {k: np.asarray(v) for k, v in crank_forces(engine, theta, omega, cylinder, kinematics).items()}
     cols = {"angle_deg": angles, **cols}
     g = engine.geometry
     m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
-    return CrankTable(
-        cols,
-        engine.name,
-        rpm,
-        kinematics,
-        cylinder,
-        crank_radius_m=float(g.crank_radius_m),
-        rod_ratio=float(g.rod_ratio),
-        reciprocating_kg=float(m_rec),
-        piston_area_m2=float(g.piston_area_m2),
-        crankcase_pa=float(engine.pressure.crankcase_pa),
-    )
+    header = {
+        "crank_radius_m": float(g.crank_radius_m),
+        "rod_ratio": float(g.rod_ratio),
+        "reciprocating_kg": float(m_rec),
+        "piston_area_m2": float(g.piston_area_m2),
+        "crankcase_pa": float(engine.pressure.crankcase_pa),
+    }
+    check_results_finite(f"the table of engine {engine.name!r} at {rpm:g} rpm", {**header, **cols})
+    return CrankTable(cols, engine.name, rpm, kinematics, cylinder, **header)

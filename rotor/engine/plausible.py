@@ -1,0 +1,271 @@
+"""What an engine's numbers may be: Python types at the API edge and plausible ranges.
+
+**Types.** A numeric field of an engine table takes a number (``int``, ``float``, a numpy
+or JAX scalar) or, for the lists of the file, a sequence or array of numbers; anything
+else (a string, ``None``, a dict) is a :class:`TypeError` that names the key and what it
+takes (:func:`number`). The public functions of :mod:`rotor.engine` and
+:mod:`rotor.design` check their arguments the same way
+(:func:`require_engine`, :func:`require_number`, :func:`require_whole`).
+
+**Plausible ranges** (:data:`PLAUSIBLE`). Finite and positive is not enough: a bore of
+1e300 m is finite, and its piston area overflows. Each input must lie within a range
+wide enough for every piston engine from a 5 cm³ model engine to the largest two-stroke
+ship diesels (bore 0.98 m, stroke 3.15 m, about 100 t of crank train), and no wider
+than a mistake of units can hide in:
+
+- ``[geometry] bore_m``: 0.001 … 2 m
+- ``[geometry] stroke_m``: 0.001 … 5 m
+- ``[geometry] rod_length_m``: 0.001 … 20 m
+- ``[geometry] pin_offset_m``: −1 … 1 m
+- ``[masses] reciprocating_kg``: 1e-6 … 1e5 kg
+- ``[masses] rotating_kg``: 0 … 1e5 kg
+- ``[masses] rod_kg``: 0 … 1e5 kg
+- ``[masses] rod_cg_from_big_end_m``: 0 … 20 m
+- ``[masses] rod_inertia_kgm2``: 0 … 1e5 kg·m²
+- ``[crankshaft] inertia_kgm2``: 1e-12 … 1e8 kg·m²
+- ``[layout] throw_angles_deg``: −3600 … 3600 deg
+- ``[layout] bank_angles_deg``: −3600 … 3600 deg
+- ``[operating] rpm``: 0.1 … 100 000 rev/min
+- ``[pressure] pressure_pa``: 0 … 1e9 Pa (10 000 bar)
+- ``[pressure] crankcase_pa``: 0 … 1e9 Pa (10 000 bar)
+- ``[pressure] intake_pa``: 0 … 1e9 Pa (10 000 bar)
+- ``[pressure] exhaust_pa``: 0 … 1e9 Pa (10 000 bar)
+- ``[pressure] imep_pa``: 0 … 1e9 Pa (10 000 bar)
+- ``[pressure] compression_ratio``: 1.5 … 100
+- ``[pressure] duration_deg``: 0 … 720 deg
+- ``[pressure] form_factor``: 0 … 50
+- ``[friction] fmep_pa``: 0 … 1e8 Pa
+- ``[friction] fmep_per_speed_pa_s_per_m``: 0 … 1e8 Pa·s/m
+- ``[friction] fmep_per_speed2_pa_s2_per_m2``: 0 … 1e8 Pa·s²/m²
+- ``[articulated] knuckle_radius_m``: 0 … 5 m
+- ``[articulated] rod_length_m``: 0.001 … 20 m
+- ``[articulated] knuckle_angle_deg``: −3600 … 3600 deg
+- ``[articulated] rod_knuckle_kg``: 0 … 1e5 kg
+
+Whether a key may be zero is decided by the table's own check (a bore must be > 0, a
+rotating mass may be 0); the range bounds what is finite but absurd.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, Literal, overload
+
+import equinox as eqx
+import jax
+import numpy as np
+
+from ..checks import as_f64, concrete, where
+from ..errors import EngineError
+
+__all__ = [
+    "PLAUSIBLE",
+    "number",
+    "check_plausible",
+    "check_fields_plausible",
+    "check_results_finite",
+    "check_speed_rpm",
+    "finite_derived",
+    "require_engine",
+    "require_number",
+    "what_it_is",
+    "require_whole",
+]
+
+_PRESSURE = (
+    0.0,
+    1e9,
+    "Pa",
+    "an absolute pressure in pascals, e.g. 101325 for 1 atm; peak firing pressures are below 3e7",
+)
+
+PLAUSIBLE: dict[tuple[str, str], tuple[float, float, str, str]] = {
+    ("geometry", "bore_m"): (1e-3, 2.0, "m", "a bore is metres, e.g. 0.092"),
+    ("geometry", "stroke_m"): (1e-3, 5.0, "m", "a stroke is metres, e.g. 0.09"),
+    ("geometry", "rod_length_m"): (1e-3, 20.0, "m", "a rod length is metres, centre to centre, e.g. 0.15"),
+    ("geometry", "pin_offset_m"): (-1.0, 1.0, "m", "a pin offset is metres, a few mm at most, e.g. 0.001"),
+    ("masses", "reciprocating_kg"): (1e-6, 1e5, "kg", "the piston group of one cylinder, e.g. 0.6"),
+    ("masses", "rotating_kg"): (0.0, 1e5, "kg", "per cylinder, e.g. 0.5"),
+    ("masses", "rod_kg"): (0.0, 1e5, "kg", "one connecting rod, e.g. 0.7"),
+    ("masses", "rod_cg_from_big_end_m"): (0.0, 20.0, "m", "a distance in metres along the rod, e.g. 0.05"),
+    ("masses", "rod_inertia_kgm2"): (0.0, 1e5, "kg·m²", "about the rod's centre of mass, e.g. 0.004"),
+    ("crankshaft", "inertia_kgm2"): (1e-12, 1e8, "kg·m²", "crankshaft and flywheel, e.g. 0.3 for a car engine"),
+    ("layout", "throw_angles_deg"): (-3600.0, 3600.0, "deg", "crank angles in degrees, e.g. 0, 180"),
+    ("layout", "bank_angles_deg"): (-3600.0, 3600.0, "deg", "bank angles in degrees, e.g. 0, 90"),
+    ("operating", "rpm"): (0.1, 1e5, "rev/min", "a crank speed in rpm, e.g. 3000"),
+    ("pressure", "pressure_pa"): _PRESSURE,
+    ("pressure", "crankcase_pa"): _PRESSURE,
+    ("pressure", "intake_pa"): _PRESSURE,
+    ("pressure", "exhaust_pa"): _PRESSURE,
+    ("pressure", "imep_pa"): _PRESSURE,
+    ("pressure", "compression_ratio"): (1.5, 100.0, "", "V_max/V_min, e.g. 10 (petrol) or 17 (diesel)"),
+    ("pressure", "duration_deg"): (0.0, 720.0, "deg", "the burn in crank degrees, e.g. 50"),
+    ("pressure", "form_factor"): (0.0, 50.0, "", "Wiebe's m, usually 0.5…3"),
+    ("friction", "fmep_pa"): (0.0, 1e8, "Pa", "a friction mean effective pressure in pascals, e.g. 1e5"),
+    ("friction", "fmep_per_speed_pa_s_per_m"): (0.0, 1e8, "Pa·s/m", "e.g. 5000"),
+    ("friction", "fmep_per_speed2_pa_s2_per_m2"): (0.0, 1e8, "Pa·s²/m²", "e.g. 400"),
+    ("articulated", "knuckle_radius_m"): (0.0, 5.0, "m", "big-end centre to knuckle pin, e.g. 0.05"),
+    ("articulated", "rod_length_m"): (1e-3, 20.0, "m", "knuckle pin to piston pin, e.g. 0.2"),
+    ("articulated", "knuckle_angle_deg"): (-3600.0, 3600.0, "deg", "an angle in degrees, e.g. 60"),
+    ("articulated", "rod_knuckle_kg"): (0.0, 1e5, "kg", "e.g. 0.3"),
+}
+"""(table, key) → (low, high, unit, hint): the plausible range of an input (see the module doc)."""
+
+
+def what_it_is(x: Any) -> str:
+    """``x`` in a few words for an error message: its type and the start of its repr."""
+    text = repr(x)
+    return f"{type(x).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+
+
+def number(table: str, key: str, *, optional: bool = False) -> Callable[[Any], Any]:
+    """The field converter of ``[table] key``: a number, or a sequence or array of numbers,
+    becomes a float64 JAX array (tracers pass); anything else raises a :class:`TypeError`
+    naming the key. ``optional``: ``None`` is kept (the key is absent)."""
+
+    def convert(x: Any) -> Any:
+        if optional and x is None:
+            return None
+        if isinstance(x, jax.core.Tracer):
+            return x
+        kind = "?"
+        if not isinstance(x, (str, bytes, dict)) and x is not None:
+            try:
+                kind = np.asarray(x).dtype.kind
+            except (TypeError, ValueError):
+                kind = "?"
+        if kind not in "biuf":  # a boolean is refused by as_f64 with its own message
+            raise TypeError(
+                f"{where(table, key)} = {x!r:.40}: expected a number (or a list of numbers), not a {type(x).__name__}"
+            )
+        return as_f64(x)
+
+    convert.__qualname__ = convert.__name__ = f"number_{table}_{key}"
+    return convert
+
+
+def check_plausible(table: str, key: str, value: Any) -> None:
+    """Raise :class:`rotor.EngineError` if the concrete ``value`` of ``[table] key`` (units
+    as in its name) lies outside its :data:`PLAUSIBLE` range; tracers and unknown keys pass."""
+    if (table, key) not in PLAUSIBLE or value is None:
+        return
+    v = concrete(value)
+    if v is None:
+        return
+    lo, hi, unit, hint = PLAUSIBLE[(table, key)]
+    bad = v[~((v >= lo) & (v <= hi))] if v.ndim else (v if not (lo <= v <= hi) else np.empty(0))
+    if np.size(bad):
+        b = float(np.ravel(bad)[0])
+        shown = f" = {b:g}" if v.ndim == 0 else f": {b:g}"
+        u = f" {unit}" if unit else ""
+        raise EngineError(
+            f"{where(table, key)}{shown} lies outside the plausible {lo:g} … {hi:g}{u} of any piston engine ({hint})"
+        )
+
+
+def require_engine(engine: Any, call: str) -> Any:
+    """``engine`` if it is a :class:`rotor.Engine`, else a :class:`TypeError` naming ``call``
+    (the function and argument, e.g. ``"engine_summary(engine)"``).
+
+    The engine is recognised by what it is (an equinox Module of class ``Engine`` with the
+    engine's tables), so that this module need not import :mod:`rotor.engine.model`,
+    which imports it."""
+    if not (
+        isinstance(engine, eqx.Module)
+        and type(engine).__name__ == "Engine"
+        and all(hasattr(engine, k) for k in ("geometry", "masses", "crankshaft", "layout", "strokes", "cylinders"))
+    ):
+        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, bytes)) else ""
+        raise TypeError(f"{call}: expected a rotor.Engine{hint}, got {what_it_is(engine)}")
+    return engine
+
+
+@overload
+def require_number(value: Any, call: str, unit: str = "", *, optional: Literal[False] = False) -> float: ...
+
+
+@overload
+def require_number(value: Any, call: str, unit: str = "", *, optional: bool) -> float | None: ...
+
+
+def require_number(value: Any, call: str, unit: str = "", *, optional: bool = False) -> float | None:
+    """``value`` as a Python float if it is a real number (a Python, numpy or concrete JAX
+    scalar; not a bool or a string), else a :class:`TypeError` naming ``call`` (e.g.
+    ``"design_flywheel(delta)"``) and the ``unit`` it takes. ``optional``: ``None`` passes
+    as ``None``. Whether the number is in range is the caller's check."""
+    if value is None and optional:
+        return None
+    ok = not isinstance(value, (bool, np.bool_, str, bytes)) and value is not None
+    if ok and not isinstance(value, (int, float, np.integer, np.floating)):
+        a = concrete(value) if hasattr(value, "dtype") else None
+        ok = a is not None and a.ndim == 0 and np.asarray(value).dtype.kind in "iuf"
+    if not ok:
+        u = f" [{unit}]" if unit else ""
+        raise TypeError(f"{call}: expected a number{u}, got {what_it_is(value)}")
+    return float(value)
+
+
+def require_whole(value: Any, call: str, lo: int = 1) -> int:
+    """``value`` as an ``int`` if it is a whole number ≥ ``lo`` (a Python or numpy integer,
+    not a bool): a :class:`TypeError` naming ``call`` for another type, a
+    :class:`rotor.EngineError` below ``lo``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{call}: expected a whole number, got {what_it_is(value)}")
+    if value < lo:
+        raise EngineError(f"{call} = {value}: must be {lo} or more")
+    return int(value)
+
+
+def finite_derived(what: str, value: Any, unit: str, cause: str, *, positive: bool = True) -> None:
+    """Raise :class:`rotor.EngineError` if a concrete derived quantity is not finite (or,
+    with ``positive``, not > 0): ``what`` names it, ``unit`` is its unit, ``cause`` the
+    inputs it came from (e.g. ``"[geometry] bore_m = 1e+300"``), first in the message."""
+    v = concrete(value)
+    if v is None:
+        return
+    finite = bool(np.all(np.isfinite(v)))
+    if finite and (not positive or bool(np.all(v > 0))):
+        return
+    shown = float(np.ravel(v)[~np.isfinite(np.ravel(v))][0]) if not finite else float(np.min(v))
+    how = "overflows" if not finite and not math.isnan(shown) else "is not a number" if not finite else "vanishes"
+    raise EngineError(f"{cause}: {what} {how} ({shown:g} {unit}); check the units of these inputs")
+
+
+def check_fields_plausible(module: Any) -> None:
+    """:func:`check_plausible` on every field of an engine table ``module`` (its ``table``
+    names it in the file)."""
+    import dataclasses
+
+    table = getattr(module, "table", "")
+    for f in dataclasses.fields(module):
+        check_plausible(table, f.name, getattr(module, f.name))
+
+
+def check_speed_rpm(rpm: Any, call: str) -> float:
+    """A crank speed argument [rev/min] as a float: a number (else :class:`TypeError` naming
+    ``call``), finite, positive and within the plausible range of ``[operating] rpm``
+    (else :class:`rotor.EngineError`)."""
+    v = require_number(rpm, call, "rpm")
+    lo, hi, unit, _ = PLAUSIBLE[("operating", "rpm")]
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise EngineError(
+            f"{call} = {rpm!r}: must be a positive, finite speed between {lo:g} and {hi:g} {unit} (in rpm, e.g. 3000)"
+        )
+    return v
+
+
+def check_results_finite(what: str, values: dict[str, Any]) -> None:
+    """Refuse a result whose numbers are not all finite: ``values`` maps each quantity's
+    name (units in the name) to a number or an array; ``what`` says whose they are (e.g.
+    ``"the summary of engine '4chn15'"``). A number that should exist and does not is an
+    error, never a NaN or an infinity in JSON or CSV."""
+    for key, value in values.items():
+        a = np.asarray(value, dtype=np.float64)
+        bad = ~np.isfinite(a)
+        if np.any(bad):
+            shown = float(np.ravel(a)[np.flatnonzero(np.ravel(bad))[0]])
+            raise EngineError(
+                f"{what}: {key} is {shown:g}, not a finite number; the engine's inputs are outside what its "
+                "equations can carry (check their units)"
+            )
