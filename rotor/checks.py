@@ -124,8 +124,12 @@ def check_size(n_bytes: float, what: str, way_out: str, *, error: type[Exception
     exception class raised. The message is one line with the need, the limit and the way out.
     """
     budget = memory_budget_bytes()
-    if not np.isfinite(n_bytes) or n_bytes > budget:
-        need = "more than can be counted" if not np.isfinite(n_bytes) else f"{n_bytes / 1e9:.3g} GB"
+    try:
+        need_bytes = float(n_bytes)  # a Python int past 2**1024 does not convert: too big
+    except OverflowError:
+        need_bytes = float("inf")
+    if not np.isfinite(need_bytes) or need_bytes > budget:
+        need = "more than can be counted" if not np.isfinite(need_bytes) else f"{need_bytes / 1e9:.3g} GB"
         raise error(
             f"{what} needs {need} of memory, over the {budget / 1e9:.3g} GB this machine allows "
             f"(half of what is available, or {MEMORY_ENV}); {way_out}"

@@ -3,13 +3,15 @@
 An *input error* (:class:`EngineError`, :class:`LogError`) names what is wrong with what
 the user gave and what to do; the command line exits with code 2 on it. A *solver
 outcome* (:class:`SolverError`) is valid input for which a solver could not reach an
-answer (no periodic steady state, a stall): the command line exits with code 1. Ground
-floor: imports nothing from rotor.
+answer (no periodic steady state, a stall): the command line exits with code 1. An
+*internal error* (:class:`InternalError`) is a result rotor should never have produced
+(a NaN or an infinity where a number must exist): a bug in rotor, reported as one by the
+command line (exit code 70). Ground floor: imports nothing from rotor.
 """
 
 from __future__ import annotations
 
-__all__ = ["RotorError", "EngineError", "LogError", "SolverError", "NoSteadyStateError"]
+__all__ = ["RotorError", "EngineError", "LogError", "SolverError", "NoSteadyStateError", "InternalError"]
 
 
 class RotorError(Exception):
@@ -30,3 +32,8 @@ class SolverError(RotorError, RuntimeError):
 
 class NoSteadyStateError(SolverError):
     """No usable periodic solution: the kinetic energy reaches zero inside the cycle."""
+
+
+class InternalError(RotorError, RuntimeError):
+    """A result rotor should never have produced (e.g. a NaN or an infinity where a number
+    must exist): a bug in rotor. The message names the value (its key path) and what it is."""

@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from .errors import InternalError
+
 __all__ = ["Result", "json_safe"]
 
 
@@ -61,13 +63,20 @@ class Result(abc.ABC):
         return f"<pre>{html.escape(self.summary())}</pre>"
 
 
-def json_safe(x: Any) -> Any:
+def json_safe(x: Any, where: str = "") -> Any:
     """``x`` as plain JSON data: arrays to lists, numpy and JAX scalars to Python numbers,
-    NaN and ±inf to ``None``, tuples to lists, dict keys to strings; recursively."""
+    tuples to lists, dict keys to strings; recursively.
+
+    **NaN** becomes ``None``: the result's way of saying that a number does not exist (a
+    δ without a whole cycle, an order not resolved), which its summary explains.
+    **±Infinity** is never hidden: it is a number that overflowed, not one that does not
+    exist, and raises :class:`rotor.errors.InternalError` naming its key path (``where``:
+    the path of ``x`` itself, ``""`` at the top). A ``set``, ``bytes`` or an object that
+    is not data raises ``TypeError`` naming its key path."""
     if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
+        return {str(k): json_safe(v, f'{where}["{k}"]' if where else f'"{k}"') for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
+        return [json_safe(v, f"{where}[{i}]") for i, v in enumerate(x)]
     if isinstance(x, str) or x is None:
         return x
     if isinstance(x, (bool, np.bool_)):
@@ -76,10 +85,24 @@ def json_safe(x: Any) -> Any:
         return int(x)
     if isinstance(x, (float, np.floating)):
         f = float(x)
+        if math.isinf(f):
+            raise InternalError(
+                f"json_safe: {where or 'the value'} is {'' if f > 0 else '-'}Infinity: a number that overflowed; "
+                "JSON cannot hold it and null would hide it"
+            )
         return f if math.isfinite(f) else None
+    if isinstance(x, complex):
+        raise TypeError(f"json_safe: {where or 'the value'} = {x!r}: a complex number is not JSON data")
     if hasattr(x, "__array__"):
         a = np.asarray(x)
+        if a.dtype.kind == "c":
+            raise TypeError(f"json_safe: {where or 'the value'}: a complex array is not JSON data")
         if a.ndim == 0:
-            return json_safe(a.item())
-        return [json_safe(v) for v in a.tolist()]
+            return json_safe(a.item(), where)
+        return [json_safe(v, f"{where}[{i}]") for i, v in enumerate(a.tolist())]
+    if isinstance(x, (set, frozenset, bytes, bytearray)) or callable(x):
+        raise TypeError(
+            f"json_safe: {where or 'the value'} is a {type(x).__name__}: expected numbers, strings, None, "
+            "lists, tuples, dicts or arrays"
+        )
     return x

@@ -111,3 +111,20 @@ def test_help_imports_no_plotting_library():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] == "[]"
+
+
+def test_json_and_csv_are_written_by_output_only():
+    """One writer (cli/output.py) for every command's JSON and CSV: none of the command
+    modules calls json.dumps or a result's to_csv, so that none can write NaN or Infinity."""
+    for path in CLI.glob("*.py"):
+        if path.name == "output.py":
+            continue
+        text = path.read_text(encoding="utf-8")
+        for needle in ("json.dump", ".to_csv(", "csv.writer", "allow_nan"):
+            assert needle not in text, f"rotor/cli/{path.name} writes JSON or CSV itself ({needle}): use cli/output.py"
+
+
+def test_debug_is_a_global_flag_and_exit_statuses_are_documented():
+    assert "--debug" in PARSER.format_help()
+    for code in ("70", "130"):
+        assert code in PARSER.epilog and code in (app.__doc__ or "")

@@ -92,7 +92,7 @@ def test_a_first_line_mixing_numbers_and_text_is_refused(tmp_path):
     from rotor.logs.reader import read_log
 
     p = _log(tmp_path, "0;1000,5\n0.1;1001\n0.2;1002\n0.3;1003\n")
-    with pytest.raises(LogError, match=r"line 1 \('0;1000,5'\) mixes numbers and text \('1000,5' is not a number\)"):
+    with pytest.raises(LogError, match=r"line 1 writes '1000,5' with a decimal comma and line 2 '0.1' with a decimal point"):
         read_log(p, "time,rpm")
     p = _log(tmp_path, "# bench 3\n0.0 1000 x\n0.1 1001 2\n0.2 1002 2\n")
     with pytest.raises(LogError, match=r"line 2 .*'#'"):
@@ -122,3 +122,21 @@ def test_a_header_of_other_names_is_recorded(tmp_path):
     assert read_log(_log(tmp_path, "time,rpm\n0,1\n0.1,2\n0.2,3\n", "named.csv")).notes == ()
     with pytest.raises(LogError, match=r"line 2 is a header whose names 'Time \[s\]', 'Speed' are not column names"):
         read_log(p)
+
+
+@pytest.mark.parametrize(
+    "make,words",
+    [
+        (lambda d: d / "plots", "is a folder"),  # a JSON or CSV output path that is a folder
+        (lambda d: d / "file" / "t.csv", "is a file, not a folder"),  # a "folder" that is a file
+        (lambda d: d / "missing" / "t.csv", "no folder"),  # a folder that does not exist
+    ],
+)
+def test_a_path_that_cannot_be_written_is_refused_by_name_before_writing(tmp_path, make, words):
+    (tmp_path / "plots").mkdir()
+    (tmp_path / "file").write_text("x")
+    path = make(tmp_path)
+    with pytest.raises(OSError) as info:
+        write_text_atomic(path, "text")
+    assert info.value.filename == str(path) and words in info.value.strerror
+    assert sorted(os.listdir(tmp_path)) == ["file", "plots"] and os.listdir(tmp_path / "plots") == []

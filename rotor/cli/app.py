@@ -1,23 +1,34 @@
 """The ``rotor`` parser, assembled from each command group's ``add_parsers``, and ``main``.
 
-Errors: bad input (an engine or log that cannot be read, an option out of range, a file
-that cannot be written: :class:`rotor.EngineError`, :class:`rotor.LogError`, any
-``ValueError`` or ``OSError``) is one line ``rotor: error: …`` on stderr and exit status 2;
-valid input without an answer (:class:`rotor.SolverError`) one line and exit status 1; a
-closed pipe (``rotor table … | head``) exit status 0.
+Errors, each one line on stderr (with its traceback before it only under ``rotor --debug``):
+
+- bad input (an engine or log that cannot be read, an option out of range, a file that
+  cannot be written, named by the user's path: :class:`rotor.EngineError`,
+  :class:`rotor.LogError`, a ``ValueError`` raised by rotor, an ``OSError``) is
+  ``rotor: error: …`` and exit status 2; so is running out of memory (reduce the size);
+- valid input without an answer (:class:`rotor.SolverError`): exit status 1;
+- anything else (a ``TypeError``, a JAX error, a ``ValueError`` raised inside numpy or
+  JAX, a NaN or infinity in a result: :class:`rotor.errors.InternalError`) is a bug in
+  rotor, reported as ``rotor: internal error: this is a bug in rotor: …`` with exit
+  status 70 (``EX_SOFTWARE`` of BSD's sysexits.h);
+- Ctrl-C: ``rotor: interrupted``, exit status 130;
+- a closed pipe (``rotor table … | head``): exit status 0.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import re
 import sys
+import traceback
 from collections.abc import Sequence
 
-from ..errors import SolverError
+from ..errors import InternalError, RotorError, SolverError
 from . import demo, design, diagnostics, engine, logs, run
-from .args import EXIT_SOLVER, EXIT_USAGE, Parser
+from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser
 
-__all__ = ["COMMAND_GROUPS", "build_parser", "main"]
+__all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error"]
 
 COMMAND_GROUPS = (engine, run, logs, diagnostics, design, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
@@ -32,7 +43,10 @@ One convention for options:
   --quiet     no progress bar (the commands that may show one)
   --format    only for tables (`rotor table --format text|csv`)
 
-Bad input exits with status 2, a solver without an answer with 1, each with one line on stderr.
+Exit status: 0 done; 1 a solver without an answer; 2 bad input (an option, an engine, a log,
+a file that cannot be written, a run too big for the memory); 70 an internal error, a bug
+in rotor (please report it); 130 interrupted (Ctrl-C). Each error is one line on stderr;
+`rotor --debug COMMAND …` prints the traceback too.
 `rotor COMMAND --help` for a command's options."""
 
 
@@ -51,6 +65,9 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"rotor {_version()}")
+    parser.add_argument(
+        "--debug", action="store_true", help="print the traceback of an error (to report a bug in rotor)"
+    )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser, metavar="COMMAND")
     for group in COMMAND_GROUPS:
         group.add_parsers(sub)
@@ -81,23 +98,108 @@ def _join_columns(argv: list[str]) -> list[str]:
     return out
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``rotor`` command: run ``argv`` (default ``sys.argv[1:]``); the exit status."""
-    args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
-    from ..cache import enable_compilation_cache
+def _raised_outside(e: BaseException) -> bool:
+    """Whether ``e`` was raised inside a third-party package (numpy, JAX, pandas, …), not in
+    rotor or Python's standard library: a ``ValueError`` from there is a check rotor missed."""
+    tb = e.__traceback__
+    if tb is None:
+        return False
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    top = str(tb.tb_frame.f_globals.get("__name__", "")).split(".")[0]
+    where = tb.tb_frame.f_code.co_filename.replace(os.sep, "/")
+    return top != "rotor" and ("/site-packages/" in where or "/dist-packages/" in where)
 
-    enable_compilation_cache()  # the command's compiled kernels are reused by its next run
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split("\n")).strip()
+
+
+_ERROR_LINE = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception): ", re.MULTILINE)
+
+
+def _brief(e: BaseException, limit: int = 400) -> str:
+    """The gist of a foreign exception's message as one line: from the last line of the form
+    ``SomeError: …`` (JAX and equinox repeat the inner error after a stack dump), its first
+    paragraph, at most ``limit`` characters."""
+    text = str(e)
+    starts = [m.end() for m in _ERROR_LINE.finditer(text)]
+    if starts:
+        text = text[starts[-1] :]
+    text = " ".join(text.strip().split("\n\n")[0].split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _silence_stdout() -> None:
+    """After a closed pipe: point standard output at the null device, so that Python's
+    final flush does not report the closed pipe again."""
     try:
-        args.func(args)
-    except BrokenPipeError:  # e.g. `rotor table ... | head`
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file behind sys.stdout (a test's capture)
+        pass
+
+
+def report_error(e: BaseException, debug: bool = False) -> int:
+    """Print what ``e`` (an exception that reached the command line) means, as one line on
+    stderr (its traceback before it when ``debug``), and return the exit status: 0 for a
+    closed pipe, 1 for a :class:`rotor.SolverError`, 2 for bad input (rotor's input errors,
+    a ``ValueError`` raised by rotor, a file error naming the user's path, out of memory:
+    a ``MemoryError`` or XLA's ``RESOURCE_EXHAUSTED``),
+    70 for an internal error (a bug in rotor: anything else, a ``TypeError`` or a JAX error
+    included), 130 for Ctrl-C."""
+    if isinstance(e, BrokenPipeError):  # e.g. `rotor table ... | head`
+        _silence_stdout()
         return 0
-    except SolverError as e:  # valid input, no answer: not a usage error
-        print(f"rotor: {str(e).replace(chr(10), ' ')}", file=sys.stderr)
+    if debug:
+        traceback.print_exception(e, file=sys.stderr)
+    if isinstance(e, KeyboardInterrupt):
+        print("rotor: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if isinstance(e, MemoryError) or (isinstance(e, RuntimeError) and "RESOURCE_EXHAUSTED" in str(e)):
+        print(
+            "rotor: error: the machine ran out of memory: reduce the size of the run (--cycles, --steps-per-cycle, "
+            "--step, --points-per-cycle, or a shorter log)",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
+    if isinstance(e, SolverError):  # valid input, no answer: not a usage error
+        print(f"rotor: {_one_line(e)}", file=sys.stderr)
         return EXIT_SOLVER
-    except (ValueError, OSError) as e:  # EngineError and LogError are ValueErrors
-        msg = str(e).replace("\n", " ")
-        if isinstance(e, OSError) and e.filename:
-            msg = f"{e.filename}: {e.strerror}"
+    if isinstance(e, RotorError) and not isinstance(e, InternalError):  # EngineError, LogError
+        print(f"rotor: error: {_one_line(e)}", file=sys.stderr)
+        return EXIT_USAGE
+    if isinstance(e, OSError) and not isinstance(e, InternalError):
+        msg = f"{e.filename}: {e.strerror}" if e.filename and e.strerror else _one_line(e)
         print(f"rotor: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
+    if type(e).__module__.split(".")[0] not in ("jax", "jaxlib") and isinstance(e, ValueError):
+        if not _raised_outside(e):
+            print(f"rotor: error: {_one_line(e)}", file=sys.stderr)
+            return EXIT_USAGE
+    print(
+        f"rotor: internal error: this is a bug in rotor: {type(e).__name__}: {_brief(e)} "
+        "(run again with --debug for the traceback; please report it)",
+        file=sys.stderr,
+    )
+    return EXIT_INTERNAL
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``rotor`` command: run ``argv`` (default ``sys.argv[1:]``); the exit
+    status (see the module's docstring: 0, 1, 2, 70 or 130)."""
+    try:
+        args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
+    except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
+        return report_error(e)
+    try:
+        from ..cache import enable_compilation_cache
+
+        enable_compilation_cache()  # the command's compiled kernels are reused by its next run
+        args.func(args)
+        sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
+    except SystemExit:
+        raise
+    except BaseException as e:  # noqa: BLE001 - every exception is reported, none as a raw traceback
+        return report_error(e, debug=args.debug)
     return 0

@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from collections.abc import Callable
-from typing import NoReturn
+from typing import Any, NoReturn
 
 __all__ = [
+    "EXIT_INTERNAL",
+    "EXIT_INTERRUPTED",
     "EXIT_SOLVER",
     "EXIT_USAGE",
     "Parser",
@@ -42,12 +45,24 @@ EXIT_USAGE = 2
 """Exit status of bad input: a usage error, an engine or log that cannot be read."""
 EXIT_SOLVER = 1
 """Exit status of valid input without an answer (a solver that did not converge)."""
+EXIT_INTERNAL = 70
+"""Exit status of an internal error, a bug in rotor (``EX_SOFTWARE`` of BSD's sysexits.h)."""
+EXIT_INTERRUPTED = 130
+"""Exit status of a run stopped by Ctrl-C (128 + SIGINT, as a shell reports it)."""
 
 FIDELITIES = ("variable", "series", "coefficients", "constant")
 
 
 class Parser(argparse.ArgumentParser):
-    """An :class:`argparse.ArgumentParser` whose usage errors are one line and exit 2."""
+    """An :class:`argparse.ArgumentParser` whose usage errors are one line and exit 2, and
+    which takes any negative number as an option's value (``--step -inf``, ``--tdc-deg
+    -1e3``), so that it is refused by the option's own check, not as a missing value."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
+        )
 
     def error(self, message: str) -> NoReturn:
         """One line on stderr, exit status 2, as for any bad input."""

@@ -6,7 +6,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from .args import add_engine, add_json, add_plot, positive_float
-from .output import json_text, plot_folder, print_json, print_text, print_written, save_plot
+from .output import csv_text, json_text, plot_folder, print_json, print_text, print_written, save_plot
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
@@ -54,7 +54,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 def cmd_table(args: argparse.Namespace) -> None:
     """The textbook table of one cylinder (Shishkov 2014, appendix 5): text, CSV or JSON, to standard output or ``--output``."""
     from ..engine.file import load_engine
-    from ..engine.table import crank_table
+    from ..engine.table import TABLE_COLUMNS, crank_table
     from ..fileio import write_text_atomic
 
     engine = load_engine(args.engine)
@@ -62,7 +62,7 @@ def cmd_table(args: argparse.Namespace) -> None:
     if args.json:
         text = json_text(table.to_json_dict())
     elif args.format == "csv":
-        text = table.to_csv()
+        text = csv_text(TABLE_COLUMNS, zip(*(table.columns[c] for c in TABLE_COLUMNS)), what="the crank table")
     else:
         text = table.to_text()
     if args.output:

@@ -1,13 +1,30 @@
-"""What every command does with a result: print its summary or its JSON, write its plots."""
+"""What every command does with a result: print its summary or its JSON (or a table as
+CSV), write its plots. The one writer of JSON and CSV: neither ever carries NaN or
+Infinity; a number that does not exist is ``null`` (put there by the result, with a note),
+a number that should exist and does not is an internal error naming its key path."""
 
 from __future__ import annotations
 
+import errno
 import json
+import math
 import os
 import sys
+from collections.abc import Iterable, Sequence
 from typing import Any
 
-__all__ = ["json_text", "plot_folder", "print_json", "print_text", "print_written", "save_plot"]
+from ..errors import InternalError
+from ..fileio import find_nonfinite, key_path_text
+
+__all__ = [
+    "csv_text",
+    "json_text",
+    "plot_folder",
+    "print_json",
+    "print_text",
+    "print_written",
+    "save_plot",
+]
 
 
 def print_text(text: str) -> None:
@@ -15,28 +32,70 @@ def print_text(text: str) -> None:
     sys.stdout.write(text)
 
 
-def json_text(data: Any, indent: int = 2) -> str:
-    """``data`` (a result's ``to_json_dict()``) as JSON text ending in a newline; NaN is
-    refused, never written."""
-    return json.dumps(data, indent=indent, allow_nan=False) + "\n"
+def json_text(data: Any, indent: int = 2, what: str = "the result") -> str:
+    """``data`` (a result's ``to_json_dict()``) as JSON text ending in a newline.
+
+    A NaN or an infinity is refused, never written: an :class:`rotor.errors.InternalError`
+    names its key path, e.g. ``the result's "mean_rpm" is NaN`` (``what`` names the data).
+    ``indent``: spaces per level."""
+    found = find_nonfinite(data)
+    if found is not None:
+        keys, kind = found
+        raise InternalError(
+            f"{what}'s {key_path_text(keys)} is {kind}: a number that should exist does not, and JSON cannot hold it"
+        )
+    try:
+        return json.dumps(data, indent=indent, allow_nan=False) + "\n"
+    except TypeError as e:  # a value that is not plain JSON data: a result that forgot json_safe
+        raise InternalError(f"{what} is not plain JSON data ({e})") from None
 
 
 def print_json(data: Any, indent: int = 2) -> None:
-    """Print ``data`` (a result's ``to_json_dict()``) as JSON (see :func:`json_text`)."""
+    """Print ``data`` (a result's ``to_json_dict()``) as JSON (see :func:`json_text`);
+    ``indent``: spaces per level."""
     sys.stdout.write(json_text(data, indent))
 
 
+def csv_text(header: Sequence[str], rows: Iterable[Sequence[float]], what: str = "the table") -> str:
+    """A table as CSV text: the ``header`` line, then one line per row of numbers (each
+    with 10 significant digits, never ``-0``), ending in a newline.
+
+    A NaN or an infinity is refused, never written: an :class:`rotor.errors.InternalError`
+    names its column and row (counted from 1), e.g. ``the table's "s_m" in row 3 is NaN``
+    (``what`` names the table). Numbers keep the units of their column's name."""
+    header = [str(h) for h in header]
+    lines = [",".join(header)]
+    for i, row in enumerate(rows, start=1):
+        values = [float(v) for v in row]
+        if len(values) != len(header):
+            raise InternalError(f"{what}'s row {i} has {len(values)} values for {len(header)} columns")
+        for name, v in zip(header, values):
+            if not math.isfinite(v):
+                kind = "NaN" if math.isnan(v) else ("Infinity" if v > 0 else "-Infinity")
+                raise InternalError(f'{what}\'s "{name}" in row {i} is {kind}: a number that should exist does not')
+        lines.append(",".join(f"{v + 0.0:.10g}" for v in values))  # + 0.0: no "-0"
+    return "\n".join(lines) + "\n"
+
+
 def plot_folder(folder: str) -> str:
-    """Make ``folder`` (``--plot DIR``) and select matplotlib's file backend; ``folder``."""
+    """Make ``folder`` (``--plot DIR``, a folder's path) and select matplotlib's file
+    backend; ``folder``. A ``folder`` that is a file, or lies under one, raises an
+    ``OSError`` naming it."""
     import matplotlib
 
     matplotlib.use("Agg")
-    os.makedirs(folder, exist_ok=True)
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise NotADirectoryError(errno.ENOTDIR, "is a file, not a folder for the plots: give a folder", folder)
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as e:
+        raise type(e)(e.errno, f"cannot make the folder for the plots ({e.strerror})", folder) from None
     return folder
 
 
 def save_plot(drawn: Any, folder: str, name: str) -> str:
-    """Save the figure of ``drawn`` (what a ``plot()`` returned) to ``folder/name``; the path."""
+    """Save the figure of ``drawn`` (what a ``plot()`` returned) to ``folder/name`` (a
+    folder's path and a file name); the path."""
     from ..plotting.common import save_figure
 
     path = os.path.join(folder, name)

@@ -137,11 +137,22 @@ def _points(points: PointsArg, engine: Engine) -> list[OperatingPoint]:
     return out
 
 
+DELTA_MIN = 1e-5
+"""The smallest target δ a design takes [-]: generator sets, the most demanding, ask for
+about 1/300; at 1e-6 the root find on 4chn15 no longer converges (the δ of the steady
+state nears the solver's own noise), and 1e-5 already asks 700 times 4chn15's inertia."""
+
+
 def _check_delta(delta: float) -> float:
     d = require_number(delta, "delta")
     if not (math.isfinite(d) and 0 < d < 1):
         raise EngineError(
             f"delta = {delta!r}: the target irregularity (ω_max − ω_min)/ω_mean must lie in (0, 1), e.g. 0.01 for 1 %"
+        )
+    if d < DELTA_MIN:
+        raise EngineError(
+            f"delta = {delta!r}: a target below {DELTA_MIN:g} asks for an inertia past any flywheel "
+            "(generator sets ask about 0.003); give a larger delta"
         )
     return d
 

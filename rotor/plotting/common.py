@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from typing import Any
+
 import numpy as np
 
 __all__ = ["new_axes", "angle_axis", "save_figure"]
@@ -22,15 +25,26 @@ def angle_axis(ax, cycle_deg):
     ax.grid(True, alpha=0.3)
 
 
-def save_figure(ax, path) -> None:
-    """Save the figure holding ``ax`` to ``path``, whole or not at all, and close it."""
+def save_figure(ax: Any, path: str | os.PathLike) -> None:
+    """Save the figure holding ``ax`` (an Axes, an array of them, or what a ``plot()``
+    returned) to ``path`` (a file's path; its extension, ``.png`` by default, picks the
+    format), whole or not at all, and close it. Every file error is one line naming
+    ``path`` (never the temporary file); an extension matplotlib cannot write is a
+    ``ValueError`` naming ``path``."""
     import matplotlib.pyplot as plt
 
     from ..fileio import atomic_path
 
+    name = os.fspath(path)
+    fmt = os.path.splitext(name)[1].lstrip(".").lower() or "png"
     fig = np.ravel(ax)[0].figure
     try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=120, format=str(path).rsplit(".", 1)[-1] if "." in str(path) else "png")
+        if fmt not in fig.canvas.get_supported_filetypes():
+            raise ValueError(
+                f"{name}: cannot save a plot as .{fmt}: give one of "
+                + ", ".join(f".{k}" for k in sorted(fig.canvas.get_supported_filetypes()))
+            )
+        with atomic_path(name) as tmp:
+            fig.savefig(tmp, dpi=120, format=fmt)
     finally:
         plt.close(fig)
