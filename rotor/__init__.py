@@ -91,7 +91,7 @@ from .engine.pressure import (  # noqa: E402
 )
 from .engine.summary import EngineCurves, EngineSummary, engine_curves, engine_summary  # noqa: E402
 from .engine.table import CrankTable, crank_table  # noqa: E402
-from .errors import EngineError, LogError, NoSteadyStateError, RotorError, SolverError  # noqa: E402
+from .errors import EngineError, InternalError, LogError, NoSteadyStateError, RotorError, SolverError  # noqa: E402
 from .logs.analysis import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
 from .logs.edges import Edges, find_edges  # noqa: E402
 from .logs.reader import Log, read_log  # noqa: E402
@@ -129,6 +129,7 @@ __all__ = [
     "HarmonicTorque",
     "Identification",
     "IndicatedTorque",
+    "InternalError",
     "Layout",
     "Load",
     "LoadStep",

@@ -1,6 +1,7 @@
-"""Writing files whole or not at all, and JSON files saved and loaded one way.
+"""Writing files whole or not at all, JSON files saved and loaded one way, and the one
+CSV writer (no NaN or infinity written).
 
-Ground floor: imports nothing from rotor.
+Ground floor: imports nothing from rotor but :mod:`rotor.errors`.
 """
 
 from __future__ import annotations
@@ -12,11 +13,13 @@ import numbers
 import os
 import secrets
 import stat
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["atomic_path", "find_nonfinite", "key_path_text", "load_json", "save_json", "write_text_atomic"]
+from .errors import InternalError
+
+__all__ = ["atomic_path", "csv_text", "find_nonfinite", "key_path_text", "load_json", "save_json", "write_text_atomic"]
 
 PathArg = str | os.PathLike
 """A file's path: a ``str`` or a path-like object (``pathlib.Path``)."""
@@ -195,3 +198,24 @@ def load_json(path: PathArg, *, what: str, error: type[Exception] = OSError) -> 
         raise error(f"{path}: not {what} (not UTF-8 text: {e.reason} at byte {e.start})") from None
     except RecursionError:
         raise error(f"{path}: not {what} (JSON nested too deep)") from None
+
+
+def csv_text(header: Sequence[str], rows: Iterable[Sequence[float]], what: str = "the table") -> str:
+    """A table as CSV text: the ``header`` line, then one line per row of numbers (each
+    with 10 significant digits, never ``-0``), ending in a newline.
+
+    A NaN or an infinity is refused, never written: an :class:`rotor.errors.InternalError`
+    names its column and row (counted from 1), e.g. ``the table's "s_m" in row 3 is NaN``
+    (``what`` names the table). Numbers keep the units of their column's name."""
+    header = [str(h) for h in header]
+    lines = [",".join(header)]
+    for i, row in enumerate(rows, start=1):
+        values = [float(v) for v in row]
+        if len(values) != len(header):
+            raise InternalError(f"{what}'s row {i} has {len(values)} values for {len(header)} columns")
+        for name, v in zip(header, values):
+            if not math.isfinite(v):
+                kind = "NaN" if math.isnan(v) else ("Infinity" if v > 0 else "-Infinity")
+                raise InternalError(f'{what}\'s "{name}" in row {i} is {kind}: a number that should exist does not')
+        lines.append(",".join(f"{v + 0.0:.10g}" for v in values))  # + 0.0: no "-0"
+    return "\n".join(lines) + "\n"

@@ -378,3 +378,19 @@ def test_plausible_ranges_are_documented():
         assert f"[{table}]" in doc and key.split("_")[0] in doc, key
     assert all(lo < hi and math.isfinite(hi) for lo, hi, _, _ in PLAUSIBLE.values())
     assert tomllib.loads(TEXT)["geometry"]["bore_m"] > PLAUSIBLE[("geometry", "bore_m")][0]
+
+
+def test_the_crank_tables_csv_refuses_a_nan_like_the_cli():
+    """The API's to_csv() goes through the one CSV writer (rotor.fileio.csv_text)."""
+    import dataclasses
+
+    import numpy as np
+
+    from rotor.errors import InternalError
+
+    table = rotor.crank_table(rotor.load_engine("4chn15"), step_deg=90)
+    assert table.to_csv().splitlines()[0].startswith("angle_deg,s_m")
+    columns = dict(table.columns)
+    columns["s_m"] = np.where(np.arange(len(table)) == 2, np.nan, np.asarray(columns["s_m"]))
+    with pytest.raises(InternalError, match=r'the crank table\'s "s_m" in row 3 is NaN'):
+        dataclasses.replace(table, columns=columns).to_csv()

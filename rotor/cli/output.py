@@ -7,14 +7,12 @@ from __future__ import annotations
 
 import errno
 import json
-import math
 import os
 import sys
-from collections.abc import Iterable, Sequence
 from typing import Any
 
 from ..errors import InternalError
-from ..fileio import find_nonfinite, key_path_text
+from ..fileio import csv_text, find_nonfinite, key_path_text
 
 __all__ = [
     "csv_text",
@@ -54,27 +52,6 @@ def print_json(data: Any, indent: int = 2) -> None:
     """Print ``data`` (a result's ``to_json_dict()``) as JSON (see :func:`json_text`);
     ``indent``: spaces per level."""
     sys.stdout.write(json_text(data, indent))
-
-
-def csv_text(header: Sequence[str], rows: Iterable[Sequence[float]], what: str = "the table") -> str:
-    """A table as CSV text: the ``header`` line, then one line per row of numbers (each
-    with 10 significant digits, never ``-0``), ending in a newline.
-
-    A NaN or an infinity is refused, never written: an :class:`rotor.errors.InternalError`
-    names its column and row (counted from 1), e.g. ``the table's "s_m" in row 3 is NaN``
-    (``what`` names the table). Numbers keep the units of their column's name."""
-    header = [str(h) for h in header]
-    lines = [",".join(header)]
-    for i, row in enumerate(rows, start=1):
-        values = [float(v) for v in row]
-        if len(values) != len(header):
-            raise InternalError(f"{what}'s row {i} has {len(values)} values for {len(header)} columns")
-        for name, v in zip(header, values):
-            if not math.isfinite(v):
-                kind = "NaN" if math.isnan(v) else ("Infinity" if v > 0 else "-Infinity")
-                raise InternalError(f'{what}\'s "{name}" in row {i} is {kind}: a number that should exist does not')
-        lines.append(",".join(f"{v + 0.0:.10g}" for v in values))  # + 0.0: no "-0"
-    return "\n".join(lines) + "\n"
 
 
 def plot_folder(folder: str) -> str:

@@ -4,7 +4,6 @@ South Ural State University, 2014, appendix 5 (after Kolchin & Demidov and Popyk
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from typing import Any
 
@@ -12,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import EngineError
+from ..fileio import csv_text
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
 from .forces import crank_forces, table_angles_deg
@@ -83,13 +83,10 @@ class CrankTable(Result):
         ]
 
     def to_csv(self) -> str:
-        """CSV text with the header ``angle_deg,s_m,…,m_Nm`` (SI units)."""
-        buf = io.StringIO()
-        buf.write(",".join(TABLE_COLUMNS) + "\n")
+        """CSV text with the header ``angle_deg,s_m,…,m_Nm`` (SI units); a NaN or an
+        infinity is refused, never written (:func:`rotor.fileio.csv_text`)."""
         data = np.column_stack([self.columns[c] for c in TABLE_COLUMNS])
-        for row in data:
-            buf.write(",".join(f"{v + 0.0:.10g}" for v in row) + "\n")  # + 0.0: no "-0"
-        return buf.getvalue()
+        return csv_text(TABLE_COLUMNS, data, what="the crank table")
 
     def to_text(self) -> str:
         """A fixed-width table as in Shishkov (2014) (forces in kN), with a header of the inputs."""
