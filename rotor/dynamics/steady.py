@@ -55,6 +55,7 @@ from .equation import (
     linear_parts,
     wrap_periodic,
 )
+from .invariants import check_speed_result
 from .loads import Load
 from .result import SpeedResult
 
@@ -237,8 +238,9 @@ def steady_state(
 
     **Raises:** :class:`rotor.NoSteadyStateError` (a :class:`rotor.SolverError`) where the
     kinetic energy would reach zero, when the values are concrete; under ``jit``/``vmap``
-    the result's ``converged`` is False instead. :class:`rotor.EngineError` for impossible
-    arguments.
+    the result's ``converged`` is False instead. :class:`rotor.SolverError` where the
+    solution breaks an invariant of every run (:func:`rotor.dynamics.invariants.check_speed_result`).
+    :class:`rotor.EngineError` for impossible arguments.
     """
     start = time.perf_counter()
     rpm = engine.operating.rpm if rpm is None else rpm
@@ -341,7 +343,7 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
                 "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
                 "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
             )
-    return SpeedResult(
+    result = SpeedResult(
         t=t,
         theta=a["theta"],
         omega=a["omega"],
@@ -366,3 +368,5 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
         periodicity_error=None if E_end is None else jnp.abs(E_end - E[0]) / E[0],
         converged=converged,
     )
+    check_speed_result(result)  # concrete values only: under jit/vmap ``converged`` says it
+    return result

@@ -1,0 +1,169 @@
+"""Invariants every speed result must satisfy, checked at the end of every run.
+
+A result that breaks one is not printed as an answer: :func:`check_speed_result` raises
+:class:`rotor.SolverError` (a solver outcome, exit code 1 on the command line) with one line
+naming the invariant and what to tighten (a smaller ``step_deg``/``grid_deg``, more
+``steps_per_cycle``, a tighter ``rtol``, or ``method='time'``).
+
+- time t strictly increasing over the samples;
+- the crank angle θ non-decreasing over the samples sampled uniformly in angle, and
+  wherever the speed is not negative (a run with ``stop_at_stall=False`` may turn backwards);
+- ω, the engine and load torques and dω/dt finite; the kinetic energy ½·I·ω² finite
+  (ω² finite: the inertia is checked with the engine);
+- ω ≥ 0 on the samples sampled uniformly in angle, and > 0 there where the angle domain
+  produced them all (``method`` closed, grid, angle or shooting) unless the run stalled;
+- min_rpm ≤ mean_rpm ≤ max_rpm (within rounding);
+- the per-cycle figures of a run that kept only its last cycles' samples: cycle times
+  increasing, cycle mean speeds finite and positive;
+- a steady state: period_s positive and finite; the balancing load or fuel scale and the
+  textbook figures finite.
+
+Only the result's public fields and properties are read. Under ``jit``/``vmap``/``grad``
+(the arrays are tracers) nothing is checked: no error can be raised on a traced value.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NoReturn
+
+import jax
+import numpy as np
+
+from ..errors import SolverError
+from .result import SpeedResult
+
+__all__ = ["check_speed_result"]
+
+#: relative slack of min ≤ mean ≤ max (rounding of the time-mean speed against the samples)
+MEAN_SLACK = 1e-6
+
+
+def _traced(x: Any) -> bool:
+    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def _remedy(result: SpeedResult) -> str:
+    """What to tighten for the method that produced ``result``."""
+    method = str(result.method)
+    if result.kind == "steady":
+        return "solve it again with a smaller grid_deg, or simulate the run with rotor.simulate(..., method='time')"
+    if method.endswith("time"):
+        return "run it again with a tighter rtol (or a larger step_deg that saves fewer samples)"
+    if method.startswith("closed"):
+        return "run it again with a smaller grid_deg, or with method='time'"
+    if method.startswith("grid"):
+        return "run it again with more steps_per_cycle (or a smaller grid_deg), or with method='time'"
+    if method.startswith("angle"):
+        return "run it again with a tighter rtol, or with method='time'"
+    return "run it again with a tighter rtol, a smaller grid_deg, or method='time'"
+
+
+def _where(result: SpeedResult, theta: np.ndarray, i: int) -> str:
+    """Where sample ``i`` lies: the cycle (from 1) and the crank angle within it [deg]."""
+    cyc = float(result.cycle_rad)
+    th = float(theta[..., i].reshape(-1)[0]) if theta.size else 0.0
+    if not np.isfinite(th):
+        return f"sample {i + 1}"
+    k = int(np.floor(th / cyc + 1e-9))
+    return f"cycle {k + 1} at crank angle {np.rad2deg(th - k * cyc):.1f}°"
+
+
+def _first(mask: np.ndarray) -> int:
+    """Index (along the last axis) of the first True of ``mask`` (any batch row)."""
+    return int(np.argmax(np.any(mask.reshape(-1, mask.shape[-1]), axis=0)))
+
+
+def _number(x: Any) -> np.ndarray | None:
+    return None if x is None else np.asarray(x, dtype=np.float64)
+
+
+def check_speed_result(result: SpeedResult) -> None:
+    """Raise :class:`rotor.SolverError` (one line) where ``result`` breaks an invariant of
+    every run (see :mod:`rotor.dynamics.invariants`); return None where it keeps them all.
+
+    **Arguments:** ``result``: a :class:`rotor.SpeedResult` from :func:`rotor.simulate` or
+    :func:`rotor.steady_state` (samples: ``t`` [s], ``theta`` [rad], ``omega`` [rad/s],
+    ``accel`` [rad/s²], ``torque`` and ``load_torque`` [N·m]; a steady state's
+    ``period_s`` [s], ``load_torque_Nm`` [N·m], ``fuel_scale`` [-]). Nothing is checked
+    when its arrays are tracers (under ``jit``, ``vmap`` or ``grad``).
+    """
+    arrays = (result.t, result.theta, result.omega, result.accel, result.torque, result.load_torque)
+    if _traced(arrays) or _traced((result.period_s, result.load_torque_Nm, result.fuel_scale)):
+        return
+    t, theta, omega, accel, torque, load = (np.asarray(a, dtype=np.float64) for a in arrays)
+    kind = "steady state" if result.kind == "steady" else f"run (method {result.method!r})"
+    remedy = _remedy(result)
+
+    def fail(what: str) -> NoReturn:
+        raise SolverError(f"the {kind} breaks an invariant: {what}; the result cannot be trusted: {remedy}")
+
+    n = t.shape[-1]
+    if n == 0 or any(a.shape[-1] != n for a in (theta, omega, accel, torque, load)):
+        fail("its sample arrays are empty or of different lengths")
+    for name, a in (("time", t), ("crank angle", theta)):
+        if not np.all(np.isfinite(a)):
+            fail(f"the {name} is not finite at {_where(result, theta, _first(~np.isfinite(a)))}")
+    for name, a in (
+        ("the speed", omega),
+        ("the engine torque", torque),
+        ("the friction and load torque", load),
+        ("the acceleration", accel),
+    ):
+        if not np.all(np.isfinite(a)):
+            fail(f"{name} is not finite at {_where(result, theta, _first(~np.isfinite(a)))}")
+    with np.errstate(over="ignore"):
+        if not np.all(np.isfinite(0.5 * omega * omega)):
+            fail("the kinetic energy overflows (the speed is beyond what float64 can square)")
+    if n > 1:
+        dt = np.diff(t, axis=-1)
+        if not np.all(dt > 0):
+            fail(f"time does not increase from one sample to the next at {_where(result, theta, _first(dt <= 0))}")
+    # the samples sampled uniformly in angle (the periodic cycle of a steady state)
+    kept = int(getattr(result, "kept_cycles", result.uniform_cycles))
+    m = min(n, max(kept, 0) * int(result.points_per_cycle))
+    if m:
+        wu = omega[..., :m]
+        # a start from rest (the time domain) begins at ω = 0; the angle domain never reaches it
+        strict = not result.stalled and str(result.method) in ("closed", "grid", "angle", "shooting")
+        low = (wu <= 0) if strict else (wu < 0)
+        if np.any(low):
+            sign = "not positive" if strict else "negative"
+            fail(f"the speed is {sign} at {_where(result, theta, _first(low))}, in the angle domain")
+    if n > 1:
+        dth = np.diff(theta, axis=-1)
+        forward = (omega[..., :-1] >= 0) & (omega[..., 1:] >= 0)
+        back = (dth < -1e-12 * np.maximum(1.0, np.abs(theta[..., 1:]))) & forward
+        if np.any(back):
+            fail(f"the crank angle decreases while the speed is positive at {_where(result, theta, _first(back))}")
+    if result.kind == "steady":
+        period = _number(result.period_s)
+        if period is None or not (np.all(np.isfinite(period)) and np.all(period > 0)):
+            fail("the period of the cycle is not positive and finite")
+        for key, what in (
+            ("load_torque_Nm", "the balancing load torque"),
+            ("fuel_scale", "the fuel scale"),
+            ("excess_work_J", "the textbook excess work"),
+            ("textbook_delta", "the textbook δ"),
+            ("periodicity_error", "the periodicity error"),
+        ):
+            v = _number(getattr(result, key, None))
+            if v is not None and not np.all(np.isfinite(v)):
+                fail(f"{what} is not finite")
+    lo, mean, hi = (np.asarray(v, dtype=np.float64) for v in (result.min_rpm, result.mean_rpm, result.max_rpm))
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(mean)) and np.all(np.isfinite(hi))):
+        fail("the mean, lowest or highest speed is not finite")
+    slack = MEAN_SLACK * np.maximum(np.abs(lo), np.abs(hi)) + 1e-300
+    if not (np.all(lo <= mean + slack) and np.all(mean <= hi + slack)):
+        fail("the time-mean speed (angle travelled / time taken) lies outside the lowest and highest sampled speed")
+    summary = getattr(result, "cycle_summary", None)
+    if summary is not None:
+        starts = _number(getattr(summary, "t_start_s", None))
+        ends = _number(getattr(summary, "t_end_s", None))
+        if starts is not None and ends is not None and starts.size:
+            if not (np.all(np.isfinite(starts)) and np.all(np.isfinite(ends)) and np.all(ends > starts)):
+                fail("a cycle's time does not increase (per-cycle figures of the cycles whose samples were dropped)")
+            if starts.size > 1 and not np.all(np.diff(starts) > 0):
+                fail("the cycles' start times do not increase (per-cycle figures)")
+        means = _number(getattr(summary, "mean_omega", None))
+        if means is not None and means.size and not (np.all(np.isfinite(means)) and np.all(means > 0)):
+            fail("a cycle's mean speed is not finite and positive (per-cycle figures)")
