@@ -92,7 +92,9 @@ def test_a_first_line_mixing_numbers_and_text_is_refused(tmp_path):
     from rotor.logs.reader import read_log
 
     p = _log(tmp_path, "0;1000,5\n0.1;1001\n0.2;1002\n0.3;1003\n")
-    with pytest.raises(LogError, match=r"line 1 writes '1000,5' with a decimal comma and line 2 '0.1' with a decimal point"):
+    with pytest.raises(
+        LogError, match=r"line 1 writes '1000,5' with a decimal comma and line 2 '0.1' with a decimal point"
+    ):
         read_log(p, "time,rpm")
     p = _log(tmp_path, "# bench 3\n0.0 1000 x\n0.1 1001 2\n0.2 1002 2\n")
     with pytest.raises(LogError, match=r"line 2 .*'#'"):

@@ -9,7 +9,11 @@ from typing import Any
 from .args import add_dynamics_options, add_engine, add_quiet, positive_float, speed, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
-__all__ = ["add_parsers", "cmd_simulate", "cmd_steady", "parse_misfires", "speed_plots"]
+__all__ = ["add_parsers", "cmd_simulate", "cmd_steady", "parse_misfires", "speed_plots", "KEEP_CYCLES"]
+
+#: cycles whose samples ``rotor simulate`` keeps by default (it prints summaries, the last
+#: cycle's orders and plots): 100 cycles of 720 samples, about 9 MB
+KEEP_CYCLES = 100
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -32,6 +36,15 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_engine(p, rpm=False)
     p.add_argument("--rpm", type=speed, help="start speed [rev/min], 0 = from rest (default: [operating] rpm)")
     p.add_argument("--cycles", type=whole, default=10, help="number of cycles (default 10)")
+    p.add_argument(
+        "--keep-cycles",
+        type=whole,
+        default=KEEP_CYCLES,
+        metavar="N",
+        help=f"keep the samples of the last N complete cycles only (default {KEEP_CYCLES}): the output's δ, "
+        "speeds and range cover every cycle, its orders and plots the kept ones; memory stays bounded "
+        "however long the run",
+    )
     add_dynamics_options(p)
     for action in p._actions:  # this command's own default: the balancing load, not none
         if action.dest == "load":
@@ -160,5 +173,6 @@ def cmd_simulate(args: argparse.Namespace) -> None:
             steps_per_cycle=args.steps_per_cycle,
             governor=Governor(args.governor) if args.governor else None,
             progress=False if (args.json or args.quiet) else None,
+            keep_cycles=args.keep_cycles,
         )
     _report(res, args, "simulate", load_info)

@@ -20,7 +20,7 @@ from ..cycles import cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 
-__all__ = ["SpeedResult", "Orders"]
+__all__ = ["SpeedResult", "Orders", "CycleSummary", "cycle_extremes"]
 
 _ORDER_KEYS = ("order", "speed_amplitude_rad_s", "speed_phase_rad", "torque_amplitude_Nm", "torque_phase_rad")
 
@@ -149,6 +149,57 @@ def _range(x, periodic: bool):
     return out[0], out[1]
 
 
+def cycle_extremes(x: ArrayLike, slopes: ArrayLike, cycle_rad: float) -> tuple[Array, Array, Array, Array]:
+    """Per row of ``x`` (consecutive cycles sampled uniformly in angle, speed [rad/s]):
+    (max, min) with the row's linear trend ``slopes`` [rad/s per rad] removed and (max, min)
+    of the raw row, each refined by a parabola through the extreme sample and its neighbours
+    in the flattened rows (none past the first and last row). ``cycle_rad``: the cycle [rad].
+
+    The first and last rows of a window of a longer run serve as context: the rows between
+    get the figures that :class:`SpeedResult` computes over the whole run."""
+    x = jnp.asarray(x, dtype=jnp.float64)
+    dmax, dmin = _extremes(x, jnp.asarray(slopes, dtype=jnp.float64), cycle_rad, False)
+    rmax, rmin = _extremes(x, jnp.zeros(x.shape[0]), cycle_rad, False)
+    return dmax, dmin, rmax, rmin
+
+
+def _spectrum(x, slopes, cycle_rad):
+    """:func:`rotor.cycles.cycle_spectrum` of the rows ``x`` with given trends ``slopes``."""
+    P = x.shape[1]
+    w = x - cycle_ramp(jnp.asarray(slopes), P, cycle_rad)
+    return jnp.fft.rfft(w, axis=1) * (2.0 / P)
+
+
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class CycleSummary:
+    """Per-cycle figures of every complete cycle of a transient run whose samples were not
+    all kept (``simulate(..., keep_cycles=N)``), so that δ, the speeds and the range come
+    out as they would from every sample.
+
+    **Per cycle** (numpy arrays, shape (cycles,)): ``t_start_s``, ``t_end_s`` [s];
+    ``mean_omega`` (time-mean speed) [rad/s]; ``mean_torque_Nm`` (mean engine torque over
+    the cycle's samples) [N·m]; ``max_omega``, ``min_omega`` (raw sampled extremes)
+    [rad/s]; ``delta`` (δ with the cycle's linear trend removed) [-]; ``range_max``,
+    ``range_min`` (the raw extremes refined by a parabola) [rad/s]. **Over the run:**
+    ``omega_max_all``, ``omega_min_all`` (every sample, those after the last whole cycle
+    included) [rad/s]; ``theta_first_rad`` [rad] and ``t_first_s`` [s] of the first sample.
+    """
+
+    t_start_s: np.ndarray
+    t_end_s: np.ndarray
+    mean_omega: np.ndarray
+    mean_torque_Nm: np.ndarray
+    max_omega: np.ndarray
+    min_omega: np.ndarray
+    delta: np.ndarray
+    range_max: np.ndarray
+    range_min: np.ndarray
+    omega_max_all: float
+    omega_min_all: float
+    theta_first_rad: float
+    t_first_s: float
+
+
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
 class SpeedResult(Result):
     """ω(θ) and friends from :func:`rotor.steady_state` or :func:`rotor.simulate`.
@@ -216,11 +267,26 @@ class SpeedResult(Result):
     solver_steps: int | None = None
     fuel: jnp.ndarray | None = None
     incomplete: str | None = None
+    # a long run that kept only its last cycles' samples (simulate(..., keep_cycles=N))
+    first_kept_cycle: int = 0
+    cycle_summary: CycleSummary | None = None
 
     # ------------------------------------------------------------------ cycles
+    @property
+    def _streamed(self) -> bool:
+        """True where the early cycles' samples were dropped: the per-cycle figures come from
+        :attr:`cycle_summary`."""
+        return self.first_kept_cycle > 0 and self.cycle_summary is not None
+
+    @property
+    def kept_cycles(self) -> int:
+        """Number of complete cycles whose samples the result holds (the last ones of the
+        run, from cycle :attr:`first_kept_cycle`, counted from 0)."""
+        return self.uniform_cycles - self.first_kept_cycle
+
     def _cycle_matrix(self, x: jnp.ndarray) -> jnp.ndarray:
-        n = self.uniform_cycles * self.points_per_cycle
-        return x[:n].reshape(self.uniform_cycles, self.points_per_cycle)
+        n = self.kept_cycles * self.points_per_cycle
+        return x[:n].reshape(self.kept_cycles, self.points_per_cycle)
 
     def _need_cycles(self) -> None:
         if self.uniform_cycles < 1:
@@ -239,6 +305,10 @@ class SpeedResult(Result):
         """Time-mean speed over the whole run, angle travelled / time taken [rad/s]."""
         if self.kind == "steady":
             return self.cycle_rad / jnp.asarray(self.period_s)
+        if self._streamed:
+            cs = self.cycle_summary
+            assert cs is not None
+            return (self.theta[-1] - cs.theta_first_rad) / (self.t[-1] - cs.t_first_s)
         return (self.theta[-1] - self.theta[0]) / (self.t[-1] - self.t[0])
 
     @property
@@ -253,6 +323,8 @@ class SpeedResult(Result):
         P = self.points_per_cycle
         if self.kind == "steady":
             return jnp.reshape(self.mean_omega, (1,))
+        if self.cycle_summary is not None and self._streamed:
+            return jnp.asarray(self.cycle_summary.mean_omega)
         n = self.uniform_cycles * P
         t_start = self.t[:n:P]
         if self.t.shape[0] > n:  # the sample that ends the last whole cycle
@@ -270,6 +342,8 @@ class SpeedResult(Result):
         so that a run-up or a run-down adds nothing. A steady state's single periodic cycle
         has no trend: its classic δ."""
         self._need_cycles()
+        if self.cycle_summary is not None and self._streamed:
+            return jnp.asarray(self.cycle_summary.delta)
         mean = self.cycle_mean_omega
         slopes = cycle_slopes(mean, self.cycle_rad)
         hi, lo = _extremes(self._cycle_matrix(self.omega), slopes, self.cycle_rad, self.kind == "steady")
@@ -287,45 +361,70 @@ class SpeedResult(Result):
         """(ω_max − ω_min)/ω_mean over all complete cycles of the run, drift included [-];
         equal to δ for a steady state, not an irregularity for a transient."""
         self._need_cycles()
+        if self.cycle_summary is not None and self._streamed:
+            cs = self.cycle_summary  # the refined extremes at the run's first highest and lowest sample
+            hi = cs.range_max[int(np.argmax(cs.max_omega))]
+            lo = cs.range_min[int(np.argmin(cs.min_omega))]
+            return (hi - lo) / jnp.mean(jnp.asarray(cs.mean_omega))
         hi, lo = _range(self._cycle_matrix(self.omega), self.kind == "steady")
         mean = self.mean_omega if self.kind == "steady" else jnp.mean(self.cycle_mean_omega)
         return (hi - lo) / mean
 
     @property
     def min_rpm(self) -> Array:
-        """Lowest sampled speed [rpm]."""
+        """Lowest sampled speed [rpm] (of every sample, kept or not)."""
+        if self.cycle_summary is not None and self._streamed:
+            return jnp.asarray(self.cycle_summary.omega_min_all) * RPM_PER_RAD_S
         return jnp.min(self.omega) * RPM_PER_RAD_S
 
     @property
     def max_rpm(self) -> Array:
-        """Highest sampled speed [rpm]."""
+        """Highest sampled speed [rpm] (of every sample, kept or not)."""
+        if self.cycle_summary is not None and self._streamed:
+            return jnp.asarray(self.cycle_summary.omega_max_all) * RPM_PER_RAD_S
         return jnp.max(self.omega) * RPM_PER_RAD_S
 
     def orders(self, cycle: int | str = -1, max_order: float = 12.0) -> Orders:
         """Amplitude and phase of the speed and engine-torque harmonics by engine order.
 
         **Arguments:** ``cycle``: which complete cycle (default the last), or ``"mean"``
-        for the average of the complex harmonics over all complete cycles;
-        ``max_order``: the highest order returned [per revolution].
+        for the average of the complex harmonics over all complete cycles whose samples the
+        result holds; ``max_order``: the highest order returned [per revolution]. Cycles
+        count over the whole run; a run that kept only its last cycles' samples
+        (``keep_cycles``) has the orders of those only (from :attr:`first_kept_cycle`).
         """
         self._need_cycles()
         P = self.points_per_cycle
         revs = self.strokes / 2  # revolutions per cycle
+        C, first = self.uniform_cycles, self.first_kept_cycle
         if isinstance(cycle, str) and cycle != "mean":
             raise ValueError(f"cycle = {cycle!r}: a cycle number (from 0; −1 the last) or 'mean'")
-        if not isinstance(cycle, str) and not -self.uniform_cycles <= cycle < self.uniform_cycles:
+        if not isinstance(cycle, str) and not -C <= cycle < C:
             raise ValueError(
-                f"cycle = {cycle!r}: the run has {_plural(self.uniform_cycles, 'complete cycle')}; "
-                f"give 0 … {self.uniform_cycles - 1}, a negative index from the end, or 'mean'"
+                f"cycle = {cycle!r}: the run has {_plural(C, 'complete cycle')}; "
+                f"give 0 … {C - 1}, a negative index from the end, or 'mean'"
+            )
+        if not isinstance(cycle, str) and (cycle % C) < first:
+            raise ValueError(
+                f"cycle = {cycle!r}: only the samples of the last {_plural(self.kept_cycles, 'cycle')} were kept "
+                f"(cycles {first} … {C - 1}); give one of those, or run with a larger keep_cycles"
             )
         # each cycle detrended as in rotor.analyze_log (rotor.cycles): a run-up leaks into no order
         m = self._cycle_matrix(self.torque)
-        Ws = cycle_spectrum(self._cycle_matrix(self.omega), self.cycle_mean_omega, self.cycle_rad)
-        Ms = cycle_spectrum(m, jnp.mean(m, axis=1), self.cycle_rad)
-        if cycle == "mean":
+        if self.cycle_summary is not None and self._streamed:
+            # the trends from the whole run's cycle means, as if every sample were there
+            cs = self.cycle_summary
+            Ws = _spectrum(
+                self._cycle_matrix(self.omega), cycle_slopes(cs.mean_omega, self.cycle_rad)[first:], self.cycle_rad
+            )
+            Ms = _spectrum(m, cycle_slopes(cs.mean_torque_Nm, self.cycle_rad)[first:], self.cycle_rad)
+        else:
+            Ws = cycle_spectrum(self._cycle_matrix(self.omega), self.cycle_mean_omega, self.cycle_rad)
+            Ms = cycle_spectrum(m, jnp.mean(m, axis=1), self.cycle_rad)
+        if isinstance(cycle, str):  # "mean"
             W, M = jnp.mean(Ws, axis=0), jnp.mean(Ms, axis=0)
         else:
-            W, M = Ws[cycle], Ms[cycle]
+            W, M = Ws[cycle % C - first], Ms[cycle % C - first]
         k_max = min(int(np.floor(max_order * revs + 1e-9)), P // 2 - 1)
         k = np.arange(1, k_max + 1)
         W, M = W[1 : k_max + 1], M[1 : k_max + 1]
@@ -334,7 +433,9 @@ class SpeedResult(Result):
     # ------------------------------------------------------------------ people
     def to_json_dict(self, max_order: float = 6.0) -> dict:
         """What ``rotor steady --json`` and ``rotor simulate --json`` print: engine, kind,
-        method, fidelity, cycles, mean/min/max rpm; ``delta`` (δ of the last complete cycle,
+        method, fidelity, cycles, mean/min/max rpm; for a transient ``kept_cycles`` (how many
+        of the last complete cycles' samples the result holds: orders and plots are of
+        those; every other figure covers the whole run); ``delta`` (δ of the last complete cycle,
         its linear trend removed; ``delta_of`` says so in words); for a transient also
         ``delta_max`` (the largest per-cycle δ) with ``delta_max_cycle`` (counted from 1) and
         ``speed_range_ratio`` ((ω_max − ω_min)/ω_mean over the whole run, drift included);
@@ -355,6 +456,8 @@ class SpeedResult(Result):
             "delta": None,
             "delta_of": "the periodic cycle" if steady else "the last complete cycle, its linear trend removed",
         }
+        if not steady:
+            out["kept_cycles"] = int(self.kept_cycles)
         if self.uniform_cycles:
             per_cycle = np.asarray(self.delta_per_cycle)
             out["delta"] = float(per_cycle[-1])
@@ -424,6 +527,11 @@ class SpeedResult(Result):
             )
         if self.incomplete:
             lines.append(f"  note: {self.incomplete}")
+        if self._streamed:
+            lines.append(
+                f"  samples kept    the last {_plural(self.kept_cycles, 'cycle')} of {s['cycles']} (keep_cycles; "
+                "δ, speeds and range cover every cycle)"
+            )
         if s["orders"]:
             lines.append("  orders of the last cycle (trend removed):")
             lines.append("  order  speed amplitude [rad/s]  torque amplitude [N·m]")
@@ -435,7 +543,9 @@ class SpeedResult(Result):
         return "\n".join(lines) + "\n"
 
     def to_pandas(self) -> Any:
-        """The samples as a ``pandas.DataFrame`` (one row per sample, SI units in the names)."""
+        """The samples as a ``pandas.DataFrame`` (one row per sample, SI units in the names):
+        those the result holds (after a ``keep_cycles`` run the last cycles' only; ``cycle``
+        counts over the whole run, from 0)."""
         import pandas as pd
 
         cycle = np.floor(np.asarray(self.theta) / self.cycle_rad + 1e-9).astype(int)
@@ -459,7 +569,8 @@ class SpeedResult(Result):
         ``kind``: ``"cycle"`` (rpm over the last cycle against crank angle, titled with
         its δ), ``"time"`` (rpm against time over the run), ``"torque"`` (engine and load
         torque over the last cycle) or ``"orders"`` (speed harmonics [rad/s] of the last
-        cycle by engine order, detrended like δ).
+        cycle by engine order, detrended like δ). After a ``keep_cycles`` run, the time plot
+        shows the kept cycles only and its title says so.
         """
         from ..plotting.speed import plot_cycle_torque, plot_orders, plot_speed, plot_speed_time
 
@@ -471,13 +582,15 @@ class SpeedResult(Result):
         title = f"{self.engine_name} — {self.kind}, {self.method}, {self.fidelity} inertia"
         if kind == "time":
             stall = self.stall_time_s if self.stalled else None
+            if self._streamed:
+                title = f"{title}\nthe last {_plural(self.kept_cycles, 'cycle')} of {self.uniform_cycles} (keep_cycles)"
             return plot_speed_time(np.asarray(self.t), rpm, title, stall_time_s=stall, ax=ax)
         which = "" if self.kind == "steady" else " of the last cycle, trend removed"
         if kind == "orders":
             o = self.orders()
             amp = np.asarray(o.speed_amplitude_rad_s)
             return plot_orders(o.order, amp, f"{title}\norders and δ{which}: δ = {float(self.delta):.4g}", ax=ax)
-        P, C = self.points_per_cycle, self.uniform_cycles
+        P, C = self.points_per_cycle, self.kept_cycles
         if C < 1:
             raise ValueError("the run holds no complete cycle to plot against crank angle")
         sl = slice((C - 1) * P, C * P)

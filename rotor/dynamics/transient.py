@@ -10,6 +10,7 @@ time, ``"grid"`` otherwise.
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 import warnings
@@ -21,7 +22,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
-from ..checks import arrays_only, concrete
+from ..checks import arrays_only, check_size, concrete
+from ..cycles import cycle_delta, cycle_slopes
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..errors import EngineError
@@ -39,15 +41,38 @@ from .equation import (
     linear_losses,
     time_run,
 )
+from .invariants import check_speed_result
 from .loads import Governor, Load
-from .result import SpeedResult
+from .result import CycleSummary, SpeedResult, cycle_extremes
 
-__all__ = ["simulate", "METHODS"]
+__all__ = ["simulate", "METHODS", "chunk_cycles"]
 
 METHODS = ("auto", "closed", "grid", "angle", "time")
 DEFAULT_RTOL = 1e-9  # the cheapest that meets 1e-6 in ω on every scene (benchmarks/defaults.py)
 STALL_HANDOVER = 0.02  # the angle domain hands over to the time domain below 2 % of the start speed
 TIME_DOMAIN_STEPS = 200_000
+# a run goes in chunks of cycles, one compiled call each, every one well under a second on
+# 4chn15 (benchmarks/long_run.py), so that Ctrl-C, which Python hears between calls, stops
+# a run within about a second, and the samples of a long run need not all be held at once
+CHUNK_GRID_STEPS = 72_000  # RK4 steps per chunk of method="grid": 50 cycles at 1440 steps, ~0.25 s
+CHUNK_CLOSED_NODES = 1_440_000  # table nodes per chunk of method="closed": 500 cycles at 0.25°, ~0.25 s
+CHUNK_ANGLE_CYCLES = 20  # cycles per chunk of method="angle" (Dopri8 at rtol 1e-9), ~0.2 s
+SAMPLE_BYTES = 16 * 8  # memory per kept sample: 7 result arrays, the states and the copies joining them [bytes]
+CYCLE_BYTES = 12 * 8  # memory per cycle of the per-cycle figures [bytes], plus 16 per cylinder
+
+
+def chunk_cycles(method: str, cycles: int, steps_per_cycle: int = 0, nodes_per_cycle: int = 0) -> int:
+    """Cycles per compiled call of a run of ``cycles`` cycles by ``method`` (``"closed"``,
+    ``"grid"`` or ``"angle"``): ``cycles`` itself for a short run, else a fixed chunk that
+    takes well under a second. ``steps_per_cycle``: RK4 steps per cycle (``"grid"``);
+    ``nodes_per_cycle``: table nodes per cycle (``"closed"``)."""
+    if method == "grid":
+        per = CHUNK_GRID_STEPS // max(int(steps_per_cycle), 1)
+    elif method == "closed":
+        per = CHUNK_CLOSED_NODES // max(int(nodes_per_cycle), 1)
+    else:
+        per = CHUNK_ANGLE_CYCLES
+    return int(min(max(per, 1), cycles))
 
 
 class Progress:
@@ -84,6 +109,15 @@ class Progress:
         if self.shown:
             sys.stderr.write("\n")
             sys.stderr.flush()
+
+
+def _whole(name, value):
+    """``value`` as a Python int of 1 or more, or a TypeError / EngineError naming ``name``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} = {value!r}: takes a whole number (an int such as 10), not a {type(value).__name__}")
+    if value < 1:
+        raise EngineError(f"{name} = {value!r}: must be a whole number, 1 or more")
+    return int(value)
 
 
 def _known(x, default):
@@ -145,6 +179,7 @@ def simulate(
     stop_at_stall: bool = True,
     max_time_s: float | None = None,
     progress: bool | None = None,
+    keep_cycles: int | None = None,
 ) -> SpeedResult:
     """Run the engine for ``cycles`` cycles from crank angle 0 at speed ``rpm``.
 
@@ -171,14 +206,48 @@ def simulate(
     - ``max_time_s``: longest time the time domain may run [s].
     - ``progress``: show a progress bar on stderr (default: when stderr is a terminal and
       the run takes longer than about two seconds).
+    - ``keep_cycles``: keep the samples of the last ``keep_cycles`` complete cycles only
+      (None, the default: every sample). The per-cycle figures of every cycle are kept
+      (:class:`rotor.dynamics.result.CycleSummary`), so that δ, the speeds and the range
+      are those of the whole run; orders, plots and tables cover the kept cycles. A long run
+      goes in chunks (:func:`chunk_cycles`) and needs memory for the kept samples only; a
+      run whose samples would not fit is refused before it starts. Not under
+      ``jax.grad``/``jax.vmap`` (keep every sample there).
 
     **Returns:** a :class:`rotor.SpeedResult` (``kind="transient"``).
     """
     wall = time.perf_counter()
     if method not in METHODS:
         raise EngineError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
-    if not (isinstance(cycles, (int, np.integer)) and cycles >= 1):
-        raise EngineError(f"cycles = {cycles!r}: must be a whole number, 1 or more")
+    cycles = _whole("cycles", cycles)
+    if keep_cycles is not None:
+        keep_cycles = _whole("keep_cycles", keep_cycles)
+    for name, value in (("step_deg", step_deg), ("grid_deg", grid_deg)):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f"{name} = {value!r}: takes a number of degrees, not a {type(value).__name__}")
+        if not (np.isfinite(value) and 0 < value <= 90):
+            raise EngineError(f"{name} = {value!r}: must be a positive, finite angle in degrees (at most 90)")
+    cycle_deg = 180.0 * engine.strokes
+    n_cyl = int(engine.cylinders)
+    check_size(
+        (cycle_deg / grid_deg) * (8 + 4 * n_cyl) * 8 * 4,
+        f"grid_deg = {grid_deg!r} ({cycle_deg / grid_deg:.3g} table nodes per cycle)",
+        "give a coarser grid_deg (0.25° is the default)",
+    )
+    check_size(
+        cycles * (CYCLE_BYTES + 16 * n_cyl),
+        f"cycles = {cycles} (the per-cycle figures and combustion scales alone)",
+        "run fewer cycles, or several runs one after another, each starting from the last one's speed",
+    )
+    P_est = cycle_deg / step_deg
+    kept = cycles if keep_cycles is None else min(keep_cycles, cycles)
+    check_size(
+        kept * P_est * SAMPLE_BYTES,
+        f"{'cycles' if keep_cycles is None else 'keep_cycles'} = {kept} with every sample kept "
+        f"({P_est:.0f} per cycle at step_deg = {step_deg:g})",
+        "keep only the last cycles' samples with keep_cycles= (--keep-cycles on the command line), "
+        "or save fewer samples per cycle with a larger step_deg",
+    )
     rpm = engine.operating.rpm if rpm is None else rpm
     r = concrete(rpm)
     if r is not None and not (r.ndim == 0 and np.isfinite(r) and r >= 0):
@@ -188,6 +257,13 @@ def simulate(
     if rt is not None and not (1e-14 <= rt <= 1e-2):
         raise EngineError(f"rtol = {rtol!r}: must lie between 1e-14 and 1e-2")
     load, governor = arrays_only(load), arrays_only(governor)
+    if keep_cycles is not None and keep_cycles < cycles:
+        leaves = jax.tree_util.tree_leaves((rpm, rtol, load, governor, combustion, engine))
+        if any(isinstance(x, jax.core.Tracer) for x in leaves):
+            raise EngineError(
+                "keep_cycles: a run that drops samples cannot be traced (jax.grad, jax.vmap, jax.jit); "
+                "keep every sample there (keep_cycles=None)"
+            )
     train = crank_train(engine, fidelity, grid_deg)
     P = int(round(train.cycle_rad / np.deg2rad(step_deg)))
     if P < 8 or train.points % P:
@@ -215,12 +291,12 @@ def simulate(
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
     if load is None and governor is None:
         _warn_runaway(train, scales, fr, rpm)
-    # the progress bar hears from inside the one compiled run (a host callback), so showing it
-    # compiles the same kernels once, never per chunk
+    # the progress bar hears from inside each compiled chunk (a host callback: the same
+    # kernels, compiled once) and between chunks
     bar = Progress(cycles, progress)
     PROGRESS["report"] = bar.fraction if bar.enabled else None
     try:
-        return _run(
+        result = _run(
             engine,
             train,
             scene,
@@ -241,10 +317,19 @@ def simulate(
             max_time_s,
             bar,
             wall,
+            keep_cycles,
         )
+    except KeyboardInterrupt:
+        # Ctrl-C between two chunks: let the chunk already sent to XLA finish (well under a
+        # second) before the interpreter goes down, which it would otherwise do under it
+        for x in jax.live_arrays():
+            x.block_until_ready()
+        raise
     finally:
         PROGRESS["report"] = None
         bar.close()
+    check_speed_result(result)  # time increases, speeds finite, min ≤ mean ≤ max: else a SolverError
+    return result
 
 
 def _run(
@@ -268,32 +353,27 @@ def _run(
     max_time_s,
     bar,
     wall,
+    keep_cycles,
 ):
-    """The run of :func:`simulate` once its arguments are checked."""
+    """The run of :func:`simulate` once its arguments are checked: the angle-domain methods
+    in chunks of :func:`chunk_cycles` cycles (one compiled call each; the last padded past
+    the end and cut), each chunk's samples handed to a sink that keeps them all or only
+    the last ``keep_cycles`` cycles' with per-cycle summaries of every cycle."""
     omega0, E0, e_switch = _start(train, rpm)
     theta_step = train.cycle_rad / P
-    pieces: list[tuple[Any, ...]] = []  # (theta, t, E or None, omega or None, z, rows kept or None)
-    done, t_now, E_now, z_now = 0, jnp.asarray(0.0), E0, jnp.asarray(0.0)
+    cyc = train.cycle_rad
+    streaming = keep_cycles is not None and keep_cycles < cycles
+    sink: _AllSamples | _LastCycles = (
+        _LastCycles(scene, P, cyc, keep_cycles, cycles) if streaming else _AllSamples(scene, P)
+    )
+    f64 = functools.partial(jnp.asarray, dtype=jnp.float64)  # strong types: one trace for every chunk
+    done, t_now, E_now, z_now = 0, f64(0.0), f64(E0), f64(0.0)
     handover = None  # (theta, t, omega, z) where the time domain takes over
     extras: dict[str, Any] = {}  # typed fields of the result: steps_per_cycle, solver_steps, incomplete
-    if method == "closed":
-        assert lin is not None  # checked above
-        a, c = lin
-        for size in (cycles,):
-            E, t, E_end, t_end, stalled_at = closed_run(scene, a, c, E_now, t_now, done, size, stride, bar.enabled)
-            k = int(_known(stalled_at, size))
-            pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, None, k))
-            done += k
-            E_now, t_now = E_end, t_end
-            bar.update(done)
-            if k == size and done == cycles:
-                pieces.append((np.array([done * train.cycle_rad]), t_end, E_end, None, None, None))
-            if k < size:
-                handover = (done * train.cycle_rad, t_end, _omega_at(train, done * train.cycle_rad, E_end), 0.0)
-                break
-    elif method == "grid":
+    spc = 0
+    if method == "grid":
         if steps_per_cycle is None:  # two per degree, or one per saved sample if those are finer
-            spc = max(int(round(2 * np.rad2deg(train.cycle_rad))), P)
+            spc = max(int(round(2 * np.rad2deg(cyc))), P)
         else:
             spc = int(steps_per_cycle)
         if spc < 8 or spc % P:
@@ -301,61 +381,129 @@ def _run(
                 f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
                 f"(step_deg = {step_deg:g}); raise step_deg or steps_per_cycle"
             )
-        for size in (cycles,):
-            th0 = done * train.cycle_rad
-            (E, t, z), y_end, stalled_at = grid_run(
-                scene, jnp.asarray(th0), (E_now, t_now, z_now), size, spc, spc // P, e_switch, bar.enabled
+        check_size(
+            spc * 3 * 8 * 4.0,
+            f"steps_per_cycle = {spc}",
+            "give fewer steps per cycle (the default is two per degree)",
+        )
+    size = chunk_cycles(method, cycles, spc, train.points) if method != "time" else cycles
+    chunked = size < cycles
+
+    def part(done):
+        """The scene of the chunk from cycle ``done`` and the chunk's start angle in it: for a
+        chunked run, the combustion scales of cycles done − 1 … done + size (clipped to the
+        run) with the chunk starting one cycle in, so that the kernels see the same shapes
+        in every chunk of every run and compile once; else the whole run's."""
+        if not chunked:
+            return scene, done * cyc, done
+        rows = np.clip(np.arange(done - 1, done + size + 1), 0, cycles - 1)
+        return eqx.tree_at(lambda s: s.scales, scene, scene.scales[rows]), cyc, 1
+
+    # the progress bar: from inside a lone chunk (a host callback), else between chunks as well
+    kprog = bar.enabled
+    base = [0]
+    if kprog:
+        PROGRESS["report"] = lambda f: bar.update(min(cycles, base[0] + int(round(float(f) * size))))
+    if method == "closed":
+        assert lin is not None  # checked above
+        a, c = lin
+        while done < cycles:
+            valid, base[0] = min(size, cycles - done), done
+            sc, _, first = part(done)
+            E, t, E_end, t_end, stalled_at = closed_run(
+                sc, a, c, E_now, t_now, jnp.asarray(first, dtype=jnp.int32), size, stride, kprog
             )
-            k = int(_known(stalled_at, size))
-            pieces.append((_theta_grid(done, k, P, train.cycle_rad), t, E, None, z, k))
+            k = min(int(_known(stalled_at, size)), valid)  # a stall in the padding is past the end
+            if k == valid < size:  # the padding's first node is the state at the end of the run
+                E_end, t_end = E[valid, 0], t[valid, 0]
+            if k:
+                sink.add_cycles(_theta_grid(done, k, P, cyc), t[:k], E[:k], None, None)
             done += k
-            E_now, t_now, z_now = y_end
+            E_now, t_now = E_end, t_end
             bar.update(done)
-            if k == size and done == cycles:
-                pieces.append((np.array([done * train.cycle_rad]), t_now, E_now, None, z_now, None))
-            if k < size:
-                th_h = done * train.cycle_rad
-                handover = (th_h, t_now, _omega_at(train, th_h, E_now), z_now)
+            if k < valid:
+                handover = (done * cyc, t_end, _omega_at(train, done * cyc, E_end), 0.0)
                 break
+        if handover is None:
+            sink.add_extra(np.array([done * cyc]), t_now, E_now, None, None)
+    elif method == "grid":
+        while done < cycles:
+            valid, base[0] = min(size, cycles - done), done
+            sc, th_start, _ = part(done)
+            (E, t, z), y_end, stalled_at = grid_run(
+                sc, f64(th_start), (E_now, t_now, z_now), size, spc, spc // P, e_switch, kprog
+            )
+            k = min(int(_known(stalled_at, size)), valid)
+            if k == valid < size:  # the padding's first state is the state at the end of the run
+                y_end = (E[valid, 0], t[valid, 0], z[valid, 0])
+            if k:
+                sink.add_cycles(_theta_grid(done, k, P, cyc), t[:k], E[:k], None, z[:k])
+            done += k
+            E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
+            bar.update(done)
+            if k < valid:
+                handover = (done * cyc, t_now, _omega_at(train, done * cyc, E_now), z_now)
+                break
+        if handover is None:
+            sink.add_extra(np.array([done * cyc]), t_now, E_now, None, z_now)
         extras["steps_per_cycle"] = spc
     elif method == "angle":
         steps = 0
-        for size in (cycles,):
-            theta_out = done * train.cycle_rad + np.arange(1, size * P + 1) * theta_step
-            th0 = done * train.cycle_rad
+        need = 0
+        theta_out = np.zeros(1)
+        while done < cycles:
+            valid, base[0] = min(size, cycles - done), done
+            need = valid * P
+            th0 = done * cyc
+            theta_out = th0 + np.arange(1, size * P + 1) * theta_step
+            sc, th_start, _ = part(done)
             (E, t, z), end, stopped, ok, n_steps = angle_run(
-                scene, th0, (E_now, t_now, z_now), theta_out, rtol_a, e_switch, 4000 * size + 10000, bar.enabled
+                sc,
+                f64(th_start),
+                (E_now, t_now, z_now),
+                th_start + np.arange(1, size * P + 1) * theta_step,
+                rtol_a,
+                e_switch,
+                4000 * size + 10000,
+                kprog,
             )
             steps += int(_known(n_steps, 0))
             stopped = bool(_known(stopped, False))
-            if not _known(ok, True) and not stopped:
+            ok = bool(_known(ok, True))
+            reached = need
+            if stopped or not ok:
+                reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the end
+                if reached >= need:  # the hand-over or the failure fell in the padding past the run's end
+                    stopped, ok = False, True
+            if not ok and not stopped:
                 raise EngineError(
-                    f"the angle-domain solver could not reach the end of cycle {done + size} "
-                    f"(stopped at crank angle {float(np.rad2deg(end[0])):.1f}°); try a looser rtol or method='time'"
+                    f"the angle-domain solver could not reach the end of cycle {done + valid} "
+                    f"(stopped at crank angle {float(np.rad2deg(end[0] - th_start + th0)):.1f}°); "
+                    "try a looser rtol or method='time'"
                 )
             # samples at θ_out[i] hold the state after step i; prepend the chunk's start
             th = np.concatenate([[th0], theta_out[:-1]])
             Es, ts, zs = _prepend((E_now, t_now, z_now), (E, t, z))
             if stopped:
-                reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the hand-over
-                whole = reached // P
+                whole = min(reached // P, valid)
                 keep = whole * P
-                pieces.append((th, ts, Es, None, zs, keep))
+                if keep:
+                    sink.add_cycles(th[:keep], ts[:keep], Es[:keep], None, zs[:keep])
                 done += whole
                 # hand over at the start of the incomplete cycle
                 if keep > 0:
                     E_h, t_h, z_h = E[keep - 1], t[keep - 1], z[keep - 1]
                 else:
                     E_h, t_h, z_h = E_now, t_now, z_now
-                th_h = done * train.cycle_rad
+                th_h = done * cyc
                 handover = (th_h, t_h, _omega_at(train, th_h, E_h), z_h)
                 break
-            pieces.append((th, ts, Es, None, zs, None))
-            E_now, t_now, z_now = _last((E, t, z))
-            done += size
+            sink.add_cycles(th[:need], ts[:need], Es[:need], None, zs[:need])
+            E_now, t_now, z_now = E[need - 1], t[need - 1], z[need - 1]
+            done += valid
             bar.update(done)
-            if done == cycles:
-                pieces.append((theta_out[-1:], t_now, E_now, None, z_now, None))
+        if handover is None:
+            sink.add_extra(theta_out[need - 1 : need], t_now, E_now, None, z_now)
         extras["solver_steps"] = steps
     else:
         handover = (0.0, 0.0, omega0, 0.0)
@@ -405,7 +553,7 @@ def _run(
         else:
             method = f"{method}+time"
     return _assemble(
-        engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras
+        engine, train, scene, sink, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras
     )
 
 
@@ -444,11 +592,6 @@ def _prepend(first, rest):
     return tuple(jnp.concatenate([jnp.reshape(a, (1,)), b[:-1]]) for a, b in zip(first, rest))
 
 
-@jax.jit
-def _last(arrays):
-    return tuple(a[-1] for a in arrays)
-
-
 @eqx.filter_jit
 def _omega_at(train, theta, E):
     return jnp.sqrt(2 * jnp.maximum(E, 0.0) / train.at(theta)[0][0])
@@ -456,32 +599,215 @@ def _omega_at(train, theta, E):
 
 @eqx.filter_jit
 def _gather(scene, pieces):
-    """All pieces (θ, t, E or None, ω or None, z or None, rows kept or None) as the flat
-    sample arrays (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled call."""
-
-    def flat(a, keep):
-        a = jnp.asarray(a, dtype=jnp.float64)
-        return jnp.reshape(a if keep is None else a[:keep], (-1,))
-
+    """All pieces (θ, t, E or None, ω or None, z or None), flat, as the flat sample arrays
+    (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled call."""
     parts = []
-    for th, t, E, w, z, keep in pieces:
-        th, t = flat(th, keep), flat(t, keep)
-        E, w = (None if a is None else flat(a, keep) for a in (E, w))
-        z = jnp.zeros_like(th) if z is None else flat(z, keep)
+    for th, t, E, w, z in pieces:
+        z = jnp.zeros_like(th) if z is None else z
         parts.append((th, t) + _samples(scene, th, t, E, w, z))
     return tuple(jnp.concatenate(a) for a in zip(*parts))
 
 
-def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras):
-    pieces = [p for p in pieces if np.shape(p[0])[0] > 0 and p[5] != 0]
-    # the whole cycles of P samples (a single end sample adds none); ``keep`` counts the
-    # rows kept of a (cycles, P) piece or the samples kept of a flat one
-    uniform = sum((np.shape(p[0])[0] if p[5] is None else p[5]) * (P if np.ndim(p[0]) == 2 else 1) // P for p in pieces)
+def _flat(a):
+    return None if a is None else jnp.reshape(jnp.asarray(a, dtype=jnp.float64), (-1,))
+
+
+@eqx.filter_jit
+def _chunk_figures(scene, th, t, E, w, z, P: int):
+    """The samples of whole cycles (:func:`_samples`, flat) and per cycle: its start time,
+    mean engine torque and highest and lowest speed, in one compiled call."""
+    z = jnp.zeros_like(th) if z is None else z
+    arrays = (th, t) + tuple(_samples(scene, th, t, E, w, z))
+    k = th.shape[0] // P
+    omega, torque = arrays[2].reshape(k, P), arrays[3].reshape(k, P)
+    return arrays, t.reshape(k, P)[:, 0], jnp.mean(torque, axis=1), jnp.max(omega, axis=1), jnp.min(omega, axis=1)
+
+
+class _AllSamples:
+    """Keeps every sample of a run (``keep_cycles=None``): the pieces, computed into the
+    result's arrays at the end in one compiled call."""
+
+    def __init__(self, scene, P):
+        self.scene, self.P = scene, P
+        self.parts: list[tuple[Any, ...]] = []
+        self.uniform = 0
+
+    def add_cycles(self, th, t, E, w, z):
+        """Samples of whole cycles (θ, t, E or ω, z or None; any shape, P per cycle)."""
+        part = tuple(_flat(a) for a in (th, t, E, w, z))
+        self.parts.append(part)
+        self.uniform += part[0].shape[0] // self.P
+
+    def add_extra(self, th, t, E, w, z):
+        """Samples after the last whole cycle (the run's end, a time-domain tail)."""
+        part = tuple(_flat(a) for a in (th, t, E, w, z))
+        if part[0].shape[0]:
+            self.parts.append(part)
+
+    def finish(self):
+        """(θ, t, ω, engine torque, load torque, dω/dt, fuel), whole cycles, first kept cycle, summary."""
+        # consecutive pieces of one kind joined: a compiled call over a few pieces, not one per chunk
+        groups: list[list[tuple[Any, ...]]] = []
+        for p in self.parts:
+            kind = tuple(a is None for a in p)
+            if groups and tuple(a is None for a in groups[-1][0]) == kind:
+                groups[-1].append(p)
+            else:
+                groups.append([p])
+        pieces = tuple(
+            g[0]
+            if len(g) == 1
+            else tuple(None if g[0][i] is None else jnp.concatenate([p[i] for p in g]) for i in range(5))
+            for g in groups
+        )
+        return _gather(self.scene, pieces), self.uniform, 0, None
+
+
+class _LastCycles:
+    """Keeps the samples of the last ``keep`` whole cycles (and those after them) and the
+    per-cycle figures of every cycle (:class:`rotor.dynamics.result.CycleSummary`): a long
+    run in bounded memory.
+
+    A cycle's δ needs its trend, from its neighbours' mean speeds (:mod:`rotor.cycles`),
+    and the samples next to its first and last; it is computed once the next cycle's mean
+    is known, over a window of rows with one row of context on each side, so that every
+    figure equals that of a run that keeps every sample."""
+
+    def __init__(self, scene, P, cycle_rad, keep, cycles):
+        self.scene, self.P, self.cycle_rad, self.keep = scene, P, cycle_rad, keep
+        n = cycles + 1
+        self.t_start, self.t_end, self.mean, self.mean_torque = (np.zeros(n) for _ in range(4))
+        self.max, self.min, self.delta, self.rmax, self.rmin = (np.zeros(n) for _ in range(5))
+        self.done = 0  # whole cycles received
+        self.final = 0  # cycles whose δ and refined extremes are known
+        self.rows: tuple[Any, ...] | None = None  # (θ, t, ω, M_eng, M_loss, dω/dt, fuel), each (rows, P)
+        self.first_row = 0  # the cycle of rows[.][0]
+        self.extra: list[tuple[Any, ...]] = []
+        self.hi, self.lo = -np.inf, np.inf
+        self.first: tuple[float, float] | None = None
+
+    def _extremes_of(self, arrays):
+        w = arrays[2]
+        if w.size:
+            self.hi, self.lo = max(self.hi, float(np.max(w))), min(self.lo, float(np.min(w)))
+        if self.first is None and w.size:
+            self.first = (float(arrays[0][0]), float(arrays[1][0]))
+
+    def add_cycles(self, th, t, E, w, z):
+        """Samples of whole cycles (θ, t, E or ω, z or None; any shape, P per cycle)."""
+        k = int(np.size(th)) // self.P
+        if k == 0:
+            return
+        arrays, t_start, mean_torque, w_max, w_min = _chunk_figures(
+            self.scene, *(_flat(a) for a in (th, t, E, w, z)), self.P
+        )
+        rows = tuple(np.asarray(a).reshape(k, self.P) for a in arrays)  # numpy from here: no compiling per shape
+        self._extremes_of(tuple(a.reshape(-1) for a in rows))
+        d = self.done
+        ts = np.asarray(t_start)
+        self.t_start[d : d + k] = ts
+        if d > 0:
+            self.t_end[d - 1] = ts[0]
+        self.t_end[d : d + k - 1] = ts[1:]
+        self.mean[max(d - 1, 0) : d + k - 1] = self.cycle_rad / (
+            self.t_end[max(d - 1, 0) : d + k - 1] - self.t_start[max(d - 1, 0) : d + k - 1]
+        )
+        self.mean_torque[d : d + k] = np.asarray(mean_torque)
+        self.max[d : d + k] = np.asarray(w_max)
+        self.min[d : d + k] = np.asarray(w_min)
+        self.rows = rows if self.rows is None else tuple(np.concatenate([a, b]) for a, b in zip(self.rows, rows))
+        self.done += k
+        self._finalize(at_end=False)
+        # keep one row of context before the pending ones, and the last ``keep`` rows
+        new_first = max(0, min(self.final - 1, self.done - self.keep))
+        if new_first > self.first_row:
+            cut = new_first - self.first_row
+            self.rows = tuple(a[cut:] for a in self.rows)
+            self.first_row = new_first
+
+    def add_extra(self, th, t, E, w, z):
+        """Samples after the last whole cycle (the run's end, a time-domain tail)."""
+        th, t, E, w, z = (_flat(a) for a in (th, t, E, w, z))
+        if th.shape[0]:
+            z = jnp.zeros_like(th) if z is None else z
+            arrays = tuple(np.asarray(a) for a in (th, t) + tuple(_samples(self.scene, th, t, E, w, z)))
+            self._extremes_of(arrays)
+            self.extra.append(arrays)
+
+    def _finalize(self, at_end: bool) -> None:
+        D, f = self.done, self.final
+        if at_end:  # every mean known; the last row has no neighbour after it
+            last, known = D - 1, D
+            a = max(min(f - 1, D - 3), 0)
+        else:  # means known below D − 1; row D − 2 is context after the last finished row
+            last, known = D - 3, D - 1
+            a = max(f - 1, 0)
+            if known - a < 3:
+                return
+        if last < f:
+            return
+        slopes = cycle_slopes(jnp.asarray(self.mean[a:known]), self.cycle_rad)  # rows a … known − 1
+        lo = max(f - 1, 0)
+        hi = D if at_end else D - 1  # rows lo … hi − 1 go in
+        assert self.rows is not None and lo >= self.first_row
+        x = self.rows[2][lo - self.first_row : hi - self.first_row]
+        dmax, dmin, rmax, rmin = cycle_extremes(x, slopes[lo - a : hi - a], self.cycle_rad)
+        sel = slice(f - lo, last + 1 - lo)
+        self.delta[f : last + 1] = np.asarray(cycle_delta(dmax[sel], dmin[sel], jnp.asarray(self.mean[f : last + 1])))
+        self.rmax[f : last + 1] = np.asarray(rmax[sel])
+        self.rmin[f : last + 1] = np.asarray(rmin[sel])
+        self.final = last + 1
+
+    def finish(self):
+        """(θ, t, ω, engine torque, load torque, dω/dt, fuel), whole cycles, first kept cycle, summary."""
+        D = self.done
+        extra = [tuple(a) for a in self.extra]
+        if D > 0:
+            assert self.rows is not None
+            if extra:
+                self.t_end[D - 1] = float(extra[0][1][0])
+            else:  # no sample after the last cycle: its end from the last sample's speed
+                self.t_end[D - 1] = float(self.rows[1][-1, -1] + (self.cycle_rad / self.P) / self.rows[2][-1, -1])
+            self.mean[D - 1] = self.cycle_rad / (self.t_end[D - 1] - self.t_start[D - 1])
+            self._finalize(at_end=True)
+        kept = min(self.keep, D)
+        first_kept = D - kept
+        parts = []
+        if kept:
+            assert self.rows is not None
+            parts.append(tuple(a[first_kept - self.first_row :].reshape(-1) for a in self.rows))
+        parts += extra
+        arrays = tuple(jnp.asarray(np.concatenate([p[i] for p in parts])) for i in range(7))
+        summary = None
+        if first_kept > 0:
+            assert self.first is not None
+            summary = CycleSummary(
+                t_start_s=self.t_start[:D].copy(),
+                t_end_s=self.t_end[:D].copy(),
+                mean_omega=self.mean[:D].copy(),
+                mean_torque_Nm=self.mean_torque[:D].copy(),
+                max_omega=self.max[:D].copy(),
+                min_omega=self.min[:D].copy(),
+                delta=self.delta[:D].copy(),
+                range_max=self.rmax[:D].copy(),
+                range_min=self.rmin[:D].copy(),
+                omega_max_all=self.hi,
+                omega_min_all=self.lo,
+                theta_first_rad=self.first[0],
+                t_first_s=self.first[1],
+            )
+        return arrays, D, first_kept, summary
+
+
+def _assemble(engine, train, scene, sink, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras):
     if time_domain is not None:
         for th, t, w, z, whole in _resample(scene, time_domain, P):
-            pieces.append((th, t, None, w, z, None))
-            uniform += whole
-    theta, t, omega, m_eng, m_loss, accel, fuel = _gather(scene, tuple(pieces))
+            n = whole * P
+            if n:
+                sink.add_cycles(th[:n], t[:n], None, w[:n], z[:n])
+            if th.shape[0] > n:
+                sink.add_extra(th[n:], t[n:], None, w[n:], z[n:])
+    (theta, t, omega, m_eng, m_loss, accel, fuel), uniform, first_kept, summary = sink.finish()
     imep = _imep(train, scene.scales)
     return SpeedResult(
         t=t,
@@ -504,6 +830,8 @@ def _assemble(engine, train, scene, pieces, time_domain, method, fidelity, P, st
         engine_name=engine.name,
         wall_s=time.perf_counter() - wall,
         fuel=None if scene.governor is None else fuel,
+        first_kept_cycle=first_kept,
+        cycle_summary=summary,
         **extras,
     )
 
