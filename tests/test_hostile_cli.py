@@ -113,6 +113,8 @@ CASES = [
     (["steady", "4chn15", "--load", "propeller:inf,1000"], 2, "--load 'propeller:inf,1000'"),
     (["steady", "4chn15", "--fidelity", "bogus"], 2, "invalid choice"),
     (["steady", "{file}"], 2, "not a valid TOML file"),
+    (["steady", "4chn15", "--rpm", "9223372036854775808"], 2, "between 0.1 and 100000 rpm"),
+    (["steady", "4chn15", "--load", "constant:1e300"], 1, "fuel scale is not a finite number"),
     # simulate
     (["simulate", "4chn15", "--cycles", "0"], 2, "must be 1 or more"),
     (["simulate", "4chn15", "--cycles", "1.5"], 2, "is not a whole number"),

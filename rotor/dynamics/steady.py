@@ -41,6 +41,7 @@ from jaxtyping import ArrayLike
 from ..checks import arrays_only, concrete
 from ..engine.friction import Friction
 from ..engine.model import Engine
+from ..engine.plausible import PLAUSIBLE
 from ..errors import EngineError, NoSteadyStateError
 from ..units import RPM_PER_RAD_S
 from .crank_train import COL_COMBUSTION, COL_MOTORED, check_fidelity, grid_points, train_from_engine
@@ -66,8 +67,9 @@ STOP_FRACTION = 1e-4  # E_min / E_mean below which the crankshaft is taken to st
 
 def _check_rpm(rpm, what="rpm"):
     r = concrete(rpm)
-    if r is not None and not (r.ndim == 0 and np.isfinite(r) and r > 0):
-        raise EngineError(f"{what} = {rpm!r}: must be a positive, finite speed in rpm")
+    lo, hi, _, _ = PLAUSIBLE[("operating", "rpm")]
+    if r is not None and not (r.ndim == 0 and np.isfinite(r) and lo <= r <= hi):
+        raise EngineError(f"{what} = {rpm!r}: must be a positive, finite speed between {lo:g} and {hi:g} rpm")
 
 
 def _closed_solution(train, s_nodes, a, c, omega_m, balance):
@@ -335,7 +337,14 @@ def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_
     a = arrays
     converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
     if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
-        good, i_min = jax.device_get((converged, a["i_min"]))
+        good, i_min, x_found = jax.device_get((converged, a["i_min"], x))
+        if not np.all(np.isfinite(x_found)):
+            what = "load torque" if balance == "load" else "fuel scale"
+            raise NoSteadyStateError(
+                f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the periodic solution's balancing "
+                f"{what} is not a finite number; check that the "
+                "load and the fuelling are in units the engine can carry (N·m, a torque of the engine's size)"
+            )
         if not good:
             raise NoSteadyStateError(
                 f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "

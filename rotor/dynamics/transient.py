@@ -536,7 +536,10 @@ def _run(
             stop_at_stall,
             TIME_DOMAIN_STEPS,
         )
-        keep = np.isfinite(np.asarray(ts))
+        ts_np = np.asarray(ts)
+        keep = np.isfinite(ts_np)
+        # an event on the last step saves that step's end twice: keep the later (located) state
+        keep[:-1] &= ~(ts_np[:-1] == ts_np[1:])
         ts, th, w, z = ts[keep], th[keep], w[keep], z[keep]
         if stop_at_stall and bool(mask[1]):
             stalled = True
