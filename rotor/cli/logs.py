@@ -16,14 +16,19 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("analyze", help="logged crank speed: per-cycle mean speed, δ and orders from a wheel signal")
     p.add_argument("log", metavar="LOG", help="CSV/TSV log: tooth times, a sampled wheel signal, or time and rpm")
     p.add_argument(
-        "--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2, 36-1, 36-2 (N alone: with an index_v column)"
+        "--wheel",
+        metavar="SPEC",
+        help="trigger wheel: N-M (60-2, 36-1), N-g1-g2… (36-2-1, 36-2-2-2: N positions, the missing teeth of "
+        "each gap; where they lie is found from the log), a wheel file (.toml), auto (found from the log), or "
+        "N alone with an index_v column; angle 0 = the first tooth after gap 1",
     )
     p.add_argument(
         "--columns",
         metavar="NAMES",
-        help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, tooth_time_s, rpm, "
-        "- (skip), e.g. time,pressure_v,encoder_v; a time in ms or µs: time_ms, time_us, tooth_time_ms, "
-        "tooth_time_us",
+        help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, encoder_d, cam_d "
+        "(digital 0/1 channels, one row per transition), tooth_time_s, rpm, - (skip), e.g. "
+        "time,pressure_v,encoder_v or time,encoder_d,-; a time in ms or µs: time_ms, time_us, tooth_time_ms, "
+        "tooth_time_us; a logic analyser's Time[s], Channel 0, Channel 1 header reads as time,encoder_d,cam_d",
     )
     p.add_argument("--strokes", type=int, choices=(2, 4), default=4)
     p.add_argument(
@@ -89,7 +94,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="δ from all orders up to --max-order, not weighted by their signal-to-noise ratio",
     )
-    p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
+    p.add_argument(
+        "--edge",
+        choices=("rising", "falling"),
+        default="rising",
+        help="edges of an analog or digital wheel signal (default rising)",
+    )
     add_json(p)
     add_plot(p, "the combined plot")
     p.set_defaults(func=cmd_analyze)

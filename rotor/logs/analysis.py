@@ -39,7 +39,9 @@ from ..cycles import cycle_delta, cycle_spectrum
 from ..errors import LogError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
-from .edges import Edges, find_edges
+from .digital import digital_edges
+from .edges import Edges, find_edges, find_weak_edges, noise_rms, two_level_locally
+from .pattern import find_wheel, place, repairs_summary
 from .plausibility import check_speed_time_base, check_time_base, check_time_resolution
 from .reader import Log, read_log
 from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, locate_teeth, parse_wheel
@@ -447,6 +449,31 @@ def _speed_parity(omega_of, phi0, phi1, tdc):
     return parity, float(sep)
 
 
+def _cam_parity(name, log, edge, t_of, phi_of, phi_lo, phi_hi, tdc, required, notes):
+    """The firing parity from the cam channel (analog ``cam_v`` or digital ``cam_d``): the
+    firing TDC is the first TDC after each rising cam edge. ``None`` (and a
+    note) where the cam edges do not fall once per cycle and the cam is not ``required``."""
+    if "cam_d" in log:
+        cam = _named(name, digital_edges, log["time"], log["cam_d"], name="cam_d").times
+    else:
+        cam = find_edges(log["time"], log["cam_v"], name="cam_v").times
+    cam_phi = phi_of(cam[(cam >= t_of(phi_lo)) & (cam <= t_of(phi_hi))])
+    why = ""
+    if cam_phi.size == 0:
+        why = "no cam edge within the tooth edges"
+    else:
+        r = np.ceil((cam_phi - tdc) / TWO_PI)
+        parities = np.mod(r, 2).astype(int)
+        if np.any(parities != parities[0]) or np.any(np.diff(r) < 2):
+            why = "the cam edges do not fall once per cycle (their revolutions alternate irregularly)"
+    if why:
+        if required:
+            raise LogError(f"{name}: {why}")
+        notes.append(f"cam channel not used for the firing revolution: {why}")
+        return None
+    return int(parities[0])
+
+
 def _wiener_gain(X, revs, teeth, kmax):
     """Weights of the harmonics 1 … kmax of the cycles' speed X (cycles × harmonics) by their
     signal-to-noise ratio, S/(S + N). Timer jitter and edge noise are white in the time of
@@ -497,6 +524,18 @@ def _firing_run_note(te, cylinders, strokes, max_order, teeth):
     return s
 
 
+class _Lazy:
+    """``cls(*args)``, built on its first call."""
+
+    def __init__(self, cls, *args):
+        self._make, self._f = (lambda: cls(*args)), None
+
+    def __call__(self, x):
+        if self._f is None:
+            self._f = self._make()
+        return self._f(x)
+
+
 def _named(log_name, fn, *args, **kwargs):
     """``fn(*args, **kwargs)`` with a LogError's message prefixed by the log's name ``log_name``."""
     try:
@@ -508,14 +547,128 @@ def _named(log_name, fn, *args, **kwargs):
         raise LogError(f"{log_name}: {text}") from None
 
 
-def _other_edge_fits(log, wheel, edge, index_times):
-    """Whether the wheel fits the other edges of the log's analog wheel signal."""
+def _edges_of(name, log, edge):
+    """The wheel's edges of an analog (``encoder_v``) or digital (``encoder_d``) channel."""
+    if log.kind == "digital":
+        return _named(name, digital_edges, log["time"], log["encoder_d"], edge=edge)
     try:
-        other = find_edges(log["time"], log["encoder_v"], edge="falling" if edge == "rising" else "rising")
-        locate_teeth(other.times, wheel, index_times=index_times)
+        return _named(name, find_edges, log["time"], log["encoder_v"], edge=edge)
+    except LogError as e:
+        if "no clear pulses" not in str(e):
+            raise
+        if two_level_locally(log["encoder_v"]):
+            # a pulse train whose levels drift (an air gap, a conditioner's offset): levels that follow it
+            return _named(name, find_edges, log["time"], log["encoder_v"], edge=edge, levels="adaptive")
+        # not a two-level pulse train: a variable-reluctance sensor's signal (amplitude ∝ speed, sign changes)
+        return _named(name, find_edges, log["time"], log["encoder_v"], edge=edge, levels="vr")
+
+
+def _other_edge_fits(log, wheel, edge, index_times):
+    """Whether the wheel fits the other edges of the log's analog or digital wheel signal
+    as they are (a digital channel's glitches removed)."""
+    try:
+        other = _edges_of("", log, "falling" if edge == "rising" else "rising")
+        locate_teeth(
+            other.times, wheel, index_times=index_times, repair=not wheel.needs_index and log.kind == "digital"
+        )
     except LogError:
         return False
     return True
+
+
+def _probe(log, edges):
+    """A probe for :func:`rotor.logs.pattern.follow_pattern`: looks for a missed edge in the
+    sampled wheel signal at a lower level (:func:`rotor.logs.edges.find_weak_edges`), at
+    the fraction of its own swing that ``edges`` were placed at."""
+    tt, vv = log["time"], log["encoder_v"]
+    noise = noise_rms(vv)
+    span = edges.high_v - edges.low_v
+    frac = float(np.clip((edges.level_v - edges.low_v) / span, 0.05, 0.95)) if span > 0 else 0.5
+
+    def probe(guess_s, pitch_s):
+        return find_weak_edges(
+            tt,
+            vv,
+            guess_s,
+            pitch_s,
+            edges.low_v,
+            edges.high_v,
+            inverted=edges.inverted,
+            level=frac,
+            noise_v=noise,
+        )
+
+    return probe
+
+
+def _uncovered(log, track):
+    """In words, where the edges of ``track`` leave more than the wheel's longest period
+    and two teeth of the sampled record uncovered at its start or end; empty if nowhere."""
+    t = log["time"]
+    d = np.diff(track.t)
+    if d.size < 20:
+        return ""
+    w = track.wheel
+    longest = (max(w.gaps) + 3) if w.gaps else 3
+    head = float(np.median(d[:10])) * longest
+    tail = float(np.median(d[-10:])) * longest
+    out = []
+    if track.t[0] - t[0] > head:
+        out.append(f"no edge in the first {track.t[0] - t[0]:.4g} s")
+    if t[-1] - track.t[-1] > tail:
+        out.append(f"no edge in the last {t[-1] - track.t[-1]:.4g} s")
+    return " and ".join(out) + (" of the record" if out else "")
+
+
+def _guessed(track):
+    """How many edges of ``track`` were guessed rather than measured (inferred, or removed as extra)."""
+    return sum(r.kind in ("missed edge inferred", "extra edge removed") for r in track.repairs)
+
+
+def _fit_with_repairs(name, log, w, edge, times, edges, index_times):
+    """The track of a log whose edges did not fit the wheel as found (with global levels):
+    for an analog signal, its edges found with adaptive levels where they fit as they are;
+    else the edges repaired to follow the pattern (a missed edge looked for in the signal,
+    :func:`_probe`), with global or adaptive levels, whichever leaves fewer edges guessed.
+
+    **Returns:** (track, the edges used, notes)."""
+    notes = []
+    adaptive = None
+    analog = log.kind == "encoder" and edges is not None and edges.method == "global levels"
+    if analog:
+        try:
+            adaptive = find_edges(log["time"], log["encoder_v"], edge=edge, levels="adaptive")
+        except LogError:
+            adaptive = None
+    said = (
+        "edges found with adaptive levels (the running minimum and maximum of the signal over about three "
+        "tooth periods): with the signal's global levels they did not fit the {} wheel"
+    )
+    if adaptive is not None:
+        try:
+            track = locate_teeth(adaptive.times, w, index_times=index_times)
+            return track, adaptive, [said.format(w.spec)]
+        except LogError:
+            pass
+    if w.needs_index:
+        return locate_teeth(times, w, index_times=index_times), edges, notes  # raises, naming where
+    probe = _probe(log, edges) if log.kind == "encoder" and edges is not None else None
+    try:
+        track = _named(name, locate_teeth, times, w, repair=True, probe=probe)
+        err = None
+    except LogError as e:
+        track, err = None, e
+    if adaptive is not None and (track is None or _guessed(track)):
+        try:
+            other = locate_teeth(adaptive.times, w, repair=True, probe=_probe(log, adaptive))
+        except LogError:
+            other = None
+        if other is not None and (track is None or _guessed(other) < _guessed(track)):
+            return other, adaptive, [said.format(w.spec) + " without guessing more edges"]
+    if track is None:
+        assert err is not None
+        raise err
+    return track, edges, notes
 
 
 def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise):
@@ -599,7 +752,14 @@ def analyze_log(
       weight; the noise of each order, which timer jitter makes grow in proportion to
       the order, is measured on the orders from teeth/6 to teeth/3); ``False``: δ from
       all orders up to ``max_order`` unweighted. The orders reported are never weighted.
-    - ``edge``: ``"rising"`` or ``"falling"`` edges of an analog signal.
+    - ``edge``: ``"rising"`` or ``"falling"`` edges of an analog or digital signal.
+      An analog signal that is no two-level pulse train (a variable-reluctance sensor's,
+      whose amplitude grows with speed) is read at its zero crossings
+      (:func:`rotor.logs.edges.find_edges` with ``levels="vr"``).
+    - ``wheel``: also ``"N-g1-g2…"`` (``"36-2-1"``), a wheel file (``*.toml``) or
+      ``"auto"`` (found from the log, :func:`rotor.logs.pattern.find_wheel`; a note says
+      what). Edges that do not fit are repaired where the pattern proves how
+      (:mod:`rotor.logs.pattern`; each repair in ``track.repairs`` and the JSON).
     - ``compression_ratio``, ``rod_ratio`` (crank radius / rod length): the engine's,
       for TDC from the pressure by a polytropic fit (:func:`tdc_from_pressure`);
       without them TDC is the pressure peak, some degrees late when the engine fires.
@@ -668,12 +828,16 @@ def analyze_log(
     else:
         if wheel is None:
             raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2', --wheel 60-2)")
-        w = parse_wheel(wheel)
         if log.kind == "teeth":
             times = log["tooth_time_s"]
         else:
-            edges = _named(name, find_edges, log["time"], log["encoder_v"], edge=edge)
+            edges = _edges_of(name, log, edge)
             times = edges.times
+        if isinstance(wheel, str) and wheel.strip().lower() == "auto":
+            w, found = _named(name, find_wheel, times)
+            notes.append(found)
+        else:
+            w = parse_wheel(wheel)
         check_time_base(times, w.teeth, name, log.kind)
         resolution = check_time_resolution(
             times,
@@ -689,19 +853,47 @@ def analyze_log(
         try:
             track = _named(name, locate_teeth, times, w, index_times=index_times)
         except LogError as e:
-            if log.kind == "encoder" and _other_edge_fits(log, w, edge, index_times):
+            if log.kind in ("encoder", "digital") and _other_edge_fits(log, w, edge, index_times):
                 other = "falling" if edge == "rising" else "rising"
                 raise LogError(
                     f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges but fits its {other} "
                     f"ones (an inverted signal?): give edge={other!r} (--edge {other})"
                 ) from e
-            raise
+            if w.needs_index and log.kind != "encoder":
+                raise
+            track, edges, more = _fit_with_repairs(name, log, w, edge, times, edges, index_times)
+            notes += more
+        else:
+            if edges is not None and edges.method == "global levels" and (cut := _uncovered(log, track)):
+                # the edges stop (or start) well inside the record: teeth the global levels do not see
+                try:
+                    adaptive = find_edges(log["time"], log["encoder_v"], edge=edge, levels="adaptive")
+                    refit: ToothTrack | None = locate_teeth(adaptive.times, w, index_times=index_times)
+                except LogError:
+                    refit = None
+                if refit is not None and refit.t.size > track.t.size:
+                    notes.append(
+                        f"edges found with adaptive levels (the running minimum and maximum of the signal over "
+                        f"each tooth period and two either side): with its global levels {cut}"
+                    )
+                    track, edges = refit, adaptive
+        if track.placement:
+            notes.append(f"the wheel's placement: {track.placement}")
+        if edges is not None and edges.repairs:
+            track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
+        if track.repairs:
+            notes.append(f"edges repaired to follow the {track.wheel.spec} wheel: {repairs_summary(track.repairs)}")
+        w = track.wheel
         span_rev = float((track.t.size - 1) / w.edges_per_rev)
         if span_rev < revs:
             raise LogError(
                 f"{name}: the {track.t.size} tooth edges span about {span_rev:.2f} revolutions; a "
                 f"{strokes}-stroke cycle needs {revs} (a longer log)"
             )
+        if isinstance(tooth_errors, str) and tooth_errors == "estimate" and w.angles_deg is not None:
+            measured = np.deg2rad(np.asarray(w.angles_deg)) - w.tooth_angles_rad
+            te = ToothErrors(w.spec, measured, "measured (the wheel file's tooth angles)")
+            tooth_errors = te
         if isinstance(tooth_errors, str) and tooth_errors == "estimate":
             if engine is not None and tdc_deg is None:
                 raise LogError(
@@ -730,7 +922,7 @@ def analyze_log(
         def omega_of(x):
             return 1.0 / dt_dphi(x)
 
-        phi_of = PchipInterpolator(track.t, phi_e)
+        phi_of = _Lazy(PchipInterpolator, track.t, phi_e)  # built only where a pressure or cam channel needs it
         phi_lo, phi_hi = float(phi_e[0]), float(phi_e[-1])
         if max_order is None:
             max_order = w.teeth / 4
@@ -813,19 +1005,13 @@ def analyze_log(
             # p_parity: the revolutions holding the TDC found from the pressure (a given TDC lies in the same
             # compression)
             parity, parity_method = p_parity, "pressure: revolutions with the compression peak"
-        elif firing in ("auto", "cam") and "cam_v" in log:
-            cam = find_edges(log["time"], log["cam_v"], name="cam_v").times
-            cam_phi = phi_of(cam[(cam >= t_of(phi_lo)) & (cam <= t_of(phi_hi))])
-            if cam_phi.size == 0:
-                raise LogError(f"{name}: no cam edge within the tooth edges")
-            # the firing TDC is the first TDC after each cam edge
-            r = np.ceil((cam_phi - tdc) / TWO_PI)
-            parities = np.mod(r, 2).astype(int)
-            if np.any(parities != parities[0]):
-                raise LogError(
-                    f"{name}: the cam edges do not fall once per cycle (their revolutions alternate irregularly)"
-                )
-            parity, parity_method = int(parities[0]), "cam: the first TDC after each cam edge"
+        elif (
+            firing in ("auto", "cam")
+            and ("cam_v" in log or "cam_d" in log)
+            and (cam_parity := _cam_parity(name, log, edge, t_of, phi_of, phi_lo, phi_hi, tdc, firing == "cam", notes))
+            is not None
+        ):
+            parity, parity_method = cam_parity, "cam: the first TDC after each cam edge"
         elif firing in ("auto", "speed"):
             parity, sep = _speed_parity(omega_of, phi_lo, phi_hi, tdc)
             parity_method = f"speed: the revolution that speeds up more after TDC (separation {sep:.1f} σ)"

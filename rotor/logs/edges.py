@@ -11,20 +11,24 @@ gap still counts (it is short, but not that short). Each remaining low→high tr
 is placed, to a fraction of a sample, at the last crossing of the ``level`` (default
 32 %) before it, by linear interpolation between the two samples around the crossing.
 A pulse that is low (reaches only half of the high level) still crosses 45 %, and the
-32 % crossing sits on its rising flank like that of a full pulse. Levels, not
+32 % crossing sits on its rising flank like that of a full pulse (later on it, by
+(32 % / its height − 32 %) of the flank's duration). A tooth too weak to cross 45 %
+is looked for where the wheel's pattern says one is missing (:func:`find_weak_edges`),
+and placed at 32 % of its own height. Levels, not
 constants: the same defaults serve a 0.05 V and a 5 V signal, offset or inverted.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 from jaxtyping import ArrayLike
 
 from ..errors import LogError
 
-__all__ = ["Edges", "find_edges", "signal_levels"]
+__all__ = ["Edges", "find_edges", "find_weak_edges", "noise_rms", "signal_levels", "two_level_locally"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -35,7 +39,10 @@ class Edges:
     signal's two levels [V]; ``thresholds_v``: the Schmitt trigger's (off, on) thresholds
     [V]; ``level_v``: the crossing level the times are interpolated at [V];
     ``glitches``: short runs removed as noise; ``inverted``: whether the signal was
-    negated (falling edges asked for).
+    negated (falling edges asked for); ``repairs``: the glitches removed, one
+    :class:`rotor.logs.pattern.Repair` each, where they are itemised (digital channels);
+    ``method``: how the levels were found (``"global levels"``, ``"adaptive levels"``,
+    ``"zero crossings"``, ``"digital"``).
     """
 
     times: np.ndarray
@@ -45,9 +52,12 @@ class Edges:
     level_v: float
     glitches: int
     inverted: bool
+    repairs: tuple = ()
+    method: str = "global levels"
 
     def to_json_dict(self) -> dict:
-        """Plain JSON: the edge count, the levels and thresholds [V], glitches removed, the edge."""
+        """Plain JSON: the edge count, the levels and thresholds [V], glitches removed, the
+        edge, how the levels were found."""
         return {
             "edges": int(self.times.size),
             "low_v": float(self.low_v),
@@ -56,6 +66,7 @@ class Edges:
             "level_v": float(self.level_v),
             "glitches_removed": int(self.glitches),
             "edge": "falling" if self.inverted else "rising",
+            "method": self.method,
         }
 
 
@@ -115,6 +126,7 @@ def find_edges(
     level: float = 0.32,
     glitch: float = 0.2,
     name: str = "encoder_v",
+    levels: str = "global",
 ) -> Edges:
     """Times [s] of the tooth edges of a sampled wheel signal.
 
@@ -126,6 +138,14 @@ def find_edges(
     - ``level``: the fraction at which each edge's crossing is interpolated [-].
     - ``glitch``: runs shorter than this fraction of the median run of the same state
       are removed as noise [-].
+    - ``levels``: ``"global"`` (default: the signal's two levels over the whole log),
+      ``"adaptive"`` (the levels follow the signal: the running minimum and maximum over
+      each tooth period and two on either side, so an amplitude that grows with speed or an offset that
+      drifts is followed; a stretch whose swing is under 5 % of the largest is no tooth),
+      or ``"vr"``: a variable-reluctance sensor's signal, whose amplitude grows with speed
+      and changes sign on every tooth: adaptive levels, a Schmitt trigger at 35 % / 65 %
+      and the edge at the mid-level, the zero crossing of a signal centred on zero (give
+      ``edge="falling"`` for the positive-to-negative crossing most VR conditioners use).
 
     **Returns:** :class:`Edges`.
     """
@@ -143,13 +163,32 @@ def find_edges(
             + (" (not all finite)" if t.size >= 3 else "")
             + "; a wheel signal needs many samples per tooth"
         )
+    if levels not in ("global", "adaptive", "vr"):
+        raise LogError(f"levels = {levels!r}: 'global', 'adaptive' or 'vr'")
     inverted = edge == "falling"
     if inverted:
         v = -v
-    low, high = signal_levels(v, name)
-    amp = high - low
-    off, on = low + band[0] * amp, low + band[1] * amp
-    lev = low + level * amp
+    method = "global levels"
+    off: Any
+    on: Any
+    lev: Any
+    if levels == "global":
+        low, high = signal_levels(v, name)
+        amp = high - low
+        off, on = low + band[0] * amp, low + band[1] * amp
+        lev = low + level * amp
+    else:
+        if levels == "vr":
+            band, level = (0.35, 0.65), 0.5
+        lo_env, hi_env = _envelope(v, name)
+        amp_env = hi_env - lo_env
+        off, on = lo_env + band[0] * amp_env, lo_env + band[1] * amp_env
+        lev = lo_env + level * amp_env
+        quiet = amp_env < 0.05 * float(np.max(amp_env))
+        on = np.where(quiet, np.inf, on)
+        off = np.where(quiet, -np.inf, off)
+        low, high = float(np.median(lo_env)), float(np.median(hi_env))
+        method = "zero crossings (VR)" if levels == "vr" else "adaptive levels"
     # Schmitt trigger: 1 above `on`, 0 below `off`, else the last decisive state
     decisive = (v > on) | (v < off)
     idx = np.where(decisive, np.arange(v.size), -1)
@@ -175,12 +214,196 @@ def find_edges(
             s = np.where(np.repeat(short, lengths), 1 - s, s).astype(np.int8)
     rise = np.flatnonzero(np.diff(s) == 1) + 1  # first sample of each high state
     # the last crossing of `lev` at or before each rise: v[j] < lev <= v[j + 1]
-    up = np.flatnonzero((v[:-1] < lev) & (v[1:] >= lev))
+    d = v - lev
+    up = np.flatnonzero((d[:-1] < 0) & (d[1:] >= 0))
     k = np.searchsorted(up, rise, side="left") - 1  # crossings with j + 1 <= rise
     ok = k >= 0
     j = up[k[ok]]
-    frac = (lev - v[j]) / (v[j + 1] - v[j])
+    frac = -d[j] / (d[j + 1] - d[j])
     times = t[j] + frac * (t[j + 1] - t[j])
+    if levels == "vr" and j.size:
+        times = _from_the_flank(t, v, rise[ok], times, lev, amp_env)
     # two rises cannot share one crossing (a glitch that survived): keep the first
     keep = np.concatenate([[True], np.diff(j) > 0]) if j.size else np.zeros(0, bool)
-    return Edges(times[keep], low, high, (off, on), lev, glitches + int((~keep).sum()), inverted)
+    if levels != "global":
+        off, on, lev = (
+            float(np.median(off[np.isfinite(off)])),
+            float(np.median(on[np.isfinite(on)])),
+            float(np.median(lev)),
+        )
+    return Edges(times[keep], low, high, (off, on), lev, glitches + int((~keep).sum()), inverted, (), method)
+
+
+def _last_crossing(t, v, level, rise):
+    """The time [s] of the last rising crossing of ``level`` (a number or one per sample)
+    at or before each sample index ``rise``; NaN where there is none."""
+    d = v - level
+    up = np.flatnonzero((d[:-1] < 0) & (d[1:] >= 0))
+    k = np.searchsorted(up, rise, side="left") - 1
+    j = up[np.maximum(k, 0)] if up.size else np.zeros(rise.size, np.int64)
+    x = t[j] - d[j] / (d[j + 1] - d[j]) * (t[j + 1] - t[j])
+    return np.where((k >= 0) & (up.size > 0), x, np.nan)
+
+
+def _from_the_flank(t, v, rise, times, lev, amp, lo=0.05, hi=0.12):
+    """Each edge's crossing of ``lev`` extrapolated along its flank: the line through the
+    last crossings of ``lev`` + ``lo`` and + ``hi`` × the local swing ``amp`` before the
+    rise, back to ``lev``. Where the signal dwells at the crossing level before a tooth
+    (a variable-reluctance signal is flat across the gap, centred on its zero crossing),
+    noise there makes the last crossing of the level itself land anywhere in the dwell;
+    the flank's steep part does not. Falls back to ``times`` where the line is not
+    steeper than the dwell."""
+    lev_a = np.broadcast_to(lev, v.shape)
+    amp_a = np.broadcast_to(amp, v.shape)
+    t1 = _last_crossing(t, v, lev_a + lo * amp_a, rise)
+    t2 = _last_crossing(t, v, lev_a + hi * amp_a, rise)
+    x = t1 - (t2 - t1) * lo / (hi - lo)
+    ok = np.isfinite(x) & (t2 > t1) & (x <= t1)
+    return np.where(ok, x, times)
+
+
+def _envelope(v: np.ndarray, name: str, teeth: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """The running minimum and maximum of ``v`` over its tooth periods and ``teeth`` on
+    either side: the periods run from one rising crossing of the signal's median to the
+    next (with a small hysteresis), so the window follows the speed — at 300 rpm as at
+    3000 — and a gap's period takes the levels of the teeth around it."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    mid = float(np.median(v))
+    h = 0.02 * float(np.percentile(v, 99) - np.percentile(v, 1))
+    decisive = (v > mid + h) | (v < mid - h)  # a small hysteresis: noise around the median is no crossing
+    idx = np.where(decisive, np.arange(v.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    s = v[np.maximum(idx, 0)] > mid + h
+    cross = np.flatnonzero(s[1:] & ~s[:-1]) + 1
+    if cross.size < 3:
+        raise LogError(f"column {name!r}: no pulses found (the signal crosses its median {cross.size} times)")
+    starts = np.concatenate([[0], cross])
+    lengths = np.diff(np.concatenate([starts, [v.size]]))
+    w = 2 * teeth + 1
+    hi = maximum_filter1d(np.maximum.reduceat(v, starts), w, mode="nearest")
+    lo = minimum_filter1d(np.minimum.reduceat(v, starts), w, mode="nearest")
+    return np.repeat(lo, lengths), np.repeat(hi, lengths)
+
+
+def two_level_locally(v: ArrayLike, near: float = 0.15, share: float = 0.75) -> bool:
+    """Whether a signal is a pulse train whose levels may drift: at least ``share`` of its
+    samples lie within ``near`` of the local swing from the local minimum or maximum (the
+    running extremes over each tooth period and two either side). A variable-reluctance
+    sensor's sine-like signal spends about half its time between them."""
+    v = np.asarray(v, dtype=np.float64)
+    try:
+        lo, hi = _envelope(v, "v")
+    except LogError:
+        return False
+    amp = hi - lo
+    close = (np.abs(v - lo) < near * amp) | (np.abs(v - hi) < near * amp)
+    return bool(np.mean(close[amp > 0]) >= share) if np.any(amp > 0) else False
+
+
+def noise_rms(v: ArrayLike) -> float:
+    """The rms of a sampled signal's noise [V], from its sample-to-sample differences (a
+    robust spread, so the few samples on tooth flanks do not count): 1.4826 · median
+    |Δv| / √2."""
+    d = np.diff(np.asarray(v, dtype=np.float64))
+    return float(1.4826 * np.median(np.abs(d)) / np.sqrt(2.0)) if d.size else 0.0
+
+
+def find_weak_edges(
+    t: ArrayLike,
+    v: ArrayLike,
+    guess_s: ArrayLike,
+    pitch_s: ArrayLike,
+    low_v: float,
+    high_v: float,
+    *,
+    inverted: bool = False,
+    min_swing: float = 0.05,
+    level: float = 0.32,
+    reach: float = 0.35,
+    noise_v: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Look for a weak tooth (one that does not reach the Schmitt trigger's levels, or
+    whose low before it does not drop below them: two teeth merged) where the wheel's
+    pattern says an edge is missing.
+
+    **Arguments:** ``t``, ``v``: the sampled signal [s], [V]; ``guess_s``: where each
+    missing edge is expected [s]; ``pitch_s``: the local tooth period there [s];
+    ``low_v``, ``high_v``: the signal's levels [V] (:class:`Edges`); ``inverted``: falling
+    edges; ``min_swing``: a tooth must swing at least this fraction of ``high_v − low_v``
+    [-] and at least 8 × the signal's noise rms (``noise_v`` [V], default
+    :func:`noise_rms`); ``level``: the fraction of the tooth's own swing at which its
+    edge is placed [-] (as :func:`find_edges`' ``level``); ``reach``: how far from the
+    guess the edge may lie [tooth periods].
+
+    The tooth's rising flank is the steepest rise (over about 1/20 of a tooth period)
+    within ``reach`` of the guess; its own levels are the minimum over the half period
+    before the flank and the maximum over the half period after it; the edge is the
+    crossing of ``level`` between them nearest the flank, interpolated between samples.
+
+    **Returns:** (edge times [s], NaN where no tooth swings enough; each tooth's swing as
+    a fraction of ``high_v − low_v`` [-]).
+    """
+    t = np.asarray(t, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    if inverted:
+        v = -v
+    guess = np.atleast_1d(np.asarray(guess_s, dtype=np.float64))
+    pitch = np.broadcast_to(np.asarray(pitch_s, dtype=np.float64), guess.shape)
+    full = abs(float(high_v) - float(low_v))
+    out = np.full(guess.size, np.nan)
+    swing = np.zeros(guess.size)
+    if guess.size == 0 or t.size < 4 or not full > 0:
+        return out, swing
+    noise = noise_rms(v) if noise_v is None else float(noise_v)
+    need = max(min_swing * full, 8.0 * noise)
+    dt_s = float(np.median(np.diff(t)))
+    for sl in _chunks(guess.size, pitch, dt_s):
+        g, p = guess[sl], pitch[sl]
+        spp = np.maximum(p / dt_s, 1.0)  # samples per pitch
+        s = np.maximum(np.round(spp / 20), 1).astype(np.int64)  # the flank's rise is measured over s samples
+        half = np.ceil(0.5 * spp).astype(np.int64)
+        rch = np.ceil(reach * spp).astype(np.int64)
+        c = np.searchsorted(t, g)
+        L = int(np.max(2 * rch + 1))
+        k = c[:, None] - rch[:, None] + np.arange(L)[None, :]  # candidate flank starts
+        inside = (k <= (c + rch)[:, None]) & (k >= 0) & (k + s[:, None] < v.size)
+        kk = np.clip(k, 0, v.size - 1)
+        rise = v[np.clip(kk + s[:, None], 0, v.size - 1)] - v[kk]
+        rise = np.where(inside, rise, -np.inf)
+        best = np.argmax(rise, axis=1)
+        f = kk[np.arange(g.size), best]  # the flank starts at sample f, ends at f + s
+        ok = np.isfinite(rise[np.arange(g.size), best])
+        H = int(np.max(half)) + 1
+        off = np.arange(H)[None, :]
+        before = np.clip(f[:, None] - off, 0, v.size - 1)
+        after = np.clip(f[:, None] + s[:, None] + off, 0, v.size - 1)
+        m = off <= half[:, None]
+        lo = np.min(np.where(m, v[before], np.inf), axis=1)
+        hi = np.max(np.where(m, v[after], -np.inf), axis=1)
+        sw = hi - lo
+        swing[sl] = np.where(ok, sw / full, 0.0)
+        ok &= sw >= need
+        lev = lo + level * sw
+        # the level's up-crossing nearest the flank: search the flank and s samples either side
+        W = int(np.max(3 * s)) + 2
+        j = f[:, None] - s[:, None] + np.arange(W)[None, :]
+        jm = (j >= 0) & (j + 1 < v.size) & (j <= (f + 2 * s)[:, None])
+        jc = np.clip(j, 0, v.size - 2)
+        up = jm & (v[jc] < lev[:, None]) & (v[jc + 1] >= lev[:, None])
+        dist = np.where(up, np.abs(jc - f[:, None] - s[:, None] // 2), np.iinfo(np.int64).max)
+        q = np.argmin(dist, axis=1)
+        ok &= up[np.arange(g.size), q]
+        jj = jc[np.arange(g.size), q]
+        x = t[jj] + (lev - v[jj]) / (v[jj + 1] - v[jj]) * (t[jj + 1] - t[jj])
+        ok &= np.abs(x - g) <= reach * p
+        out[sl] = np.where(ok, x, np.nan)
+    return out, swing
+
+
+def _chunks(n: int, pitch: np.ndarray, dt_s: float, budget: int = 4_000_000):
+    """Slices of ``n`` guesses whose window matrices stay within ``budget`` elements."""
+    L = int(np.max(pitch) / max(dt_s, 1e-300)) + 8
+    step = max(1, budget // max(L, 1))
+    for a in range(0, n, step):
+        yield slice(a, min(a + step, n))

@@ -44,6 +44,7 @@ MIN_RPM = 10.0
 MAX_RPM = 30_000.0
 RESOLUTION_NOTE = 0.002
 RESOLUTION_REFUSE = 0.02
+RESOLUTION_SAMPLE = 2**17  # time differences read for the resolution of a long log
 _UNITS = (("milliseconds", 1e3, "time_ms", "tooth_time_ms"), ("microseconds", 1e6, "time_us", "tooth_time_us"))
 
 
@@ -120,8 +121,14 @@ def time_resolution_s(t: ArrayLike, *, evenly_spaced: bool = False) -> float:
     be alike take two or more (``evenly_spaced``: all of them, as a sampled time column's;
     else those within 1.5× of the median, a wheel's regular tooth periods: a wheel at
     exactly constant speed gives one tooth period and one gap period, no rounding); 0 where
-    no such step is seen (stamps of full precision)."""
+    no such step is seen (stamps of full precision).
+
+    A long log is read from the :data:`RESOLUTION_SAMPLE` differences at the end where
+    the stamps are largest in magnitude: a float's resolution is coarsest there, and a
+    timer's tick is the same everywhere."""
     t = np.asarray(t, dtype=np.float64)
+    if t.size > RESOLUTION_SAMPLE + 1:
+        t = t[-RESOLUTION_SAMPLE - 1 :] if abs(t[-1]) >= abs(t[0]) else t[: RESOLUTION_SAMPLE + 1]
     d = np.diff(t)
     d = d[d > 0]
     if d.size < 8:
@@ -132,7 +139,7 @@ def time_resolution_s(t: ArrayLike, *, evenly_spaced: bool = False) -> float:
     if vals.size < 2 or vals.size > 0.5 * d.size:
         return 0.0
     if not evenly_spaced:
-        med = float(np.median(d))
+        med = 0.5 * float(u[(u.size - 1) // 2] + u[u.size // 2])  # the median, from the sorted differences
         vals_alike = vals[(vals > med / 1.5) & (vals < med * 1.5)]
     else:
         vals_alike = vals

@@ -16,6 +16,9 @@ spec; a header of other names is skipped when the spec names the columns, and
                     shape is used (firing revolution and TDC), never its calibration
 ``cam_v``           a cam/phase sensor signal, one pulse per engine cycle
 ``index_v``         a once-per-revolution index signal (for wheels without a gap)
+``encoder_d``       a digital (0/1) trigger-wheel channel given at its transitions (a
+                    logic-analyser or ECU export: one row per transition)
+``cam_d``           a digital (0/1) cam/phase channel, the same way
 ``tooth_time_s``    tooth edge timestamps [s], one per row
 ``rpm``             an instantaneous speed series [rev/min]
 ``-``               a column to skip
@@ -27,6 +30,11 @@ to seconds on reading (``Log.notes`` says so) and named ``time`` and ``tooth_tim
 
 Columns after the last named one are ignored. A file whose header line already holds
 these names needs no spec; a file with one column is read as ``tooth_time_s``.
+
+**Known export formats** are recognised by their header (:data:`KNOWN_HEADERS`): a logic
+analyser's (Saleae) ``Time[s], Channel 0, Channel 1, …`` is read as
+``time, encoder_d, cam_d, -, …`` (channel 0 the crank wheel, channel 1 the cam), and
+``Log.notes`` says so; a spec (``--columns time,encoder_d,-``) names them otherwise.
 
 **What is refused, before reading:** a path that is no file (missing, a folder,
 unreadable); a file that holds NUL bytes in its first 64 kB (a binary or zero-filled
@@ -53,7 +61,15 @@ from jaxtyping import ArrayLike
 from ..checks import check_size
 from ..errors import LogError
 
-__all__ = ["COLUMN_NAMES", "UNIT_COLUMNS", "Log", "parse_columns", "read_log", "READ_BYTES_PER_FILE_BYTE"]
+__all__ = [
+    "COLUMN_NAMES",
+    "UNIT_COLUMNS",
+    "KNOWN_HEADERS",
+    "Log",
+    "parse_columns",
+    "read_log",
+    "READ_BYTES_PER_FILE_BYTE",
+]
 
 READ_BYTES_PER_FILE_BYTE = 12
 """Memory that reading a log takes per byte of the file [bytes]: the text, its lines, the
@@ -65,6 +81,8 @@ COLUMN_NAMES = {
     "pressure_v": "cylinder-pressure signal [V] (shape only)",
     "cam_v": "cam/phase signal [V]",
     "index_v": "once-per-revolution index signal [V]",
+    "encoder_d": "digital trigger-wheel channel (0/1), one row per transition",
+    "cam_d": "digital cam/phase channel (0/1), one row per transition",
     "tooth_time_s": "tooth edge time [s]",
     "rpm": "instantaneous speed [rev/min]",
     "time_ms": "sample time [ms] (read as 'time' in seconds)",
@@ -81,6 +99,26 @@ UNIT_COLUMNS = {
     "tooth_time_us": ("tooth_time_s", 1e-6),
 }
 """Column names of a time in other units: name → (the name it is read as, seconds per unit)."""
+
+
+KNOWN_HEADERS = {
+    "Saleae logic analyser (Time[s], Channel 0, Channel 1, …)": (
+        re.compile(r"time\s*\[s\]", re.IGNORECASE),
+        re.compile(r"channel\s*\d+", re.IGNORECASE),
+        ("time", "encoder_d", "cam_d"),
+    ),
+}
+"""Export formats recognised by their header: name → (first column's pattern, the other
+columns' pattern, the columns they are read as in order; further columns are skipped)."""
+
+
+def _known_header(tokens: list) -> tuple[str, list] | None:
+    """(format name, column spec) of a known export's header, or None."""
+    for fmt, (first, rest, names) in KNOWN_HEADERS.items():
+        if tokens and first.fullmatch(tokens[0]) and len(tokens) > 1 and all(rest.fullmatch(x) for x in tokens[1:]):
+            spec = list(names[: len(tokens)]) + ["-"] * max(len(tokens) - len(names), 0)
+            return fmt, spec
+    return None
 
 
 def _canonical(name: str) -> str:
@@ -174,11 +212,14 @@ class Log:
 
     @property
     def kind(self) -> str:
-        """``"teeth"`` (tooth timestamps), ``"encoder"`` (sampled wheel signal) or ``"speed"``."""
+        """``"teeth"`` (tooth timestamps), ``"encoder"`` (sampled wheel signal), ``"digital"``
+        (a 0/1 wheel channel at its transitions) or ``"speed"``."""
         if "tooth_time_s" in self.columns:
             return "teeth"
         if "encoder_v" in self.columns:
             return "encoder"
+        if "encoder_d" in self.columns:
+            return "digital"
         return "speed"
 
     @property
@@ -209,10 +250,18 @@ def _check(log: Log) -> None:
     if len(set(lengths.values())) != 1:
         raise LogError(f"{log.source}: columns of different lengths {lengths}")
     names = set(cols)
+    if "encoder_d" in names or "cam_d" in names:
+        if "time" not in names:
+            raise LogError(f"{log.source}: a 'time' column is needed with the digital channels (encoder_d, cam_d)")
+        clash = names & {"tooth_time_s", "encoder_v", "rpm"}
+        if "encoder_d" in names and clash:
+            raise LogError(f"{log.source}: 'encoder_d' and {sorted(clash)} in one log; name one kind of signal")
     if "tooth_time_s" in names:
         clash = names & {"encoder_v", "rpm"}
         if clash:
             raise LogError(f"{log.source}: 'tooth_time_s' and {sorted(clash)} in one log; name one kind of signal")
+    elif "encoder_d" in names:
+        pass
     elif "encoder_v" in names or "rpm" in names:
         if "time" not in names:
             need = "encoder_v" if "encoder_v" in names else "rpm"
@@ -221,7 +270,8 @@ def _check(log: Log) -> None:
             raise LogError(f"{log.source}: 'encoder_v' and 'rpm' in one log; name one kind of signal")
     else:
         raise LogError(
-            f"{log.source}: name a 'tooth_time_s', 'encoder_v' (with 'time') or 'rpm' (with 'time') "
+            f"{log.source}: name a 'tooth_time_s', 'encoder_v' (with 'time'), 'encoder_d' (with 'time') or 'rpm' "
+            f"(with 'time') "
             f"column; the log has {', '.join(sorted(names))}"
         )
     for k, v in cols.items():
@@ -249,6 +299,18 @@ def _check(log: Log) -> None:
                         if same
                         else ""
                     )
+                )
+    for k in ("encoder_d", "cam_d"):
+        if k in cols:
+            v = cols[k]
+            two = np.unique(v[: min(v.size, 64)])[:2]
+            bad = np.flatnonzero(~np.isin(v, two)) if two.size == 2 else np.zeros(0, np.int64)
+            if bad.size:
+                i = int(bad[0])
+                raise LogError(
+                    f"{log.where(i)}, column {k!r}: {v[i]:g} where the channel's levels are {two[0]:g} and "
+                    f"{two[1]:g}; a digital channel has two levels (an analog signal? name it "
+                    f"{k[:-2] + '_v'})"
                 )
     if "rpm" in cols:
         bad = np.flatnonzero(cols["rpm"] <= 0)
@@ -344,7 +406,15 @@ def read_log(
             f"start a line with '#' to make it a comment"
         )
     ncols = len(tokens)
-    if columns is None:
+    known = _known_header(tokens) if header else None
+    if columns is None and known is not None:
+        columns = known[1]
+        notes.append(
+            f"header line {first[0]} ({_short(first[1])}) read as a {known[0]} export: "
+            f"{', '.join(f'{h} → {n}' for h, n in zip(tokens, columns) if n != '-')} (name the columns, "
+            f"e.g. --columns time,encoder_d,-, if the channels are wired otherwise)"
+        )
+    elif columns is None:
         if header and all(t in COLUMN_NAMES for t in tokens):
             columns = tokens
         elif ncols == 1 and not header:
@@ -361,7 +431,7 @@ def read_log(
                 f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v' or "
                 f"--columns time,encoder_v,pressure_v; '-' skips one)"
             )
-    elif header:
+    elif header and known is None:
         spec = parse_columns(columns)
         clash = [
             (i, h, n)
@@ -392,6 +462,8 @@ def read_log(
     nums = np.fromiter((n for n, _ in _data_lines(text)), dtype=np.int64)
     if header:
         nums = nums[1:]
+    if known is not None and any(n != k for n, k in zip(parse_columns(columns), known[1])):
+        notes.append(f"header line {first[0]} ({_short(first[1])}) skipped: the columns are named by the spec")
     cols = _to_seconds({names[i]: data[:, j] for j, i in enumerate(use)}, notes)
     return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes))
 

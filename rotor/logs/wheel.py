@@ -36,7 +36,7 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -53,6 +53,7 @@ if TYPE_CHECKING:
 __all__ = [
     "Wheel",
     "parse_wheel",
+    "read_wheel_file",
     "ToothTrack",
     "locate_teeth",
     "ToothErrors",
@@ -66,22 +67,67 @@ ENGINE_ORDER_FACTOR = 4.0  # an order is the engine's if its amplitude is this m
 
 @dataclasses.dataclass(frozen=True)
 class Wheel:
-    """A trigger wheel of ``teeth`` equal pitches per revolution, ``missing`` of them
-    without a tooth (the gap). ``missing = 0``: a wheel whose revolutions are marked by a
-    separate once-per-revolution index signal."""
+    """A trigger wheel of ``teeth`` equally spaced positions per revolution, ``missing`` of
+    them without a tooth.
+
+    ``gaps``: the missing teeth of each gap in the order the wheel passes the sensor,
+    gap 1 first (``(2,)`` for a 60-2 wheel, ``(2, 1)`` for 36-2-1); ``layout``: the teeth
+    that follow each gap up to the next one (``(58,)`` for 60-2; for several gaps found
+    from the log by :func:`locate_teeth`, ``None`` until then). ``missing = 0``: a wheel
+    whose revolutions are marked by a separate once-per-revolution index signal.
+    ``angles_deg``: measured angle of each tooth from tooth 0 [deg] (a wheel file), or
+    ``None``.
+
+    **Angle 0** is the first tooth after gap 1 (the gap named first in the spec; in a
+    wheel file, the longest gap). Where the spec names several gaps of the same size,
+    gap 1 is the one followed by the most teeth (the layout read round from gap 1 is the
+    largest in lexicographic order); on a wheel whose pattern repeats within a
+    revolution (e.g. three equal gaps evenly spaced), the first such gap in the log.
+    """
 
     teeth: int
     missing: int = 0
+    gaps: tuple = ()
+    layout: tuple | None = dataclasses.field(default=None, compare=False)
+    angles_deg: tuple | None = dataclasses.field(default=None, compare=False)
 
     def __post_init__(self):
         if not (isinstance(self.teeth, (int, np.integer)) and self.teeth >= 3):
             raise LogError(f"wheel: {self.teeth!r} teeth; need a whole number, 3 or more")
-        if not (isinstance(self.missing, (int, np.integer)) and 0 <= self.missing <= self.teeth - 2):
+        if not (isinstance(self.missing, (int, np.integer)) and not isinstance(self.missing, bool)):
+            raise LogError(f"wheel: {self.missing!r} missing teeth; need a whole number")
+        gaps = tuple(int(g) for g in self.gaps)
+        if not gaps and self.missing:
+            gaps = (int(self.missing),)
+        missing = int(self.missing) if self.missing else sum(gaps)
+        if any(g < 1 for g in gaps) or sum(gaps) != missing:
+            raise LogError(f"wheel: gaps {gaps!r} do not add up to {missing} missing teeth (each gap 1 or more)")
+        if not (0 <= missing <= self.teeth - 2 * max(len(gaps), 1)):
             raise LogError(f"wheel: {self.missing!r} missing teeth of {self.teeth}; need 0 … {self.teeth - 2}")
+        object.__setattr__(self, "gaps", gaps)
+        object.__setattr__(self, "missing", missing)
+        layout = self.layout
+        if layout is None and len(gaps) == 1:
+            layout = (self.teeth - missing,)
+        if layout is not None:
+            layout = tuple(int(x) for x in layout)
+            if len(layout) != len(gaps) or any(x < 1 for x in layout) or sum(layout) != self.teeth - missing:
+                raise LogError(
+                    f"wheel {self.spec}: teeth between the gaps {layout!r} do not fit {len(gaps)} gap(s) and "
+                    f"{self.teeth - missing} teeth"
+                )
+        object.__setattr__(self, "layout", layout)
+        if self.angles_deg is not None:
+            a = tuple(float(x) for x in self.angles_deg)
+            if len(a) != self.edges_per_rev or not all(math.isfinite(x) for x in a):
+                raise LogError(
+                    f"wheel {self.spec}: {len(a)} measured tooth angles; the wheel has {self.edges_per_rev} teeth"
+                )
+            object.__setattr__(self, "angles_deg", a)
 
     @property
     def spec(self) -> str:
-        return f"{self.teeth}-{self.missing}" if self.missing else f"{self.teeth}"
+        return f"{self.teeth}" + "".join(f"-{g}" for g in self.gaps)
 
     @property
     def pitch_rad(self) -> float:
@@ -96,26 +142,145 @@ class Wheel:
     def needs_index(self) -> bool:
         return self.missing == 0
 
+    @property
+    def positions(self) -> np.ndarray:
+        """The position (0 … teeth−1, 0 = tooth 0) of each tooth, tooth 0 first; a
+        :class:`LogError` while the gaps' places are not known (found by :func:`locate_teeth`)."""
+        if self.missing == 0:
+            return np.arange(self.teeth)
+        if self.layout is None:
+            raise LogError(f"wheel {self.spec}: where its gaps lie is found from the log (locate_teeth)")
+        out: list[int] = []
+        pos = 0
+        for run, gap in zip(self.layout, self.gaps[1:] + self.gaps[:1]):
+            out.extend(range(pos, pos + run))
+            pos += run + gap
+        return np.asarray(out, dtype=np.int64)
+
+    @property
+    def tooth_angles_rad(self) -> np.ndarray:
+        """Nominal angle of each tooth from tooth 0 [rad] (its position × the pitch)."""
+        return self.pitch_rad * self.positions
+
+    def describe(self) -> str:
+        """The pattern in words: teeth and gaps going round from tooth 0."""
+        if self.missing == 0:
+            return f"{self.teeth} teeth and an index"
+        if self.layout is None:
+            return f"{self.teeth} positions, gaps of {', '.join(map(str, self.gaps))} missing teeth"
+        parts = []
+        for run, gap in zip(self.layout, self.gaps[1:] + self.gaps[:1]):
+            parts.append(f"{run} teeth, {gap} missing")
+        return f"{self.teeth} positions going round from tooth 0: " + ", ".join(parts)
+
 
 def parse_wheel(spec: str | int | Wheel) -> Wheel:
-    """A :class:`Wheel` from ``"60-2"``, ``"36-1"``, ``"36-2"`` (N−M) or ``"60"`` (with an index)."""
+    """A :class:`Wheel` from ``"60-2"``, ``"36-1"`` (N−M), ``"36-2-1"``, ``"36-2-2-2"``
+    (N positions and the missing teeth of each gap, gap 1 first: where the gaps lie is
+    found from the log), ``"60"`` (with an index) or a wheel file (``*.toml``, see
+    :func:`read_wheel_file`)."""
     if isinstance(spec, Wheel):
         return spec
-    m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+))?\s*", str(spec))
+    text = str(spec).strip()
+    if text.lower().endswith(".toml"):
+        return read_wheel_file(text)
+    m = re.fullmatch(r"(\d+)((?:\s*-\s*\d+)*)", text)
     if not m:
-        raise LogError(f"wheel {spec!r}: expected N-M teeth such as 60-2, 36-1, 36-2, or N for a wheel with an index")
-    return Wheel(int(m.group(1)), int(m.group(2) or 0))
+        raise LogError(
+            f"wheel {spec!r}: expected N-M teeth such as 60-2, 36-1, 36-2, N-g1-g2 such as 36-2-1, "
+            f"a wheel file (.toml), auto, or N for a wheel with an index"
+        )
+    gaps = tuple(int(g) for g in re.findall(r"\d+", m.group(2)))
+    if any(g == 0 for g in gaps):
+        Wheel(int(m.group(1)))  # the tooth count's own message first (e.g. 0 teeth)
+        raise LogError(
+            f"wheel {spec!r}: a gap of 0 missing teeth; give each gap 1 or more (e.g. 60-2, 36-2-1), "
+            "or N alone for a wheel with an index"
+        )
+    return Wheel(int(m.group(1)), sum(gaps), gaps)
+
+
+def read_wheel_file(path: str | os.PathLike) -> Wheel:
+    """A :class:`Wheel` from a TOML file::
+
+        positions = 36               # equally spaced tooth positions per revolution
+        missing = [16, 17, 35]       # positions without a tooth (0 … positions−1, going round)
+        angles_deg = [0.0, 10.02, …] # optional: the measured angle of each tooth [deg], in
+                                     # position order from position 0 (the file's frame)
+
+    Angle 0 is the first tooth after the longest gap (of equal ones, the first in position
+    order); the measured angles are taken relative to their nominal places, so their frame
+    does not matter. A malformed file raises :class:`LogError` naming the file and key.
+    """
+    import tomllib
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise LogError(f"{path}: No such wheel file")
+    try:
+        with open(path, "rb") as f:
+            d = tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise LogError(f"{path}: not a wheel file ({e})") from None
+    n = d.get("positions")
+    if not isinstance(n, int) or isinstance(n, bool) or n < 3:
+        raise LogError(f"{path}: 'positions' must be a whole number of tooth positions, 3 or more, not {n!r}")
+    miss = d.get("missing", [])
+    if not isinstance(miss, list) or not all(isinstance(x, int) and 0 <= x < n for x in miss):
+        raise LogError(f"{path}: 'missing' must be a list of positions 0 … {n - 1}, not {str(miss)[:40]!r}")
+    present = np.ones(n, bool)
+    present[miss] = False
+    if not miss:
+        return Wheel(n, 0)
+    if present.sum() < 2:
+        raise LogError(f"{path}: 'missing' leaves {int(present.sum())} teeth")
+    # runs of missing positions going round, from the first tooth after a gap
+    first_tooth = next(p for p in range(n) if present[p] and not present[p - 1])
+    order = (first_tooth + np.arange(n)) % n
+    pr = present[order]
+    change = np.flatnonzero(np.diff(pr.astype(np.int8))) + 1
+    bounds = np.concatenate([[0], change, [n]])
+    runs = [(bool(pr[a]), int(b - a), int(order[a])) for a, b in zip(bounds[:-1], bounds[1:])]
+    teeth_runs = [r for r in runs if r[0]]
+    gap_runs = [r for r in runs if not r[0]]
+    # teeth_runs[k] is followed by gap_runs[k]; gap 1 = the longest gap (first in position order)
+    g1 = max(range(len(gap_runs)), key=lambda k: (gap_runs[k][1], -((gap_runs[k][2] - 1) % n)))
+    k = np.roll(np.arange(len(gap_runs)), -g1)
+    gaps = tuple(gap_runs[i][1] for i in k)
+    layout = tuple(teeth_runs[(i + 1) % len(teeth_runs)][1] for i in k)
+    tooth0 = teeth_runs[(g1 + 1) % len(teeth_runs)][2]
+    angles = None
+    if d.get("angles_deg") is not None:
+        a = d["angles_deg"]
+        if (
+            not isinstance(a, list)
+            or len(a) != int(present.sum())
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in a)
+        ):
+            raise LogError(f"{path}: 'angles_deg' must be {int(present.sum())} numbers, one per tooth [deg]")
+        pos = np.flatnonzero(present)
+        err = np.asarray(a, dtype=np.float64) - pos * 360.0 / n
+        rolled = np.roll(err, -int(np.searchsorted(pos, tooth0)))
+        w0 = Wheel(n, sum(gaps), gaps, layout)
+        angles = tuple(w0.positions * 360.0 / n + rolled - rolled[0])
+    return Wheel(n, sum(gaps), gaps, layout, angles)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class ToothTrack:
     """Tooth edges with their place on the wheel.
 
-    **Attributes:** ``t`` [s]: edge times; ``tooth``: position on the wheel (0 … N−M−1,
-    0 = the first edge after the gap); ``rev``: revolution (0 = the first with a
-    reference edge in the log, −1 before it); ``wheel``; ``gap_ratio``: the median
-    period ratio found on the gap (M+1 expected) and ``tooth_ratio_max``: the largest
-    ratio on a regular tooth (1 expected).
+    **Attributes:** ``t`` [s]: edge times (with any edge inferred from the pattern);
+    ``tooth``: the tooth (0 … N−M−1, 0 = the first edge after gap 1, see :class:`Wheel`);
+    ``rev``: revolution (0 = the first with a reference edge in the log, −1 before it);
+    ``wheel`` (with the places of its gaps as found); ``gap_ratio``: the median period
+    ratio found on gap 1 (its missing teeth + 1 expected) and ``tooth_ratio_max``: the
+    largest ratio on a regular tooth (1 expected); ``repairs``: what was done to the
+    edges to make them follow the wheel (:class:`rotor.logs.pattern.Repair`: glitches
+    and extra edges removed, missed edges found or inferred, edges dropped at the ends);
+    ``placement``: where the timing alone fits several placements on the wheel alike (a
+    tooth missed in every revolution next to a gap), how one was chosen, in words
+    (empty otherwise).
     """
 
     t: np.ndarray
@@ -124,11 +289,13 @@ class ToothTrack:
     wheel: Wheel
     gap_ratio: float = float("nan")
     tooth_ratio_max: float = float("nan")
+    repairs: tuple = ()
+    placement: str = ""
 
     @property
     def nominal_angle(self) -> np.ndarray:
         """Nominal wheel angle of each edge [rad]."""
-        return TWO_PI * self.rev + self.wheel.pitch_rad * self.tooth
+        return TWO_PI * self.rev + self.wheel.tooth_angles_rad[self.tooth]
 
     @property
     def revolutions(self) -> int:
@@ -136,20 +303,39 @@ class ToothTrack:
         return int(np.count_nonzero(self.tooth == 0)) - 1
 
     def to_json_dict(self) -> dict:
-        """Plain JSON: the wheel as found (teeth, edges, revolutions, the gap's period ratios)."""
+        """Plain JSON: the wheel as found (teeth, edges, revolutions, the gap's period ratios,
+        the repairs made to the edges)."""
+        from .pattern import repairs_json
+
+        w = self.wheel
+        if w.missing and len(w.gaps) == 1:
+            where = (
+                f"after tooth position {w.edges_per_rev - 1} (edges 0 … {w.edges_per_rev - 1} per revolution; "
+                f"gap spans {w.missing + 1} pitches)"
+            )
+        elif w.missing:
+            ends = np.cumsum(w.layout or ()) - 1
+            where = (
+                f"{w.describe()}; gaps after teeth {', '.join(str(int(e)) for e in ends)}; tooth 0 = the first "
+                f"after gap 1 ({w.gaps[0]} missing)"
+            )
+        else:
+            where = "index signal"
         return {
-            "spec": self.wheel.spec,
-            "teeth_per_rev": self.wheel.teeth,
-            "missing_teeth": self.wheel.missing,
-            "edges_per_rev": self.wheel.edges_per_rev,
+            "spec": w.spec,
+            "teeth_per_rev": w.teeth,
+            "missing_teeth": w.missing,
+            "gaps": list(w.gaps),
+            "teeth_between_gaps": None if w.layout is None else list(w.layout),
+            "edges_per_rev": w.edges_per_rev,
             "edges": int(self.t.size),
             "complete_revolutions": self.revolutions,
-            "gap_position": f"after tooth position {self.wheel.edges_per_rev - 1} (edges 0 … {self.wheel.edges_per_rev - 1} per revolution; gap spans {self.wheel.missing + 1} pitches)"
-            if self.wheel.missing
-            else "index signal",
+            "gap_position": where,
             "first_reference_time_s": float(self.t[np.argmax(self.tooth == 0)]),
             "gap_period_ratio": _finite_or_none(self.gap_ratio),  # none for an index wheel
             "max_tooth_period_ratio": _finite_or_none(self.tooth_ratio_max),
+            "repairs": repairs_json(self.repairs),
+            "placement": self.placement or None,
         }
 
 
@@ -164,15 +350,29 @@ def _ratios(dt):
     return r
 
 
-def locate_teeth(times: ArrayLike, wheel: str | Wheel, *, index_times: ArrayLike | None = None) -> ToothTrack:
+def locate_teeth(
+    times: ArrayLike,
+    wheel: str | Wheel,
+    *,
+    index_times: ArrayLike | None = None,
+    repair: bool = False,
+    probe: Callable | None = None,
+) -> ToothTrack:
     """Place each tooth edge on the wheel: find the gaps (or use the index) and count.
 
     **Arguments:** ``times``: tooth edge times [s], increasing; ``wheel``: a
-    :class:`Wheel` or a spec such as ``"60-2"``; ``index_times``: once-per-revolution
-    index edge times [s], needed for a wheel without a gap.
+    :class:`Wheel` or a spec such as ``"60-2"`` or ``"36-2-1"``; ``index_times``:
+    once-per-revolution index edge times [s], needed for a wheel without a gap;
+    ``repair``: make the edges follow the wheel's pattern where it proves how
+    (:func:`rotor.logs.pattern.follow_pattern`: an extra edge removed, a missed one
+    inferred, edges that do not fit at the ends of the log dropped), each repair reported
+    in ``ToothTrack.repairs``; ``False`` (default): any edge that does not fit is an error;
+    ``probe``: with ``repair``, looks for a missed edge in the recorded signal (see
+    :func:`rotor.logs.pattern.follow_pattern`).
 
     **Returns:** :class:`ToothTrack`. Raises :class:`LogError` if the log is shorter
-    than a revolution, no gap is found, or the edges between two gaps are not N−M.
+    than a revolution, no gap is found, or the edges between two gaps are not N−M (or,
+    with ``repair``, where the pattern cannot be followed, saying where and why).
     """
     wheel = parse_wheel(wheel)
     try:
@@ -195,6 +395,10 @@ def locate_teeth(times: ArrayLike, wheel: str | Wheel, *, index_times: ArrayLike
     if np.any(np.diff(t) <= 0):
         i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise LogError(f"tooth edge {i}: time {t[i]:.9g} s is not after the previous edge's {t[i - 1]:.9g} s")
+    if not wheel.needs_index and (repair or len(wheel.gaps) > 1):
+        from .pattern import follow_pattern
+
+        return follow_pattern(t, wheel, repair=repair, probe=probe)
     dt = np.diff(t)
     r = _ratios(dt)
     if wheel.needs_index:
@@ -480,7 +684,7 @@ def _inertia_ripple(wheel, engine, tdc_deg):
     fine = np.linspace(0.0, TWO_PI, 2881)
     root = np.sqrt(np.asarray(reduced_inertia(engine, fine - math.radians(tdc_deg))))
     T = np.concatenate([[0.0], np.cumsum(0.5 * (root[1:] + root[:-1]) * np.diff(fine))])  # ∝ time at constant E
-    nominal = wheel.pitch_rad * np.arange(wheel.edges_per_rev)
+    nominal = wheel.tooth_angles_rad
     d = TWO_PI * np.interp(nominal, fine, T) / T[-1] - nominal
     return d - d.mean()
 
@@ -538,7 +742,7 @@ def estimate_tooth_errors(
     tt, tooth, rev = track.t[sel], track.tooth[sel], track.rev[sel]
     if tt.size != R * E:
         raise LogError("tooth errors: the revolutions are not complete")  # locate_teeth guarantees it
-    d = (theta(tt) - TWO_PI * rev - w.pitch_rad * tooth).reshape(R, E)
+    d = (theta(tt) - TWO_PI * rev - w.tooth_angles_rad[tooth]).reshape(R, E)
     if engine is not None:
         if tdc_deg is None or not math.isfinite(float(tdc_deg)):
             raise LogError(
@@ -573,7 +777,7 @@ def estimate_tooth_errors(
     worst = np.argsort(-np.abs(dev))[: max(2, E // 20)]  # at most 5 % of the teeth
     clean = np.ones(E, bool)
     clean[worst[np.abs(dev[worst]) > 6 * mad]] = False
-    phi = w.pitch_rad * np.arange(E)
+    phi = w.tooth_angles_rad
     if isinstance(engine_orders, str):
         if engine_orders != "auto":
             raise LogError(f"engine_orders = {engine_orders!r}: 'auto', a list of orders, or ()")
