@@ -94,6 +94,7 @@ from .engine.table import CrankTable, crank_table  # noqa: E402
 from .errors import EngineError, InternalError, LogError, NoSteadyStateError, RotorError, SolverError  # noqa: E402
 from .logs.analysis import LogAnalysis, analyze_log, tdc_from_pressure  # noqa: E402
 from .logs.edges import Edges, find_edges  # noqa: E402
+from .logs.pattern import locate_teeth  # noqa: E402
 from .logs.reader import Log, read_log  # noqa: E402
 from .logs.wheel import (  # noqa: E402
     ToothErrors,
@@ -101,7 +102,6 @@ from .logs.wheel import (  # noqa: E402
     Wheel,
     estimate_tooth_errors,
     firing_orders,
-    locate_teeth,
     parse_wheel,
 )
 from .results import Result  # noqa: E402

@@ -4,7 +4,7 @@ The pipeline of :func:`analyze_log`:
 
 1. tooth edges: the ``tooth_time_s`` column, or found in ``encoder_v``
    (:func:`rotor.logs.edges.find_edges`);
-2. each edge placed on the wheel (:func:`rotor.logs.wheel.locate_teeth`), its angle corrected
+2. each edge placed on the wheel (:func:`rotor.logs.pattern.locate_teeth`), its angle corrected
    by the wheel's tooth-spacing errors (estimated from the log, given, or none);
 3. time as a function of angle, t(φ), a cubic spline through the edges; the speed is
    ω(φ) = 1/t'(φ) [rad/s], sampled on a uniform grid of each engine cycle;
@@ -41,10 +41,10 @@ from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 from .digital import digital_edges
 from .edges import Edges, find_edges, find_weak_edges, noise_rms, two_level_locally
-from .pattern import find_wheel, place, repairs_summary
+from .pattern import find_wheel, locate_teeth, place, repairs_summary
 from .plausibility import check_speed_time_base, check_time_base, check_time_resolution
 from .reader import Log, read_log
-from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, locate_teeth, parse_wheel
+from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, parse_wheel
 
 if TYPE_CHECKING:
     from ..engine.model import Engine

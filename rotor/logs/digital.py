@@ -7,7 +7,7 @@ changed), and the first row (often t = 0 with the initial levels) is no edge. **
 (a pulse of a fraction of a microsecond, e.g. a double edge) are removed as in
 :func:`rotor.logs.edges.find_edges`, by duration: a high or low state lasting less than
 ``glitch`` (20 %) of the median duration of that state is merged into its neighbours, the
-shortest first; each removal is reported (:class:`rotor.logs.pattern.Repair`). Then the
+shortest first; each removal is reported (:class:`rotor.logs.wheel.Repair`). Then the
 transitions to high (``edge="rising"``) or to low (``"falling"``) are the edges; which
 is the cleaner one depends on the sensor and its conditioning, so both are offered.
 """

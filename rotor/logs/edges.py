@@ -40,7 +40,7 @@ class Edges:
     [V]; ``level_v``: the crossing level the times are interpolated at [V];
     ``glitches``: short runs removed as noise; ``inverted``: whether the signal was
     negated (falling edges asked for); ``repairs``: the glitches removed, one
-    :class:`rotor.logs.pattern.Repair` each, where they are itemised (digital channels);
+    :class:`rotor.logs.wheel.Repair` each, where they are itemised (digital channels);
     ``method``: how the levels were found (``"global levels"``, ``"adaptive levels"``,
     ``"zero crossings"``, ``"digital"``).
     """

@@ -36,7 +36,8 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Callable, Sequence
+from collections import Counter
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -55,7 +56,9 @@ __all__ = [
     "parse_wheel",
     "read_wheel_file",
     "ToothTrack",
-    "locate_teeth",
+    "Repair",
+    "repairs_json",
+    "repairs_summary",
     "ToothErrors",
     "estimate_tooth_errors",
     "firing_orders",
@@ -266,6 +269,57 @@ def read_wheel_file(path: str | os.PathLike) -> Wheel:
     return Wheel(n, sum(gaps), gaps, layout, angles)
 
 
+@dataclasses.dataclass(frozen=True)
+class Repair:
+    """One repair of the edges.
+
+    **Attributes:** ``kind``: ``"glitch removed"``, ``"extra edge removed"``, ``"missed
+    edge found"`` (measured in the signal at a lower level), ``"missed edge inferred"``
+    (placed from the pattern, pro rata of the pitches), ``"edge dropped"``; ``time_s``
+    [s]; ``revolution`` (as in :class:`rotor.logs.wheel.ToothTrack`, ``None`` if not
+    placed); ``confidence``: how sure, 0 … 1 [-]; ``detail``: in words.
+    """
+
+    kind: str
+    time_s: float
+    revolution: int | None = None
+    confidence: float = 1.0
+    detail: str = ""
+
+    def to_json_dict(self) -> dict:
+        """Plain JSON: kind, time [s], revolution, confidence and detail."""
+        return {
+            "kind": self.kind,
+            "time_s": float(self.time_s),
+            "revolution": None if self.revolution is None else int(self.revolution),
+            "confidence": round(float(self.confidence), 3),
+            "detail": self.detail,
+        }
+
+
+def repairs_json(repairs, max_items: int = 200) -> dict:
+    """The repairs as plain JSON: their count, the count of each kind, and the first
+    ``max_items`` of them (``items_left_out`` says how many more)."""
+    repairs = list(repairs)
+    return {
+        "count": len(repairs),
+        "by_kind": dict(Counter(r.kind for r in repairs)),
+        "items": [r.to_json_dict() for r in repairs[:max_items]],
+        "items_left_out": max(len(repairs) - max_items, 0),
+    }
+
+
+def repairs_summary(repairs) -> str:
+    """One line: how many of each kind, the least sure."""
+    if not repairs:
+        return "none"
+    c = Counter(r.kind for r in repairs)
+    low = min(repairs, key=lambda r: r.confidence)
+    return (
+        ", ".join(f"{k} × {v}" for k, v in c.items()) + f" (least sure {low.confidence:.2f} at t = {low.time_s:.6f} s)"
+    )
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class ToothTrack:
     """Tooth edges with their place on the wheel.
@@ -276,7 +330,7 @@ class ToothTrack:
     ``wheel`` (with the places of its gaps as found); ``gap_ratio``: the median period
     ratio found on gap 1 (its missing teeth + 1 expected) and ``tooth_ratio_max``: the
     largest ratio on a regular tooth (1 expected); ``repairs``: what was done to the
-    edges to make them follow the wheel (:class:`rotor.logs.pattern.Repair`: glitches
+    edges to make them follow the wheel (:class:`rotor.logs.wheel.Repair`: glitches
     and extra edges removed, missed edges found or inferred, edges dropped at the ends);
     ``placement``: where the timing alone fits several placements on the wheel alike (a
     tooth missed in every revolution next to a gap), how one was chosen, in words
@@ -305,8 +359,6 @@ class ToothTrack:
     def to_json_dict(self) -> dict:
         """Plain JSON: the wheel as found (teeth, edges, revolutions, the gap's period ratios,
         the repairs made to the edges)."""
-        from .pattern import repairs_json
-
         w = self.wheel
         if w.missing and len(w.gaps) == 1:
             where = (
@@ -344,124 +396,11 @@ def _finite_or_none(x):
     return x if math.isfinite(x) else None
 
 
-def _ratios(dt):
+def period_ratios(dt: np.ndarray) -> np.ndarray:
+    """Each tooth period [s] over the geometric mean of its two neighbours [-] (NaN at the ends)."""
     r = np.full(dt.size, np.nan)
     r[1:-1] = dt[1:-1] / np.sqrt(dt[:-2] * dt[2:])
     return r
-
-
-def locate_teeth(
-    times: ArrayLike,
-    wheel: str | Wheel,
-    *,
-    index_times: ArrayLike | None = None,
-    repair: bool = False,
-    probe: Callable | None = None,
-) -> ToothTrack:
-    """Place each tooth edge on the wheel: find the gaps (or use the index) and count.
-
-    **Arguments:** ``times``: tooth edge times [s], increasing; ``wheel``: a
-    :class:`Wheel` or a spec such as ``"60-2"`` or ``"36-2-1"``; ``index_times``:
-    once-per-revolution index edge times [s], needed for a wheel without a gap;
-    ``repair``: make the edges follow the wheel's pattern where it proves how
-    (:func:`rotor.logs.pattern.follow_pattern`: an extra edge removed, a missed one
-    inferred, edges that do not fit at the ends of the log dropped), each repair reported
-    in ``ToothTrack.repairs``; ``False`` (default): any edge that does not fit is an error;
-    ``probe``: with ``repair``, looks for a missed edge in the recorded signal (see
-    :func:`rotor.logs.pattern.follow_pattern`).
-
-    **Returns:** :class:`ToothTrack`. Raises :class:`LogError` if the log is shorter
-    than a revolution, no gap is found, or the edges between two gaps are not N−M (or,
-    with ``repair``, where the pattern cannot be followed, saying where and why).
-    """
-    wheel = parse_wheel(wheel)
-    try:
-        t = np.asarray(times, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"locate_teeth(times): an array of edge times [s], not {type(times).__name__}") from None
-    if t.ndim != 1:
-        raise LogError(f"tooth edge times: a 1-d array, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise LogError(
-            f"tooth edge {int(np.flatnonzero(~np.isfinite(t))[0])}: time {t[~np.isfinite(t)][0]} is not finite"
-        )
-    E = wheel.edges_per_rev
-    n = t.size
-    if n < E + 3:
-        raise LogError(
-            f"{n} tooth edge{'s' if n != 1 else ''}: a {wheel.spec} wheel gives {E} per revolution; the log must hold more than "
-            f"one revolution ({E + 3} edges or more) to find its reference"
-        )
-    if np.any(np.diff(t) <= 0):
-        i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
-        raise LogError(f"tooth edge {i}: time {t[i]:.9g} s is not after the previous edge's {t[i - 1]:.9g} s")
-    if not wheel.needs_index and (repair or len(wheel.gaps) > 1):
-        from .pattern import follow_pattern
-
-        return follow_pattern(t, wheel, repair=repair, probe=probe)
-    dt = np.diff(t)
-    r = _ratios(dt)
-    if wheel.needs_index:
-        if index_times is None:
-            raise LogError(
-                f"wheel {wheel.spec} has no gap: give a once-per-revolution index signal "
-                f"(column 'index_v'), or the missing teeth (e.g. {wheel.teeth}-2)"
-            )
-        idx = np.asarray(index_times, dtype=np.float64)
-        ref = np.unique(np.searchsorted(t, idx, side="left"))
-        ref = ref[ref < n]
-        if ref.size < 2:
-            raise LogError(f"{ref.size} index pulse(s) within the tooth edges: need two or more (a whole revolution)")
-        sp = np.diff(ref)
-        bad = np.flatnonzero(sp != E)
-        if bad.size:
-            b = int(bad[0])
-            raise LogError(
-                f"between the index pulses at t = {t[ref[b]]:.6f} s and {t[ref[b + 1]]:.6f} s: "
-                f"{sp[b]} tooth edges where a {wheel.spec} wheel gives {E} (a missed or extra edge?)"
-            )
-        first = int(ref[0])
-        gap_ratio, tooth_max = float("nan"), float(np.nanmax(r))
-    else:
-        thr = math.sqrt(wheel.missing + 1)
-        cand = np.flatnonzero(r > thr)
-        if cand.size == 0:
-            raise LogError(
-                f"no gap of a {wheel.spec} wheel found in {n} tooth edges (t = {t[0]:.6f} … {t[-1]:.6f} s): "
-                f"the largest tooth period is {np.nanmax(r):.2f}× its neighbours', a gap gives "
-                f"{wheel.missing + 1}× (is the wheel right?)"
-            )
-        sp = np.diff(cand)
-        bad = np.flatnonzero(sp != E)
-        if bad.size:
-            b = int(bad[0])
-            raise LogError(
-                f"between the gaps at t = {t[cand[b]]:.6f} s and {t[cand[b + 1]]:.6f} s: {sp[b]} tooth edges "
-                f"where a {wheel.spec} wheel gives {E} (a missed or extra edge, or another wheel)"
-            )
-        g0, g1 = int(cand[0]), int(cand[-1])
-        if g0 - E >= 1:
-            i = g0 - E
-            raise LogError(
-                f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
-                f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)"
-            )
-        if g1 + E <= dt.size - 2:
-            i = g1 + E
-            raise LogError(
-                f"at t = {t[i]:.6f} s a gap of the {wheel.spec} wheel is due but the tooth period there is "
-                f"only {r[i]:.2f}× its neighbours' (a missed or extra edge, or another wheel)"
-            )
-        # the first edge after the first gap found; an earlier edge at the same position (the log starts right
-        # at a gap, whose long period is then before the first edge) is the first reference
-        first = (g0 + 1) % E
-        gap_ratio = float(np.median(r[cand]))
-        regular = np.ones(dt.size, bool)
-        regular[cand] = False
-        regular[(np.arange(dt.size) - first) % E == E - 1] = False  # the unclassified end gaps
-        tooth_max = float(np.nanmax(r[regular])) if np.any(regular & np.isfinite(r)) else float("nan")
-    k = np.arange(n) - first
-    return ToothTrack(t, np.mod(k, E), np.floor_divide(k, E), wheel, gap_ratio, tooth_max)
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
