@@ -42,7 +42,9 @@ from .diagnostics.inverse import (  # noqa: E402
     indicated_torque,
 )
 from .diagnostics.misfire import contribution_index  # noqa: E402
-from .diagnostics.synthetic import simulated_recording, simulated_tooth_errors  # noqa: E402
+from .diagnostics.pegging import MotoredGain, pressure_gain_from_motored  # noqa: E402
+from .diagnostics.phase import SpeedTdc, TdcCheck, TdcNotDetermined, tdc_from_speed  # noqa: E402
+from .diagnostics.synthetic import simulated_recording, simulated_tooth_errors, simulated_tooth_times  # noqa: E402
 from .dynamics.combustion import combustion_pattern  # noqa: E402
 from .dynamics.crank_train import CrankTrain, crank_train  # noqa: E402
 from .dynamics.loads import (  # noqa: E402
@@ -138,6 +140,7 @@ __all__ = [
     "LogError",
     "Masses",
     "MotoredCycle",
+    "MotoredGain",
     "NoPressure",
     "NoSteadyStateError",
     "Operating",
@@ -153,7 +156,10 @@ __all__ = [
     "RotorError",
     "SolverError",
     "SpeedResult",
+    "SpeedTdc",
     "TableLoad",
+    "TdcCheck",
+    "TdcNotDetermined",
     "TextbookFlywheel",
     "ToothErrors",
     "ToothTrack",
@@ -202,6 +208,7 @@ __all__ = [
     "piston_motion",
     "preset_calibration",
     "preset_names",
+    "pressure_gain_from_motored",
     "read_log",
     "reciprocating_inertia_torque",
     "reduced_inertia",
@@ -210,8 +217,10 @@ __all__ = [
     "simulate",
     "simulated_recording",
     "simulated_tooth_errors",
+    "simulated_tooth_times",
     "steady_state",
     "tdc_from_pressure",
+    "tdc_from_speed",
     "textbook_flywheel",
     "total_torque",
 ]

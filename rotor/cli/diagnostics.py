@@ -10,11 +10,11 @@ from .args import add_json, add_plot, positive_float
 from .logs import log_plot
 from .output import print_json, print_text, print_written
 
-__all__ = ["add_parsers", "cmd_diagnose"]
+__all__ = ["add_parsers", "cmd_diagnose", "cmd_calibrate"]
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
-    """Add ``diagnose`` to the subcommands ``sub``."""
+    """Add ``diagnose`` and ``calibrate`` to the subcommands ``sub``."""
     p = sub.add_parser("diagnose", help="per-cylinder IMEP, load and misfires of a recording from its crank speed")
     p.add_argument(
         "log",
@@ -47,17 +47,30 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--pressure-gain",
+        type=_gain_arg,
+        metavar="PA_PER_UNIT|motored",
+        help="pressure sensor gain for --save-calibration [Pa per signal unit], or 'motored' (as for calibrate; "
+        "default: from the log's motored cycles where it has some, else the gain that gives the log's mean "
+        "IMEP the engine file's)",
+    )
+    p.add_argument(
+        "--intake-pa",
         type=positive_float,
-        metavar="PA_PER_UNIT",
-        help="pressure sensor gain for --save-calibration [Pa per signal unit] (default: the gain "
-        "that gives the log's mean IMEP the engine file's)",
+        metavar="PA",
+        help="intake pressure of the motored cycles [Pa] for a gain from them (default: the engine file's intake_pa)",
     )
     p.add_argument(
         "--tdc-deg",
-        type=float,
-        metavar="DEG",
-        help="angle from the gap to TDC of cylinder 1 [deg] "
-        "(default: the calibration's, else from the pressure channel)",
+        type=_tdc_arg,
+        metavar="DEG|speed",
+        help="angle from the gap to TDC of cylinder 1 [deg], or 'speed': found from the speed alone "
+        "(default: the calibration's, checked against the speed and corrected where the speed contradicts "
+        "it; else from the pressure channel)",
+    )
+    p.add_argument(
+        "--no-tdc-check",
+        action="store_true",
+        help="use the calibration's TDC as it is, without checking it against the recording's speed",
     )
     p.add_argument(
         "--load-per",
@@ -81,6 +94,30 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_json(p)
     add_plot(p, "the diagnosis plot")
     p.set_defaults(func=cmd_diagnose)
+    _add_calibrate(sub)
+
+
+def _tdc_arg(text: str) -> float | str:
+    """``--tdc-deg``: an angle [deg] or ``speed``."""
+    if text.strip().lower() == "speed":
+        return "speed"
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: an angle [deg] or 'speed'") from None
+    if x != x or x in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: a finite angle [deg] or 'speed'")
+    return x
+
+
+def _gain_arg(text: str) -> float | str:
+    """``--pressure-gain``: a positive number [Pa per signal unit] or ``motored``."""
+    if text.strip().lower() == "motored":
+        return "motored"
+    try:
+        return positive_float(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"{text!r}: a positive gain [Pa per signal unit] or 'motored'") from None
 
 
 def cmd_diagnose(args: argparse.Namespace) -> None:
@@ -106,6 +143,7 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
             wheel=args.wheel,
             columns=args.columns,
             pressure_gain=args.pressure_gain,
+            intake_pa=args.intake_pa,
             edge=args.edge,
         )
         new.save(args.save_calibration)
@@ -125,6 +163,7 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
             threshold=args.threshold,
             calibration_source=cal_source,
             edge=args.edge,
+            check_tdc=not args.no_tdc_check,
         )
     except ArithmeticError as e:  # a one-line error, not a traceback
         raise EngineError(f"{args.log}: the diagnosis failed ({e})") from None
@@ -136,4 +175,79 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
         print_json(res.to_json_dict(written=written), indent=1)
     else:
         print_text(res.summary())
+        print_written(written)
+
+
+def _add_calibrate(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="inertia, TDC, tooth errors and the pressure sensor's offset of an installation, from a log with pressure",
+    )
+    p.add_argument("log", metavar="LOG", help="CSV/TSV log with a wheel signal (or tooth times) and a pressure channel")
+    p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
+    p.add_argument("--wheel", metavar="SPEC", help="trigger wheel, e.g. 60-2")
+    p.add_argument("--columns", metavar="NAMES", help="column names in file order, as for analyze")
+    p.add_argument(
+        "--pressure-gain",
+        type=_gain_arg,
+        metavar="PA_PER_UNIT|motored",
+        help="pressure sensor gain [Pa per signal unit], or 'motored': from the log's motored cycles (their "
+        "compression polytropic, pegged at the intake pressure; refused without any). Default: from the "
+        "motored cycles where the log has some, else left unknown: the gain that gives the log's mean IMEP "
+        "the engine file's (TDC, tooth errors and the inertia that reproduces that IMEP are calibrated all "
+        "the same)",
+    )
+    p.add_argument(
+        "--intake-pa",
+        type=positive_float,
+        metavar="PA",
+        help="intake pressure of the motored cycles [Pa] for a gain from them (default: the engine file's intake_pa)",
+    )
+    p.add_argument(
+        "--scaling",
+        choices=("charge", "none"),
+        default="charge",
+        help="scale the engine file's whole cycle with the load (charge: SI, default) or only its combustion",
+    )
+    p.add_argument("--output", "-o", metavar="FILE", help="write the calibration as JSON (for --calibration)")
+    p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
+    add_json(p)
+    add_plot(p, "the calibration plot")
+    p.set_defaults(func=cmd_calibrate)
+
+
+def cmd_calibrate(args: argparse.Namespace) -> None:
+    """Calibrate from the log's pressure channel; print (text or JSON) and write it if asked."""
+    from ..diagnostics.calibration import calibrate
+    from ..engine.file import load_engine
+    from ..errors import EngineError
+
+    engine = load_engine(args.engine)
+    if args.output:
+        folder = os.path.dirname(os.path.abspath(args.output))
+        if not os.path.isdir(folder):
+            raise EngineError(f"--output {args.output}: no folder {folder}")
+    try:
+        cal = calibrate(
+            engine,
+            args.log,
+            wheel=args.wheel,
+            columns=args.columns,
+            pressure_gain=args.pressure_gain,
+            intake_pa=args.intake_pa,
+            scaling=args.scaling,
+            edge=args.edge,
+        )
+    except ArithmeticError as e:
+        raise EngineError(f"{args.log}: the calibration failed ({e})") from None
+    written = []
+    if args.output:
+        cal.save(args.output)
+        written.append(args.output)
+    if args.plot:
+        written.append(log_plot(cal.plot(), args.plot, args.log, "calibration"))
+    if args.json:
+        print_json({**cal.to_json_dict(), "written": written}, indent=1)
+    else:
+        print_text(cal.summary())
         print_written(written)

@@ -18,9 +18,14 @@ cylinder 1's):
    inertia J that are both too large by the same factor explain the same speed (only
    g/J is seen), and the pressure trace's shape (the polytropic compression) fixes its
    offset but not its gain. So the gain is an input (``pressure_gain``, the sensor's data
-   sheet or bench calibration) or, by default, the one that gives the recording's mean
-   IMEP the engine file's IMEP. The offset is fitted (step 3); it does not enter the
-   IMEP (∮p·dV of a constant is 0).
+   sheet or bench calibration), or comes from the recording's **motored cycles** (a
+   motored stretch, an ignition cut: :mod:`rotor.diagnostics.pegging`, their compression
+   polytropic and pegged at the intake pressure; ``pressure_gain="motored"``, and by
+   default where the recording has such cycles), or else is **left unknown**: the one
+   that gives the recording's mean IMEP the engine file's IMEP, which is all that TDC,
+   the tooth errors and an inertia that reproduces that IMEP need (``fit['pressure_gain_from']``
+   says which). The offset is fitted (step 3, or with the motored cycles' gain); it does
+   not enter the IMEP (∮p·dV of a constant is 0).
 3. *Inertia, pressure offset, losses* from the energy balance over the record
    (variable inertia, angle domain):
    ½·(J + I_m(θ))·ω² = E₀ + ∫M_gas dθ − ∫a_k dθ, with M_gas = (g·u(θ) + b − p_cc)·A·s′(θ)
@@ -97,13 +102,14 @@ from typing import TYPE_CHECKING, Any
 import equinox as eqx
 import numpy as np
 
-from ..errors import EngineError
+from ..errors import EngineError, LogError
 from ..fileio import load_json, save_json
 from ..logs.analysis import LogAnalysis
 from ..logs.wheel import ToothErrors
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
-from .identification import Identification
+from .identification import POOR_FIT_R2, Identification
+from .phase import TOOTH_MISMATCH, TdcCheck
 
 if TYPE_CHECKING:
     from ..dynamics.result import SpeedResult
@@ -380,7 +386,8 @@ class Calibration(Result):
             f"  inertia {self.inertia_kgm2:.5f} kg·m² (energy balance {j_e:.5f})",
             f"  TDC {self.tdc_after_gap_deg:.2f}° after the gap; pressure = "
             f"{self.pressure_gain_pa / PA_PER_BAR:.4g} bar × signal {sign} "
-            f"{abs(self.pressure_offset_pa) / PA_PER_BAR:.4g} bar",
+            f"{abs(self.pressure_offset_pa) / PA_PER_BAR:.4g} bar"
+            + (f" (gain: {self.fit['pressure_gain_from']})" if self.fit.get("pressure_gain_from") else ""),
             f"  friction + load {self.loss_torque_Nm:.3f} N·m; measured IMEP {imep / PA_PER_BAR:.3f} bar; "
             f"scaling {self.scaling} (σ {self.charge_scale:.4f})",
         ]
@@ -421,28 +428,11 @@ def _check_single(engine, what):
 
 
 def _binned_pressure(analysis, step_deg=BIN_DEG):
-    """Each complete cycle's pressure signal averaged in bins of ``step_deg``: (bin centres
-    [rad], (cycles, bins)). Empty bins are interpolated within the cycle."""
-    if analysis.pressure is None:
-        raise EngineError(f"{analysis.source}: no pressure channel in the recording (a column pressure_v)")
-    ph, pv, cyc = analysis.pressure
-    step = np.deg2rad(step_deg)
-    nb = int(round(analysis.cycle_rad / step))
-    centres = (np.arange(nb) + 0.5) * analysis.cycle_rad / nb
-    out = np.empty((analysis.cycles, nb))
-    b_all = np.clip((ph / analysis.cycle_rad * nb).astype(int), 0, nb - 1)
-    for k in range(analysis.cycles):
-        m = cyc == k
-        n = np.bincount(b_all[m], minlength=nb)
-        if np.count_nonzero(n) < nb // 2:
-            raise EngineError(
-                f"{analysis.source}: cycle {k} has pressure samples in only {np.count_nonzero(n)} of "
-                f"{nb} bins of {step_deg:g}°: sample the pressure faster"
-            )
-        s = np.bincount(b_all[m], weights=pv[m], minlength=nb)
-        ok = n > 0
-        out[k] = np.interp(centres, centres[ok], s[ok] / n[ok], period=analysis.cycle_rad)
-    return centres, out
+    """Each complete cycle's pressure signal averaged in bins of ``step_deg``
+    (:func:`rotor.diagnostics.pegging.binned_pressure`)."""
+    from .pegging import binned_pressure
+
+    return binned_pressure(analysis, step_deg)
 
 
 def _displacement(engine, theta):
@@ -593,8 +583,10 @@ def _check_types(fn, engine, log, calibration, wheel, tdc_deg):
 
         if not isinstance(wheel, Wheel):
             raise TypeError(f"{fn}(wheel): a spec such as '60-2', a rotor.Wheel or None; got {type(wheel).__name__}")
-    if tdc_deg is not None and (
-        isinstance(tdc_deg, bool) or not isinstance(tdc_deg, (int, float, np.integer, np.floating))
+    if (
+        tdc_deg is not None
+        and not (fn == "diagnose" and isinstance(tdc_deg, str))
+        and (isinstance(tdc_deg, bool) or not isinstance(tdc_deg, (int, float, np.integer, np.floating)))
     ):
         raise TypeError(f"{fn}(tdc_deg): a number [deg] or None; got {type(tdc_deg).__name__}")
 
@@ -653,7 +645,8 @@ def calibrate(
     *,
     wheel: str | None = None,
     columns: str | Sequence[str] | None = None,
-    pressure_gain: float | None = None,
+    pressure_gain: float | str | None = None,
+    intake_pa: float | None = None,
     max_order: float = DEFAULT_MAX_ORDER,
     scaling: str = "charge",
     refine: bool = True,
@@ -669,8 +662,15 @@ def calibrate(
       compression ratio for the TDC fit).
     - ``log``: a file (read with ``wheel`` and ``columns``, e.g. ``"time,pressure_v,encoder_v"``)
       or a :class:`rotor.LogAnalysis` with a pressure channel and TDC from it.
-    - ``pressure_gain``: pascal per unit of the pressure signal; default: the gain that
-      gives the recording's mean IMEP the engine file's IMEP.
+    - ``pressure_gain``: pascal per unit of the pressure signal; ``"motored"``: from the
+      recording's motored cycles (:func:`rotor.diagnostics.pegging.pressure_gain_from_motored`:
+      their compression polytropic, pegged at the intake pressure; refused where there are
+      none); None (default): from the motored cycles where the recording has some, else
+      left unknown: the gain that gives the recording's mean IMEP the engine file's IMEP
+      (enough where only TDC, tooth errors and the inertia that reproduces that IMEP are
+      wanted; ``fit['pressure_gain_from']`` says which).
+    - ``intake_pa``: the intake pressure of the motored cycles [Pa] for ``"motored"``
+      (default the engine file's ``intake_pa``).
     - ``max_order``: the energy balance's low-pass [orders per revolution].
     - ``scaling``: ``"charge"`` (default) or ``"none"`` (see the module doc).
     - ``refine``: find the identification inertia (default) or keep the energy balance's.
@@ -683,13 +683,20 @@ def calibrate(
     from ..logs.analysis import analyze_log
 
     _check_types("calibrate", engine, log, None, wheel, None)
-    if pressure_gain is not None and (
-        isinstance(pressure_gain, bool) or not isinstance(pressure_gain, (int, float, np.integer, np.floating))
+    motored = pressure_gain == "motored" if isinstance(pressure_gain, str) else False
+    if (
+        pressure_gain is not None
+        and not motored
+        and (isinstance(pressure_gain, bool) or not isinstance(pressure_gain, (int, float, np.integer, np.floating)))
     ):
-        raise TypeError(f"calibrate(pressure_gain): a number [Pa per signal unit] or None, not {pressure_gain!r}")
+        raise TypeError(
+            f"calibrate(pressure_gain): a number [Pa per signal unit], 'motored' or None, not {pressure_gain!r}"
+        )
     _check_single(engine, "calibrate")
     _check_scaling(scaling, engine, ": use scaling='none'")
-    if pressure_gain is not None and not (np.isfinite(pressure_gain) and pressure_gain > 0):
+    if not (pressure_gain is None or isinstance(pressure_gain, str)) and not (
+        np.isfinite(pressure_gain) and pressure_gain > 0
+    ):
         raise EngineError(f"pressure_gain = {pressure_gain!r}: must be a positive number [Pa per signal unit]")
     rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
     if isinstance(log, LogAnalysis):
@@ -719,7 +726,16 @@ def calibrate(
 
     w_cycle = _signal_work(engine, a)[:, -1]
     nominal = float(_imep(engine))
-    if pressure_gain is None:
+    pegged = None
+    if pressure_gain is None or motored:
+        from .pegging import motored_cycles, pressure_gain_from_motored
+
+        if motored or (engine.strokes == 4 and motored_cycles(a).any()):
+            pegged = pressure_gain_from_motored(engine, a, intake_pa=intake_pa)
+    if pegged is not None:
+        gain = pegged.gain_pa
+        gain_from = f"motored cycles {', '.join(str(c) for c in pegged.cycles)}"
+    elif pressure_gain is None:
         gain = nominal * vh / float(np.mean(w_cycle))
         gain_from = "engine file's IMEP"
     else:
@@ -729,6 +745,11 @@ def calibrate(
     J_e, b_rel, a_k, figs = _energy_balance(engine, a, gain, max_order)
     offset = b_rel + float(engine.pressure.crankcase_pa)  # single-zone cycles
     imep_mean = float(np.mean(imep_cycles))
+    if not imep_mean > 0:
+        raise EngineError(
+            f"{a.source}: no firing in the recording (mean IMEP {imep_mean / PA_PER_BAR:.3g} bar from the pressure "
+            f"channel): the calibration needs fired cycles"
+        )
     sigma = imep_mean / nominal if scaling == "charge" else 1.0
     fit = {
         "energy_balance_inertia_kgm2": J_e,
@@ -738,6 +759,8 @@ def calibrate(
         "imep_measured_cycles_pa": imep_cycles.tolist(),
         "loss_torque_cycles_Nm": a_k.tolist(),
         "pressure_gain_from": gain_from,
+        "energy_balance_offset_pa": float(offset),
+        **({} if pegged is None else {"motored": pegged.to_json_dict()}),
         "mean_rpm": float(np.mean(a.mean_rpm)),
         "loss_mep_pa": float(np.mean(a_k)) * float(engine.cycle_rad) / vh,  # friction + load as a mean pressure
         **figs,
@@ -772,7 +795,7 @@ def calibrate(
         inertia_kgm2=float(J),
         tdc_after_gap_deg=float(np.rad2deg(a.tdc_rad)),
         pressure_gain_pa=float(gain),
-        pressure_offset_pa=float(offset),
+        pressure_offset_pa=float(offset if pegged is None else pegged.offset_pa),
         loss_torque_Nm=float(np.mean(a_k)),
         scaling=scaling,
         charge_scale=float(sigma),
@@ -800,7 +823,14 @@ class Diagnosis(Identification):
     ``measured_imep_pa`` (cycles,) [Pa]: the IMEP of each cycle from the recording's
     pressure channel with the calibration's gain (single cylinder), or None;
     ``mismatch``: one line per sign that the engine does not match the log (see the module
-    doc; also among ``warnings``).
+    doc; also among ``warnings``); ``tdc_check``: the calibration's TDC checked against the
+    speed, or found from it (:class:`rotor.diagnostics.phase.TdcCheck`, None where not
+    checked); ``cycle_flags``: per cycle the reason the data cannot support it, or ``""``
+    (``supported``: the cycles without one); ``partial_deg``: the recording's span before
+    the first whole cycle and after the last [deg], not diagnosed; ``phase_warning``: where
+    the firing revolution came from a cam or pressure channel (or was given) and the speed's
+    fit puts it in the other revolution, the line that says so (also among ``warnings``),
+    else ``""``.
 
     ``summary()`` and ``to_json_dict()`` are what ``rotor diagnose`` prints.
     """
@@ -814,12 +844,35 @@ class Diagnosis(Identification):
     no_firing: bool = False
     measured_imep_pa: np.ndarray | None = None
     mismatch: tuple = ()
+    tdc_check: TdcCheck | None = None
+    cycle_flags: tuple = ()
+    partial_deg: tuple = (0.0, 0.0)
+    phase_warning: str = ""
 
     @property
     def warnings(self) -> tuple[str, ...]:
-        """The identification's warnings (a poor fit) and :attr:`mismatch`: where the engine
-        does not match the log (see the module doc). Empty when there is nothing to warn about."""
-        return Identification.warnings.fget(self) + tuple(self.mismatch)  # type: ignore[attr-defined]
+        """The identification's warnings (a poor fit, with its likely cause where the
+        calibration's tooth errors are another wheel's), a TDC corrected from the speed
+        (:attr:`tdc_check`), and :attr:`mismatch`: where the engine does not match the log
+        (see the module doc). Empty when there is nothing to warn about."""
+        base = Identification.warnings.fget(self)  # type: ignore[attr-defined]
+        chk = self.tdc_check
+        if base and chk is not None and chk.tooth_mismatch > TOOTH_MISMATCH:
+            base = (
+                base[0] + f" (the calibration's tooth errors do not fit this wheel: they differ from the "
+                f"recording's own estimate by {chk.tooth_mismatch:.2f}× their rms)",
+                *base[1:],
+            )
+        own = (chk.message,) if chk is not None and chk.corrected else ()
+        phase = (self.phase_warning,) if self.phase_warning else ()
+        return tuple(base) + own + phase + tuple(self.mismatch)
+
+    @property
+    def supported(self) -> np.ndarray:
+        """(cycles,) bool: the cycles whose figures the data support (no :attr:`cycle_flags` reason)."""
+        if not self.cycle_flags:
+            return np.ones(self.cycles, dtype=bool)
+        return np.array([not f for f in self.cycle_flags], dtype=bool)
 
     @property
     def source(self) -> str | None:
@@ -832,7 +885,22 @@ class Diagnosis(Identification):
         text = ""
         if self.calibration is not None:
             text += self.calibration.summary() + f"  calibration: {self.calibration_source}\n"
+        if self.tdc_check is not None and not self.tdc_check.corrected:
+            text += f"  {self.tdc_check.message}\n"
         text += Identification.summary(self)
+        flagged = [(k, f) for k, f in enumerate(self.cycle_flags) if f]
+        if flagged:
+            text += f"  {len(flagged)} of {self.cycles} cycles not supported by the data:\n" + "".join(
+                f"    cycle {k}: {f}\n" for k, f in flagged[:8]
+            )
+            if len(flagged) > 8:
+                text += f"    … and {len(flagged) - 8} more (see --json)\n"
+        lead, tail = self.partial_deg
+        if lead > 0 or tail > 0:
+            text += (
+                f"  the recording holds {lead:.0f}° before the first whole cycle and {tail:.0f}° after the last: "
+                f"not diagnosed (partial cycles)\n"
+            )
         if self.measured_imep_pa is not None:
             measured = self.measured_imep_pa
             err = self.imep_pa[:, 0] - measured
@@ -886,6 +954,9 @@ class Diagnosis(Identification):
             }
             if self.measured_imep_pa is not None:
                 row["measured_imep_pa"] = [self.measured_imep_pa[k]]
+            flag = self.cycle_flags[k] if k < len(self.cycle_flags) else ""
+            row["supported"] = not flag
+            row["flag"] = flag or None
             cycles.append(row)
         cal = self.calibration
         return json_safe(
@@ -901,6 +972,9 @@ class Diagnosis(Identification):
                 "scaling": self.scaling,
                 "charge_scale": self.charge_scale,
                 "tdc_after_gap_deg": None if a is None else np.rad2deg(a.tdc_rad),
+                "tdc_check": None if self.tdc_check is None else self.tdc_check.to_json_dict(),
+                "partial_cycles_deg": {"before_first": self.partial_deg[0], "after_last": self.partial_deg[1]},
+                "unsupported_cycles": [k for k, f in enumerate(self.cycle_flags) if f],
                 "tdc_method": None if a is None else a.tdc_method,
                 "firing_method": None if a is None else a.firing_method,
                 "rms_residual_rad_s": self.rms_residual,
@@ -929,6 +1003,7 @@ def diagnose(
     max_iterations: int = 8,
     calibration_source: str | None = None,
     edge: str = "rising",
+    check_tdc: bool = True,
     **identify_kwargs: Any,
 ) -> Diagnosis:
     """Per-firing IMEP, load and misfires of a recording from its crank speed alone, with a
@@ -951,6 +1026,33 @@ def diagnose(
     - ``calibration_source``: how the result names where the calibration came from
       (default ``"preset <path>"``, ``"file <path>"`` or ``"given"``).
     - ``edge``: ``"rising"`` (default) or ``"falling"`` edges of an analog wheel signal.
+    - ``tdc_deg``: angle from the gap to cylinder 1's TDC [deg] (default the calibration's,
+      else from a pressure channel), or ``"speed"``: found from the recording's speed alone
+      (:func:`rotor.diagnostics.phase.tdc_from_speed`); refused with the reason
+      (:class:`rotor.diagnostics.phase.TdcNotDetermined`) where the speed cannot determine it.
+    - ``check_tdc``: check a calibration's TDC against the recording's speed (default True,
+      see below).
+
+    **A calibration checked against the recording** (a log file whose TDC comes from the
+    calibration): the engine's speed signature is fitted at every offset
+    (:func:`rotor.diagnostics.phase.check_tdc`), on the recording's own tooth-error estimate
+    where the calibration's tooth errors are another wheel's. A TDC that the speed
+    determines and contradicts (more than :data:`rotor.diagnostics.phase.AGREE_DEG` off,
+    leaving more than :data:`rotor.diagnostics.phase.CONTRADICT_RATIO` times the best
+    fit's unexplained fluctuation) is **corrected** and a warning says so, with its ± and
+    separation; one the speed contradicts but cannot replace, or a speed with no engine
+    signature at all, is refused (:class:`rotor.diagnostics.phase.TdcNotDetermined`, the
+    measured offset in the message); otherwise the calibration's TDC is kept (the firing
+    revolution taken from the fit) and a note says how well it agrees. ``tdc_check`` of
+    the result holds the figures. Where the log gives the firing revolution itself (a cam
+    channel; a pressure channel) or ``firing`` is given, that phase is kept at the TDC used,
+    and the fit's firing revolution is checked against it: a note where they agree, a
+    warning (``phase_warning``) where the fit puts firing TDC one revolution away.
+
+    **Recordings of any length**: the partial cycles at the record's ends are not diagnosed
+    (``partial_deg`` says how much), and every cycle whose figures the data cannot support
+    carries its reason in ``cycle_flags`` (a firing cut by the record's end; a cycle the
+    model explains poorly), listed in the text and as ``supported``/``flag`` per cycle in the JSON.
 
     **Returns:** a :class:`Diagnosis`: the :class:`rotor.Identification` with the
     calibration used, where it came from, the charge scale σ, the
@@ -984,35 +1086,67 @@ def diagnose(
         scaling = calibration.scaling if calibration is not None else "none"
     _check_scaling(scaling, engine)
     analysis: LogAnalysis | None = None
+    eng = calibration.apply(engine) if calibration is not None else engine
+    from_speed = isinstance(tdc_deg, str)
+    if from_speed and tdc_deg != "speed":
+        raise TypeError(
+            f"diagnose(tdc_deg): expected an angle [deg], 'speed' (from the speed alone) or None, got {tdc_deg!r}"
+        )
+    if from_speed and not isinstance(log, (str, os.PathLike)):
+        raise EngineError("tdc_deg='speed' needs a log file (a wheel's gap to count the angle from)")
+    check: TdcCheck | None = None
+    phase_warning = phase_note = ""
     if isinstance(log, (str, os.PathLike)):
-        if tdc_deg is None and calibration is not None:
-            tdc_deg = calibration.tdc_after_gap_deg
+        from_calibration = tdc_deg is None and calibration is not None
+        if from_calibration:
+            tdc_deg = calibration.tdc_after_gap_deg  # type: ignore[union-attr]
         w = wheel or (calibration.wheel if calibration is not None and calibration.wheel else None)
         te = "estimate" if calibration is None or calibration.tooth_errors is None else calibration.tooth_errors
         rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
         cr = getattr(engine.pressure, "compression_ratio", None)
-        analysis = analyze_log(
-            log,
-            w,
-            columns=columns,
-            strokes=engine.strokes,
-            cylinders=engine.cylinders,
-            tdc_deg=tdc_deg,
-            firing=firing,
-            tooth_errors=te,
-            compression_ratio=None if cr is None else float(cr),
-            rod_ratio=None if cr is None else rod_ratio,
-            edge=edge,
-        )
+
+        def read(tdc, fire, teeth):
+            return analyze_log(
+                log,
+                w,
+                columns=columns,
+                strokes=engine.strokes,
+                cylinders=engine.cylinders,
+                tdc_deg=tdc,
+                firing=fire,
+                tooth_errors=teeth,
+                compression_ratio=None if cr is None else float(cr),
+                rod_ratio=None if cr is None else rod_ratio,
+                edge=edge,
+            )
+
+        analysis = read(0.0 if from_speed else tdc_deg, firing, te)
         if str(analysis.tdc_method).startswith("unknown"):
             raise EngineError(
                 f"{analysis.source}: TDC is not known: give a calibration (--calibration), tdc_deg "
-                f"(--tdc-deg) or a pressure channel"
+                f"(--tdc-deg DEG, or --tdc-deg speed: from the speed alone) or a pressure channel"
             )
+        if analysis.kind != "speed" and (from_speed or (from_calibration and check_tdc)):
+            check = _speed_check(eng, analysis, None if from_speed else float(tdc_deg), te, read)  # type: ignore[arg-type]
+            # a firing revolution from a cam or pressure channel, or given, stands: re-read at the TDC used with it
+            own_phase = firing not in ("auto", "speed") or str(analysis.firing_method).startswith(("cam", "pressure"))
+            if own_phase and check.verdict in ("corrected", "found"):
+                analysis = read(check.used_deg, firing, te)
+                if firing == "auto" and not str(analysis.firing_method).startswith(("cam", "pressure")):
+                    own_phase = False  # the channel no longer decides at this TDC: the fit's revolution
+            if own_phase:
+                phase_warning = _phase_agreement(check, analysis)
+                if not phase_warning and check.firing_parity is not None:
+                    phase_note = (
+                        f"firing revolution from the log ({analysis.firing_method}), where the speed's fit puts it too"
+                    )
+            elif check.verdict in ("corrected", "found") or (
+                check.firing_parity is not None and check.firing_parity != analysis.firing_parity
+            ):
+                analysis = read(check.used_deg, firing if check.firing_parity is None else check.firing_parity, te)
         speed: LogAnalysis | SpeedResult | np.ndarray = analysis
     else:
         speed = log
-    eng = calibration.apply(engine) if calibration is not None else engine
     sigma = calibration.charge_scale if (calibration is not None and scaling == "charge") else 1.0
     lo, hi = (math.log(v) for v in SIGMA_RANGE)
     iters = 0
@@ -1070,6 +1204,10 @@ def diagnose(
     measured = None
     if calibration is not None and analysis is not None and analysis.pressure is not None and engine.cylinders == 1:
         measured = measured_imep(engine, analysis, calibration.pressure_gain_pa)
+    if check is not None and not check.corrected:
+        extra.append(check.message)
+    if phase_note:
+        extra.append(phase_note)
     fields = {f.name: getattr(ident, f.name) for f in dataclasses.fields(Identification)}
     fields["notes"] = ident.notes + tuple(extra)
     if no_firing:
@@ -1086,4 +1224,71 @@ def diagnose(
         no_firing=no_firing,
         measured_imep_pa=measured,
         mismatch=mismatch,
+        tdc_check=check,
+        cycle_flags=_cycle_flags(ident, fields["misfire"]),
+        partial_deg=_partial(analysis),
+        phase_warning=phase_warning,
     )
+
+
+def _speed_check(eng, analysis, given_deg, te, read):
+    """Check (or find, ``given_deg`` None) TDC from the speed of ``analysis``: the fit on the
+    recording's own tooth-error estimate where the given ones are another wheel's."""
+    from ..logs.wheel import ToothErrors
+    from .phase import check_tdc, tdc_from_speed, tooth_error_mismatch
+
+    fit_on, te_mismatch = analysis, float("nan")
+    if isinstance(te, ToothErrors):
+        try:
+            own = read(0.0 if given_deg is None else given_deg, analysis.firing_parity, "estimate")
+        except LogError:
+            own = None
+        if own is not None and own.tooth_errors is not None:
+            te_mismatch = tooth_error_mismatch(te, own.tooth_errors)
+            if not te_mismatch <= TOOTH_MISMATCH:
+                fit_on = own
+    fit = tdc_from_speed(eng, fit_on)
+    return check_tdc(fit, given_deg, what="the calibration's", tooth_mismatch=te_mismatch)
+
+
+def _phase_agreement(check, analysis):
+    """Where the firing revolution came from a cam or pressure channel (or was given) and the
+    speed's fit puts firing TDC in the other revolution: the line that says so ("" where they
+    agree, or the fit has no firing revolution)."""
+    fit_parity = check.firing_parity
+    if fit_parity is None or analysis.firing_parity is None or fit_parity == analysis.firing_parity:
+        return ""
+    return (
+        f"firing revolution: the {analysis.firing_method.split(':')[0]} channel's kept"
+        if analysis.firing_method.startswith(("cam", "pressure"))
+        else "firing revolution: the one given kept"
+    ) + (
+        f"; the speed's fit puts firing TDC one revolution away ({check.fit.separation:.0f} σ separation): "
+        f"check the {'cam' if analysis.firing_method.startswith('cam') else 'firing'} channel's phase"
+    )
+
+
+def _cycle_flags(ident, misfire):
+    """Per cycle: why the data cannot support its figures, or "" (see :class:`Diagnosis`)."""
+    out = []
+    r2 = np.asarray(ident.r2, dtype=np.float64).reshape(-1)
+    for k in range(ident.cycles):
+        why = []
+        cut = ~np.asarray(ident.identified[k], dtype=bool)
+        if cut.any():
+            cyl = ", ".join(str(c + 1) for c in np.flatnonzero(cut))
+            why.append(f"firing of cylinder {cyl} cut by the record's end (tied to its neighbour)")
+        if k < r2.size and np.isfinite(r2[k]) and r2[k] < POOR_FIT_R2 and not np.asarray(misfire[k]).all():
+            why.append(f"the model explains little of this cycle's speed (R² {r2[k]:.2f})")
+        out.append("; ".join(why))
+    return tuple(out)
+
+
+def _partial(analysis):
+    """The recording's span before the first whole cycle and after the last [deg]."""
+    if analysis is None or analysis.track is None or analysis.cycles == 0:
+        return (0.0, 0.0)
+    phi = analysis.track.nominal_angle
+    lead = float(analysis.cycle_start_rad[0] - phi[0])
+    tail = float(phi[-1] - (analysis.cycle_start_rad[-1] + analysis.cycle_rad))
+    return (max(float(np.rad2deg(lead)), 0.0), max(float(np.rad2deg(tail)), 0.0))

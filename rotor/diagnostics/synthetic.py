@@ -44,6 +44,7 @@ from __future__ import annotations
 import math
 import os
 import pathlib
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -56,9 +57,18 @@ from ..logs.wheel import ToothErrors, Wheel, parse_wheel
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
 
 if TYPE_CHECKING:
+    from ..dynamics.result import SpeedResult
     from ..engine.model import Engine
 
-__all__ = ["simulated_recording", "simulated_tooth_errors", "BENCH_GAIN_PA_PER_V", "DEFAULT_GAP_DEG", "pressure_volts"]
+__all__ = [
+    "simulated_recording",
+    "simulated_tooth_times",
+    "simulated_tooth_errors",
+    "BENCH_GAIN_PA_PER_V",
+    "BENCH_OFFSET_V",
+    "DEFAULT_GAP_DEG",
+    "pressure_volts",
+]
 
 BENCH_GAIN_PA_PER_V = PA_PER_BAR / (5 * 0.00385)  # the bench's sensor: 51.95 bar per volt
 BENCH_OFFSET_V = 5 * 0.115  # the sensor's output at 0 bar [V]
@@ -121,6 +131,7 @@ def simulated_recording(
     tooth_error_deg: float = 0.1,
     noise_v: float = 0.01,
     seed: int = 0,
+    motored_cycles: Sequence[int] = (),
 ) -> pathlib.Path:
     """Write a simulated raw bench recording (time, pressure voltage, encoder voltage) to ``path``.
 
@@ -149,6 +160,11 @@ def simulated_recording(
       0.01, ten times the real files' 0.001 V; the pressure channel gets a twentieth of it).
     - ``seed``: seeds the noise and where the recording starts; the same arguments give the
       same file. The wheel's tooth errors do not depend on it (one wheel for all recordings).
+    - ``motored_cycles``: complete cycles (0 = the first, as :func:`rotor.analyze_log`
+      counts them) that do not fire (a motored stretch, an ignition cut): their speed is the
+      motored steady state at the same mean speed (the engine driven, as on a dynamometer)
+      and their pressure the engine file's motored cycle; the speed switches at the cycle's
+      start (TDC before intake) between the fired and the motored periodic solution.
 
     **Returns:** the path written (:class:`pathlib.Path`).
 
@@ -186,6 +202,12 @@ def simulated_recording(
     noise_v = _number("noise_v", noise_v, nonnegative=True)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise EngineError(f"seed = {seed!r}: a whole number")
+    try:
+        motored_set = {int(c) for c in motored_cycles}
+    except (TypeError, ValueError):
+        raise EngineError(f"motored_cycles = {motored_cycles!r}: whole cycle numbers") from None
+    if any(not 0 <= c < cycles for c in motored_set):
+        raise EngineError(f"motored_cycles = {sorted(motored_set)}: cycle numbers in 0 … {cycles - 1}")
     rows = (cycles + 1) * (eng.strokes // 2) * 60.0 / rpm * fs
     check_size(
         rows * 8.0 * SAMPLE_ARRAYS,
@@ -240,14 +262,28 @@ def simulated_recording(
 
     rng = np.random.default_rng(seed)
     revs = round(cycle_rad / (2 * np.pi))
-    # the spline covers one cycle more than the recording each side
+    # the spline covers one cycle more than the recording each side; cycle k of the recording is row k + 1
     n_cyc = cycles + 3
-    theta = (theta1[None, :] + cycle_rad * np.arange(-1, n_cyc - 1)[:, None]).ravel()
-    t = (t1[None, :] + period * np.arange(-1, n_cyc - 1)[:, None]).ravel()
-    omega = np.tile(omega1, n_cyc)
+    rows_k = np.arange(-1, n_cyc - 1)
+    is_motored = np.isin(rows_k, sorted(motored_set))
+    t_rows = np.tile(t1 - t1[0], (n_cyc, 1))
+    omega_rows = np.tile(omega1, (n_cyc, 1))
+    periods = np.full(n_cyc, period)
+    if motored_set:
+        ss0 = steady_state(eng, rpm, imep_scale=0.0)
+        if not np.allclose(np.asarray(ss0.theta, dtype=np.float64), theta1):
+            raise EngineError("motored_cycles: the motored steady state's grid differs from the fired one's")
+        t0_1 = np.asarray(ss0.t, dtype=np.float64)
+        t_rows[is_motored] = t0_1 - t0_1[0]
+        omega_rows[is_motored] = np.asarray(ss0.omega, dtype=np.float64)
+        periods[is_motored] = float(np.asarray(ss0.period_s))
+    starts = np.concatenate([[0.0], np.cumsum(periods)]) - periods[0]
+    theta = (theta1[None, :] + cycle_rad * rows_k[:, None]).ravel()
+    t = (t_rows + starts[:-1, None]).ravel()
+    omega = omega_rows.ravel()
     theta = np.append(theta, theta[-1] + (theta1[1] - theta1[0]))
-    t = np.append(t, period * (n_cyc - 1))
-    omega = np.append(omega, omega1[0])
+    t = np.append(t, starts[-1])
+    omega = np.append(omega, omega_rows[-1, 0])
     t_of = CubicHermiteSpline(theta, t, 1.0 / omega)
     theta_of = CubicHermiteSpline(t, theta, omega)
     # from 36…180° (drawn) before the first cycle's start to 36…180° after the last one's end: exactly
@@ -269,6 +305,13 @@ def simulated_recording(
         p_grid = p0 + comb_scale * (p_grid - p0)
     p_of = CubicSpline(np.append(grid, cycle_rad), np.append(p_grid, p_grid[0]), bc_type="periodic")
     p = p_of(np.mod(th, cycle_rad))
+    if motored_set:
+        unfired = eqx.tree_at(lambda e: e.pressure, eng, eng.pressure.motored(eng.strokes))
+        pm_grid = np.asarray(cylinder_pressure(unfired, grid))[:, 0]
+        pm_of = CubicSpline(np.append(grid, cycle_rad), np.append(pm_grid, pm_grid[0]), bc_type="periodic")
+        k_of = np.floor(th / cycle_rad).astype(int)
+        m = np.isin(k_of, sorted(motored_set))
+        p[m] = pm_of(np.mod(th[m], cycle_rad))
     pv = pressure_volts(p) + rng.normal(0.0, noise_v / 20, n)
 
     # ---------------------------------------------------------------- encoder channel
@@ -307,4 +350,74 @@ def simulated_recording(
     data = np.column_stack([ts, pv, ev])
     with atomic_path(path) as tmp:
         np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
+    return path
+
+
+def simulated_tooth_times(
+    path: str | os.PathLike,
+    run: SpeedResult,
+    *,
+    wheel: str | Wheel | None = None,
+    gap_deg: float = DEFAULT_GAP_DEG,
+    tooth_error_deg: float = 0.1,
+    jitter_s: float = 20e-9,
+    start_deg: float = 0.0,
+    end_deg: float | None = None,
+    seed: int = 0,
+) -> pathlib.Path:
+    """Write the tooth edge times of any simulated run (:func:`rotor.simulate`: an ignition
+    cut, a coast-down, a load step) as a tooth-time log (one column, ``tooth_time_s`` [s],
+    read with ``wheel``), the wheel turning with the crank.
+
+    **Arguments:**
+    - ``path``: the file to write (its folder must exist); written whole or not at all.
+    - ``run``: a :class:`rotor.SpeedResult` (θ from 0 at cylinder 1's TDC at the start of
+      intake; its samples need not be uniform).
+    - ``wheel``: a spec or :class:`rotor.Wheel` with a gap (default 60-2).
+    - ``gap_deg``: crank angle of the first tooth edge after the gap relative to cylinder 1's
+      TDC [deg] (default −29.4: TDC 29.4° after the gap, as on the real bench).
+    - ``tooth_error_deg``: the wheel's tooth-spacing errors, uniform in ±this [deg] (the
+      same wheel as :func:`simulated_recording`'s; :func:`simulated_tooth_errors`).
+    - ``jitter_s``: standard deviation of white timer noise on each edge [s] (default 20 ns).
+    - ``start_deg``, ``end_deg``: the crank angles [deg] where the recording starts and
+      ends (default: the run's whole span): anywhere in a cycle.
+    - ``seed``: seeds the timer noise.
+
+    **Returns:** the path written. Raises :class:`rotor.EngineError` naming an argument
+    that cannot be used.
+    """
+    from scipy.interpolate import CubicSpline
+
+    from ..fileio import atomic_path
+
+    path = pathlib.Path(path)
+    if not path.parent.is_dir():
+        raise EngineError(f"path = {os.fspath(path)!r}: the folder {os.fspath(path.parent)!r} does not exist")
+    try:
+        w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
+    except ValueError as e:
+        raise EngineError(f"wheel = {wheel!r}: {e}") from None
+    if w.missing < 1:
+        raise EngineError(f"wheel = {w.spec!r}: a simulated tooth-time log needs a wheel with a gap (e.g. 60-2)")
+    gap = np.deg2rad(_number("gap_deg", gap_deg))
+    tooth_error_deg = _number("tooth_error_deg", tooth_error_deg, nonnegative=True)
+    if tooth_error_deg >= 360.0 / w.teeth / 4:
+        raise EngineError(f"tooth_error_deg = {tooth_error_deg:g}: must be below a quarter of the {w.spec} pitch")
+    jitter_s = _number("jitter_s", jitter_s, nonnegative=True)
+    th = np.asarray(run.theta, dtype=np.float64)
+    t = np.asarray(run.t, dtype=np.float64)
+    keep = np.concatenate([[True], np.diff(th) > 0])
+    th, t = th[keep], t[keep]
+    lo = max(float(th[0]), np.deg2rad(_number("start_deg", start_deg)))
+    hi = float(th[-1]) if end_deg is None else min(float(th[-1]), np.deg2rad(_number("end_deg", end_deg)))
+    if not hi > lo:
+        raise EngineError(f"start_deg = {start_deg!r}, end_deg = {end_deg!r}: an empty span of the run")
+    err = _wheel_errors(w, tooth_error_deg)
+    r0, r1 = int(math.floor((lo - gap) / (2 * np.pi))) - 1, int(math.ceil((hi - gap) / (2 * np.pi))) + 1
+    rev = np.arange(r0, r1 + 1)
+    ang = (gap + 2 * np.pi * rev[:, None] + w.pitch_rad * np.arange(w.edges_per_rev)[None, :] + err[None, :]).ravel()
+    ang = ang[(ang >= lo) & (ang <= hi)]
+    times = CubicSpline(th, t)(ang) + np.random.default_rng(seed).normal(0.0, jitter_s, ang.size)
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, times - times[0], fmt="%.10f")
     return path

@@ -1,5 +1,7 @@
 """The plots of the diagnostics room: an identification (speed fit, cylinder torques, IMEP
-and misfires) and a calibration (measured against identified IMEP per cycle)."""
+and misfires), a calibration (measured against identified IMEP per cycle), TDC from the
+speed (the fit's residual against the offset) and a pressure gain from motored cycles (their
+compression on log p – log V axes)."""
 
 from __future__ import annotations
 
@@ -9,7 +11,14 @@ import numpy as np
 
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
 
-__all__ = ["plot_calibration", "plot_identification", "plot_indicated_torque", "plot_torque_orders"]
+__all__ = [
+    "plot_calibration",
+    "plot_identification",
+    "plot_indicated_torque",
+    "plot_motored_gain",
+    "plot_speed_tdc",
+    "plot_torque_orders",
+]
 
 
 def plot_identification(
@@ -177,4 +186,68 @@ def plot_torque_orders(*, order: Any, amplitude_Nm: Any, title: str, ax: Any = N
     ax.set_ylabel("torque amplitude [N·m]")
     ax.grid(True, alpha=0.3, axis="y")
     ax.set_title(title)
+    return ax
+
+
+def plot_speed_tdc(
+    *,
+    candidates_deg: Any,
+    residual: Any,
+    offset_deg: float,
+    std_deg: float,
+    r2: float,
+    cycle_deg: float,
+    given_deg: float | None = None,
+    ax: Any = None,
+) -> Any:
+    """The plot of a :class:`rotor.diagnostics.phase.SpeedTdc`: the fit's summed residual over
+    the speed fluctuation's power ``residual`` ((D,) [-]) against the candidate offset of
+    cylinder 1's TDC from the cycle grid's start ``candidates_deg`` ((D,) [deg]), the best
+    ``offset_deg`` [deg] (± ``std_deg`` [deg], R² ``r2`` [-]) marked, and a checked TDC
+    ``given_deg`` [deg, same frame] where there is one; ``cycle_deg``: the cycle's length
+    [deg]. ``ax``: one Axes or None for a new figure. **Returns:** the Axes."""
+    from .common import angle_axis, new_axes
+
+    ax = new_axes(ax)
+    ax.plot(np.asarray(candidates_deg), np.asarray(residual), lw=1.0, label="residual / fluctuation power")
+    ax.axvline(offset_deg, color="C3", lw=1.0, ls="--", label=f"TDC {offset_deg:.1f}°")
+    if given_deg is not None:
+        ax.axvline(
+            given_deg % cycle_deg, color="0.4", lw=1.0, ls=":", label=f"checked TDC {given_deg % cycle_deg:.1f}°"
+        )
+    angle_axis(ax, cycle_deg)
+    ax.set_xlabel("offset of cylinder 1's TDC from the cycle grid's start [deg]")
+    ax.set_ylabel("residual [-]")
+    ax.set_title(f"TDC from the speed: {offset_deg:.1f}° ± {std_deg:.2f}°, R² {r2:.3f}")
+    ax.legend(loc="best", fontsize="small")
+    return ax
+
+
+def plot_motored_gain(
+    *, volume_ratio: Any, pressure_pa: Any, exponent: float, intake_pa: float, title: str, ax: Any = None
+) -> Any:
+    """The plot of a :class:`rotor.diagnostics.pegging.MotoredGain`: the motored cycles' mean
+    pressure ``pressure_pa`` ((n,) [Pa], with the gain and offset found) against the volume
+    ``volume_ratio`` ((n,) V/V_BDC [-]) on log–log axes, and the polytrope
+    p = ``intake_pa``·(V/V_BDC)^(−``exponent``) it was pegged to. ``ax``: one Axes or None.
+    **Returns:** the Axes."""
+    from .common import new_axes
+
+    ax = new_axes(ax, figsize=(6, 4.5))
+    v = np.asarray(volume_ratio, dtype=np.float64)
+    ax.loglog(v, np.asarray(pressure_pa) / PA_PER_BAR, ".", ms=3, color="C0", label="motored cycles (mean)")
+    vv = np.geomspace(float(v.min()), 1.0, 50)
+    ax.loglog(
+        vv,
+        intake_pa * vv ** (-exponent) / PA_PER_BAR,
+        "--",
+        lw=1,
+        color="C3",
+        label=f"p·V^{exponent:.3g} constant from {intake_pa / PA_PER_BAR:.3g} bar at BDC",
+    )
+    ax.set_xlabel("V / V_BDC [-]")
+    ax.set_ylabel("pressure [bar]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title, fontsize=9)
     return ax
