@@ -27,6 +27,14 @@ import jax  # noqa: E402
 
 import rotor  # noqa: E402  (switches float64 on)
 
+# Switched on for the tests in this process too, not only once a CLI command has run in it:
+# most of the suite's time is XLA compiling rotor's kernels, and many modules (and both
+# xdist workers, the CLI subprocesses and the notebook kernels of tests/test_notebooks.py,
+# which share the folder) compile the same ones. A kernel compiled once in the session is
+# read back instead of compiled again, also after _free_compiled_code below drops it.
+# ROTOR_COMPILATION_CACHE=off runs the suite without it.
+COMPILATION_CACHE = rotor.enable_compilation_cache()
+
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
 SHARED_DATA = ROOT.parent / "shared" / "data"

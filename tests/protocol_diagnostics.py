@@ -3,6 +3,8 @@
 calibrated and diagnosed; inverse dynamics of a short simulated run."""
 
 import functools
+import tempfile
+from pathlib import Path
 
 import numpy as np
 from protocol_logs import analysis, recording
@@ -31,6 +33,33 @@ def diagnosis():
     return rotor.diagnose(_engine(), recording(), calibration(), columns="time,-,encoder_v", wheel="60-2")
 
 
+@functools.cache
+def speed_tdc() -> rotor.SpeedTdc:
+    return rotor.tdc_from_speed(_engine(), analysis())
+
+
+def tdc_check() -> rotor.TdcCheck:
+    check = diagnosis().tdc_check
+    assert check is not None, "diagnose checks the calibration's TDC against the recording"
+    return check
+
+
+def motored_gain() -> rotor.MotoredGain:
+    """The gain of a simulated recording whose cycles 1 and 2 do not fire."""
+    folder = Path(tempfile.mkdtemp(prefix="rotor-protocol-motored-"))
+    log = rotor.simulated_recording(folder / "cut.txt", cycles=4, seed=5, motored_cycles=(1, 2))
+    engine = _engine()
+    rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
+    a = rotor.analyze_log(
+        log,
+        "60-2",
+        columns="time,pressure_v,encoder_v",
+        compression_ratio=float(engine.pressure.compression_ratio),
+        rod_ratio=rod_ratio,
+    )
+    return rotor.pressure_gain_from_motored(engine, a)
+
+
 def _speed() -> np.ndarray:
     """Two cycles of a made-up crank speed on a 3° grid [rad/s]: 314 rad/s with a firing ripple."""
     theta = np.arange(2 * 240) * 3.0 * np.pi / 180
@@ -51,4 +80,7 @@ FACTORIES = {
     "Diagnosis": diagnosis,
     "IndicatedTorque": indicated,
     "HarmonicTorque": harmonic,
+    "SpeedTdc": speed_tdc,
+    "TdcCheck": tdc_check,
+    "MotoredGain": motored_gain,
 }

@@ -10,6 +10,10 @@ from conftest import ROOT
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 IDS = [p.name for p in NOTEBOOKS]
+# the kernel uses the test session's compilation cache (tests/conftest.py: the kernel inherits
+# $ROTOR_COMPILATION_CACHE), as the `rotor` command does: what the notebooks and the tests
+# compile in common is compiled once; the notebooks themselves stay as a user runs them
+KERNEL_STARTUP = "--IPKernelApp.exec_lines=import rotor; rotor.enable_compilation_cache()"
 
 
 def _outputs(nb):
@@ -46,7 +50,12 @@ def test_runs_in_quick_form(path, monkeypatch):
         if cell.cell_type == "code":
             cell.outputs = []
     client = NotebookClient(
-        nb, timeout=600, kernel_name="python3", allow_errors=False, resources={"metadata": {"path": str(path.parent)}}
+        nb,
+        timeout=600,
+        kernel_name="python3",
+        allow_errors=False,
+        resources={"metadata": {"path": str(path.parent)}},
+        extra_arguments=[KERNEL_STARTUP],
     )
     client.execute()  # raises CellExecutionError with the cell and the traceback
     assert not _errors(nb)
