@@ -22,7 +22,7 @@ COMMANDS = {
     if isinstance(action, argparse._SubParsersAction)
     for name, p in action.choices.items()
 }
-DRAWS = {"plot", "demo", "steady", "simulate", "analyze", "diagnose", "flywheel"}
+DRAWS = {"plot", "demo", "steady", "simulate", "analyze", "diagnose", "calibrate", "flywheel"}
 NO_RESULT = {"plot", "demo"}  # they only write plots / print a tour of several results
 PROGRESS = {"simulate", "demo"}  # they run transients long enough for a progress bar
 
@@ -41,6 +41,7 @@ def test_every_command_is_there():
         "simulate",
         "analyze",
         "diagnose",
+        "calibrate",
         "flywheel",
         "demo",
     }

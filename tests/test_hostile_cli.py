@@ -149,6 +149,13 @@ CASES = [
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--save-calibration", "{file}/c.json"], 2, "no folder"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--threshold", "-1"], 2, "must be a positive number"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH], 2, "TDC is not known"),
+    # calibrate
+    (["calibrate", "{log}", "--engine", "nosuchpreset"], 2, "neither an engine file nor a preset"),
+    (["calibrate", "{log}", "--engine", "tue-single", *TOOTH], 2, "no pressure channel"),
+    (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--pressure-gain", "abc"], 2, "'abc': a positive gain"),
+    (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--pressure-gain", "-5"], 2, "'-5': a positive gain"),
+    (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--intake-pa", "-1"], 2, "must be a positive number"),
+    (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--output", "{file}/c.json"], 2, "no folder"),
     # flywheel
     (["flywheel", "4chn15", "--delta", "0"], 2, "must be a positive number"),
     (["flywheel", "4chn15", "--delta", "nan"], 2, "must be a positive number"),

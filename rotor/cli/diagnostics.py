@@ -90,7 +90,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=0.5,
         help="misfire threshold of the contribution index (default 0.5)",
     )
-    p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
+    p.add_argument(
+        "--edge",
+        choices=("rising", "falling"),
+        default="rising",
+        help="which edges of the wheel signal (analog or digital) mark the teeth",
+    )
     add_json(p)
     add_plot(p, "the diagnosis plot")
     p.set_defaults(func=cmd_diagnose)
@@ -210,7 +215,12 @@ def _add_calibrate(sub: argparse._SubParsersAction) -> None:
         help="scale the engine file's whole cycle with the load (charge: SI, default) or only its combustion",
     )
     p.add_argument("--output", "-o", metavar="FILE", help="write the calibration as JSON (for --calibration)")
-    p.add_argument("--edge", choices=("rising", "falling"), default="rising", help="edges of an analog wheel signal")
+    p.add_argument(
+        "--edge",
+        choices=("rising", "falling"),
+        default="rising",
+        help="which edges of the wheel signal (analog or digital) mark the teeth",
+    )
     add_json(p)
     add_plot(p, "the calibration plot")
     p.set_defaults(func=cmd_calibrate)
