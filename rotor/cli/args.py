@@ -27,6 +27,7 @@ __all__ = [
     "EXIT_USAGE",
     "Parser",
     "add_dynamics_options",
+    "add_edge",
     "add_engine",
     "add_json",
     "add_plot",
@@ -155,6 +156,16 @@ def add_plot(p: argparse.ArgumentParser, what: str = "plots", default: str | Non
     """``--plot DIR``: write ``what`` into DIR (only when given, unless ``default``)."""
     text = f"write {what} to DIR" + (f" (default {default}/)" if default else "")
     p.add_argument("--plot", metavar="DIR", default=default, help=text)
+
+
+def add_edge(p: argparse.ArgumentParser) -> None:
+    """``--edge rising|falling``: which edges of the wheel signal (analog or digital) mark the teeth."""
+    p.add_argument(
+        "--edge",
+        choices=("rising", "falling"),
+        default="rising",
+        help="which edges of the wheel signal (analog or digital) mark the teeth (default rising)",
+    )
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:

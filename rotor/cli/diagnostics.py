@@ -6,7 +6,7 @@ import argparse
 import os
 import sys
 
-from .args import add_json, add_plot, positive_float
+from .args import add_edge, add_json, add_plot, positive_float
 from .logs import log_plot
 from .output import print_json, print_text, print_written
 
@@ -45,20 +45,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="calibrate from this log's pressure channel, write the "
         "calibration as JSON and use it (unless --calibration is given)",
     )
-    p.add_argument(
-        "--pressure-gain",
-        type=_gain_arg,
-        metavar="PA_PER_UNIT|motored",
-        help="pressure sensor gain for --save-calibration [Pa per signal unit], or 'motored' (as for calibrate; "
-        "default: from the log's motored cycles where it has some, else the gain that gives the log's mean "
-        "IMEP the engine file's)",
-    )
-    p.add_argument(
-        "--intake-pa",
-        type=positive_float,
-        metavar="PA",
-        help="intake pressure of the motored cycles [Pa] for a gain from them (default: the engine file's intake_pa)",
-    )
+    _add_pressure_scale(p, "for --save-calibration ")
     p.add_argument(
         "--tdc-deg",
         type=_tdc_arg,
@@ -90,12 +77,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=0.5,
         help="misfire threshold of the contribution index (default 0.5)",
     )
-    p.add_argument(
-        "--edge",
-        choices=("rising", "falling"),
-        default="rising",
-        help="which edges of the wheel signal (analog or digital) mark the teeth",
-    )
+    add_edge(p)
     add_json(p)
     add_plot(p, "the diagnosis plot")
     p.set_defaults(func=cmd_diagnose)
@@ -183,20 +165,13 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
         print_written(written)
 
 
-def _add_calibrate(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "calibrate",
-        help="inertia, TDC, tooth errors and the pressure sensor's offset of an installation, from a log with pressure",
-    )
-    p.add_argument("log", metavar="LOG", help="CSV/TSV log with a wheel signal (or tooth times) and a pressure channel")
-    p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
-    p.add_argument("--wheel", metavar="SPEC", help="trigger wheel, e.g. 60-2")
-    p.add_argument("--columns", metavar="NAMES", help="column names in file order, as for analyze")
+def _add_pressure_scale(p: argparse.ArgumentParser, use: str = "") -> None:
+    """``--pressure-gain`` and ``--intake-pa`` of a calibration (``use``: what the gain is for)."""
     p.add_argument(
         "--pressure-gain",
         type=_gain_arg,
         metavar="PA_PER_UNIT|motored",
-        help="pressure sensor gain [Pa per signal unit], or 'motored': from the log's motored cycles (their "
+        help=f"pressure sensor gain {use}[Pa per signal unit], or 'motored': from the log's motored cycles (their "
         "compression polytropic, pegged at the intake pressure; refused without any). Default: from the "
         "motored cycles where the log has some, else left unknown: the gain that gives the log's mean IMEP "
         "the engine file's (TDC, tooth errors and the inertia that reproduces that IMEP are calibrated all "
@@ -208,6 +183,18 @@ def _add_calibrate(sub: argparse._SubParsersAction) -> None:
         metavar="PA",
         help="intake pressure of the motored cycles [Pa] for a gain from them (default: the engine file's intake_pa)",
     )
+
+
+def _add_calibrate(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="inertia, TDC, tooth errors and the pressure sensor's offset of an installation, from a log with pressure",
+    )
+    p.add_argument("log", metavar="LOG", help="CSV/TSV log with a wheel signal (or tooth times) and a pressure channel")
+    p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
+    p.add_argument("--wheel", metavar="SPEC", help="trigger wheel, e.g. 60-2")
+    p.add_argument("--columns", metavar="NAMES", help="column names in file order, as for analyze")
+    _add_pressure_scale(p)
     p.add_argument(
         "--scaling",
         choices=("charge", "none"),
@@ -215,12 +202,7 @@ def _add_calibrate(sub: argparse._SubParsersAction) -> None:
         help="scale the engine file's whole cycle with the load (charge: SI, default) or only its combustion",
     )
     p.add_argument("--output", "-o", metavar="FILE", help="write the calibration as JSON (for --calibration)")
-    p.add_argument(
-        "--edge",
-        choices=("rising", "falling"),
-        default="rising",
-        help="which edges of the wheel signal (analog or digital) mark the teeth",
-    )
+    add_edge(p)
     add_json(p)
     add_plot(p, "the calibration plot")
     p.set_defaults(func=cmd_calibrate)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from .args import add_json, add_plot, positive_float, whole
+from .args import add_edge, add_json, add_plot, positive_float, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
 __all__ = ["add_parsers", "cmd_analyze", "log_plot"]
@@ -94,12 +94,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="δ from all orders up to --max-order, not weighted by their signal-to-noise ratio",
     )
-    p.add_argument(
-        "--edge",
-        choices=("rising", "falling"),
-        default="rising",
-        help="edges of an analog or digital wheel signal (default rising)",
-    )
+    add_edge(p)
     add_json(p)
     add_plot(p, "the combined plot")
     p.set_defaults(func=cmd_analyze)
