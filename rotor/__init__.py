@@ -82,7 +82,7 @@ from .engine.inertia import (  # noqa: E402
 )
 from .engine.kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
 from .engine.mechanism import engine_piston_motion  # noqa: E402
-from .engine.model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
+from .engine.model import Articulated, Counterweights, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
 from .engine.pressure import (  # noqa: E402
     MotoredCycle,
     NoPressure,
@@ -114,6 +114,7 @@ __all__ = [
     "Articulated",
     "Calibration",
     "ConstantLoad",
+    "Counterweights",
     "CrankTable",
     "CrankTrain",
     "Crankshaft",

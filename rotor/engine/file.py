@@ -2,8 +2,9 @@
 
 An engine file has the top-level keys ``name``, ``strokes`` and ``cylinders`` and the
 tables ``[geometry]``, ``[masses]``, ``[crankshaft]``, ``[layout]``, ``[pressure]``,
-``[operating]`` and, optionally, ``[articulated]`` and ``[friction]``; each table becomes the module of
-the same name on :class:`rotor.Engine`. Unknown keys and tables are errors (a typo
+``[operating]`` and, optionally, ``[articulated]``, ``[friction]`` and the list
+``[[counterweights]]`` (one table per counterweight: ``web``, ``mass_kg``, ``radius_m``,
+``angle_deg``); each becomes the module of the same name on :class:`rotor.Engine`. Unknown keys and tables are errors (a typo
 must not be ignored), and so are values of the wrong type.
 """
 
@@ -21,7 +22,7 @@ import numpy as np
 
 from ..errors import EngineError
 from .friction import Friction
-from .model import Articulated, Crankshaft, Engine, Geometry, Layout, Masses, Operating
+from .model import Articulated, Counterweights, Crankshaft, Engine, Geometry, Layout, Masses, Operating
 from .pressure import PRESSURE_KINDS
 
 __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path", "MAX_FILE_BYTES"]
@@ -56,6 +57,14 @@ _LIST_KEYS = {
     "pressure_pa": _NUMS,
     "slaves": _INTS,
     "masters": _INTS,
+    "throws": _INTS,
+    "main_journals": _INT,
+}
+_COUNTERWEIGHT_KEYS = {
+    "web": (_INT, True),
+    "mass_kg": (_NUM, True),
+    "radius_m": (_NUM, True),
+    "angle_deg": (_NUM, False),
 }
 
 
@@ -142,6 +151,41 @@ def _build_pressure(data, strokes):
     return _build("pressure", PRESSURE_KINDS[kind], data)
 
 
+def _build_counterweights(data):
+    """``[[counterweights]]``: a list of tables, one per counterweight."""
+    if not isinstance(data, list) or not all(isinstance(d, dict) for d in data):
+        raise EngineError(
+            "[[counterweights]] must be a list of tables, one per counterweight: "
+            "[[counterweights]] web = 1, mass_kg = 1.2, radius_m = 0.05, angle_deg = 180"
+        )
+    if not data:
+        return None
+    cols: dict[str, list] = {"web": [], "mass_kg": [], "radius_m": [], "angle_deg": []}
+    for i, item in enumerate(data, 1):
+        for key in item:
+            if key not in _COUNTERWEIGHT_KEYS:
+                raise EngineError(
+                    f"[[counterweights]] {i}: {key}: unknown key{_suggest(key, _COUNTERWEIGHT_KEYS)}; "
+                    f"known keys: {', '.join(_COUNTERWEIGHT_KEYS)}"
+                )
+        for key, (kind, required) in _COUNTERWEIGHT_KEYS.items():
+            if key not in item:
+                if required:
+                    raise EngineError(f"[[counterweights]] {i}: {key} is missing")
+                cols[key].append(180.0)  # opposite its throw
+                continue
+            cols[key].append(_typed("", f"[[counterweights]] {i}: {key}", item[key], kind))
+    try:
+        return Counterweights(
+            webs=cols["web"],
+            mass_kg=np.asarray(cols["mass_kg"]),
+            radius_m=np.asarray(cols["radius_m"]),
+            angle_deg=np.asarray(cols["angle_deg"]),
+        )
+    except EngineError as e:
+        raise EngineError(f"[[counterweights]]: {e}") from None
+
+
 def engine_from_dict(data: dict) -> Engine:
     """Build and validate an :class:`rotor.Engine` from the parsed contents of an engine file.
 
@@ -149,7 +193,7 @@ def engine_from_dict(data: dict) -> Engine:
     """
     if not isinstance(data, dict):
         raise EngineError("an engine description must be a table of keys")
-    known = set(_TOP) | set(_TABLES) | {"pressure"}
+    known = set(_TOP) | set(_TABLES) | {"pressure", "counterweights"}
     for key in data:
         if key not in known:
             kind = "table" if isinstance(data[key], dict) else "key"
@@ -167,6 +211,8 @@ def engine_from_dict(data: dict) -> Engine:
         if not isinstance(data["pressure"], dict):
             raise EngineError(f"[pressure] must be a table, got {data['pressure']!r}")
         parts["pressure"] = _build_pressure(data["pressure"], top["strokes"])
+    if "counterweights" in data:
+        parts["counterweights"] = _build_counterweights(data["counterweights"])
     return Engine(**top, **parts)
 
 

@@ -49,6 +49,7 @@ __all__ = [
     "Layout",
     "Operating",
     "Articulated",
+    "Counterweights",
     "Engine",
 ]
 
@@ -115,6 +116,13 @@ class Masses(eqx.Module):
     ``rod_inertia_kgm2`` [kg·m², about the rod's centre of mass]): the rod is modelled
     as a rigid body, and then ``reciprocating_kg`` is the piston group alone and
     ``rotating_kg`` the throw's unbalanced mass alone.
+
+    ``rod_big_end_kg`` (optional, two-mass model only): m₂, the rod's share at the crank
+    pin [kg], the part of ``rotating_kg`` whose centrifugal force S₂ = −m₂·R·ω² loads the
+    crank pin (Shishkov (2014) §3.2.4); the rest of ``rotating_kg`` is the throw's own
+    unbalanced mass, which loads the main journals only. Without it, the whole of
+    ``rotating_kg`` is taken as the rod's share (the presets put the throw's own mass in
+    ``[crankshaft]``); with a full rod m₂ follows from the rod (:meth:`big_end_kg`).
     """
 
     reciprocating_kg: jnp.ndarray = eqx.field(converter=number("masses", "reciprocating_kg"))
@@ -125,6 +133,9 @@ class Masses(eqx.Module):
     )
     rod_inertia_kgm2: jnp.ndarray | None = eqx.field(
         converter=number("masses", "rod_inertia_kgm2", optional=True), default=None
+    )
+    rod_big_end_kg: jnp.ndarray | None = eqx.field(
+        converter=number("masses", "rod_big_end_kg", optional=True), default=None
     )
     table: ClassVar[str] = "masses"
 
@@ -144,6 +155,19 @@ class Masses(eqx.Module):
             check_positive(t, "rod_kg", self.rod_kg)
             check_positive(t, "rod_cg_from_big_end_m", self.rod_cg_from_big_end_m, allow_zero=True)
             check_positive(t, "rod_inertia_kgm2", self.rod_inertia_kgm2, allow_zero=True)
+        if self.rod_big_end_kg is not None:
+            if given:
+                raise EngineError(
+                    f"{where(t, 'rod_big_end_kg')}: with a full rod (rod_kg, rod_cg_from_big_end_m) the rod's share "
+                    "at the crank pin follows from the rod; remove rod_big_end_kg"
+                )
+            check_positive(t, "rod_big_end_kg", self.rod_big_end_kg, allow_zero=True)
+            m2, mr = concrete(self.rod_big_end_kg), concrete(self.rotating_kg)
+            if m2 is not None and mr is not None and m2 > mr:
+                raise EngineError(
+                    f"{where(t, 'rod_big_end_kg')} = {fmt(m2)}: the rod's share at the crank pin is part of "
+                    f"rotating_kg = {fmt(mr)} kg and cannot exceed it"
+                )
         check_fields_plausible(self)
 
     @property
@@ -165,16 +189,78 @@ class Masses(eqx.Module):
             self.rotating_kg + self.rod_kg * (1 - a_over_l),
         )
 
+    def big_end_kg(self, rod_length_m: ArrayLike) -> Array:
+        """m₂, the rod's mass at the crank pin [kg] (its centrifugal force loads the crank pin),
+        for a rod ``rod_length_m`` [m] long: ``rod_big_end_kg`` if given, the full rod's
+        static share at the big end, or else the whole ``rotating_kg``."""
+        if self.rod_kg is not None and self.rod_cg_from_big_end_m is not None:
+            return self.rod_kg * (1 - self.rod_cg_from_big_end_m / jnp.asarray(rod_length_m))
+        return self.rotating_kg if self.rod_big_end_kg is None else self.rod_big_end_kg
+
 
 class Crankshaft(eqx.Module):
-    """``[crankshaft]``: ``inertia_kgm2``, the constant moment of inertia of the crankshaft,
-    flywheel and everything rigidly attached [kg·m²] (not the rods and pistons)."""
+    """``[crankshaft]``: the crankshaft as a rigid body and as a beam on its main journals.
+
+    **Fields:** ``inertia_kgm2``: the constant moment of inertia of the crankshaft,
+    flywheel and everything rigidly attached [kg·m²] (not the rods and pistons).
+    Optional, for the bearing loads and the balancing (:mod:`rotor.engine.shaft`):
+    ``throws``: the crank throw of each cylinder, numbered 1… from the front (default:
+    each cylinder its own throw, a slave rod its master's; a V engine with two rods on a
+    pin names them, e.g. ``[1, 2, 3, 4, 1, 2, 3, 4]``); ``main_journals``: the number of
+    main journals (default throws + 1, a journal between every two throws; fewer must
+    share the throws evenly between the spans); ``journal_spacing_m``: the distance
+    between neighbouring main journals [m] (default 1.25 bores per throw in a span, the
+    cylinder spacing of Kolchin & Demidov's ratios).
+    """
 
     inertia_kgm2: jnp.ndarray = eqx.field(converter=number("crankshaft", "inertia_kgm2"))
+    throws: tuple | None = eqx.field(
+        static=True, default=None, converter=lambda x: x if x is None else _tuple_of_ints(x)
+    )
+    main_journals: int | None = eqx.field(static=True, default=None)
+    journal_spacing_m: jnp.ndarray | None = eqx.field(
+        converter=number("crankshaft", "journal_spacing_m", optional=True), default=None
+    )
     table: ClassVar[str] = "crankshaft"
 
     def __check_init__(self):
         check_positive(self.table, "inertia_kgm2", self.inertia_kgm2)
+        if self.main_journals is not None and (
+            isinstance(self.main_journals, bool) or not isinstance(self.main_journals, (int, np.integer))
+        ):
+            raise TypeError(f"{where(self.table, 'main_journals')} = {self.main_journals!r}: expected a whole number")
+        if self.journal_spacing_m is not None:
+            check_positive(self.table, "journal_spacing_m", self.journal_spacing_m)
+        check_fields_plausible(self)
+
+
+class Counterweights(eqx.Module):
+    """``[[counterweights]]``: the crank webs' counterweights, one entry each.
+
+    **Fields** (one value per counterweight): ``webs``: the web that carries it, 1…2·throws
+    (webs 2k − 1 and 2k flank throw k, the front one first); ``mass_kg`` [kg];
+    ``radius_m``: its centre of mass from the crank axis [m]; ``angle_deg``: its direction
+    from its throw's, in the direction of rotation [deg] (180, the default, is opposite the
+    throw). Each is a rotating mass whose centrifugal force m·r·ω² turns with the shaft.
+    """
+
+    webs: tuple = eqx.field(static=True, converter=_tuple_of_ints)
+    mass_kg: jnp.ndarray = eqx.field(converter=number("counterweights", "mass_kg"))
+    radius_m: jnp.ndarray = eqx.field(converter=number("counterweights", "radius_m"))
+    angle_deg: jnp.ndarray = eqx.field(converter=number("counterweights", "angle_deg"))
+    table: ClassVar[str] = "counterweights"
+
+    def __check_init__(self):
+        n = len(self.webs)
+        for key in ("mass_kg", "radius_m", "angle_deg"):
+            v = getattr(self, key)
+            if jnp.ndim(v) != 1 or v.shape[0] != n:
+                raise EngineError(
+                    f"[[counterweights]] {key}: needs one value per counterweight ({n}), got {np.size(v)}"
+                )
+        check_positive(self.table, "mass_kg", self.mass_kg, allow_zero=True)
+        check_positive(self.table, "radius_m", self.radius_m, allow_zero=True)
+        check_finite(self.table, "angle_deg", self.angle_deg)
         check_fields_plausible(self)
 
 
@@ -332,6 +418,7 @@ class Engine(eqx.Module):
     operating: Operating = eqx.field(default_factory=lambda: Operating(rpm=as_f64(1000.0)))
     articulated: Articulated | None = None
     friction: Friction | None = None
+    counterweights: Counterweights | None = None
 
     def __check_init__(self):
         self._check_types()
@@ -373,6 +460,7 @@ class Engine(eqx.Module):
                 )
         if self.articulated is not None:
             self._check_articulated()
+        self._check_shaft()
         self._check_derived()
 
     def _check_types(self):
@@ -471,7 +559,7 @@ class Engine(eqx.Module):
         self._check_types()
         for part in (self.geometry, self.masses, self.crankshaft, self.layout, self.pressure, self.operating):
             _recheck(part)
-        for optional_part in (self.articulated, self.friction):
+        for optional_part in (self.articulated, self.friction, self.counterweights):
             if optional_part is not None:
                 _recheck(optional_part)
         type(self).__check_init__(self)
@@ -503,6 +591,69 @@ class Engine(eqx.Module):
                 f"{where('articulated', 'rod_length_m')} = {fmt(l1)}: the slave rod must be longer than the crank "
                 f"radius plus the knuckle radius ({fmt(R + r1)} m)"
             )
+
+    def _check_shaft(self):
+        """The crankshaft's throws, main journals and counterweights fit the cylinders."""
+        n, cs = self.cylinders, self.crankshaft
+        if cs.throws is not None:
+            t = list(cs.throws)
+            if len(t) != n:
+                raise EngineError(
+                    f"{where('crankshaft', 'throws')}: needs one throw number per cylinder ({n}), got {len(t)}"
+                )
+            used = sorted(set(t))
+            if used != list(range(1, len(used) + 1)):
+                raise EngineError(
+                    f"{where('crankshaft', 'throws')} = {t}: number the throws 1, 2, … from the front without gaps"
+                )
+            throws = concrete(self.layout.throw_angles_deg)
+            if throws is not None:
+                for k in used:
+                    cyl = [i for i in range(n) if t[i] == k]
+                    if not np.allclose(np.mod(throws[cyl] - throws[cyl[0]] + 180, 360) - 180, 0):
+                        raise EngineError(
+                            f"{where('crankshaft', 'throws')}: cylinders {', '.join(str(i + 1) for i in cyl)} share "
+                            f"throw {k} but have different throw angles ({fmt(throws[cyl])}°)"
+                        )
+            for s_, m_ in self.slave_index().items():
+                if t[s_] != t[m_]:
+                    raise EngineError(
+                        f"{where('crankshaft', 'throws')}: slave cylinder {s_ + 1} must be on the throw of its master "
+                        f"{m_ + 1}"
+                    )
+        nt = self.throw_count
+        if cs.main_journals is not None:
+            j = int(cs.main_journals)
+            fits = [d + 1 for d in range(1, nt + 1) if nt % d == 0]
+            if j not in fits:
+                raise EngineError(
+                    f"{where('crankshaft', 'main_journals')} = {j}: {nt} throw{'s' if nt > 1 else ''} cannot be shared "
+                    f"evenly between {j - 1} span{'s' if j != 2 else ''}; use {', '.join(map(str, fits))} journals"
+                )
+        cw = self.counterweights
+        if cw is not None:
+            for i, w in enumerate(cw.webs, 1):
+                if not 1 <= w <= 2 * nt:
+                    raise EngineError(
+                        f"[[counterweights]] {i}: web {w} does not exist: the crankshaft has {nt} "
+                        f"throw{'s' if nt > 1 else ''}, webs 1…{2 * nt} (2k − 1 and 2k flank throw k)"
+                    )
+
+    @property
+    def throw_index(self) -> tuple[int, ...]:
+        """The crank throw of each cylinder, 0-based (``[crankshaft] throws`` minus one; by
+        default each cylinder its own throw and a slave rod its master's)."""
+        if self.crankshaft.throws is not None:
+            return tuple(k - 1 for k in self.crankshaft.throws)
+        slaves = self.slave_index()
+        masters = [i for i in range(self.cylinders) if i not in slaves]
+        own = {c: k for k, c in enumerate(masters)}
+        return tuple(own[slaves.get(i, i)] for i in range(self.cylinders))
+
+    @property
+    def throw_count(self) -> int:
+        """The number of crank throws."""
+        return max(self.throw_index) + 1
 
     # ------------------------------------------------------------------ derived angles
     @property
@@ -566,4 +717,5 @@ _TABLE_TYPES = (
     ("operating", Operating, False),
     ("articulated", Articulated, True),
     ("friction", Friction, True),
+    ("counterweights", Counterweights, True),
 )

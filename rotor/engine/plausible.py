@@ -22,7 +22,12 @@ than a mistake of units can hide in:
 - ``[masses] rod_kg``: 0 … 1e5 kg
 - ``[masses] rod_cg_from_big_end_m``: 0 … 20 m
 - ``[masses] rod_inertia_kgm2``: 0 … 1e5 kg·m²
+- ``[masses] rod_big_end_kg``: 0 … 1e5 kg
 - ``[crankshaft] inertia_kgm2``: 1e-12 … 1e8 kg·m²
+- ``[crankshaft] journal_spacing_m``: 0.001 … 20 m
+- ``[[counterweights]] mass_kg``: 0 … 1e5 kg
+- ``[[counterweights]] radius_m``: 0 … 5 m
+- ``[[counterweights]] angle_deg``: −3600 … 3600 deg
 - ``[layout] throw_angles_deg``: −3600 … 3600 deg
 - ``[layout] bank_angles_deg``: −3600 … 3600 deg
 - ``[operating] rpm``: 0.1 … 100 000 rev/min
@@ -90,7 +95,12 @@ PLAUSIBLE: dict[tuple[str, str], tuple[float, float, str, str]] = {
     ("masses", "rod_kg"): (0.0, 1e5, "kg", "one connecting rod, e.g. 0.7"),
     ("masses", "rod_cg_from_big_end_m"): (0.0, 20.0, "m", "a distance in metres along the rod, e.g. 0.05"),
     ("masses", "rod_inertia_kgm2"): (0.0, 1e5, "kg·m²", "about the rod's centre of mass, e.g. 0.004"),
+    ("masses", "rod_big_end_kg"): (0.0, 1e5, "kg", "the rod's share at the crank pin, e.g. 0.45"),
     ("crankshaft", "inertia_kgm2"): (1e-12, 1e8, "kg·m²", "crankshaft and flywheel, e.g. 0.3 for a car engine"),
+    ("crankshaft", "journal_spacing_m"): (1e-3, 20.0, "m", "main journal centre to centre, e.g. 0.1"),
+    ("counterweights", "mass_kg"): (0.0, 1e5, "kg", "one counterweight, e.g. 1.2"),
+    ("counterweights", "radius_m"): (0.0, 5.0, "m", "its centre of mass from the crank axis, e.g. 0.04"),
+    ("counterweights", "angle_deg"): (-3600.0, 3600.0, "deg", "from its throw, e.g. 180"),
     ("layout", "throw_angles_deg"): (-3600.0, 3600.0, "deg", "crank angles in degrees, e.g. 0, 180"),
     ("layout", "bank_angles_deg"): (-3600.0, 3600.0, "deg", "bank angles in degrees, e.g. 0, 90"),
     ("operating", "rpm"): (0.1, 1e5, "rev/min", "a crank speed in rpm, e.g. 3000"),
