@@ -37,11 +37,18 @@ def _dump(data):
             return "[" + ", ".join(val(x) for x in v) + "]"
         return repr(v)
 
-    lines = [f"{k} = {val(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    def table_list(v):
+        return isinstance(v, list) and v and all(isinstance(x, dict) for x in v)
+
+    lines = [f"{k} = {val(v)}" for k, v in data.items() if not isinstance(v, dict) and not table_list(v)]
     for k, v in data.items():
         if isinstance(v, dict):
             lines.append(f"[{k}]")
             lines += [f"{kk} = {val(vv)}" for kk, vv in v.items()]
+        elif table_list(v):
+            for item in v:
+                lines.append(f"[[{k}]]")
+                lines += [f"{kk} = {val(vv)}" for kk, vv in item.items()]
     return "\n".join(lines) + "\n"
 
 

@@ -4,7 +4,10 @@ Holds the engine model (:mod:`.model`) and its TOML file (:mod:`.file`), piston 
 kinematics (:mod:`.kinematics`, :mod:`.articulated`, :mod:`.mechanism`), the reduced
 inertia I(θ) (:mod:`.inertia`), cylinder pressure sources (:mod:`.pressure`), forces and
 torques at a given speed (:mod:`.forces`), friction (:mod:`.friction`), the textbook
-one-cylinder table (:mod:`.table`) and the one-screen engine summary (:mod:`.summary`).
+one-cylinder table (:mod:`.table`), the one-screen engine summary (:mod:`.summary`), the
+crankshaft as a beam on its main journals (:mod:`.shaft`), the bearing loads, wear
+diagrams and running torques (:mod:`.bearings`) and the free forces and moments of the
+balancing (:mod:`.balance`).
 :mod:`.plausible` holds what an engine's numbers may be: their Python types at the API
 edge and the plausible range of every input (a bore of 1e300 m is finite, not an engine).
 
