@@ -24,6 +24,7 @@ from .design.flywheel import (  # noqa: E402
     lightest_disc,
     textbook_flywheel,
 )
+from .design.report import Report, report  # noqa: E402
 from .diagnostics.calibration import (  # noqa: E402
     Calibration,
     Diagnosis,
@@ -60,6 +61,8 @@ from .dynamics.loads import (  # noqa: E402
 from .dynamics.result import Orders, SpeedResult  # noqa: E402
 from .dynamics.steady import steady_state  # noqa: E402
 from .dynamics.transient import simulate  # noqa: E402
+from .design.balance import Balance, balance  # noqa: E402
+from .design.bearings import BearingLoads, bearing_loads  # noqa: E402
 from .engine.file import engine_from_dict, load_engine, preset_names  # noqa: E402
 from .engine.forces import (  # noqa: E402
     crank_forces,
@@ -82,7 +85,17 @@ from .engine.inertia import (  # noqa: E402
 )
 from .engine.kinematics import PistonMotion, RodMotion, mean_piston_speed, piston_motion, rod_motion  # noqa: E402
 from .engine.mechanism import engine_piston_motion  # noqa: E402
-from .engine.model import Articulated, Counterweights, Crankshaft, Engine, Geometry, Layout, Masses, Operating  # noqa: E402
+from .engine.model import (  # noqa: E402
+    Articulated,
+    Counterweights,
+    Crankshaft,
+    Engine,
+    Geometry,
+    Layout,
+    Masses,
+    Operating,
+    Torsion,
+)
 from .engine.pressure import (  # noqa: E402
     MotoredCycle,
     NoPressure,
@@ -107,12 +120,18 @@ from .logs.wheel import (  # noqa: E402
     parse_wheel,
 )
 from .results import Result  # noqa: E402
+from .torsion.campbell import Campbell, campbell  # noqa: E402
+from .torsion.model import TorsionalChain, crank_throw_stiffness, shaft_stiffness, torsional_chain  # noqa: E402
+from .torsion.modes import TorsionalModes, holzer_frequencies, torsional_modes  # noqa: E402
 
 __version__ = "0.1.0"
 
 __all__ = [
     "Articulated",
+    "Balance",
+    "BearingLoads",
     "Calibration",
+    "Campbell",
     "ConstantLoad",
     "Counterweights",
     "CrankTable",
@@ -152,6 +171,7 @@ __all__ = [
     "PressureSource",
     "PressureTable",
     "PropellerLoad",
+    "Report",
     "Result",
     "RodMotion",
     "RotorError",
@@ -165,14 +185,21 @@ __all__ = [
     "ToothErrors",
     "ToothTrack",
     "TorqueOrders",
+    "Torsion",
+    "TorsionalChain",
+    "TorsionalModes",
     "Wheel",
     "WiebeCycle",
     "analyze_log",
+    "balance",
+    "bearing_loads",
     "calibrate",
+    "campbell",
     "combustion_pattern",
     "contribution_index",
     "crank_forces",
     "crank_table",
+    "crank_throw_stiffness",
     "crank_train",
     "cylinder_gas_torques",
     "cylinder_inertia",
@@ -190,6 +217,7 @@ __all__ = [
     "gas_torque",
     "harmonic_response",
     "harmonic_torque",
+    "holzer_frequencies",
     "identify",
     "imep_pa",
     "indicated_power_w",
@@ -214,7 +242,9 @@ __all__ = [
     "reciprocating_inertia_torque",
     "reduced_inertia",
     "reduced_inertia_derivative",
+    "report",
     "rod_motion",
+    "shaft_stiffness",
     "simulate",
     "simulated_recording",
     "simulated_tooth_errors",
@@ -223,5 +253,7 @@ __all__ = [
     "tdc_from_pressure",
     "tdc_from_speed",
     "textbook_flywheel",
+    "torsional_chain",
+    "torsional_modes",
     "total_torque",
 ]

@@ -13,7 +13,7 @@ import subprocess
 import pytest
 from conftest import ROOT
 
-ROOMS = ["engine", "dynamics", "logs", "diagnostics", "design", "plotting", "cli"]
+ROOMS = ["engine", "dynamics", "logs", "diagnostics", "design", "torsion", "plotting", "cli"]
 
 
 def _private(name: str) -> bool:

@@ -1,6 +1,7 @@
 """The command line's conventions: one module per command group, thin, one rule for flags.
 
---json on every command with a result, --plot DIR on every command that draws (no --out),
+--json on every command with a result, --plot DIR on every command that draws (--out DIR
+only for `rotor report`, whose product is a whole folder),
 --quiet where a progress bar may show, --format only for tables; the command modules
 import the library's rooms lazily, never the top-level package, and build no JSON."""
 
@@ -22,7 +23,8 @@ COMMANDS = {
     if isinstance(action, argparse._SubParsersAction)
     for name, p in action.choices.items()
 }
-DRAWS = {"plot", "demo", "steady", "simulate", "analyze", "diagnose", "calibrate", "flywheel"}
+DRAWS = {"plot", "demo", "steady", "simulate", "analyze", "diagnose", "calibrate", "flywheel", "loads", "balance"}
+OUT = {"report"}  # its product is a folder (a page, figures and tables), named by --out DIR
 NO_RESULT = {"plot", "demo"}  # they only write plots / print a tour of several results
 PROGRESS = {"simulate", "demo"}  # they run transients long enough for a progress bar
 
@@ -43,6 +45,9 @@ def test_every_command_is_there():
         "diagnose",
         "calibrate",
         "flywheel",
+        "loads",
+        "balance",
+        "report",
         "demo",
     }
 
@@ -56,7 +61,7 @@ def test_json_on_every_command_with_a_result(name):
 def test_plot_dir_on_every_command_that_draws(name):
     opts = _options(COMMANDS[name])
     assert ("--plot" in opts) == (name in DRAWS)
-    assert "--out" not in opts
+    assert ("--out" in opts) == (name in OUT)
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))

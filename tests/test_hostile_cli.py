@@ -46,7 +46,22 @@ def places(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     np.savetxt(log, tooth_times(), fmt="%.12g")
     (root / "file").write_text("not a folder\n")
     (root / "dir").mkdir()
-    return {"log": str(log), "file": str(root / "file"), "dir": str(root / "dir"), "missing": str(root / "missing")}
+    (root / "full").mkdir()
+    (root / "full" / "notes.txt").write_text("not a report\n")
+    preset = (ROOT / "rotor" / "presets" / "4chn15.toml").read_text(encoding="utf-8")
+    bad_web = root / "bad_web.toml"
+    bad_web.write_text(preset + "\n[[counterweights]]\nweb = 9\nmass_kg = 2.0\nradius_m = 0.08\nangle_deg = 180\n")
+    bad_journals = root / "bad_journals.toml"
+    bad_journals.write_text(preset.replace("[crankshaft]\n", "[crankshaft]\nmain_journals = 4\n"))
+    return {
+        "log": str(log),
+        "file": str(root / "file"),
+        "dir": str(root / "dir"),
+        "full": str(root / "full"),
+        "missing": str(root / "missing"),
+        "bad_web": str(bad_web),
+        "bad_journals": str(bad_journals),
+    }
 
 
 def run(capsys: pytest.CaptureFixture, argv: list[str]) -> tuple[int, str, str]:
@@ -163,6 +178,34 @@ CASES = [
     (["flywheel", "4chn15", "--delta", "0.01", "--rpm", "0.001"], 2, "rpm = 0.001"),
     (["flywheel", "4chn15", "--delta", "0.01", "--shaft-inertia", "-1"], 2, "must be zero or positive"),
     (["flywheel", "4chn15", "--delta", "1e-300"], 2, "delta = 1e-300: a target below 1e-05"),
+    # loads
+    (["loads", "4chn15", "--rpm", "-5"], 2, "must be a positive number"),
+    (["loads", "4chn15", "--rpm", "1e300"], 2, "= 1e+300: must be a positive, finite speed"),
+    (["loads", "4chn15", "--step", "7"], 2, "must divide the 720° cycle"),
+    (["loads", "4chn15", "--step", "0"], 2, "must be a positive number"),
+    (["loads", "4chn15", "--step", "1e-9"], 2, "use a larger step"),
+    (["loads", "{bad_web}"], 2, "web 9 does not exist"),
+    (["loads", "{bad_journals}"], 2, "main_journals = 4"),
+    (["loads", "4chn15", "--plot", "{file}"], 2, "{file}: is a file, not a folder"),
+    (["loads", "nosuchpreset"], 2, "neither an engine file nor a preset"),
+    # balance
+    (["balance", "4chn15", "--orders", "0"], 2, "must be 1 or more"),
+    (["balance", "4chn15", "--orders", "1.5"], 2, "is not a whole number"),
+    (["balance", "4chn15", "--orders", "1000"], 2, "orders) = 1000"),
+    (["balance", "4chn15", "--rpm", "-5"], 2, "must be a positive number"),
+    (["balance", "{bad_web}"], 2, "web 9 does not exist"),
+    (["balance", "4chn15", "--plot", "{file}"], 2, "{file}: is a file, not a folder"),
+    # report
+    (["report", "4chn15"], 2, "the following arguments are required: --out"),
+    (["report", "4chn15", "--out", "{file}"], 2, "{file}: is a file, not a folder for the report"),
+    (["report", "4chn15", "--out", "{file}/sub"], 2, "{file}/sub: {file} is a file, not a folder"),
+    (["report", "4chn15", "--out", "{full}"], 2, "{full}: holds other files (notes.txt)"),
+    (["report", "4chn15", "--out", "{missing}/r", "--step", "7"], 2, "must divide the 720° cycle"),
+    (["report", "4chn15", "--out", "{missing}/r", "--rpm", "-5"], 2, "must be a positive number"),
+    (["report", "4chn15", "--out", "{missing}/r", "--delta", "0"], 2, "must be a positive number"),
+    (["report", "4chn15", "--out", "{missing}/r", "--delta", "1e-300"], 2, "delta = 1e-300"),
+    (["report", "4chn15", "--out", "{missing}/r", "--orders", "0"], 2, "must be 1 or more"),
+    (["report", "{bad_web}", "--out", "{missing}/r"], 2, "web 9 does not exist"),
     # demo
     (["demo", "--engine", "nosuchpreset"], 2, "neither an engine file nor a preset"),
     (["demo", "--bogus"], 2, "unrecognized arguments"),

@@ -96,6 +96,17 @@ def test_readme_figures(namespace):
     )
     assert float(np.mean(idle.imep_pa)) / 1e5 == pytest.approx(1.07, abs=0.005)  # "1.07 bar from the speed"
     assert float(np.mean(measured)) / 1e5 == pytest.approx(1.02, abs=0.005)  # "against 1.02 bar measured"
+    loads, bal = ns["loads"], ns["bal"]
+    k = int(np.argmax(loads.pin_q_N[:, 0]))
+    assert loads.angle_deg[k] == 370.0 and loads.pin_q_N[k, 0] / 1e3 == pytest.approx(
+        96.23, abs=0.005
+    )  # "96.23 kN at 370°"
+    assert float(np.mean(loads.pin_q_N[:, 0])) / 1e3 == pytest.approx(21.0, abs=0.1)  # "mean 21.0 kN"
+    orders = bal.to_json_dict()["orders"]
+    assert orders[1]["free_force_N"] == pytest.approx(18568, abs=0.5)  # "free_force_N 18568"
+    assert (
+        orders[0]["free_force_N"] < 1e-6 and max(o["free_moment_Nm"] for o in orders) < 1e-6
+    )  # "order 1 and all moments 0"
 
 
 SEED = re.compile(r"seeds? 00", re.IGNORECASE)  # file names such as seed004_accuracy.py are not text

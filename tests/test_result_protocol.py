@@ -10,7 +10,7 @@ from result_protocol import check_result_protocol
 import rotor
 from rotor.results import Result
 
-ROOMS = ["engine", "bearings", "balance", "dynamics", "logs", "diagnostics", "design"]
+ROOMS = ["engine", "bearings", "balance", "dynamics", "logs", "diagnostics", "design", "torsion"]
 
 
 def _factories():

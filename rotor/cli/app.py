@@ -25,12 +25,12 @@ import traceback
 from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
-from . import demo, design, diagnostics, engine, logs, run
+from . import demo, design, diagnostics, engine, logs, report, run
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser
 
 __all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error"]
 
-COMMAND_GROUPS = (engine, run, logs, diagnostics, design, demo)
+COMMAND_GROUPS = (engine, run, logs, diagnostics, design, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
 
 EPILOG = """\
@@ -40,6 +40,7 @@ One convention for options:
   --json      print the result as one JSON object (every command with a result)
   --plot DIR  write the command's plots as PNG files into DIR (every command that draws;
               `rotor plot` and `rotor demo` write to out/ unless given another DIR)
+  --out DIR   only `rotor report`: the folder of the whole report (HTML page, PNG, CSV)
   --quiet     no progress bar (the commands that may show one)
   --format    only for tables (`rotor table --format text|csv`)
 

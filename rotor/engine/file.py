@@ -2,10 +2,16 @@
 
 An engine file has the top-level keys ``name``, ``strokes`` and ``cylinders`` and the
 tables ``[geometry]``, ``[masses]``, ``[crankshaft]``, ``[layout]``, ``[pressure]``,
-``[operating]`` and, optionally, ``[articulated]``, ``[friction]`` and the list
-``[[counterweights]]`` (one table per counterweight: ``web``, ``mass_kg``, ``radius_m``,
-``angle_deg``); each becomes the module of the same name on :class:`rotor.Engine`. Unknown keys and tables are errors (a typo
-must not be ignored), and so are values of the wrong type.
+``[operating]`` and, optionally, ``[articulated]``, ``[friction]``, ``[torsion]`` (the
+multi-mass torsional chain, :class:`rotor.Torsion`) and the list ``[[counterweights]]``
+(one table per counterweight: ``web``, ``mass_kg``, ``radius_m``, ``angle_deg``); each
+becomes the module of the same name on :class:`rotor.Engine`. Unknown keys and tables are
+errors (a typo must not be ignored), and so are values of the wrong type.
+
+``[torsion]``'s constant inertias must sum to ``[crankshaft] inertia_kgm2`` (to 1e-6
+relative): the chain is the same crankshaft, flywheel and attachments split into masses,
+and rotor adds the rods and pistons to the throws itself, so that very stiff shafts give
+the rigid model.
 """
 
 from __future__ import annotations
@@ -22,7 +28,7 @@ import numpy as np
 
 from ..errors import EngineError
 from .friction import Friction
-from .model import Articulated, Counterweights, Crankshaft, Engine, Geometry, Layout, Masses, Operating
+from .model import Articulated, Counterweights, Crankshaft, Engine, Geometry, Layout, Masses, Operating, Torsion
 from .pressure import PRESSURE_KINDS
 
 __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path", "MAX_FILE_BYTES"]
@@ -30,12 +36,14 @@ __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path", "MA
 MAX_FILE_BYTES = 16 * 1024**2
 """The largest engine file read [bytes]: a pressure table of a million points fits well within."""
 
-_NUM, _NUMS, _INTS, _STR, _INT = (
+_NUM, _NUMS, _INTS, _STR, _INT, _STRS, _NUM_OR_NUMS = (
     "a number",
     "a list of numbers",
     "a list of whole numbers",
     "a string",
     "a whole number",
+    "a list of strings",
+    "a number or a list of numbers",
 )
 
 _TOP = {"name": _STR, "strokes": _INT, "cylinders": _INT}
@@ -47,6 +55,7 @@ _TABLES = {
     "operating": Operating,
     "articulated": Articulated,
     "friction": Friction,
+    "torsion": Torsion,
 }
 _REQUIRED_TABLES = ("geometry", "masses", "crankshaft", "layout", "operating")
 _LIST_KEYS = {
@@ -59,7 +68,18 @@ _LIST_KEYS = {
     "masters": _INTS,
     "throws": _INTS,
     "main_journals": _INT,
+    "inertias_kgm2": _NUMS,
+    "stiffnesses_Nm_per_rad": _NUMS,
+    "absolute_damping_Nms_per_rad": _NUMS,
+    "relative_damping_Nms_per_rad": _NUMS,
+    "modal_damping_ratio": _NUM_OR_NUMS,
+    "names": _STRS,
+    "throw_masses": _INTS,
+    "load_mass": _INT,
 }
+
+TORSION_SUM_RTOL = 1e-6
+"""How closely ``[torsion] inertias_kgm2`` must sum to ``[crankshaft] inertia_kgm2`` [-]."""
 _COUNTERWEIGHT_KEYS = {
     "web": (_INT, True),
     "mass_kg": (_NUM, True),
@@ -94,12 +114,19 @@ def _typed(table, key, value, kind):
         if isinstance(value, bool) or not isinstance(value, int):
             raise EngineError(f"{where} = {value!r}: expected {kind}")
         return value
+    if kind == _NUM_OR_NUMS:
+        kind = _NUMS if isinstance(value, list) else _NUM
     if kind == _NUM:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise EngineError(f"{where} = {value!r}: expected {kind}")
         return float(value)
     if not isinstance(value, list):
         raise EngineError(f"{where} = {value!r}: expected {kind}")
+    if kind == _STRS:
+        for i, v in enumerate(value, 1):
+            if not isinstance(v, str):
+                raise EngineError(f"{where}: item {i} is {v!r}, expected a string")
+        return list(value)
     want_int = kind == _INTS
     for i, v in enumerate(value, 1):
         ok = isinstance(v, int) if want_int else isinstance(v, (int, float))
@@ -213,7 +240,21 @@ def engine_from_dict(data: dict) -> Engine:
         parts["pressure"] = _build_pressure(data["pressure"], top["strokes"])
     if "counterweights" in data:
         parts["counterweights"] = _build_counterweights(data["counterweights"])
+    if "torsion" in data:
+        _check_torsion_sum(parts["torsion"], parts["crankshaft"])
     return Engine(**top, **parts)
+
+
+def _check_torsion_sum(torsion: Torsion, crankshaft: Crankshaft) -> None:
+    """``[torsion] inertias_kgm2`` split ``[crankshaft] inertia_kgm2`` into masses."""
+    total = float(np.sum(np.asarray(torsion.inertias_kgm2)))
+    J = float(crankshaft.inertia_kgm2)
+    if not abs(total - J) <= TORSION_SUM_RTOL * J:
+        raise EngineError(
+            f"[torsion] inertias_kgm2 sum to {total:.7g} kg·m², but [crankshaft] inertia_kgm2 = {J:.7g}: the chain's "
+            "constant inertias (without the rods and pistons, which rotor adds to the throws) must sum to the "
+            f"crankshaft's, to {TORSION_SUM_RTOL:g} relative (change one of them by {J - total:+.7g} kg·m²)"
+        )
 
 
 def preset_names() -> list[str]:

@@ -50,6 +50,7 @@ __all__ = [
     "Operating",
     "Articulated",
     "Counterweights",
+    "Torsion",
     "Engine",
 ]
 
@@ -344,6 +345,114 @@ class Articulated(eqx.Module):
         check_fields_plausible(self)
 
 
+def _tuple_of_strs(x):
+    if isinstance(x, (str, bytes)):
+        raise TypeError(f"[torsion] names = {x!r:.40}: expected a list of strings, one per mass")
+    out = tuple(x)
+    for v in out:
+        if not isinstance(v, str):
+            raise TypeError(f"[torsion] names: expected strings, got {type(v).__name__} {v!r:.40}")
+    return out
+
+
+class Torsion(eqx.Module):
+    """``[torsion]``: the crankshaft as a chain of masses on torsional springs (optional;
+    the rigid one-mass model is the default everywhere, :mod:`rotor.torsion` uses this).
+
+    **Fields:**
+
+    - ``inertias_kgm2``: the *constant* inertia of each mass, from the front [kg·m²]: the
+      damper or pulley, gear train, the crank throws without their rods and pistons, the
+      flywheel, …; they sum to ``[crankshaft] inertia_kgm2`` (the engine file checks it),
+      and rotor adds each cylinder's mechanism, I_cyl(θ), to its throw's mass itself.
+    - ``stiffnesses_Nm_per_rad``: each shaft section's stiffness, between masses i and
+      i + 1 [N·m/rad] (one fewer than the masses).
+    - ``throw_masses``: the mass number (1-based, from the front) of each crank throw, in
+      throw order (static).
+    - ``names``: a name per mass (static; optional).
+    - ``load_mass``: the mass number (1-based) where the load acts (static; default the last).
+    - ``absolute_damping_Nms_per_rad``: viscous damping of each mass to the ground
+      [N·m·s/rad] (optional, one per mass).
+    - ``relative_damping_Nms_per_rad``: viscous damping in each shaft section [N·m·s/rad]
+      (optional, one per section).
+    - ``modal_damping_ratio``: one ratio ζ [-] for every elastic mode, or one per elastic
+      mode (optional).
+    """
+
+    inertias_kgm2: jnp.ndarray = eqx.field(converter=number("torsion", "inertias_kgm2"))
+    stiffnesses_Nm_per_rad: jnp.ndarray = eqx.field(converter=number("torsion", "stiffnesses_Nm_per_rad"))
+    throw_masses: tuple = eqx.field(static=True, converter=_tuple_of_ints)
+    names: tuple = eqx.field(static=True, default=(), converter=_tuple_of_strs)
+    load_mass: int | None = eqx.field(static=True, default=None)
+    absolute_damping_Nms_per_rad: jnp.ndarray | None = eqx.field(
+        converter=number("torsion", "absolute_damping_Nms_per_rad", optional=True), default=None
+    )
+    relative_damping_Nms_per_rad: jnp.ndarray | None = eqx.field(
+        converter=number("torsion", "relative_damping_Nms_per_rad", optional=True), default=None
+    )
+    modal_damping_ratio: jnp.ndarray | None = eqx.field(
+        converter=number("torsion", "modal_damping_ratio", optional=True), default=None
+    )
+    table: ClassVar[str] = "torsion"
+
+    def __check_init__(self):
+        t = self.table
+        J, k = self.inertias_kgm2, self.stiffnesses_Nm_per_rad
+        if jnp.ndim(J) != 1 or J.shape[0] < 2:
+            raise EngineError(f"{where(t, 'inertias_kgm2')}: needs a list of two or more inertias, one per mass")
+        n = J.shape[0]
+        if jnp.ndim(k) != 1 or k.shape[0] != n - 1:
+            raise EngineError(
+                f"{where(t, 'stiffnesses_Nm_per_rad')}: needs one stiffness per shaft section, {n - 1} for {n} "
+                f"masses, got {np.size(k)}"
+            )
+        check_positive(t, "inertias_kgm2", J)
+        check_positive(t, "stiffnesses_Nm_per_rad", k)
+        for key, size, what in (
+            ("absolute_damping_Nms_per_rad", n, "mass"),
+            ("relative_damping_Nms_per_rad", n - 1, "shaft section"),
+        ):
+            v = getattr(self, key)
+            if v is None:
+                continue
+            if jnp.ndim(v) != 1 or v.shape[0] != size:
+                raise EngineError(f"{where(t, key)}: needs one value per {what} ({size}), got {np.size(v)}")
+            check_positive(t, key, v, allow_zero=True)
+        z = self.modal_damping_ratio
+        if z is not None:
+            if not (jnp.ndim(z) == 0 or (jnp.ndim(z) == 1 and z.shape[0] == n - 1)):
+                raise EngineError(
+                    f"{where(t, 'modal_damping_ratio')}: needs one ratio for every mode or one per elastic mode "
+                    f"({n - 1}), got {np.size(z)}"
+                )
+            check_positive(t, "modal_damping_ratio", z, allow_zero=True)
+        if self.names and len(self.names) != n:
+            raise EngineError(f"{where(t, 'names')}: needs one name per mass ({n}), got {len(self.names)}")
+        if not self.throw_masses:
+            raise EngineError(f"{where(t, 'throw_masses')}: give the mass number (1…{n}) of each crank throw")
+        for m in self.throw_masses:
+            if not 1 <= m <= n:
+                raise EngineError(
+                    f"{where(t, 'throw_masses')} = {list(self.throw_masses)}: mass {m} does not exist (1…{n})"
+                )
+        if len(set(self.throw_masses)) != len(self.throw_masses):
+            raise EngineError(
+                f"{where(t, 'throw_masses')} = {list(self.throw_masses)}: each crank throw needs its own mass"
+            )
+        lm = self.load_mass
+        if lm is not None:
+            if isinstance(lm, bool) or not isinstance(lm, (int, np.integer)):
+                raise TypeError(f"{where(t, 'load_mass')} = {lm!r}: expected a whole number (a mass number 1…{n})")
+            if not 1 <= lm <= n:
+                raise EngineError(f"{where(t, 'load_mass')} = {lm}: mass {lm} does not exist (1…{n})")
+        check_fields_plausible(self)
+
+    @property
+    def size(self) -> int:
+        """The number of masses."""
+        return int(self.inertias_kgm2.shape[0])
+
+
 def _firing_tdc_deg(xp, tdc_deg, order, strokes):
     """Engine angle [deg] of each cylinder's firing TDC, walking the firing order.
 
@@ -404,7 +513,8 @@ class Engine(eqx.Module):
 
     **Fields:** ``name``, ``strokes`` (2 or 4), ``cylinders`` (static); ``geometry``,
     ``masses``, ``crankshaft``, ``layout``, ``pressure``, ``operating`` and, optionally,
-    ``articulated`` and ``friction`` — one per table of the file.
+    ``articulated``, ``friction``, ``counterweights`` and ``torsion`` — one per table of
+    the file.
     """
 
     name: str = eqx.field(static=True)
@@ -419,6 +529,7 @@ class Engine(eqx.Module):
     articulated: Articulated | None = None
     friction: Friction | None = None
     counterweights: Counterweights | None = None
+    torsion: Torsion | None = None
 
     def __check_init__(self):
         self._check_types()
@@ -461,6 +572,7 @@ class Engine(eqx.Module):
         if self.articulated is not None:
             self._check_articulated()
         self._check_shaft()
+        self._check_torsion()
         self._check_derived()
 
     def _check_types(self):
@@ -559,7 +671,7 @@ class Engine(eqx.Module):
         self._check_types()
         for part in (self.geometry, self.masses, self.crankshaft, self.layout, self.pressure, self.operating):
             _recheck(part)
-        for optional_part in (self.articulated, self.friction, self.counterweights):
+        for optional_part in (self.articulated, self.friction, self.counterweights, self.torsion):
             if optional_part is not None:
                 _recheck(optional_part)
         type(self).__check_init__(self)
@@ -638,6 +750,18 @@ class Engine(eqx.Module):
                         f"[[counterweights]] {i}: web {w} does not exist: the crankshaft has {nt} "
                         f"throw{'s' if nt > 1 else ''}, webs 1…{2 * nt} (2k − 1 and 2k flank throw k)"
                     )
+
+    def _check_torsion(self):
+        """The ``[torsion]`` chain has a mass for every crank throw."""
+        t = self.torsion
+        if t is None:
+            return
+        nt = self.throw_count
+        if len(t.throw_masses) != nt:
+            raise EngineError(
+                f"{where('torsion', 'throw_masses')} = {list(t.throw_masses)}: needs the mass number of each of the "
+                f"{nt} crank throw{'s' if nt > 1 else ''}, got {len(t.throw_masses)}"
+            )
 
     @property
     def throw_index(self) -> tuple[int, ...]:
@@ -718,4 +842,5 @@ _TABLE_TYPES = (
     ("articulated", Articulated, True),
     ("friction", Friction, True),
     ("counterweights", Counterweights, True),
+    ("torsion", Torsion, True),
 )

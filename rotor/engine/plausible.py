@@ -46,6 +46,11 @@ than a mistake of units can hide in:
 - ``[articulated] rod_length_m``: 0.001 … 20 m
 - ``[articulated] knuckle_angle_deg``: −3600 … 3600 deg
 - ``[articulated] rod_knuckle_kg``: 0 … 1e5 kg
+- ``[torsion] inertias_kgm2``: 1e-12 … 1e8 kg·m²
+- ``[torsion] stiffnesses_Nm_per_rad``: 1e-3 … 1e12 N·m/rad
+- ``[torsion] absolute_damping_Nms_per_rad``: 0 … 1e9 N·m·s/rad
+- ``[torsion] relative_damping_Nms_per_rad``: 0 … 1e9 N·m·s/rad
+- ``[torsion] modal_damping_ratio``: 0 … 0.99
 
 Whether a key may be zero is decided by the table's own check (a bore must be > 0, a
 rotating mass may be 0); the range bounds what is finite but absurd.
@@ -119,6 +124,11 @@ PLAUSIBLE: dict[tuple[str, str], tuple[float, float, str, str]] = {
     ("articulated", "rod_length_m"): (1e-3, 20.0, "m", "knuckle pin to piston pin, e.g. 0.2"),
     ("articulated", "knuckle_angle_deg"): (-3600.0, 3600.0, "deg", "an angle in degrees, e.g. 60"),
     ("articulated", "rod_knuckle_kg"): (0.0, 1e5, "kg", "e.g. 0.3"),
+    ("torsion", "inertias_kgm2"): (1e-12, 1e8, "kg·m²", "one mass of the chain, e.g. 0.03 for a throw"),
+    ("torsion", "stiffnesses_Nm_per_rad"): (1e-3, 1e12, "N·m/rad", "one shaft section, e.g. 1.2e6"),
+    ("torsion", "absolute_damping_Nms_per_rad"): (0.0, 1e9, "N·m·s/rad", "e.g. 20 for a viscous damper"),
+    ("torsion", "relative_damping_Nms_per_rad"): (0.0, 1e9, "N·m·s/rad", "e.g. 5"),
+    ("torsion", "modal_damping_ratio"): (0.0, 0.99, "", "a fraction of critical damping, e.g. 0.02"),
 }
 """(table, key) → (low, high, unit, hint): the plausible range of an input (see the module doc)."""
 

@@ -73,14 +73,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..checks import check_size
+from ..engine.forces import cylinder_pressure
+from ..engine.mechanism import engine_piston_motion
+from ..engine.model import Engine
+from ..engine.plausible import check_results_finite, check_speed_rpm, require_engine, require_number, require_whole
+from ..engine.shaft import journal_count, journal_positions_m, span_of_throw, throw_positions_m, web_positions_m
 from ..errors import EngineError
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
-from .forces import cylinder_pressure
-from .mechanism import engine_piston_motion
-from .model import Engine
-from .plausible import check_results_finite, check_speed_rpm, require_engine, require_number, require_whole
-from .shaft import journal_count, journal_positions_m, span_of_throw, throw_positions_m, web_positions_m
 
 __all__ = ["BearingLoads", "bearing_loads", "wear_indices", "rod_pin_forces", "load_direction_rad"]
 
@@ -200,7 +200,7 @@ def rod_pin_forces(
 @dataclass(frozen=True, eq=False, repr=False)
 class BearingLoads(Result):
     """Crank-pin, big-end, main-journal and main-bearing loads, wear diagrams and running
-    torques over one cycle at constant speed (frames and signs: :mod:`rotor.engine.bearings`).
+    torques over one cycle at constant speed (frames and signs: :mod:`rotor.design.bearings`).
 
     **Attributes:** ``engine_name``; ``rpm`` [rev/min]; ``model`` (piston kinematics);
     ``step_deg`` [deg]; ``crank_radius_m`` R [m]; ``angle_deg``: engine crank angle, 0 …
@@ -640,7 +640,7 @@ def bearing_loads(
 ) -> BearingLoads:
     """Crank-pin, big-end, main-journal and main-bearing loads, wear diagrams and running
     torques over one cycle at constant crank speed (Shishkov (2014) §3.2.4–3.2.9; frames and
-    signs in :mod:`rotor.engine.bearings`).
+    signs in :mod:`rotor.design.bearings`).
 
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`.

@@ -54,14 +54,14 @@ from typing import Any
 import equinox as eqx
 import numpy as np
 
+from ..engine.kinematics import rod_motion
+from ..engine.mechanism import engine_piston_motion
+from ..engine.model import Engine
+from ..engine.plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
+from ..engine.shaft import journal_positions_m, throw_positions_m, web_positions_m
 from ..errors import EngineError
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
-from .kinematics import rod_motion
-from .mechanism import engine_piston_motion
-from .model import Engine
-from .plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
-from .shaft import journal_positions_m, throw_positions_m, web_positions_m
 
 __all__ = [
     "Balance",
@@ -175,7 +175,7 @@ def _shafts(spectra: dict, scales: dict, omega: float) -> tuple[dict[str, Any], 
 @dataclass(frozen=True, eq=False, repr=False)
 class Balance(Result):
     """The free forces and moments of an engine's inertia by order, with and without its
-    counterweights (:func:`balance`; conventions in :mod:`rotor.engine.balance`).
+    counterweights (:func:`balance`; conventions in :mod:`rotor.design.balance`).
 
     **Fields:** ``engine_name``; ``rpm`` [rev/min]; ``model`` (``"exact"`` or
     ``"series"`` kinematics); ``orders``: 1…K; ``force`` and ``moment``: for each of
@@ -414,7 +414,7 @@ def _fft_orders(z: np.ndarray, orders: int) -> np.ndarray:
 def balance(engine: Engine, rpm: float | None = None, *, orders: int = 6, model: str = "exact") -> Balance:
     """The free inertia forces and moments of ``engine`` by order, with and without the
     counterweights of its file (Shishkov (2014) §3.2.10; conventions in
-    :mod:`rotor.engine.balance`).
+    :mod:`rotor.design.balance`).
 
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine` (any layout: inline, V, flat, radial, articulated).
