@@ -30,7 +30,7 @@ renames, the page last. A folder holding anything else is refused, never overwri
 Where the figures are drawn: the diagrams of the results (bearing loads, balance,
 flywheel, the crank table's kinematics) draw themselves in :mod:`rotor.plotting`; the
 few line diagrams that belong to this page alone (forces, tangential forces, the
-turning-moment diagram) are drawn here on Axes from :func:`rotor.plotting.new_axes`.
+turning-moment diagram) are in :mod:`rotor.plotting.report`.
 """
 
 from __future__ import annotations
@@ -59,7 +59,8 @@ from ..engine.plausible import check_results_finite, check_speed_rpm, require_en
 from ..engine.table import CrankTable, crank_table
 from ..errors import EngineError
 from ..fileio import csv_text
-from ..plotting.common import angle_axis, new_axes, save_figure
+from ..plotting.common import save_figure
+from ..plotting.report import plot_curves, plot_tangential_forces, plot_turning_moment
 from ..results import json_safe
 from ..units import RAD_S_PER_RPM
 from .balance import balance
@@ -397,75 +398,6 @@ def _csv_value(v: Any, numeric: bool, table: str, column: str) -> str:
     return _csv_field(str(v))
 
 
-# ----------------------------------------------------------------------------- drawings of this page
-def _draw_lines(
-    angle: np.ndarray, curves: Sequence[tuple[np.ndarray, str]], ylabel: str, title: str, cycle: float
-) -> Any:
-    """Several curves over the crank angle on one new Axes."""
-    ax = new_axes(None)
-    for y, label in curves:
-        ax.plot(angle, y, lw=1.4, label=label)
-    ax.axhline(0, color="k", lw=0.6)
-    ax.set_xlabel("crank angle [deg]")
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8, ncol=3)
-    angle_axis(ax, cycle)
-    return ax
-
-
-def _draw_tangential(
-    angle: np.ndarray, t_cyl: dict[int, np.ndarray], t_sum: np.ndarray, t_mean: float, title: str, cycle: float
-) -> Any:
-    ax = new_axes(None)
-    for c, y in t_cyl.items():
-        ax.plot(angle, y / 1e3, lw=0.9, alpha=0.6, label=f"T, cylinder {c}")
-    ax.plot(angle, t_sum / 1e3, lw=1.8, color="k", label="T_Σ")
-    ax.axhline(t_mean / 1e3, color="C3", ls="--", lw=1.2, label=f"T_Σ mean {t_mean / 1e3:.2f} kN")
-    ax.axhline(0, color="k", lw=0.5)
-    ax.set_xlabel("crank angle [deg]")
-    ax.set_ylabel("tangential force [kN]")
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the plot: many cylinders
-    angle_axis(ax, cycle)
-    return ax
-
-
-def _draw_turning_moment(
-    angle: np.ndarray, torque: np.ndarray, mean: float, work: np.ndarray, excess: float, title: str, cycle: float
-) -> Any:
-    """The total torque with its mean, the areas above and below it, and the work
-    ∫(M − M_mean)dθ whose largest swing is the excess work."""
-    top, bottom = new_axes(None, 2, figsize=(8, 6.5))
-    top.plot(angle, torque, color="k", lw=1.5, label="total torque M_Σ")
-    top.axhline(mean, color="C3", ls="--", lw=1.2, label=f"mean {mean:.0f} N·m")
-    top.fill_between(angle, torque, mean, where=torque >= mean, color="C2", alpha=0.3, label="excess (above mean)")
-    top.fill_between(angle, torque, mean, where=torque < mean, color="C0", alpha=0.3, label="deficit (below mean)")
-    top.axhline(0, color="k", lw=0.5)
-    top.set_ylabel("torque [N·m]")
-    top.set_title(title, fontsize=10)
-    top.legend(fontsize=8, ncol=2)
-    angle_axis(top, cycle)
-    bottom.plot(angle, work, color="C4", lw=1.5, label="∫(M_Σ − M_mean)dθ")
-    i_lo, i_hi = int(np.argmin(work)), int(np.argmax(work))
-    bottom.plot([angle[i_lo], angle[i_hi]], [work[i_lo], work[i_hi]], "o", color="C3")
-    bottom.axhline(work[i_lo], color="C3", lw=0.6, ls=":")
-    bottom.axhline(work[i_hi], color="C3", lw=0.6, ls=":")
-    bottom.annotate(
-        f"L_excess = {excess:.1f} J",
-        xy=(angle[i_hi], 0.5 * (work[i_lo] + work[i_hi])),
-        xytext=(8, 0),
-        textcoords="offset points",
-        color="C3",
-        fontsize=9,
-    )
-    bottom.set_xlabel("crank angle [deg]")
-    bottom.set_ylabel("work [J]")
-    bottom.legend(fontsize=8)
-    angle_axis(bottom, cycle)
-    return np.array([top, bottom])
-
-
 # ----------------------------------------------------------------------------- the calculation
 def _figure_step(step_deg: float) -> float:
     """The largest step ≤ :data:`FIGURE_STEP_DEG` that divides ``step_deg`` (``step_deg``
@@ -571,7 +503,7 @@ def _kinematics_and_forces(page: _Page, table: CrankTable, fine: CrankTable, cyc
         "on the cylinder wall, the force along the crank Z and the tangential force T (Shishkov 2014, §3.2.2–3.2.3)."
     )
     page.figure(
-        _draw_lines(
+        plot_curves(
             a,
             [(c["pg_N"] / 1e3, "gas force P_g"), (c["pj_N"] / 1e3, "inertia force P_j"), (c["psum_N"] / 1e3, "P_Σ")],
             "force [kN]",
@@ -583,7 +515,7 @@ def _kinematics_and_forces(page: _Page, table: CrankTable, fine: CrankTable, cyc
         "суммарная сила)",
     )
     page.figure(
-        _draw_lines(
+        plot_curves(
             a,
             [
                 (c["k_N"] / 1e3, "along the rod K (P_ш)"),
@@ -788,7 +720,7 @@ def _torque_section(
         f"mean {mean:.1f} N·m (Shishkov 2014, §3.2.11)."
     )
     page.figure(
-        _draw_tangential(a, tq["t_cyl_N"], tq["t_sum_N"], mean / R, f"{head}: tangential forces", cycle),
+        plot_tangential_forces(a, tq["t_cyl_N"], tq["t_sum_N"], mean / R, f"{head}: tangential forces", cycle),
         "tangential",
         "Tangential force T, total tangential force TΣ and its mean TΣ mean",
     )
@@ -812,7 +744,7 @@ def _torque_section(
         "m = 4·J<sub>flywheel</sub>/D² at a mean diameter D = 2.5·S."
     )
     page.figure(
-        _draw_turning_moment(a, total, mean, work, excess, f"{head}: turning-moment diagram", cycle),
+        plot_turning_moment(a, total, mean, work, excess, f"{head}: turning-moment diagram", cycle),
         "turning_moment",
         "Turning-moment diagram: total torque, its mean, and the excess work",
     )
