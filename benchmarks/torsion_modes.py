@@ -82,7 +82,7 @@ def main(argv=None):
             lambda: rotor.torsional_modes(chain),
         ),
         "holzer_100_masses": (
-            "rotor.holzer_frequencies(chain): Sturm bisection + Brent on the Holzer residual (numpy)",
+            "rotor.holzer_frequencies(chain): Sturm bisection, then bisection on the Holzer residual (numpy)",
             lambda: rotor.holzer_frequencies(chain),
         ),
         "campbell_arrays_100_masses_1000_speeds": (

@@ -14,6 +14,8 @@ import jax as _jax
 _jax.config.update("jax_enable_x64", True)
 
 from .cache import enable_compilation_cache  # noqa: E402
+from .design.balance import Balance, balance  # noqa: E402
+from .design.bearings import BearingLoads, bearing_loads  # noqa: E402
 from .design.flywheel import (  # noqa: E402
     DiscFlywheel,
     FlywheelDesign,
@@ -61,8 +63,6 @@ from .dynamics.loads import (  # noqa: E402
 from .dynamics.result import Orders, SpeedResult  # noqa: E402
 from .dynamics.steady import steady_state  # noqa: E402
 from .dynamics.transient import simulate  # noqa: E402
-from .design.balance import Balance, balance  # noqa: E402
-from .design.bearings import BearingLoads, bearing_loads  # noqa: E402
 from .engine.file import engine_from_dict, load_engine, preset_names  # noqa: E402
 from .engine.forces import (  # noqa: E402
     crank_forces,

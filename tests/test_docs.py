@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 API = DOCS / "api"
 MKDOCS = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
-ROOMS = ("engine", "dynamics", "logs", "diagnostics", "design")
+ROOMS = ("engine", "dynamics", "logs", "diagnostics", "design", "torsion")
 ENTRY = re.compile(r"^::: rotor\.(\w+)\s*$", re.MULTILINE)
 
 
