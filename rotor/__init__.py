@@ -123,6 +123,8 @@ from .results import Result  # noqa: E402
 from .torsion.campbell import Campbell, campbell  # noqa: E402
 from .torsion.model import TorsionalChain, crank_throw_stiffness, shaft_stiffness, torsional_chain  # noqa: E402
 from .torsion.modes import TorsionalModes, holzer_frequencies, torsional_modes  # noqa: E402
+from .torsion.response import TorsionalResponse, TorsionalSweep, torsional_response, torsional_sweep  # noqa: E402
+from .torsion.transient import TorsionalRun, torsional_simulate  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -188,6 +190,9 @@ __all__ = [
     "Torsion",
     "TorsionalChain",
     "TorsionalModes",
+    "TorsionalResponse",
+    "TorsionalRun",
+    "TorsionalSweep",
     "Wheel",
     "WiebeCycle",
     "analyze_log",
@@ -255,5 +260,8 @@ __all__ = [
     "textbook_flywheel",
     "torsional_chain",
     "torsional_modes",
+    "torsional_response",
+    "torsional_simulate",
+    "torsional_sweep",
     "total_torque",
 ]

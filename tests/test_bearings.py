@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.engine.articulated import knuckle_velocity_sq
 from rotor.design.bearings import load_direction_rad, wear_indices
+from rotor.engine.articulated import knuckle_velocity_sq
 from rotor.engine.mechanism import slave_geometry
 from rotor.engine.shaft import journal_positions_m, throw_positions_m, web_positions_m
 from rotor.units import RAD_S_PER_RPM

@@ -24,6 +24,7 @@ COMMANDS = {
     for name, p in action.choices.items()
 }
 DRAWS = {"plot", "demo", "steady", "simulate", "analyze", "diagnose", "calibrate", "flywheel", "loads", "balance"}
+DRAWS |= {"modes", "campbell", "torsion"}
 OUT = {"report"}  # its product is a folder (a page, figures and tables), named by --out DIR
 NO_RESULT = {"plot", "demo"}  # they only write plots / print a tour of several results
 PROGRESS = {"simulate", "demo"}  # they run transients long enough for a progress bar
@@ -47,6 +48,9 @@ def test_every_command_is_there():
         "flywheel",
         "loads",
         "balance",
+        "modes",
+        "campbell",
+        "torsion",
         "report",
         "demo",
     }

@@ -25,12 +25,12 @@ import traceback
 from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
-from . import demo, design, diagnostics, engine, logs, report, run
+from . import demo, design, diagnostics, engine, logs, report, run, torsion
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser
 
 __all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error"]
 
-COMMAND_GROUPS = (engine, run, logs, diagnostics, design, report, demo)
+COMMAND_GROUPS = (engine, run, logs, diagnostics, design, torsion, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
 
 EPILOG = """\

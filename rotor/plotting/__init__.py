@@ -18,6 +18,7 @@ from .engine import plot_inertia, plot_table, plot_torque
 from .logs import plot_log_analysis, plot_tooth_errors
 from .speed import plot_cycle_torque, plot_orders, plot_speed, plot_speed_time
 from .torsion import plot_campbell, plot_mode_shapes
+from .torsion_response import plot_torsional_response, plot_torsional_run, plot_torsional_sweep
 
 __all__ = [
     "angle_axis",
@@ -46,6 +47,9 @@ __all__ = [
     "plot_tooth_errors",
     "plot_torque",
     "plot_torque_orders",
+    "plot_torsional_response",
+    "plot_torsional_run",
+    "plot_torsional_sweep",
     "plot_wear",
     "save_figure",
 ]

@@ -98,7 +98,7 @@ class _Scene(eqx.Module):
         A, dA = dc.inertias(theta)
         torque = dc.gas_torques(theta) - dc.friction_torques(omega) - dc.damping_torques(omega, self.omega_ref)
         torque = torque.at[dc.load_mass].add(-self.load.torque(omega[dc.load_mass], t))
-        shaft = dc.section_torques(twist, omega[:-1] - omega[1:])
+        shaft = dc.stiffnesses * twist  # the shafts' springs (their damping is in dc.damping)
         torque = torque.at[:-1].add(-shaft).at[1:].add(shaft)
         accel = (torque - 0.5 * dA * omega**2) / A
         T = self.time_scale
@@ -179,12 +179,12 @@ class TorsionalRun(Result):
     ``cycle_rad`` [rad]; ``wall_s``.
     """
 
-    t: Array
-    angle_rad: Array
-    omega: Array
-    twist_rad: Array
-    torque_Nm: Array
-    energy_J: Array
+    t: ArrayLike
+    angle_rad: ArrayLike
+    omega: ArrayLike
+    twist_rad: ArrayLike
+    torque_Nm: ArrayLike
+    energy_J: ArrayLike
     sampled_by: str
     points_per_cycle: int
     cycles: int
@@ -390,8 +390,7 @@ def torsional_simulate(
     """
     call = "torsional_simulate"
     start = time.perf_counter()
-    free = isinstance(engine, TorsionalChain)
-    if free:
+    if isinstance(engine, TorsionalChain):
         if chain is not None:
             raise EngineError(f"{call}: give the chain once, as the first argument or as chain=, not both")
         chain, eng = engine, None
@@ -399,8 +398,9 @@ def torsional_simulate(
         eng = engine
     else:
         hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, bytes)) else ""
-        raise TypeError(f"{call}(engine): expected a rotor.Engine or a rotor.TorsionalChain{hint}, got "
-                        f"{what_it_is(engine)}")
+        raise TypeError(
+            f"{call}(engine): expected a rotor.Engine or a rotor.TorsionalChain{hint}, got {what_it_is(engine)}"
+        )
     if solver not in SOLVERS:
         raise EngineError(f"{call}(solver) = {solver!r}: one of {', '.join(map(repr, SOLVERS))}")
     rtol = require_number(rtol, f"{call}(rtol)")
@@ -412,8 +412,9 @@ def torsional_simulate(
         rpm = 0.0 if eng is None else float(eng.operating.rpm)
     rpm = require_number(rpm, f"{call}(rpm)", "rpm")
     if eng is not None and not (math.isfinite(rpm) and lo <= rpm <= hi):
-        raise EngineError(f"{call}(rpm) = {rpm!r}: an engine run needs a positive, finite speed between {lo:g} and "
-                          f"{hi:g} rpm")
+        raise EngineError(
+            f"{call}(rpm) = {rpm!r}: an engine run needs a positive, finite speed between {lo:g} and {hi:g} rpm"
+        )
     if eng is None and not (math.isfinite(rpm) and abs(rpm) <= hi):
         raise EngineError(f"{call}(rpm) = {rpm!r}: must be a finite speed below {hi:g} rpm")
     dc = driven_chain(eng, chain, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
@@ -425,10 +426,10 @@ def torsional_simulate(
     # the load
     if load is None:
         m0 = float(dc.mean_gas_torque()) - float(jnp.sum(dc.friction_torques(jnp.full(n, omega_ref))))
-        load_obj: Load = ConstantLoad(m0 if eng is not None else 0.0)
+        load_obj: Load = ConstantLoad(jnp.asarray(m0 if eng is not None else 0.0))
         load_value: float | None = m0 if eng is not None else None
     elif isinstance(load, (int, float)) and not isinstance(load, bool):
-        load_obj, load_value = ConstantLoad(float(load)), float(load)
+        load_obj, load_value = ConstantLoad(jnp.asarray(float(load))), float(load)
     elif isinstance(load, Load):
         load_obj, load_value = load, (float(load.torque_Nm) if isinstance(load, ConstantLoad) else None)
     else:
