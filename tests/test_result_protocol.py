@@ -10,7 +10,7 @@ from result_protocol import check_result_protocol
 import rotor
 from rotor.results import Result
 
-ROOMS = ["engine", "bearings", "balance", "dynamics", "logs", "diagnostics", "design", "torsion"]
+ROOMS = ["engine", "bearings", "balance", "dynamics", "logs", "diagnostics", "design", "torsion", "torsion_response"]
 
 
 def _factories():

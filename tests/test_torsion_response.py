@@ -88,13 +88,14 @@ def test_free_vibration_conserves_energy_over_1000_periods():
 
 # ----------------------------------------------------------------------------- (c) vs the time domain
 def test_forced_response_agrees_with_a_settled_time_domain_run(mwm, chain, response):
-    """From the response's state with the shafts twisted 0.1 mrad more (no change in angular
-    momentum), the damped chain settles back onto the response within three cycles."""
+    """From the response's state with the shafts twisted by up to 0.05 mrad more and the masses'
+    speeds stirred (no change in angular momentum), the damped chain settles back onto the
+    response within three cycles (Dopri8, rtol 1e-10)."""
     a0 = np.asarray(response.angle_rad)[:, 0].copy()
     w0 = np.asarray(response.omega)[:, 0].copy()
-    a0[:-1] += 1e-4 * np.sin(np.arange(8))  # the flywheel (reference) keeps its angle
+    a0[:-1] += 5e-5 * np.sin(np.arange(8))  # the flywheel (reference) keeps its angle
     J = np.asarray(chain.inertias_kgm2)
-    dw = 0.05 * np.cos(np.arange(9))
+    dw = 0.025 * np.cos(np.arange(9))
     w0 += dw - np.sum(J * dw) / np.sum(J)
     run = torsional_simulate(mwm, RPM, cycles=3, initial=(a0, w0), load=response.load_torque_Nm, rtol=1e-10)
     assert run.solver == "dopri8"  # the real chain is not stiff at this speed
@@ -102,8 +103,8 @@ def test_forced_response_agrees_with_a_settled_time_domain_run(mwm, chain, respo
     w = np.asarray(run.omega)
     first = np.max(np.abs(w[:P].T - np.asarray(response.omega))) / w_m
     last = np.max(np.abs(w[-P:].T - np.asarray(response.omega))) / w_m
-    assert first > 1e-5  # the start was off the periodic state
-    assert last < 1e-6  # measured 3e-7
+    assert first > 1e-4  # the start was off the periodic state (measured 2e-3)
+    assert last < 1e-6  # measured 2.5e-7 (1.4e-7 of it the 0.25° grid's collocation error)
     torque = np.asarray(run.torque_Nm)[-P:].T
     assert np.max(np.abs(torque - np.asarray(response.torque_Nm))) < 1e-5 * np.max(np.abs(response.torque_Nm))
 

@@ -444,7 +444,8 @@ def balance(engine: Engine, rpm: float | None = None, *, orders: int = 6, model:
     g, masses, lay = engine.geometry, engine.masses, engine.layout
     R = float(g.crank_radius_m)
     slaves = engine.slave_index()
-    m_rec_master, m_rot_master = (float(m) for m in masses.two_mass_split(g.rod_length_m))
+    m_rec_master = float(masses.two_mass_split(g.rod_length_m)[0])
+    m_rot_master = float(masses.rotating_at_pin_kg(g.rod_length_m))
     cyl = range(engine.cylinders)
     m_rec = np.array([float(masses.reciprocating_kg) if i in slaves else m_rec_master for i in cyl])
     m_rot = np.array([0.0 if i in slaves else m_rot_master for i in cyl])

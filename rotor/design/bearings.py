@@ -695,7 +695,7 @@ def bearing_loads(
     slaves = engine.slave_index()
     own = [i for i in range(engine.cylinders) if i not in slaves]
     m2 = float(engine.masses.big_end_kg(g.rod_length_m))
-    _, m_rot = engine.masses.two_mass_split(g.rod_length_m)
+    m_rot = engine.masses.rotating_at_pin_kg(g.rod_length_m)
     s2 = -m2 * R * omega**2
     z1_cyl = z_cyl + s2  # slaves' columns are not used below
 

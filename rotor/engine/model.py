@@ -119,11 +119,14 @@ class Masses(eqx.Module):
     ``rotating_kg`` the throw's unbalanced mass alone.
 
     ``rod_big_end_kg`` (optional, two-mass model only): m₂, the rod's share at the crank
-    pin [kg], the part of ``rotating_kg`` whose centrifugal force S₂ = −m₂·R·ω² loads the
-    crank pin (Shishkov (2014) §3.2.4); the rest of ``rotating_kg`` is the throw's own
-    unbalanced mass, which loads the main journals only. Without it, the whole of
-    ``rotating_kg`` is taken as the rod's share (the presets put the throw's own mass in
-    ``[crankshaft]``); with a full rod m₂ follows from the rod (:meth:`big_end_kg`).
+    pin [kg], whose centrifugal force S₂ = −m₂·R·ω² loads the crank pin (Shishkov (2014)
+    §3.2.4); the rest of ``rotating_kg`` is the throw's own unbalanced mass, which loads the
+    main journals only. Without it, the whole of ``rotating_kg`` is taken as the rod's
+    share; with a full rod m₂ follows from the rod (:meth:`big_end_kg`). A rotating mass at
+    R adds only a constant to I(θ), so a file may count the big ends' inertia in
+    ``[crankshaft] inertia_kgm2`` instead: ``rod_big_end_kg`` above ``rotating_kg`` says
+    so, and the bearing loads and the balance then take m₂ as the rotating mass
+    (:meth:`rotating_at_pin_kg`).
     """
 
     reciprocating_kg: jnp.ndarray = eqx.field(converter=number("masses", "reciprocating_kg"))
@@ -163,12 +166,6 @@ class Masses(eqx.Module):
                     "at the crank pin follows from the rod; remove rod_big_end_kg"
                 )
             check_positive(t, "rod_big_end_kg", self.rod_big_end_kg, allow_zero=True)
-            m2, mr = concrete(self.rod_big_end_kg), concrete(self.rotating_kg)
-            if m2 is not None and mr is not None and m2 > mr:
-                raise EngineError(
-                    f"{where(t, 'rod_big_end_kg')} = {fmt(m2)}: the rod's share at the crank pin is part of "
-                    f"rotating_kg = {fmt(mr)} kg and cannot exceed it"
-                )
         check_fields_plausible(self)
 
     @property
@@ -197,6 +194,13 @@ class Masses(eqx.Module):
         if self.rod_kg is not None and self.rod_cg_from_big_end_m is not None:
             return self.rod_kg * (1 - self.rod_cg_from_big_end_m / jnp.asarray(rod_length_m))
         return self.rotating_kg if self.rod_big_end_kg is None else self.rod_big_end_kg
+
+    def rotating_at_pin_kg(self, rod_length_m: ArrayLike) -> Array:
+        """The whole rotating mass at the crank radius [kg] whose centrifugal force turns with
+        the throw (for the bearing loads and the balance): the two-mass split's rotating
+        mass, or m₂ where that is larger (the big ends' inertia counted in
+        ``[crankshaft] inertia_kgm2``, see the class docstring); ``rod_length_m`` [m]."""
+        return jnp.maximum(self.two_mass_split(rod_length_m)[1], self.big_end_kg(rod_length_m))
 
 
 class Crankshaft(eqx.Module):

@@ -89,7 +89,7 @@ def plot_torsional_sweep(
     finite = np.asarray(torque_pp_Nm)[np.isfinite(torque_pp_Nm)]
     if finite.size and np.all(finite > 0):
         ax.set_yscale("log")
-    ax.set_xlabel("mean speed [rpm]" + (" (dotted: critical speeds of the major orders)" if critical_rpm else ""))
+    ax.set_xlabel("mean speed [rpm]" + (" (dotted: critical speeds of the strong orders)" if critical_rpm else ""))
     ax.set_ylabel("vibratory torque, peak to peak [N·m]")
     ax.set_title(title)
     ax.grid(True, alpha=0.3)

@@ -32,12 +32,12 @@ system is solved by Newton's method (:class:`optimistix.Newton`) whose linear st
 GMRES (:class:`lineax.GMRES`), preconditioned by the chain's *constant-coefficient*
 operator, −(kΩ)²·M̄ + i·kΩ·C + K, which is diagonal in the harmonics k (an n×n solve per
 harmonic): it takes the shafts' stiffness and the resonances exactly, so the iterations
-see only the crank-angle variation of the inertias and torques (about 5 Newton steps).
+see only the crank-angle variation of the inertias and torques (4 or 5 Newton steps).
 The time-mean speed is exactly ω̄ by construction.
 
 *Why harmonic balance, not shooting:* shooting integrates one cycle per Newton step with a
 fixed step that a stiff chain forces to be tiny (an explicit step must stay below 2.8/ω_max:
-for a six-cylinder chain with 3 kHz modes at 600 rpm that is already 1/700 of the cycle,
+for a six-cylinder chain with 3 kHz modes at 600 rpm that is already 1/1300 of the cycle,
 and 10⁴ times stiffer shafts need 10⁵ steps a cycle), or with an implicit scheme whose
 per-step nonlinear solves cost as much; harmonic balance does not care how stiff the
 shafts are (a stiff chain converges in fewer steps), puts the result on the rigid model's
@@ -45,18 +45,23 @@ own grid (the flywheel's ω(φ) compares node by node with :func:`rotor.steady_s
 a trigger wheel samples the speed by angle too), and vmaps over speeds with a fixed
 problem size.
 
-**Accuracy** (``tests/test_torsion_response.py``): the MWM six's chain with 10⁶ times
-stiffer shafts gives the rigid steady state's δ to 3e-12 and its speed orders to 5e-10 of
-the mean speed; the response agrees with a time-domain run (diffrax, rtol 1e-11) to 1e-9 of
-the mean speed at every mass and 1e-7 of the largest shaft torque. The collocation is
-exact at the nodes; between them (and for a pressure trace with a kink) its error is that
-of the grid, as for the rigid model.
+**Accuracy** (``tests/test_torsion_response.py``; MWM six at 1500 and 2200 rpm, 0.25°
+grid): its chain with 10⁶ times stiffer shafts and no damping gives the rigid steady state's
+δ to 4e-9, the load torque to 1e-14 and, at the flywheel, ω(θ) to 3e-9 and every speed
+order to 1e-9 of the mean speed (at the damper, the other end, 4e-8 and 1e-8: the shafts'
+remaining compliance). The real chain's response agrees with a time-domain run started on
+it (Dopri8, rtol 1e-11) to 1.4e-7 of the mean speed at the throws, 2e-9 at the flywheel, and
+to 3e-7 of the largest shaft torque: the collocation's aliasing of the gas torque's
+harmonics above the grid's Nyquist order (the same order as the rigid model's own grid
+error).
 
-**Cost** (2-core CPU, after compile; compile about 15 s): one response of the nine-mass
-MWM chain on the 0.25° grid in about 1–3 s (more Newton and GMRES steps near an undamped
-resonance); :func:`torsional_sweep` runs speeds in vmapped batches (``batch``), bounding
-memory at about 60 MB per speed in a batch on the 0.25° grid (a quarter on the 1° grid
-that a resonance curve needs).
+**Cost** (2-core CPU, after compile; the first call compiles for about 20 s, the cylinder
+tables included): one response of the nine-mass MWM chain in about 1–2 s on the 0.25° grid
+and 0.15–0.3 s on the 1° grid (4 Newton steps; more near an undamped resonance);
+:func:`torsional_sweep` of 100 speeds on the 1° grid in 15–35 s (the range: the same run on a
+quiet and a busy machine). It runs the speeds in ``jax.vmap`` batches one batch after
+another (``jax.lax.map``), which bounds memory at about 2 kB per node and mass for each
+speed of a batch (50 MB for the MWM chain on the 0.25° grid).
 """
 
 from __future__ import annotations
@@ -103,8 +108,9 @@ __all__ = [
 
 #: the Newton iteration's tolerance on the unknowns (rad, and relative for the balance)
 NEWTON_TOL = 1e-11
-#: residual [N·m] relative to the engine's torque scale below which a response counts as found
-RESIDUAL_TOL = 1e-8
+#: the preconditioned residual (the Newton correction still left: radians of twist and phase,
+#: and the relative balance) below which a response counts as found
+RESIDUAL_TOL = 1e-9
 #: bytes per unknown (mass × node) while a response is solved: the GMRES basis (restart
 #: vectors), the linearisation and the tables
 BYTES_PER_UNKNOWN = 8 * 260
@@ -437,8 +443,9 @@ def _x_column(dc: DrivenChain, balance: _Balance) -> Array:
 
 
 def _hb_system(dc: DrivenChain, omega_m: Array, balance: _Balance, P: int):
-    """The harmonic-balance system at mean speed ω̄ on P nodes: ``(residual, u0, dk,
-    torque_scale)``, ``residual(u, args) -> (preconditioned residual, raw residual [N·m])``."""
+    """The harmonic-balance system at mean speed ω̄ on P nodes: ``(residual, u0, dk)``,
+    ``residual(u, args) -> (preconditioned residual, raw residual [N·m])``, the start u0 and
+    the spectral derivative dk of each harmonic."""
     n, ref, L = dc.size, dc.reference_mass, dc.load_mass
     cycle = dc.cycle_rad
     nodes = jnp.arange(P) * (cycle / P)
@@ -457,9 +464,6 @@ def _hb_system(dc: DrivenChain, omega_m: Array, balance: _Balance, P: int):
     Z = -(wk**2)[:, None, None] * M[None] + 1j * wk[:, None, None] * C[None] + K[None]
     Z0 = K.at[:, ref].set(_x_column(dc, balance) * balance.scale)
     Zinv = jnp.linalg.inv(Z.at[0].set(Z0.astype(Z.dtype)))
-    torque_scale = jnp.abs(balance.scale) + 1.0
-    if dc.values is not None:
-        torque_scale = torque_scale + jnp.max(jnp.sum(jnp.abs(dc.values[:, :, 1:]), axis=(1, 2)))
 
     def residual(u, _):
         x, s, q, omega, accel = _fields(u, P, dk, omega_m, ref, balance.scale)
@@ -472,7 +476,7 @@ def _hb_system(dc: DrivenChain, omega_m: Array, balance: _Balance, P: int):
 
     x0 = (0.0 if balance.load is None else 1.0) / balance.scale
     u0 = jnp.zeros((n, P)).at[ref, 0].set(x0)
-    return residual, u0, dk, torque_scale
+    return residual, u0, dk
 
 
 #: GMRES for the Newton steps (on the preconditioned system, whose operator is near identity)
@@ -482,7 +486,7 @@ GMRES = lx.GMRES(rtol=1e-9, atol=1e-13, restart=40, stagnation_iters=40, max_ste
 @eqx.filter_jit
 def _hb_kernel(dc: DrivenChain, omega_m: Array, balance: _Balance, P: int):
     """The periodic steady state at mean speed ω̄ on P nodes of the reference mass's angle."""
-    residual, u0, dk, torque_scale = _hb_system(dc, omega_m, balance, P)
+    residual, u0, dk = _hb_system(dc, omega_m, balance, P)
     ref = dc.reference_mass
     nodes = jnp.arange(P) * (dc.cycle_rad / P)
 
@@ -498,12 +502,28 @@ def _hb_kernel(dc: DrivenChain, omega_m: Array, balance: _Balance, P: int):
         throw=False,
     )
     x, s, q, omega, accel = _fields(sol.value, P, dk, omega_m, ref, balance.scale)
-    _, R = residual(sol.value, None)
-    resid = jax.lax.stop_gradient(jnp.max(jnp.abs(R)) / torque_scale)
+    F, _ = residual(sol.value, None)
+    resid = jax.lax.stop_gradient(jnp.max(jnp.abs(F)))
     t = nodes / omega_m + s - s[0]
     ok = (sol.result == optx.RESULTS.successful) & (resid < RESIDUAL_TOL) & jnp.all(omega[ref] > 0)
     ok = ok & jnp.all(jnp.isfinite(omega))
     return x, t, nodes[None] + q, omega, accel, ok, sol.stats["num_steps"], resid
+
+
+@eqx.filter_jit
+def _response_kernel(dc: DrivenChain, omega_m: Array, balance: _Balance, P: int):
+    """:func:`_hb_kernel` and what the result shows: the sections' torques, the whole
+    chain's gas torque and its losses (friction and load) at the nodes [N·m]."""
+    x, t, theta, omega, accel, ok, steps, resid = _hb_kernel(dc, omega_m, balance, P)
+    torque = dc.section_torques((theta[:-1] - theta[1:]).T, (omega[:-1] - omega[1:]).T).T
+    fuel = 1.0 if balance.load is None else x
+    gas = jnp.sum(dc.gas_torques(theta.T, fuel), axis=-1)
+    loss = jnp.sum(dc.friction_torques(omega.T), axis=-1)
+    if balance.load is None:
+        loss = loss + x
+    else:
+        loss = loss + balance.load.torque(omega[dc.load_mass], 0.0)
+    return x, t, theta, omega, accel, ok, steps, resid, torque, gas, loss
 
 
 def _check_load(load: Any, call: str) -> Load | None:
@@ -563,12 +583,14 @@ class TorsionalResponse(Result):
     per shaft section (n − 1, P): ``twist_rad`` (θ_i − θ_{i+1}, the front mass leading:
     positive) and ``torque_Nm`` (k_i·twist + the relative damping's torque: what the
     section carries rearwards); over the whole chain (P,): ``gas_torque_Nm`` (every
-    cylinder's gas torque) and ``loss_torque_Nm`` (friction and the load) [N·m].
+    cylinder's gas torque) and ``loss_torque_Nm`` (friction and the load) [N·m];
+    ``imep_pa``: each cylinder's IMEP at the response's fuelling [Pa], (cylinders,).
 
     **Figures:** ``rpm`` (time-mean speed) [rpm]; ``period_s`` [s]; ``load_torque_Nm``
     (the load that keeps the mean speed, ``load=None``) [N·m] or ``fuel_scale`` (that
     carries the given load) [-]; ``converged`` (a bool, a JAX bool under ``jit``/``vmap``);
-    ``newton_steps``; ``residual`` (largest equation residual over the torque scale [-]).
+    ``newton_steps``; ``residual`` (the Newton correction still left: the preconditioned
+    residual, [rad] of phase and twist).
 
     **About:** ``mass_names``, ``reference_mass``, ``load_mass`` (0-based);
     ``stiffnesses_Nm_per_rad``; ``natural_frequencies_hz`` (of the chain, for context);
@@ -584,6 +606,7 @@ class TorsionalResponse(Result):
     torque_Nm: ArrayLike
     gas_torque_Nm: ArrayLike
     loss_torque_Nm: ArrayLike
+    imep_pa: ArrayLike
     rpm: float
     period_s: Any
     load_torque_Nm: Any
@@ -638,7 +661,7 @@ class TorsionalResponse(Result):
             accel=accel,
             torque=jnp.asarray(self.gas_torque_Nm),
             load_torque=jnp.asarray(self.loss_torque_Nm),
-            imep_pa=jnp.zeros((1, 0)),
+            imep_pa=jnp.asarray(self.imep_pa)[None, :],
             method="harmonic balance",
             fidelity="variable",
             kind="steady",
@@ -989,7 +1012,7 @@ class TorsionalSweep(Result):
 
     def plot(self, ax: Any = None, sections: Any = None) -> Any:
         """Each section's vibratory torque peak to peak against speed [N·m] (``sections``:
-        indices to draw, default all), with the critical speeds of the major orders marked.
+        indices to draw, default all), with the critical speeds of the strong orders (those whose vibratory torque reaches a tenth of the largest) marked.
         ``ax``: one Axes or None. Returns the Axes."""
         from ..plotting.torsion_response import plot_torsional_sweep
 
@@ -1046,7 +1069,10 @@ def torsional_response(
     - ``imep_scale``: combustion scale per cylinder [-] (one for all or one per cylinder).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's) or False.
     - ``grid_deg``: node spacing over the cycle [deg] (default 0.25°, as the rigid steady
-      state): the response's samples and the cylinder tables.
+      state): the response's samples and the cylinder tables. The collocation's error in
+      the speeds, against a time-domain run, is about 1.4e-7 of the mean speed at 0.25°,
+      7e-7 at 0.5° and 2e-5 at 2° (the MWM six: it falls as the gas torque's harmonics
+      above the grid's Nyquist order).
 
     **Returns:** a :class:`TorsionalResponse`.
 
@@ -1059,31 +1085,31 @@ def torsional_response(
     engine = _engine_arg(engine, call)
     rpm = check_speed_rpm(engine.operating.rpm if rpm is None else rpm, f"{call}(rpm)")
     load = _check_load(load, call)
-    dc = driven_chain(engine, chain, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
+    engine.check()
+    ch = _chain_for(engine, chain, f"{call}(chain)")
+    dc = driven_chain(engine, ch, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
     P = _check_grid(grid_deg, engine, call, dc.size)
     omega_m = rpm / RPM_PER_RAD_S
     balance = _balance_for(dc, load, omega_m, call)
-    out = _hb_kernel(dc, jnp.asarray(omega_m), balance, P)
-    x, t, theta, omega, accel, ok, steps, resid = jax.device_get(out)
+    out = jax.device_get(_response_kernel(dc, jnp.asarray(omega_m), balance, P))
+    ok, steps, resid = out[5], out[6], out[7]
     if not ok:
         raise NoSteadyStateError(
             f"no torsional steady state found at {rpm:g} rpm (Newton's method stopped after {int(steps)} steps with "
             f"a residual of {float(resid):.2g} of the torque scale): the chain may sit on an undamped resonance or the "
             "speed may be too low for the flywheel; give the chain damping or try another speed"
         )
-    return _response(engine, dc, chain, load, rpm, x, t, theta, omega, accel, ok, steps, resid, start)
+    return _response(engine, dc, ch, load, rpm, out, start)
 
 
-def _response(engine, dc, chain, load, rpm, x, t, theta, omega, accel, ok, steps, resid, start) -> TorsionalResponse:
-    ch = _chain_for(engine, chain, "torsional_response(chain)")
+def _response(engine, dc, ch, load, rpm, out, start) -> TorsionalResponse:
+    x, t, theta, omega, accel, ok, steps, resid, torque, gas, loss = out
     twist = theta[:-1] - theta[1:]
-    twist_rate = omega[:-1] - omega[1:]
-    torque = np.asarray(dc.section_torques(twist.T, twist_rate.T)).T
-    nodes = np.arange(theta.shape[1]) * (engine.cycle_rad / theta.shape[1])
     fuel = 1.0 if load is None else float(x)
-    gas = np.asarray(jnp.sum(dc.gas_torques(theta.T, fuel), axis=-1))
-    loss = np.asarray(jnp.sum(dc.friction_torques(omega.T), axis=-1))
-    loss = loss + (float(x) if load is None else np.asarray(load.torque(omega[dc.load_mass], 0.0)))
+    v = np.asarray(dc.values)  # the per-cylinder tables: mean torque × cycle / swept volume
+    imep = (v[:, :, 1].mean(axis=0) + fuel * np.asarray(dc.imep_scale) * v[:, :, 2].mean(axis=0)) * engine.cycle_rad
+    imep = imep / float(engine.geometry.displacement_m3)
+    nodes = np.arange(theta.shape[1]) * (engine.cycle_rad / theta.shape[1])
     return TorsionalResponse(
         theta=nodes,
         t=t,
@@ -1094,6 +1120,7 @@ def _response(engine, dc, chain, load, rpm, x, t, theta, omega, accel, ok, steps
         torque_Nm=torque,
         gas_torque_Nm=gas,
         loss_torque_Nm=loss,
+        imep_pa=imep,
         rpm=float(rpm),
         period_s=engine.cycle_rad / (rpm / RPM_PER_RAD_S),
         load_torque_Nm=float(x) if load is None else None,
