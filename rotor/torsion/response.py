@@ -102,6 +102,7 @@ __all__ = [
     "driven_chain",
     "torsional_response",
     "torsional_sweep",
+    "mass_index",
     "section_names",
     "periodic_range",
 ]
@@ -251,6 +252,21 @@ class DrivenChain(eqx.Module):
             return jnp.zeros(self.size)
         assert self.values is not None and self.onto is not None
         return (self.imep_scale * jnp.mean(self.values[:, :, 2], axis=0)) @ self.onto
+
+
+def mass_index(names: tuple[str, ...], reference: int, mass: int | str | None) -> int:
+    """The 0-based index of ``mass`` in a chain whose masses are ``names``: an index
+    (negative from the end), a name, or None (``reference``)."""
+    n = len(names)
+    if mass is None:
+        return reference
+    if isinstance(mass, str):
+        if mass not in names:
+            raise ValueError(f"mass = {mass!r}: the chain's masses are {', '.join(map(repr, names))}")
+        return names.index(mass)
+    if isinstance(mass, (bool, np.bool_)) or not isinstance(mass, (int, np.integer)) or not -n <= mass < n:
+        raise ValueError(f"mass = {mass!r}: a mass index 0 … {n - 1} or a name")
+    return int(mass) % n
 
 
 def section_names(names: tuple[str, ...]) -> tuple[str, ...]:
@@ -679,16 +695,7 @@ class TorsionalResponse(Result):
 
     def mass_index(self, mass: int | str | None) -> int:
         """The 0-based index of ``mass`` (an index, a name, or None: the reference mass)."""
-        n = len(self.mass_names)
-        if mass is None:
-            return self.reference_mass
-        if isinstance(mass, str):
-            if mass not in self.mass_names:
-                raise ValueError(f"mass = {mass!r}: the chain's masses are {', '.join(map(repr, self.mass_names))}")
-            return self.mass_names.index(mass)
-        if isinstance(mass, (bool, np.bool_)) or not isinstance(mass, (int, np.integer)) or not -n <= mass < n:
-            raise ValueError(f"mass = {mass!r}: a mass index 0 … {n - 1} or a name")
-        return int(mass) % n
+        return mass_index(self.mass_names, self.reference_mass, mass)
 
     @property
     def delta(self) -> np.ndarray:

@@ -57,7 +57,7 @@ from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 from .model import TorsionalChain
 from .modes import natural_frequencies
-from .response import DrivenChain, TorsionalResponse, driven_chain, section_names
+from .response import DrivenChain, TorsionalResponse, driven_chain, mass_index, section_names
 
 __all__ = ["TorsionalRun", "torsional_simulate", "SOLVERS", "STIFF_STEPS"]
 
@@ -210,16 +210,7 @@ class TorsionalRun(Result):
 
     def mass_index(self, mass: int | str | None) -> int:
         """The 0-based index of ``mass`` (an index, a name, or None: the reference mass)."""
-        n = len(self.mass_names)
-        if mass is None:
-            return self.reference_mass
-        if isinstance(mass, str):
-            if mass not in self.mass_names:
-                raise ValueError(f"mass = {mass!r}: the chain's masses are {', '.join(map(repr, self.mass_names))}")
-            return self.mass_names.index(mass)
-        if isinstance(mass, (bool, np.bool_)) or not isinstance(mass, (int, np.integer)) or not -n <= mass < n:
-            raise ValueError(f"mass = {mass!r}: a mass index 0 … {n - 1} or a name")
-        return int(mass) % n
+        return mass_index(self.mass_names, self.reference_mass, mass)
 
     def speed_cycles(self, mass: int | str | None = None) -> np.ndarray:
         """The speed of ``mass`` (default the reference mass) at the reference mass's uniform
