@@ -28,6 +28,7 @@ DRAWS |= {"modes", "campbell", "torsion"}
 OUT = {"report"}  # its product is a folder (a page, figures and tables), named by --out DIR
 NO_RESULT = {"plot", "demo"}  # they only write plots / print a tour of several results
 PROGRESS = {"simulate", "demo"}  # they run transients long enough for a progress bar
+PROGRESS |= {"analyze", "diagnose"}  # over many LOGs: a bar counting the files
 
 
 def _options(p):
@@ -138,3 +139,15 @@ def test_debug_is_a_global_flag_and_exit_statuses_are_documented():
     assert "--debug" in PARSER.format_help()
     for code in ("70", "130"):
         assert code in PARSER.epilog and code in (app.__doc__ or "")
+
+
+@pytest.mark.parametrize("name", ["analyze", "diagnose"])
+def test_log_commands_take_many_logs_jobs_and_a_scheduler(name):
+    """Several LOGs or a pattern in one run (issue 19): --jobs, --scheduler, and the exit
+    status of a run where some files fail is in the help."""
+    p = COMMANDS[name]
+    assert {"--jobs", "--scheduler", "--quiet"} <= _options(p)
+    (log,) = [a for a in p._actions if a.dest == "log"]
+    assert log.nargs == "+"
+    text = " ".join(p.format_help().split())
+    assert "JSON line per file" in text and "exit status" in text and "pip install 'crank-rotor[dask]'" in text

@@ -129,7 +129,7 @@ CASES = [
     (["steady", "4chn15", "--fidelity", "bogus"], 2, "invalid choice"),
     (["steady", "{file}"], 2, "not a valid TOML file"),
     (["steady", "4chn15", "--rpm", "9223372036854775808"], 2, "between 0.1 and 100000 rpm"),
-    (["steady", "4chn15", "--load", "constant:1e300"], 1, "fuel scale is not a finite number"),
+    (["steady", "4chn15", "--load", "constant:1e300"], 1, "fuel scale gives no finite speed"),
     # simulate
     (["simulate", "4chn15", "--cycles", "0"], 2, "must be 1 or more"),
     (["simulate", "4chn15", "--cycles", "1.5"], 2, "is not a whole number"),
@@ -157,8 +157,16 @@ CASES = [
     (["analyze", "{file}", "--wheel", "60-2"], 2, "{file}: line 1"),
     (["analyze", "{dir}", "--wheel", "60-2"], 2, "{dir}: is a folder"),
     (["analyze", "{missing}.csv", "--wheel", "60-2"], 2, "{missing}.csv: No such file"),
+    # several LOGs or a pattern (issue 19): the run's own errors are one line before any file is read
+    (["analyze", "{dir}/*.csv", "--wheel", "60-2"], 2, "{dir}/*.csv: the pattern matches no file"),
+    (["analyze", "{log}", "{log}", *TOOTH, "--save-tooth-errors", "{file}"], 2, "takes a single LOG"),
+    (["analyze", "{log}", "{log}", *TOOTH, "--jobs", "0"], 2, "must be 1 or more"),
+    (["analyze", "{log}", "{log}", *TOOTH, "--jobs", "two"], 2, "is not a whole number"),
     # diagnose
     (["diagnose", "{log}", "--engine", "nosuchpreset"], 2, "neither an engine file nor a preset"),
+    (["diagnose", "{log}", "{log}", "--engine", "nosuchpreset"], 2, "neither an engine file nor a preset"),
+    (["diagnose", "{dir}/[0-9]*.txt", "--engine", "4chn15"], 2, "the pattern matches no file"),
+    (["diagnose", "{log}", "{log}", "--engine", "4chn15", "--save-calibration", "{dir}/c.json"], 2, "a single LOG"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--calibration", "{file}"], 2, "not a calibration file"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--calibration", "{dir}"], 2, "{dir}: is a folder"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--save-calibration", "{file}/c.json"], 2, "no folder"),

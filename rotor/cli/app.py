@@ -25,7 +25,7 @@ import traceback
 from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
-from . import demo, design, diagnostics, engine, logs, report, run, torsion
+from . import demo, design, diagnostics, engine, logs, report, run, torsion  # light: see test_cli_latency.py
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser
 
 __all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error"]
@@ -188,7 +188,12 @@ def report_error(e: BaseException, debug: bool = False) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rotor`` command: run ``argv`` (default ``sys.argv[1:]``); the exit
-    status (see the module's docstring: 0, 1, 2, 70 or 130)."""
+    status (see the module's docstring: 0, 1, 2, 70 or 130).
+
+    Switches JAX's persistent compilation cache on (:func:`rotor.enable_compilation_cache`;
+    with ``argv`` None, a command line of its own, for every kernel however small). Builds
+    the parser without importing JAX: the commands import what they compute with, so that
+    ``rotor --help`` and ``rotor presets`` never import it."""
     try:
         args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
     except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
@@ -196,7 +201,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         from ..cache import enable_compilation_cache
 
-        enable_compilation_cache()  # the command's compiled kernels are reused by its next run
+        # the command's compiled kernels are reused by its next run; from the command line
+        # (argv None, a process of its own) its small eager kernels too, which a long
+        # Python session calling main(argv) should not pile up in the cache
+        enable_compilation_cache(min_compile_time_s=0.0 if argv is None else 0.1)
         args.func(args)
         sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
     except SystemExit:

@@ -64,6 +64,19 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(
             r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
         )
+        self._help_later: list[tuple[argparse.Action, Callable[[], str]]] = []
+
+    def help_later(self, action: argparse.Action, make: Callable[[], str]) -> None:
+        """Set ``action``'s help to ``make()`` when this parser's help is shown, not before:
+        for a help text that lives in a module too slow to import for every command."""
+        self._help_later.append((action, make))
+
+    def format_help(self) -> str:
+        """The help, with the texts of :meth:`help_later` filled in."""
+        while self._help_later:
+            action, make = self._help_later.pop()
+            action.help = make()
+        return super().format_help()
 
     def error(self, message: str) -> NoReturn:
         """One line on stderr, exit status 2, as for any bad input."""
@@ -180,9 +193,17 @@ def fidelity_option(p: argparse.ArgumentParser, text: str) -> None:
 
 def add_dynamics_options(p: argparse.ArgumentParser) -> None:
     """``--load``, ``--fidelity``, ``--json`` and ``--plot`` of ``steady`` and ``simulate``."""
-    from ..dynamics.loads import LOAD_HELP
 
-    p.add_argument("--load", default="none", metavar="SPEC", help=LOAD_HELP + " (default none)")
+    def load_help() -> str:
+        from ..dynamics.load_help import LOAD_HELP
+
+        return LOAD_HELP + " (default none)"
+
+    load = p.add_argument("--load", default="none", metavar="SPEC", help="the load (default none)")
+    if isinstance(p, Parser):
+        p.help_later(load, load_help)
+    else:
+        load.help = load_help()
     fidelity_option(
         p,
         "inertia model: exact I(θ) (default), the A·cos²θ + B·cosθ + C form of Anisimov, Yelenich & "

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
+from typing import Any
 
 from .args import add_edge, add_json, add_plot, positive_float
-from .logs import log_plot
+from .logs import BULK_HELP, PLOT_LOCK, FileOutput, add_bulk, for_each_log, log_plot
 from .output import print_json, print_text, print_written
 
 __all__ = ["add_parsers", "cmd_diagnose", "cmd_calibrate"]
@@ -19,8 +19,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "log",
         metavar="LOG",
+        nargs="+",
         help="CSV/TSV log: a sampled wheel signal or tooth times (a pressure channel "
-        "is optional: used for --save-calibration and compared with when a calibration is given)",
+        "is optional: used for --save-calibration and compared with when a calibration is given)" + BULK_HELP,
     )
     p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
     p.add_argument("--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2 (default: the calibration's)")
@@ -80,6 +81,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_edge(p)
     add_json(p)
     add_plot(p, "the diagnosis plot")
+    add_bulk(p)
     p.set_defaults(func=cmd_diagnose)
     _add_calibrate(sub)
 
@@ -108,17 +110,32 @@ def _gain_arg(text: str) -> float | str:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> None:
-    """Calibrate (``--save-calibration``) if asked, then diagnose the log with the calibration
-    given, saved, the preset's own, or none."""
-    from ..diagnostics.calibration import Calibration, calibrate, diagnose
+    """Calibrate (``--save-calibration``, one LOG) if asked, then diagnose the log (or each of
+    several) with the calibration given, saved, the preset's own, or none."""
+    _calibration(args)  # a bad engine or calibration is the command's error, not each file's
+    for_each_log(args, diagnose_file, "diagnosing", one_only=("save_calibration",))
+
+
+def _calibration(args: argparse.Namespace) -> tuple[Any, Any, str | None]:
+    """The engine of ``--engine`` and the calibration of ``--calibration`` (checked against
+    it) with where it came from."""
+    from ..diagnostics.calibration import Calibration
     from ..engine.file import load_engine
-    from ..errors import EngineError
 
     engine = load_engine(args.engine)
     cal, cal_source = None, None
     if args.calibration:
         cal, cal_source = Calibration.load(args.calibration), f"file {args.calibration}"
         cal.check_engine(engine, where=f"--calibration {args.calibration}")
+    return engine, cal, cal_source
+
+
+def diagnose_file(args: argparse.Namespace, log: str) -> FileOutput:
+    """``rotor diagnose`` of the one file ``log`` with the options ``args``: what it prints and writes."""
+    from ..diagnostics.calibration import calibrate, diagnose
+    from ..errors import EngineError
+
+    engine, cal, cal_source = _calibration(args)
     written = []
     if args.save_calibration:
         folder = os.path.dirname(os.path.abspath(args.save_calibration))
@@ -126,7 +143,7 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
             raise EngineError(f"--save-calibration {args.save_calibration}: no folder {folder}")
         new = calibrate(
             engine,
-            args.log,
+            log,
             wheel=args.wheel,
             columns=args.columns,
             pressure_gain=args.pressure_gain,
@@ -140,7 +157,7 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
     try:
         res = diagnose(
             engine,
-            args.log,
+            log,
             cal if cal is not None or args.no_calibration else "preset",  # the preset's own, if it ships one
             wheel=args.wheel,
             columns=args.columns,
@@ -153,16 +170,13 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
             check_tdc=not args.no_tdc_check,
         )
     except ArithmeticError as e:  # a one-line error, not a traceback
-        raise EngineError(f"{args.log}: the diagnosis failed ({e})") from None
-    for w in res.warnings:  # on stderr too, where a pipe or --json would hide it
-        print(f"rotor: warning: {args.log}: {w}", file=sys.stderr)
+        raise EngineError(f"{log}: the diagnosis failed ({e})") from None
     if args.plot:
-        written.append(log_plot(res.plot(), args.plot, args.log, "diagnosis"))
+        with PLOT_LOCK:
+            written.append(log_plot(res.plot(), args.plot, log, "diagnosis"))
     if args.json:
-        print_json(res.to_json_dict(written=written), indent=1)
-    else:
-        print_text(res.summary())
-        print_written(written)
+        return FileOutput(res.to_json_dict(written=written), "", written, list(res.warnings))
+    return FileOutput({}, res.summary(), written, list(res.warnings))
 
 
 def _add_pressure_scale(p: argparse.ArgumentParser, use: str = "") -> None:

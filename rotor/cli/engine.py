@@ -11,7 +11,7 @@ from .output import csv_text, json_text, plot_folder, print_json, print_text, pr
 if TYPE_CHECKING:
     from ..engine.model import Engine
 
-__all__ = ["add_parsers", "cmd_info", "cmd_plot", "cmd_presets", "cmd_table", "engine_plots"]
+__all__ = ["add_parsers", "cmd_info", "cmd_plot", "cmd_presets", "cmd_table", "engine_plots", "preset_listing"]
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -107,11 +107,23 @@ def cmd_plot(args: argparse.Namespace) -> None:
     print_written(engine_plots(load_engine(args.engine), args.rpm, args.plot))
 
 
+def preset_listing() -> dict[str, str]:
+    """{preset name: engine name} of the built-in engines, read from their TOML files
+    without building the engines (that would import JAX: ``rotor presets`` needs none;
+    tests/test_cli_latency.py checks the names against :func:`rotor.load_engine`)."""
+    import tomllib
+    from importlib import resources
+
+    files = resources.files("rotor.presets")
+    names = sorted(p.name[: -len(".toml")] for p in files.iterdir() if p.name.endswith(".toml"))
+    return {
+        name: str(tomllib.loads((files / f"{name}.toml").read_text(encoding="utf-8-sig"))["name"]) for name in names
+    }
+
+
 def cmd_presets(args: argparse.Namespace) -> None:
     """The built-in engines: preset name and engine name."""
-    from ..engine.file import load_engine, preset_names
-
-    names = {name: load_engine(name).name for name in preset_names()}
+    names = preset_listing()
     if args.json:
         print_json({"presets": [{"name": k, "engine": v} for k, v in names.items()]})
     else:

@@ -4,17 +4,40 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
-from .args import add_edge, add_json, add_plot, positive_float, whole
+from .args import add_edge, add_json, add_plot, add_quiet, positive_float, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
-__all__ = ["add_parsers", "cmd_analyze", "log_plot"]
+__all__ = ["PLOT_LOCK", "FileOutput", "add_bulk", "add_parsers", "cmd_analyze", "for_each_log", "log_plot"]
+
+PLOT_LOCK = threading.Lock()
+"""Held while a file's plot is drawn and saved: matplotlib's pyplot is not thread-safe, and
+several LOGs run on threads (``--jobs``)."""
+
+BULK_HELP = (
+    "; several LOGs, or a glob pattern such as 'logs/*.csv' (quoted: rotor expands it itself), are done in one "
+    "run across --jobs threads (or --scheduler's Dask cluster): with --json one JSON line per file in the "
+    'order given, {"file": LOG, ...the result...} or {"file": LOG, "error": ..., "exit_status": ...}; '
+    "without, each file's summary under a ==> LOG <== line. A bad file does not stop the others: the exit "
+    "status is 0 when every file was done, else the highest of the failed files' (1 a solver without an "
+    "answer, 2 a bad file, 70 a bug), and a pattern that matches no file is an error (2)"
+)
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``analyze`` to the subcommands ``sub``."""
     p = sub.add_parser("analyze", help="logged crank speed: per-cycle mean speed, δ and orders from a wheel signal")
-    p.add_argument("log", metavar="LOG", help="CSV/TSV log: tooth times, a sampled wheel signal, or time and rpm")
+    p.add_argument(
+        "log",
+        metavar="LOG",
+        nargs="+",
+        help="CSV/TSV log: tooth times, a sampled wheel signal, or time and rpm" + BULK_HELP,
+    )
     p.add_argument(
         "--wheel",
         metavar="SPEC",
@@ -97,7 +120,28 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_edge(p)
     add_json(p)
     add_plot(p, "the combined plot")
+    add_bulk(p)
     p.set_defaults(func=cmd_analyze)
+
+
+def add_bulk(p: argparse.ArgumentParser) -> None:
+    """``--jobs``, ``--scheduler`` and ``--quiet`` of a command over several LOGs."""
+    p.add_argument(
+        "--jobs",
+        "-j",
+        type=whole,
+        metavar="N",
+        help="with several LOGs: files done at once, by threads sharing this process's compiled code "
+        "(default: the machine's cores; 1 = one after the other)",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="with several LOGs: run them on the Dask cluster whose scheduler is at ADDRESS, e.g. "
+        "tcp://10.0.0.5:8786 (its workers need rotor and the files' paths; needs the dask extra: "
+        "pip install 'crank-rotor[dask]')",
+    )
+    add_quiet(p)
 
 
 def log_plot(drawn: object, folder: str, log: str, kind: str) -> str:
@@ -121,15 +165,22 @@ def _engine_orders(text: str) -> str | tuple[int, ...]:
 
 
 def cmd_analyze(args: argparse.Namespace) -> None:
-    """Analyse the log: its summary or JSON, the tooth errors and the plot if asked for."""
+    """Analyse the log (or each of several): its summary or JSON, the tooth errors and the plot if asked for."""
+    from ..errors import LogError
+
+    if (args.compression_ratio is None) != (args.rod_ratio is None):
+        raise LogError("--compression-ratio and --rod-ratio go together")
+    for_each_log(args, analyze_file, "analysing", one_only=("save_tooth_errors",))
+
+
+def analyze_file(args: argparse.Namespace, log: str) -> FileOutput:
+    """``rotor analyze`` of the one file ``log`` with the options ``args``: what it prints and writes."""
     from ..engine.file import load_engine
     from ..errors import LogError
     from ..logs.analysis import analyze_log
 
-    if (args.compression_ratio is None) != (args.rod_ratio is None):
-        raise LogError("--compression-ratio and --rod-ratio go together")
     res = analyze_log(
-        args.log,
+        log,
         args.wheel,
         columns=args.columns,
         strokes=args.strokes,
@@ -153,9 +204,163 @@ def cmd_analyze(args: argparse.Namespace) -> None:
         res.tooth_errors.save(args.save_tooth_errors)
         written.append(args.save_tooth_errors)
     if args.plot:
-        written.append(log_plot(res.plot(), args.plot, args.log, "analysis"))
+        with PLOT_LOCK:
+            written.append(log_plot(res.plot(), args.plot, log, "analysis"))
+    return FileOutput(res.to_json_dict(), "", written) if args.json else FileOutput({}, res.summary(), written)
+
+
+# ----------------------------------------------------------------------------- several LOGs
+@dataclass
+class FileOutput:
+    """What a log command prints and writes for one file: its JSON (``to_json_dict()``, with
+    ``--json``) or its text summary (without: only the one asked for is made), the files it
+    wrote and its warnings (for stderr)."""
+
+    json: dict
+    text: str
+    written: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+
+def _print_one(args: argparse.Namespace, log: str, out: FileOutput) -> None:
+    """A single LOG's output, as the command has always printed it."""
+    for w in out.warnings:  # on stderr too, where a pipe or --json would hide it
+        print(f"rotor: warning: {log}: {w}", file=sys.stderr)
     if args.json:
-        print_json(res.to_json_dict(), indent=1)
+        print_json(out.json, indent=1)
     else:
-        print_text(res.summary())
-        print_written(written)
+        print_text(out.text)
+        print_written(out.written)
+
+
+def _error_line(e: Exception) -> tuple[int, str]:
+    """The exit status and the one line ``rotor`` reports for ``e`` (``rotor: error: …``):
+    the classification of :func:`rotor.cli.app.report_error` (which this module cannot
+    import: app imports it), for one file among several; ``tests/test_bulk.py`` holds the
+    two to the same answers."""
+    import traceback
+
+    from ..errors import InternalError, RotorError, SolverError
+
+    text = " ".join(str(e).split("\n")).strip()
+    if isinstance(e, MemoryError) or (isinstance(e, RuntimeError) and "RESOURCE_EXHAUSTED" in str(e)):
+        return 2, "rotor: error: the machine ran out of memory: reduce the size of the run (a shorter log)"
+    if isinstance(e, SolverError):
+        return 1, f"rotor: {text}"
+    if isinstance(e, RotorError) and not isinstance(e, InternalError):
+        return 2, f"rotor: error: {text}"
+    if isinstance(e, OSError) and not isinstance(e, InternalError):
+        return 2, f"rotor: error: {e.filename}: {e.strerror}" if e.filename and e.strerror else f"rotor: error: {text}"
+    if isinstance(e, ValueError) and type(e).__module__.split(".")[0] not in ("jax", "jaxlib"):
+        last = traceback.extract_tb(e.__traceback__)[-1:] if e.__traceback__ else []
+        where = last[0].filename.replace(os.sep, "/") if last else ""
+        if not ("/site-packages/" in where or "/dist-packages/" in where):
+            return 2, f"rotor: error: {text}"
+    brief = " ".join(text.split())
+    brief = brief if len(brief) <= 400 else brief[:399] + "…"
+    return 70, f"rotor: internal error: this is a bug in rotor: {type(e).__name__}: {brief} (please report it)"
+
+
+def _bulk_file(one: Callable[[argparse.Namespace, str], FileOutput], args: argparse.Namespace, log: str) -> dict:
+    """Run ``one`` on ``log`` (in a worker): its output, or its error's exit status and line."""
+    try:
+        out = one(args, log)
+    except Exception as e:  # noqa: BLE001 - one file's error is that file's line
+        status, line = _error_line(e)
+        return {"output": None, "status": status, "line": line}
+    return {"output": out, "status": 0, "line": ""}
+
+
+def _with_file(line: str, log: str) -> tuple[str, str]:
+    """``rotor: error: MSG`` → (``rotor: error: LOG: MSG``, ``MSG``), the file named once."""
+    for head in ("rotor: error: ", "rotor: internal error: this is a bug in rotor: ", "rotor: "):
+        if line.startswith(head):
+            msg = line[len(head) :]
+            return head + (msg if msg.startswith(log) else f"{log}: {msg}"), msg
+    return f"rotor: {log}: {line}", line
+
+
+def _dask_client(address: str) -> Any:
+    from ..diagnostics.bulk import DASK_HINT
+    from ..errors import EngineError
+
+    try:
+        from distributed import Client
+    except ImportError:
+        raise EngineError(f"--scheduler needs Dask, which is not installed: {DASK_HINT}") from None
+    try:
+        return Client(address, timeout=10)
+    except (OSError, TimeoutError, ValueError) as e:
+        raise EngineError(f"--scheduler {address}: cannot reach the Dask scheduler ({e})") from None
+
+
+def for_each_log(
+    args: argparse.Namespace,
+    one: Callable[[argparse.Namespace, str], FileOutput],
+    verb: str,
+    one_only: tuple[str, ...] = (),
+) -> None:
+    """Run ``one(args, log)`` on the command's LOG(s) (``args.log``, a list) and print.
+
+    One LOG that is not a pattern: in this process, printed as the command always has (an
+    error is the command's error). Several, or a pattern: expanded, then run across
+    ``--jobs`` local processes or on the ``--scheduler`` cluster; printed in the order given
+    (one JSON line per file with ``--json``), a progress bar on stderr unless ``--quiet``;
+    the exit status is the highest of the failed files' (0 when none failed).
+    ``one_only``: options (``args`` names) that take a single LOG."""
+    import functools
+
+    from ..diagnostics.bulk import FileProgress, expand_logs, is_pattern, map_files
+    from ..errors import LogError
+
+    logs = [args.log] if isinstance(args.log, str) else list(args.log)
+    client = _dask_client(args.scheduler) if getattr(args, "scheduler", None) else None
+    try:
+        if len(logs) == 1 and not is_pattern(logs[0]):
+            _print_one(args, logs[0], one(args, logs[0]))
+            return
+        for name in one_only:
+            if getattr(args, name, None):
+                raise LogError(f"--{name.replace('_', '-')} takes a single LOG, not several")
+        paths = expand_logs(logs)
+        fn = functools.partial(_bulk_file, one, args)
+        bar = FileProgress(len(paths), False if args.quiet else None, verb)
+        outcomes = map_files(fn, paths, jobs=args.jobs, client=client, progress=False)
+        pending: dict[int, dict] = {}
+        nxt, failed, worst = 0, 0, 0
+        for done, (i, ok, value) in enumerate(outcomes, 1):
+            if not ok:  # _bulk_file itself failed: a bug
+                value = {
+                    "output": None,
+                    "status": 70,
+                    "line": f"rotor: internal error: {type(value).__name__}: {value}",
+                }
+            pending[i] = value
+            while nxt in pending:
+                got, log = pending.pop(nxt), paths[nxt]
+                bar.clear()
+                if got["output"] is None:
+                    failed, worst = failed + 1, max(worst, got["status"])
+                    shown, msg = _with_file(got["line"], log)
+                    print(shown, file=sys.stderr)
+                    if args.json:
+                        print_json({"file": log, "error": msg, "exit_status": got["status"]}, indent=None)  # type: ignore[arg-type]
+                else:
+                    out: FileOutput = got["output"]
+                    for w in out.warnings:
+                        print(f"rotor: warning: {log}: {w}", file=sys.stderr)
+                    if args.json:
+                        print_json({"file": log, **out.json}, indent=None)  # type: ignore[arg-type]
+                    else:
+                        print_text(("\n" if nxt else "") + f"==> {log} <==\n" + out.text)
+                        print_written(out.written)
+                sys.stdout.flush()
+                nxt += 1
+            bar.update(done)
+        bar.close()
+        if failed:
+            print(f"rotor: {failed} of {len(paths)} files failed", file=sys.stderr)
+            raise SystemExit(worst)
+    finally:
+        if client is not None:
+            client.close()

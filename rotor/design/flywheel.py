@@ -38,6 +38,7 @@ import optimistix as optx
 from jaxtyping import Float
 
 from ..dynamics.loads import Load, parse_load
+from ..dynamics.prepared import PreparedEngine, resolve_engine
 from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
@@ -881,7 +882,7 @@ def _load_name(load: Load | None) -> str:
 
 
 def design_flywheel(
-    engine: Engine,
+    engine: Engine | PreparedEngine,
     delta: float | None,
     points: PointsArg = None,
     *,
@@ -901,7 +902,7 @@ def design_flywheel(
     """The smallest flywheel keeping δ ≤ ``delta`` at every operating point.
 
     **Arguments:**
-    - ``engine``: a :class:`rotor.Engine`; its ``[crankshaft] inertia_kgm2`` is only the
+    - ``engine``: a :class:`rotor.Engine` (or a :class:`rotor.PreparedEngine`); its ``[crankshaft] inertia_kgm2`` is only the
       starting guess.
     - ``delta``: the target irregularity (ω_max − ω_min)/ω_mean [-], e.g. 0.01, for
       every point that gives none of its own (None if all do).
@@ -927,6 +928,7 @@ def design_flywheel(
     (a :class:`rotor.SolverError`) for an operating point with no steady state, and
     :class:`rotor.SolverError` where Newton's method finds no inertia.
     """
+    engine = resolve_engine(engine)  # a prepared engine: its tables are reused
     require_engine(engine, "design_flywheel(engine)").check()
     pts = _points(points, engine)
     if delta is None and any(p.delta is None for p in pts):

@@ -95,6 +95,7 @@ from ..dynamics.crank_train import (
 )
 from ..dynamics.equation import friction_coefficients, hermite_cumulative, node_offsets, wrap_periodic
 from ..dynamics.loads import ConstantLoad, Load
+from ..dynamics.prepared import PreparedEngine, resolve_engine
 from ..errors import EngineError
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR
@@ -637,7 +638,7 @@ def symmetric_pairs(engine):
 
 # ----------------------------------------------------------------------------- entry point
 def identify(
-    engine: Engine,
+    engine: Engine | PreparedEngine,
     speed: LogAnalysis | SpeedResult | ArrayLike,
     *,
     load: Load | float | None = None,
@@ -658,7 +659,7 @@ def identify(
     """Identify each firing's combustion scale (and IMEP), the load and the misfires from ω(θ).
 
     **Arguments:**
-    - ``engine``: a :class:`rotor.Engine` (its tables: inertia, motored and combustion torque).
+    - ``engine``: a :class:`rotor.Engine` or a :class:`rotor.PreparedEngine` (its tables: inertia, motored and combustion torque).
     - ``speed``: the crank speed on the uniform cycle-angle grid of consecutive cycles
       (0 = TDC of cylinder 1 before intake): a :class:`rotor.LogAnalysis`, a
       :class:`rotor.SpeedResult` (its uniformly sampled cycles) or an array (cycles, P)
@@ -689,6 +690,7 @@ def identify(
     **Returns:** :class:`Identification`. Raises :class:`rotor.EngineError` for input that
     cannot be identified.
     """
+    engine = resolve_engine(engine)  # a prepared engine: its tables are reused
     from ..engine.model import Engine as EngineType
 
     wall = time.perf_counter()

@@ -1,8 +1,9 @@
 """The crank train in motion: the equation of motion and its solutions.
 
-Holds the engine prepared as periodic tables over one cycle (:mod:`.crank_train`), the
-equation of motion and its integrators (:mod:`.equation`), the periodic steady state
-(:mod:`.steady`), transient runs (:mod:`.transient`), loads and the governor
+Holds the engine prepared as periodic tables over one cycle (:mod:`.crank_train`; made
+once and reused: :mod:`.prepared`), the equation of motion and its integrators
+(:mod:`.equation`), the periodic steady state (:mod:`.steady`) and many of them at once
+(:mod:`.sweep`), transient runs (:mod:`.transient`), loads and the governor
 (:mod:`.loads`), per-cycle combustion events (:mod:`.combustion`) and the speed result
 ω(θ, t) with δ and orders (:mod:`.result`).
 

@@ -28,6 +28,8 @@ Fidelity (``fidelity=``):
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
@@ -51,6 +53,11 @@ __all__ = [
     "crank_train",
     "check_engine",
     "check_tables",
+    "clear_table_cache",
+    "remember_tables",
+    "shift_inertia",
+    "table_inputs",
+    "table_key",
     "FIDELITIES",
     "COL_I",
     "COL_K",
@@ -304,14 +311,98 @@ def crank_train(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.
 def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     """:func:`crank_train` with the node count given (usable inside jit). A concrete
     ``engine`` is checked again first (:meth:`rotor.Engine.check`) and its tables after:
-    every value finite and I(θ) > 0, or a :class:`rotor.EngineError` naming the column."""
+    every value finite and I(θ) > 0, or a :class:`rotor.EngineError` naming the column.
+
+    Tables of a concrete engine are kept (:func:`table_key`: keyed on the values of every
+    field they depend on) and reused by the next call with the same values; the crankshaft
+    inertia ``[crankshaft] inertia_kgm2`` is a constant added to I(θ), so a new value of it
+    (a flywheel sweep) reuses them too. Traced fields (inside ``jit``, ``vmap``, ``grad``)
+    build the tables in the trace."""
     check_engine(engine, "train_from_engine(engine)")
     engine = arrays_only(engine)
-    values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)
-    check_tables(values, slopes, mean_i, engine)
-    return CrankTrain(
-        values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes, fidelity
+    key = table_key(engine, fidelity, points)
+    hit = _TABLES.get(key) if key is not None else None
+    if hit is None:
+        values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)
+        check_tables(values, slopes, mean_i, engine)
+        train = CrankTrain(
+            values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes, fidelity
+        )
+        if key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None:  # never keep a tracer
+            remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values[:, COL_I])))))
+        return train
+    assert key is not None
+    _TABLES.move_to_end(key)
+    train, inertia_ref, low = hit
+    d_inertia = engine.crankshaft.inertia_kgm2 - inertia_ref
+    d = concrete(d_inertia)
+    if d is not None and d == 0:
+        return train
+    if d is not None and not low + d > 0:
+        raise EngineError(
+            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {low + d:g} kg·m²: it must stay positive; "
+            "check [crankshaft] inertia_kgm2"
+        )
+    return shift_inertia(train, d_inertia)
+
+
+@jax.jit
+def shift_inertia(train: CrankTrain, d_inertia: ArrayLike) -> CrankTrain:
+    """``train`` with ``d_inertia`` [kg·m²] added to I(θ) and its mean: the tables of the
+    same engine with another crankshaft inertia (a constant in I(θ) at every fidelity)."""
+    values = train.values.at[:, COL_I].add(d_inertia)
+    return eqx.tree_at(lambda t: (t.values, t.mean_inertia), train, (values, train.mean_inertia + d_inertia))
+
+
+# ----------------------------------------------------------------------------- the table cache
+TABLE_CACHE_SIZE = 16
+"""How many engines' tables :func:`train_from_engine` keeps (least recently used go first)."""
+
+_TABLES: OrderedDict[str, tuple[CrankTrain, Any, float]] = OrderedDict()
+
+
+def table_inputs(engine: Engine) -> tuple:
+    """Every part of ``engine`` its tables depend on, besides the crankshaft inertia (a
+    constant added to I(θ)): strokes, cylinders, ``[geometry]``, ``[masses]``,
+    ``[layout]``, ``[pressure]`` and the articulated rods."""
+    return (
+        engine.strokes,
+        engine.cylinders,
+        engine.geometry,
+        engine.masses,
+        engine.layout,
+        engine.pressure,
+        engine.articulated,
     )
+
+
+def table_key(engine: Engine, fidelity: str, points: int) -> str | None:
+    """A digest of the values of :func:`table_inputs` (every number, bit for bit, and the
+    structure with its static fields), the fidelity and the node count; None when any of
+    them is traced (no key can be made of a value not yet known)."""
+    leaves, treedef = jax.tree_util.tree_flatten(table_inputs(engine))
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in leaves):
+        return None
+    digest = hashlib.blake2b(repr((treedef, fidelity, points)).encode(), digest_size=20)
+    for leaf in leaves:
+        a = np.asarray(leaf)
+        digest.update(f"{a.dtype.str}{a.shape}".encode())
+        digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
+def remember_tables(key: str, entry: tuple) -> None:
+    """Keep ``entry`` = (train, its crankshaft inertia [kg·m²], its smallest I(θ) [kg·m²])
+    under ``key`` (:func:`table_key`), dropping the least recently used beyond
+    :data:`TABLE_CACHE_SIZE`."""
+    _TABLES[key] = entry
+    while len(_TABLES) > TABLE_CACHE_SIZE:
+        _TABLES.popitem(last=False)
+
+
+def clear_table_cache() -> None:
+    """Forget every kept table (:func:`train_from_engine`); the next call builds them again."""
+    _TABLES.clear()
 
 
 _COLUMN_CAUSE = {

@@ -162,6 +162,12 @@ def hermite_cumulative(f, df, h):
     return jnp.concatenate([jnp.zeros(1), jnp.cumsum(seg)])
 
 
+def hermite_sum(f, df, h):
+    """∫ over all the nodes by the Hermite rule (:func:`hermite_cumulative`'s last value,
+    without the running sum): h·(Σf − (f₀+f_N)/2) + h²/12·(f₀′ − f_N′)."""
+    return h * (jnp.sum(f) - 0.5 * (f[0] + f[-1])) + h * h / 12.0 * (df[0] - df[-1])
+
+
 def wrap_periodic(x):
     """Node values 0…N−1 → 0…N (the periodic table's node N is node 0)."""
     return jnp.concatenate([x, x[:1]], axis=0)
@@ -384,7 +390,7 @@ def friction_coefficients(engine, friction):
     return jnp.stack(fr.torque_coefficients(engine))
 
 
-def _is_zero(x):
+def is_zero(x):
     if x is None:
         return True
     if isinstance(x, jax.core.Tracer):
@@ -396,14 +402,14 @@ def linear_losses(load, friction_abc):
     """(a, c) when friction plus load is a + c·ω² with no speed-linear term and nothing
     changing in time (the closed form applies), else None."""
     fa, fb, fc = friction_abc
-    if not _is_zero(fb):
+    if not is_zero(fb):
         return None
     if load is None:
         return fa, fc
     if load.time_dependent:
         return None
     poly = load.polynomial()
-    if poly is None or not _is_zero(poly[1]):
+    if poly is None or not is_zero(poly[1]):
         return None
     a = fa + (0.0 if poly[0] is None else poly[0])
     c = fc + (0.0 if poly[2] is None else poly[2])

@@ -29,6 +29,7 @@ from jaxtyping import Array, ArrayLike, Float
 from ..checks import as_f64, check_finite, check_positive, concrete
 from ..errors import EngineError
 from ..units import RPM_PER_RAD_S
+from .load_help import LOAD_HELP
 
 __all__ = [
     "Load",
@@ -250,13 +251,6 @@ def _numbers(text: str, n: int, spec: str) -> list[float]:
     if len(vals) != n or not all(np.isfinite(vals)):
         raise EngineError(f"--load {spec!r}: expected {n} number{'s' if n > 1 else ''} after the colon")
     return vals
-
-
-LOAD_HELP = (
-    "a load is one of: none; constant:TORQUE_NM (or just TORQUE_NM); poly:A,B,C (A + B·ω + C·ω², ω in rad/s); "
-    "propeller:TORQUE_NM,RPM; table:RPM=TORQUE_NM,RPM=TORQUE_NM,...; "
-    "step:TORQUE_BEFORE,TORQUE_AFTER,TIME_S[,RAMP_S]"
-)
 
 
 def parse_load(spec: str) -> Load | None:

@@ -91,7 +91,7 @@ def _plural(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-def _peak(y0, y1, y2, sign):
+def parabola_peak(y0, y1, y2, sign):
     """Extreme value of the parabola through three equally spaced samples (y1 the extreme sample)."""
     curv = y0 - 2 * y1 + y2
     ok = sign * curv < 0
@@ -119,13 +119,13 @@ def _extremes(x, slopes, cycle_rad, periodic: bool):
         j = arg(xd, axis=1)
         y1 = xd[rows, j]
         if periodic:
-            out.append(_peak(xd[rows, (j - 1) % P], y1, xd[rows, (j + 1) % P], sign))
+            out.append(parabola_peak(xd[rows, (j - 1) % P], y1, xd[rows, (j + 1) % P], sign))
         else:
             i = j + rows * P
             interior = (i > 0) & (i < flat.size - 1)
             left = flat[jnp.clip(i - 1, 0, flat.size - 1)] - line(j - 1)
             right = flat[jnp.clip(i + 1, 0, flat.size - 1)] - line(j + 1)
-            out.append(jnp.where(interior, _peak(left, y1, right, sign), y1))
+            out.append(jnp.where(interior, parabola_peak(left, y1, right, sign), y1))
     return out[0], out[1]
 
 
@@ -140,12 +140,12 @@ def _range(x, periodic: bool):
         if periodic:
             left = flat[jnp.where(i % P == 0, i + P - 1, i - 1)]
             right = flat[jnp.where(i % P == P - 1, i - P + 1, i + 1)]
-            out.append(_peak(left, flat[i], right, sign))
+            out.append(parabola_peak(left, flat[i], right, sign))
         else:
             interior = (i > 0) & (i < flat.size - 1)
             left = flat[jnp.clip(i - 1, 0, flat.size - 1)]
             right = flat[jnp.clip(i + 1, 0, flat.size - 1)]
-            out.append(jnp.where(interior, _peak(left, flat[i], right, sign), flat[i]))
+            out.append(jnp.where(interior, parabola_peak(left, flat[i], right, sign), flat[i]))
     return out[0], out[1]
 
 

@@ -44,13 +44,23 @@ from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
 from ..errors import EngineError, NoSteadyStateError
 from ..units import RPM_PER_RAD_S
-from .crank_train import COL_COMBUSTION, COL_MOTORED, check_fidelity, grid_points, train_from_engine
+from .crank_train import (
+    COL_COMBUSTION,
+    COL_I,
+    COL_MOTORED,
+    check_fidelity,
+    grid_points,
+    shift_inertia,
+    train_from_engine,
+)
 from .equation import (
     Scene,
     count_trace,
     friction_coefficients,
     grid_run,
     hermite_cumulative,
+    hermite_sum,
+    is_zero,
     linear_cycle,
     linear_losses,
     linear_parts,
@@ -58,6 +68,7 @@ from .equation import (
 )
 from .invariants import check_speed_result
 from .loads import Load
+from .prepared import PreparedEngine, checked_reference
 from .result import SpeedResult
 
 __all__ = ["steady_state"]
@@ -106,42 +117,181 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
         omega = jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
         r = 1.0 / omega
         dr = -0.5 * r * ((dE_a * E0 + dE_b) / jnp.maximum(E, 1e-300) - i_ratio)
-        return hermite_cumulative(r, dr, h)[-1]
+        return hermite_sum(r, dr, h)
 
-    def residual(eta, _):
+    def residual(eta):
         return jnp.log(period_of(e_star + e_ref * jnp.exp(eta)) / period)
 
     eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
-    sol = optx.root_find(
-        residual,
-        optx.Newton(rtol=1e-14, atol=1e-14),
-        eta0,
-        max_steps=200,
-        adjoint=optx.ImplicitAdjoint(),
-        throw=False,
-    )
-    E0 = e_star + e_ref * jnp.exp(sol.value)
+    eta, ok = scalar_newton(residual, eta0)
+    E0 = e_star + e_ref * jnp.exp(eta)
     x = x0 + x1 * E0
     parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
     E, omega, t, _ = linear_cycle(train, parts, E0, 0.0)
-    return E, t, x, sol.result == optx.RESULTS.successful, Q1[-1]
+    return E, t, x, ok, Q1[-1]
+
+
+def scalar_newton(residual: Any, x0: Any, coarse: Any = None, tol: float = 1e-14, max_steps: int = 60):
+    """Newton's method on a scalar ``residual(x) = 0`` from ``x0``: a ``lax.while_loop``
+    with the derivative by forward-mode differentiation (one pass per step), stopped when
+    a step is below ``tol``·(1 + |x|); on ``coarse`` (a cheaper residual with nearly the
+    same root) if given, then one step on ``residual``. That last step, outside the loop,
+    makes the root differentiable by the implicit function theorem: its derivative is
+    divided by the (constant) slope, dx/dp = −(∂r/∂p)/(∂r/∂x). Returns the root and
+    whether it is one (finite, |r| < 1e-8 before the last step, which then leaves an
+    error of order r²)."""
+    loop_residual = residual if coarse is None else coarse
+
+    def cond(state):
+        x, step, i = state
+        return (jnp.abs(step) > tol * (1.0 + jnp.abs(x))) & (i < max_steps) & jnp.isfinite(step)
+
+    def body(state):
+        x, _, i = state
+        r, dr = jax.jvp(loop_residual, (x,), (jnp.ones_like(x),))
+        step = r / dr
+        return x - step, step, i + 1
+
+    start = jax.lax.stop_gradient(x0)
+    x, _, _ = jax.lax.while_loop(cond, body, (start, jnp.full_like(start, 1e300), 0))
+    x = jax.lax.stop_gradient(x)
+    r, dr = jax.jvp(residual, (x,), (jnp.ones_like(x),))
+    root = x - r / jax.lax.stop_gradient(dr)
+    return root, jnp.isfinite(root) & (jnp.abs(jax.lax.stop_gradient(r)) < 1e-8)
+
+
+COARSE_NODES = 360  # nodes per cycle of the coarse grid on which the flat closed form iterates
+
+
+def coarse_stride(points: int) -> int:
+    """The largest step in nodes that divides ``points`` and leaves at least
+    :data:`COARSE_NODES` nodes per cycle (1: no coarse grid)."""
+    for k in range(max(points // COARSE_NODES, 1), 0, -1):
+        if points % k == 0:
+            return k
+    return 1
+
+
+def _cumulative_columns(f, df, h):
+    """:func:`hermite_cumulative` of every column of ``f`` (nodes 0…N down the rows)."""
+    seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
+    return jnp.concatenate([jnp.zeros((1, f.shape[1])), jnp.cumsum(seg, axis=0)])
+
+
+def flat_balance(train, s, a, balance):
+    """The parts of the flat closed form (:func:`_flat_solution`) that depend on the
+    tables, the fuelling ``s`` and the losses ``a`` alone: β(θ) and dE/dθ on the nodes
+    0…N, and x (the balancing load [N·m] or the fuel scale [-])."""
+    h = train.step_rad
+    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
+    cols = jnp.concatenate([v[:, COL_MOTORED : COL_MOTORED + 1], v[:, COL_COMBUSTION:]], axis=1)
+    dcols = jnp.concatenate([d[:, COL_MOTORED : COL_MOTORED + 1], d[:, COL_COMBUSTION:]], axis=1)
+    means = jnp.sum(cols[:-1], axis=0) * h / train.cycle_rad  # periodic: the Hermite rule is the trapezoid rule
+    B = _cumulative_columns(cols - means, dcols, h)
+    mot_mean, comb_mean = means[0], means[1:]
+    if balance == "load":
+        x = mot_mean + comb_mean @ s - a  # the load that balances the mean torque
+        w = s
+    else:
+        x = (a - mot_mean) / (comb_mean @ s)  # the fuelling that carries the load
+        w = x * s
+    beta = B[:, 0] + B[:, 1:] @ w
+    dE = cols[:, 0] - mot_mean + (cols[:, 1:] - comb_mean) @ w
+    return beta, dE, x
+
+
+def flat_energy(train, d_inertia, beta, omega_m):
+    """E(0) [J] of the flat closed form with β(θ) (:func:`flat_balance`) at time-mean
+    speed ``omega_m`` [rad/s], and whether Newton converged.
+
+    Newton's method on η, E(0) = E* + E_ref·e^η (E* the smallest E(0) that keeps E ≥ 0),
+    for log(T/T_m) = 0, T = ∫dθ/ω = h·Σ√(I/2E) and T_m = Θ/ω_m: first on the coarse grid
+    (:func:`coarse_stride`; its quadrature is within 1e-8 of the full grid's on the
+    presets), then on the full grid until a step is below 1e-7 (one pass where the coarse
+    root is good; more near a stall, where the coarse grid misses the slow spot), with
+    T′ summed in the same pass as T. A last step outside the loops makes E(0)
+    differentiable by the implicit function theorem (see :func:`scalar_newton`)."""
+    h = train.step_rad
+    inertia = train.values[:, COL_I] + d_inertia  # the N nodes of the cycle (periodic)
+    e_ref = 0.5 * (train.mean_inertia + d_inertia) * omega_m**2
+    e_star = jax.lax.stop_gradient(jnp.maximum(jnp.max(-beta), 0.0))
+    period = train.cycle_rad / omega_m
+    k = coarse_stride(train.points)
+
+    def energy(eta):
+        return e_star + e_ref * jnp.exp(eta)
+
+    def coarse(eta):
+        E = energy(eta) + beta[:-1:k]
+        return jnp.log(h * k * jnp.sum(jnp.sqrt(0.5 * inertia[::k] / jnp.maximum(E, 1e-300))) / period)
+
+    def fine(eta):  # the residual and its slope in η, in one pass over the nodes
+        E = jnp.maximum(energy(eta) + beta[:-1], 1e-300)
+        r = jnp.sqrt(0.5 * inertia / E)
+        T, dT = h * jnp.sum(r), -0.5 * h * jnp.sum(r / E)
+        return jnp.log(T / period), dT * e_ref * jnp.exp(eta) / T
+
+    def cond(state):
+        eta, step, i = state
+        return (jnp.abs(step) > 1e-7 * (1.0 + jnp.abs(eta))) & (i < 60) & jnp.isfinite(step)
+
+    def body(state):
+        eta, _, i = state
+        res, slope = fine(eta)
+        step = res / slope
+        return eta - step, step, i + 1
+
+    eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
+    eta, _ = scalar_newton(coarse, eta0)
+    eta, _, _ = jax.lax.while_loop(cond, body, (jax.lax.stop_gradient(eta), jnp.full_like(eta, 1e300), 0))
+    eta = jax.lax.stop_gradient(eta)
+    res, slope = fine(eta)
+    eta = eta - res / jax.lax.stop_gradient(slope)
+    ok = jnp.isfinite(eta) & (jnp.abs(jax.lax.stop_gradient(res)) < 1e-8)
+    return energy(eta), ok
+
+
+def _flat_solution(train, d_inertia, s, a, omega_m, balance):
+    """The closed form where nothing in the losses grows with ω² and I(θ) carries the
+    reciprocating inertia (G = 2(c − k)/I ≡ 0): E(θ) = E0 + β(θ), β the cumulative
+    integral of the torque with its cycle mean balanced, β = B_mot + Σ w_c·B_c, where the
+    cumulative integrals B of the motored and of each combustion column depend on the
+    tables alone (under ``vmap`` over speed or inertia they are computed once per batch).
+    The mean-speed condition ∫dθ/ω = Θ/ω_m is iterated on a coarse grid (every
+    :func:`coarse_stride` node; the trapezoid rule on a periodic integrand) and finished
+    by one Newton step on the full grid. ``d_inertia`` [kg·m²] is added to I(θ) (another
+    crankshaft inertia than the tables'). Returns E and t on the nodes 0…N, x (load [N·m]
+    or fuel scale [-]) and whether Newton converged."""
+    beta, dE, x = flat_balance(train, s, a, balance)
+    E0, ok = flat_energy(train, d_inertia, beta, omega_m)
+    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
+    inertia, dinertia = v[:, COL_I] + d_inertia, d[:, COL_I]
+    E = E0 + beta
+    omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
+    r = 1.0 / omega
+    dr = -0.5 * r * (dE / jnp.maximum(E, 1e-300) - dinertia / inertia)
+    return E, hermite_cumulative(r, dr, train.step_rad), x, ok
 
 
 @eqx.filter_jit
-def _closed_kernel(train, s, a, c, omega_m, balance):
+def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
+    """E, t on the nodes 0…N, x and convergence: :func:`_flat_solution` where ``flat``
+    (static: G ≡ 0), else the general closed form (:func:`_closed_solution`)."""
     count_trace()
+    if flat:
+        return _flat_solution(train, d_inertia, s, a, omega_m, balance)
+    train = shift_inertia(train, d_inertia)
     s_nodes = jnp.broadcast_to(s, (train.points + 1, train.cylinders))
-    return _closed_solution(train, s_nodes, a, c, omega_m, balance)
+    return _closed_solution(train, s_nodes, a, c, omega_m, balance)[:4]
 
 
 @eqx.filter_jit
-def _closed_steady(engine, fidelity, points, s, fr, load, a, c, omega_m, balance):
-    """The whole closed-form steady state in one compiled call: tables, solution, arrays."""
+def _closed_steady(train, d_inertia, s, fr, load, a, c, omega_m, balance, flat):
+    """The whole closed-form steady state in one compiled call: solution and arrays."""
     count_trace()
-    train = train_from_engine(engine, fidelity, points)
-    E, t, x, ok, _ = _closed_kernel(train, s, a, c, omega_m, balance)
+    E, t, x, ok = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
-    return train, scene, E[:-1], t[:-1], x, ok, _finish_arrays(engine, scene, E[:-1], t[:-1], omega_m)
+    return E[:-1], t[:-1], x, ok, _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
 
 
 def _balanced_scene(scene, x, balance):
@@ -173,7 +323,7 @@ def _solve_newton(residual: Any, u0: jnp.ndarray, tol: float = 1e-13, max_steps:
 
 
 @eqx.filter_jit
-def _shooting_kernel(engine, scene, omega_m, guess_E0, guess_x, balance):
+def _shooting_kernel(scene, omega_m, guess_E0, guess_x, balance):
     """Newton on (E0, x) so that the cycle map is periodic with mean speed ω_m.
 
     The cycle map is RK4 with one step per table node, so it is a smooth function of
@@ -200,24 +350,26 @@ def _shooting_kernel(engine, scene, omega_m, guess_E0, guess_x, balance):
     u, ok = _solve_newton(residual, jnp.stack([jnp.zeros_like(guess_x / x_ref), guess_x / x_ref]))
     E0, x, E, t, y_end = cycle(u)
     scene = _balanced_scene(scene, x, balance)
-    return x, scene, E, t, y_end[0], ok, _finish_arrays(engine, scene, E, t, omega_m)
+    return x, E, t, y_end[0], ok, _finish_arrays(scene, E, t, omega_m, 0.0)
 
 
 def steady_state(
-    engine: Engine,
+    engine: Engine | PreparedEngine,
     rpm: ArrayLike | None = None,
     load: Load | None = None,
     *,
-    fidelity: str = "variable",
+    fidelity: str | None = None,
     friction: Friction | Literal[False] | None = None,
     imep_scale: ArrayLike = 1.0,
     method: str = "auto",
-    grid_deg: float = 0.25,
+    grid_deg: float | None = None,
 ) -> SpeedResult:
     """The periodic steady state over one cycle at time-mean speed ``rpm``.
 
     **Arguments:**
-    - ``engine``: a :class:`rotor.Engine`.
+    - ``engine``: a :class:`rotor.Engine`, or a :class:`rotor.PreparedEngine`
+      (:func:`rotor.prepare`: its tables are reused; so are an engine's from an earlier
+      call with the same values, :func:`rotor.dynamics.crank_train.train_from_engine`).
     - ``rpm``: time-mean crank speed (angle travelled / time taken) [rpm]; default the
       engine file's ``[operating] rpm``.
     - ``load``: None (the load torque becomes the engine's mean torque minus friction:
@@ -225,13 +377,15 @@ def steady_state(
       speed-dependent (:class:`rotor.PolynomialLoad`, :class:`rotor.PropellerLoad`,
       :class:`rotor.TableLoad`): the fuelling is scaled until the engine carries it
       (``result.fuel_scale``); a motored engine (no combustion) cannot, and is refused.
-    - ``fidelity``: ``"variable"`` (default), ``"series"`` (λ-series kinematics),
-      ``"coefficients"`` or ``"constant"`` (see :mod:`rotor.dynamics.crank_train`).
+    - ``fidelity``: ``"variable"`` (default; a prepared engine's own), ``"series"``
+      (λ-series kinematics), ``"coefficients"`` or ``"constant"`` (see
+      :mod:`rotor.dynamics.crank_train`).
     - ``friction``: a :class:`rotor.Friction`, None (the engine file's, if any) or False.
     - ``imep_scale``: combustion scale per cylinder (a number or one per cylinder) [-].
     - ``method``: ``"auto"`` (closed form where the losses allow, else shooting),
       ``"closed"`` or ``"shooting"``.
-    - ``grid_deg``: node spacing of the tables and of the result [deg].
+    - ``grid_deg``: node spacing of the tables and of the result [deg] (default 0.25; a
+      prepared engine's own).
 
     **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``) with
     ``load_torque_Nm`` [N·m] or ``fuel_scale`` [-], ``period_s`` [s], ``excess_work_J``
@@ -245,6 +399,13 @@ def steady_state(
     :class:`rotor.EngineError` for impossible arguments.
     """
     start = time.perf_counter()
+    prepared: PreparedEngine | None = None
+    if isinstance(engine, PreparedEngine):
+        prepared, engine = engine, engine.engine
+        fidelity = prepared.fidelity if fidelity is None else fidelity
+        grid_deg = prepared.grid_deg if grid_deg is None else grid_deg
+    fidelity = "variable" if fidelity is None else fidelity
+    grid_deg = 0.25 if grid_deg is None else grid_deg
     rpm = engine.operating.rpm if rpm is None else rpm
     _check_rpm(rpm)
     if load is not None and load.time_dependent:
@@ -253,9 +414,17 @@ def steady_state(
         )
     if method not in ("auto", "closed", "shooting"):
         raise EngineError(f"method = {method!r}: a steady state is found by 'auto', 'closed' or 'shooting'")
-    check_fidelity(fidelity, engine)
     points = grid_points(engine.strokes, grid_deg)
+    if prepared is not None and (fidelity, points) == (prepared.fidelity, prepared.points):
+        # checked when prepared; what may have changed since is checked here
+        train = prepared.train
+        d_inertia = prepared.engine.crankshaft.inertia_kgm2 - checked_reference(prepared)
+    else:
+        check_fidelity(fidelity, engine)
+        train = train_from_engine(engine, fidelity, points)  # kept for the next call (table_key)
+        d_inertia = np.float64(0.0)
     engine, load = arrays_only(engine), arrays_only(load)
+    assert isinstance(engine, Engine)
     n = engine.cylinders
     xp = jnp if any(isinstance(v, jax.core.Tracer) for v in (rpm, imep_scale)) else np  # numpy: no dispatch
     s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
@@ -271,25 +440,24 @@ def steady_state(
         )
     if lin is not None and method != "shooting":
         a_lin, c_lin = lin
-        train, scene, E, t, x, ok, arrays = _closed_steady(
-            engine, fidelity, points, s, fr, speed_load, a_lin, c_lin, omega_m, balance
-        )
+        flat = is_zero(c_lin) and fidelity != "constant"  # G ≡ 0: E = E0 + β(θ)
+        E, t, x, ok, arrays = _closed_steady(train, d_inertia, s, fr, speed_load, a_lin, c_lin, omega_m, balance, flat)
         _check_combustion(train, balance)
-        return _finish(engine, train, scene, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
-    train = train_from_engine(engine, fidelity, points)
+        return _finish(engine, train, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
     _check_combustion(train, balance)
+    train = shift_inertia(train, d_inertia)
     # start from the closed form with the losses linearised about ω_m
     a_lin, c_lin = fr[0] + fr[1] * omega_m, fr[2]
     if balance == "fuel":
         m0 = load.torque(omega_m, 0.0)
         c_l = jax.grad(lambda w: load.torque(w, 0.0))(omega_m) / (2 * omega_m)
         a_lin, c_lin = a_lin + m0 - c_l * omega_m**2, c_lin + c_l
-    E_g, _, x_g, _, _ = _closed_kernel(train, s, a_lin, c_lin, omega_m, balance)
+    E_g, _, x_g, _ = _closed_kernel(train, 0.0, s, a_lin, c_lin, omega_m, balance, False)
     if balance == "load":
         x_g = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
     scene = Scene(train, s[None, :], fr, speed_load)
-    x, scene, E, t, E_end, ok, arrays = _shooting_kernel(engine, scene, omega_m, E_g[0], x_g, balance)
-    return _finish(engine, train, scene, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays)
+    x, E, t, E_end, ok, arrays = _shooting_kernel(scene, omega_m, E_g[0], x_g, balance)
+    return _finish(engine, train, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays)
 
 
 def _check_combustion(train, balance):
@@ -302,21 +470,26 @@ def _check_combustion(train, balance):
 
 
 @eqx.filter_jit
-def _finish_arrays(engine, scene, E, t, omega_m):
+def _finish_arrays(scene, E, t, omega_m, d_inertia):
+    """The result's arrays on the table nodes; ``d_inertia`` [kg·m²] is added to the
+    tables' I(θ) (the crankshaft inertia of a prepared engine changed)."""
     count_trace()
     train = scene.train
     theta = train.nodes()
     val, der, sc = train.values, train.slopes, scene.scales[0]  # the result lies on the table nodes
-    inertia, dinertia = val[:, 0], der[:, 0]
+    inertia, dinertia = val[:, COL_I] + d_inertia, der[:, COL_I]
     omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
     m_eng = scene.engine_torque(val, sc, omega, 0.0)
     m_loss = scene.loss(omega, t)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
     # Shishkov, "Dinamika dvigatelei" (SUSU 2014) §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
     # the gas torque at this point's fuelling plus the reciprocating inertia torque
+    # (the cumulative work is linear in the fuelling and in ω²: its two parts depend on the
+    # tables and the fuelling alone, so a sweep over speed or inertia sums them once)
     gas = val[:, COL_MOTORED] + jnp.sum(sc * val[:, COL_COMBUSTION:], axis=1)
-    total = gas + train.textbook_k * omega_m**2
-    work = jnp.cumsum(total - jnp.mean(total)) * train.step_rad
+    work_gas = jnp.cumsum(gas - jnp.mean(gas)) * train.step_rad
+    work_k = jnp.cumsum(train.textbook_k - jnp.mean(train.textbook_k)) * train.step_rad
+    work = work_gas + work_k * omega_m**2
     excess = jnp.max(work) - jnp.min(work)
     return {
         "theta": theta,
@@ -327,22 +500,23 @@ def _finish_arrays(engine, scene, E, t, omega_m):
         "imep_pa": (train.imep_motored_pa + sc * train.imep_combustion_pa)[None, :],
         "period_s": train.cycle_rad / omega_m,
         "excess_work_J": excess,
-        "textbook_delta": excess / (train.mean_inertia * omega_m**2),
+        "textbook_delta": excess / ((train.mean_inertia + d_inertia) * omega_m**2),
         "e_ratio": jnp.min(E) / jnp.mean(E),
         "i_min": jnp.argmin(E),
     }
 
 
-def _finish(engine, train, scene, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
+def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
     a = arrays
     converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
     if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
-        good, i_min, x_found = jax.device_get((converged, a["i_min"], x))
-        if not np.all(np.isfinite(x_found)):
+        good, i_min, x_found, e_ratio = jax.device_get((converged, a["i_min"], x, a["e_ratio"]))
+        if not (np.all(np.isfinite(x_found)) and np.isfinite(e_ratio)):
             what = "load torque" if balance == "load" else "fuel scale"
+            trouble = "is not a finite number" if not np.all(np.isfinite(x_found)) else "gives no finite speed"
             raise NoSteadyStateError(
                 f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the periodic solution's balancing "
-                f"{what} is not a finite number; check that the "
+                f"{what} {trouble}; check that the "
                 "load and the fuelling are in units the engine can carry (N·m, a torque of the engine's size)"
             )
         if not good:

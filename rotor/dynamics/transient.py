@@ -28,7 +28,7 @@ from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..errors import EngineError
 from ..units import RPM_PER_RAD_S
-from .crank_train import COL_COMBUSTION, COL_MOTORED, crank_train
+from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, crank_train
 from .equation import (
     PROGRESS,
     Scene,
@@ -39,10 +39,12 @@ from .equation import (
     friction_coefficients,
     grid_run,
     linear_losses,
+    node_offsets,
     time_run,
 )
 from .invariants import check_speed_result
 from .loads import Governor, Load
+from .prepared import PreparedEngine, resolve_engine
 from .result import CycleSummary, SpeedResult, cycle_extremes
 
 __all__ = ["simulate", "METHODS", "chunk_cycles"]
@@ -78,12 +80,15 @@ def chunk_cycles(method: str, cycles: int, steps_per_cycle: int = 0, nodes_per_c
 class Progress:
     """A one-line progress bar on stderr, shown only after ~2 s and only on a terminal.
 
-    ``total``: cycles in the run; ``enabled``: True, False or None (when stderr is a terminal).
+    ``total``: units of work (cycles in a run); ``enabled``: True, False or None (when
+    stderr is a terminal); ``verb`` and ``unit``: what the bar says (``simulating``,
+    ``cycles``).
     """
 
-    def __init__(self, total: int, enabled: bool | None):
+    def __init__(self, total: int, enabled: bool | None, verb: str = "simulating", unit: str = "cycles"):
         self.total, self.start, self.shown, self.last = total, time.perf_counter(), False, 0
         self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
+        self.verb, self.unit = verb, unit
 
     def fraction(self, done: float) -> None:
         """Show that the fraction ``done`` (0…1) of the run is done."""
@@ -100,7 +105,9 @@ class Progress:
         frac = done / self.total
         bar = "#" * int(30 * frac)
         eta = elapsed / frac - elapsed if frac > 0 else float("nan")
-        sys.stderr.write(f"\rsimulating [{bar:<30}] {done}/{self.total} cycles, {elapsed:5.1f} s, ~{eta:4.0f} s left")
+        sys.stderr.write(
+            f"\r{self.verb} [{bar:<30}] {done}/{self.total} {self.unit}, {elapsed:5.1f} s, ~{eta:4.0f} s left"
+        )
         sys.stderr.flush()
         self.shown = True
 
@@ -162,7 +169,7 @@ def _check_scales(combustion, cycles, n):
 
 
 def simulate(
-    engine: Engine,
+    engine: Engine | PreparedEngine,
     rpm: ArrayLike | None = None,
     cycles: int = 10,
     load: Load | None = None,
@@ -184,7 +191,7 @@ def simulate(
     """Run the engine for ``cycles`` cycles from crank angle 0 at speed ``rpm``.
 
     **Arguments:**
-    - ``engine``: a :class:`rotor.Engine`.
+    - ``engine``: a :class:`rotor.Engine`, or a :class:`rotor.PreparedEngine` (its tables reused at the same fidelity and grid).
     - ``rpm``: the starting speed [rpm] (0: from rest); default ``[operating] rpm``.
     - ``cycles``: number of cycles to run.
     - ``load``: a load (:mod:`rotor.dynamics.loads`) or None.
@@ -216,6 +223,7 @@ def simulate(
 
     **Returns:** a :class:`rotor.SpeedResult` (``kind="transient"``).
     """
+    engine = resolve_engine(engine)  # a prepared engine: its tables are reused
     wall = time.perf_counter()
     if method not in METHODS:
         raise EngineError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
@@ -417,7 +425,7 @@ def _run(
             if k == valid < size:  # the padding's first node is the state at the end of the run
                 E_end, t_end = E[valid, 0], t[valid, 0]
             if k:
-                sink.add_cycles(_theta_grid(done, k, P, cyc), t[:k], E[:k], None, None)
+                sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, None)
             done += k
             E_now, t_now = E_end, t_end
             bar.update(done)
@@ -437,7 +445,7 @@ def _run(
             if k == valid < size:  # the padding's first state is the state at the end of the run
                 y_end = (E[valid, 0], t[valid, 0], z[valid, 0])
             if k:
-                sink.add_cycles(_theta_grid(done, k, P, cyc), t[:k], E[:k], None, z[:k])
+                sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, z[:k])
             done += k
             E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
             bar.update(done)
@@ -488,7 +496,7 @@ def _run(
                 whole = min(reached // P, valid)
                 keep = whole * P
                 if keep:
-                    sink.add_cycles(th[:keep], ts[:keep], Es[:keep], None, zs[:keep])
+                    sink.add_cycles(done, th[:keep], ts[:keep], Es[:keep], None, zs[:keep])
                 done += whole
                 # hand over at the start of the incomplete cycle
                 if keep > 0:
@@ -498,7 +506,7 @@ def _run(
                 th_h = done * cyc
                 handover = (th_h, t_h, _omega_at(train, th_h, E_h), z_h)
                 break
-            sink.add_cycles(th[:need], ts[:need], Es[:need], None, zs[:need])
+            sink.add_cycles(done, th[:need], ts[:need], Es[:need], None, zs[:need])
             E_now, t_now, z_now = E[need - 1], t[need - 1], z[need - 1]
             done += valid
             bar.update(done)
@@ -600,14 +608,52 @@ def _omega_at(train, theta, E):
     return jnp.sqrt(2 * jnp.maximum(E, 0.0) / train.at(theta)[0][0])
 
 
+def _cycle_samples(scene, first, t, E, omega, z, P: int):
+    """:func:`_samples` for whole cycles saved on the table nodes (θ = k·Θ + p·Θ/P, cycle
+    k from ``first``; t, E or ω, z flat, P per cycle): the tables' own node values, no
+    interpolation, and each cylinder's combustion scale by its firing window at the node
+    (as :func:`rotor.dynamics.equation.closed_run` uses it) as three small matrix products,
+    no per-sample gather."""
+    train = scene.train
+    stride = train.points // P
+    k = t.shape[0] // P
+    val, der = train.values[::stride], train.slopes[::stride]  # (P, columns)
+    off = node_offsets(train)[:-1:stride]  # (P, cylinders): -1, 0 or 1 cycles from the sample's
+    rows = first + jnp.arange(k)
+    last = scene.scales.shape[0] - 1
+    comb = sum(
+        scene.scales[jnp.clip(rows + o, 0, last)] @ jnp.where(off == o, val[:, COL_COMBUSTION:], 0.0).T
+        for o in (-1, 0, 1)
+    )  # (k, P): Σ_c s·ΔM_c
+    t = t.reshape(k, P)
+    z = jnp.zeros_like(t) if z is None else z.reshape(k, P)
+    inertia, dinertia = val[:, COL_I], der[:, COL_I]
+    if E is not None:
+        omega = jnp.sqrt(2 * jnp.maximum(E.reshape(k, P), 0.0) / inertia)
+    else:
+        omega = omega.reshape(k, P)
+    fuel = scene.fuel(omega, z)
+    m_eng = val[:, COL_MOTORED] + fuel * comb + val[:, COL_K] * omega**2
+    m_loss = scene.loss(omega, t)
+    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    return tuple(jnp.reshape(a, (-1,)) for a in (omega, m_eng, m_loss, accel, fuel))
+
+
 @eqx.filter_jit
-def _gather(scene, pieces):
-    """All pieces (θ, t, E or None, ω or None, z or None), flat, as the flat sample arrays
-    (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled call."""
+def _gather(scene, pieces, P: int):
+    """All pieces (first cycle or None, θ, t, E or None, ω or None, z or None), flat, as the
+    flat sample arrays (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled
+    call. A piece with a first cycle holds whole cycles on the table nodes (:func:`_cycle_samples`)."""
+    count_trace()
     parts = []
-    for th, t, E, w, z in pieces:
-        z = jnp.zeros_like(th) if z is None else z
-        parts.append((th, t) + _samples(scene, th, t, E, w, z))
+    for first, th, t, E, w, z in pieces:
+        if first is not None:
+            parts.append((th, t) + _cycle_samples(scene, first, t, E, w, z, P))
+        else:
+            z = jnp.zeros_like(th) if z is None else z
+            parts.append((th, t) + _samples(scene, th, t, E, w, z))
+    if len(parts) == 1:
+        return parts[0]
     return tuple(jnp.concatenate(a) for a in zip(*parts))
 
 
@@ -616,11 +662,12 @@ def _flat(a):
 
 
 @eqx.filter_jit
-def _chunk_figures(scene, th, t, E, w, z, P: int):
-    """The samples of whole cycles (:func:`_samples`, flat) and per cycle: its start time,
-    mean engine torque and highest and lowest speed, in one compiled call."""
-    z = jnp.zeros_like(th) if z is None else z
-    arrays = (th, t) + tuple(_samples(scene, th, t, E, w, z))
+def _chunk_figures(scene, first, th, t, E, w, P: int, z=None):
+    """The samples of whole cycles from cycle ``first`` (:func:`_cycle_samples`, flat) and
+    per cycle: its start time, mean engine torque and highest and lowest speed, in one
+    compiled call."""
+    count_trace()
+    arrays = (th, t) + _cycle_samples(scene, first, t, E, w, z, P)
     k = th.shape[0] // P
     omega, torque = arrays[2].reshape(k, P), arrays[3].reshape(k, P)
     return arrays, t.reshape(k, P)[:, 0], jnp.mean(torque, axis=1), jnp.max(omega, axis=1), jnp.min(omega, axis=1)
@@ -635,35 +682,42 @@ class _AllSamples:
         self.parts: list[tuple[Any, ...]] = []
         self.uniform = 0
 
-    def add_cycles(self, th, t, E, w, z):
-        """Samples of whole cycles (θ, t, E or ω, z or None; any shape, P per cycle)."""
-        part = tuple(_flat(a) for a in (th, t, E, w, z))
+    def add_cycles(self, first, th, t, E, w, z):
+        """Samples of whole cycles from cycle ``first`` on the table nodes (θ, t, E or ω,
+        z or None; any shape, P per cycle)."""
+        part = (int(first),) + tuple(_flat(a) for a in (th, t, E, w, z))
         self.parts.append(part)
-        self.uniform += part[0].shape[0] // self.P
+        self.uniform += part[1].shape[0] // self.P
 
     def add_extra(self, th, t, E, w, z):
         """Samples after the last whole cycle (the run's end, a time-domain tail)."""
-        part = tuple(_flat(a) for a in (th, t, E, w, z))
-        if part[0].shape[0]:
+        part = (None,) + tuple(_flat(a) for a in (th, t, E, w, z))
+        if part[1].shape[0]:
             self.parts.append(part)
 
     def finish(self):
         """(θ, t, ω, engine torque, load torque, dω/dt, fuel), whole cycles, first kept cycle, summary."""
-        # consecutive pieces of one kind joined: a compiled call over a few pieces, not one per chunk
+        # consecutive pieces of one kind joined (whole cycles: consecutive ones): a compiled
+        # call over a few pieces, not one per chunk
         groups: list[list[tuple[Any, ...]]] = []
         for p in self.parts:
             kind = tuple(a is None for a in p)
             if groups and tuple(a is None for a in groups[-1][0]) == kind:
-                groups[-1].append(p)
-            else:
-                groups.append([p])
+                g = groups[-1]
+                if p[0] is None or p[0] == g[-1][0] + g[-1][1].shape[0] // self.P:
+                    g.append(p)
+                    continue
+            groups.append([p])
         pieces = tuple(
             g[0]
             if len(g) == 1
-            else tuple(None if g[0][i] is None else jnp.concatenate([p[i] for p in g]) for i in range(5))
+            else (g[0][0],)
+            + tuple(None if g[0][i] is None else jnp.concatenate([p[i] for p in g]) for i in range(1, 6))
             for g in groups
         )
-        return _gather(self.scene, pieces), self.uniform, 0, None
+        # the first cycle as an array: a new first cycle compiles nothing
+        pieces = tuple((None if p[0] is None else jnp.asarray(p[0], dtype=jnp.int32),) + p[1:] for p in pieces)
+        return _gather(self.scene, pieces, self.P), self.uniform, 0, None
 
 
 class _LastCycles:
@@ -696,13 +750,15 @@ class _LastCycles:
         if self.first is None and w.size:
             self.first = (float(arrays[0][0]), float(arrays[1][0]))
 
-    def add_cycles(self, th, t, E, w, z):
-        """Samples of whole cycles (θ, t, E or ω, z or None; any shape, P per cycle)."""
+    def add_cycles(self, first, th, t, E, w, z):
+        """Samples of whole cycles from cycle ``first`` on the table nodes (θ, t, E or ω,
+        z or None; any shape, P per cycle)."""
         k = int(np.size(th)) // self.P
         if k == 0:
             return
+        th, t, E, w, z = (_flat(a) for a in (th, t, E, w, z))
         arrays, t_start, mean_torque, w_max, w_min = _chunk_figures(
-            self.scene, *(_flat(a) for a in (th, t, E, w, z)), self.P
+            self.scene, jnp.asarray(first, dtype=jnp.int32), th, t, E, w, self.P, z
         )
         rows = tuple(np.asarray(a).reshape(k, self.P) for a in arrays)  # numpy from here: no compiling per shape
         self._extremes_of(tuple(a.reshape(-1) for a in rows))
@@ -806,8 +862,8 @@ def _assemble(engine, train, scene, sink, time_domain, method, fidelity, P, stal
     if time_domain is not None:
         for th, t, w, z, whole in _resample(scene, time_domain, P):
             n = whole * P
-            if n:
-                sink.add_cycles(th[:n], t[:n], None, w[:n], z[:n])
+            if n:  # whole cycles start on a cycle boundary (:func:`_resample`)
+                sink.add_cycles(int(round(float(th[0]) / train.cycle_rad)), th[:n], t[:n], None, w[:n], z[:n])
             if th.shape[0] > n:
                 sink.add_extra(th[n:], t[n:], None, w[n:], z[n:])
     (theta, t, omega, m_eng, m_loss, accel, fuel), uniform, first_kept, summary = sink.finish()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-import jax.numpy as jnp
+import equinox as eqx
 import numpy as np
 
 from ..checks import check_size
@@ -129,27 +129,26 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
     require_engine(engine, "engine_summary(engine)").check()
     rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
     omega = rpm * RAD_S_PER_RPM
-    g = engine.geometry
-    theta = jnp.linspace(0.0, engine.cycle_rad, int(720 * engine.strokes / 2), endpoint=False)
-    total = total_torque(engine, theta, omega)
-    inertia = reduced_inertia(engine, theta)
-    torque = float(mean_gas_torque(engine))
-    A, B, C = inertia_coefficients(engine)
-    work = np.cumsum(np.asarray(total) - float(jnp.mean(total))) * (engine.cycle_rad / theta.shape[0])
+    theta = np.linspace(0.0, engine.cycle_rad, int(720 * engine.strokes / 2), endpoint=False)
+    out = {k: np.asarray(v) for k, v in _summary_arrays(engine, theta, np.asarray(omega)).items()}
+    total, inertia = out.pop("total"), out.pop("inertia")
+    A, B, C = out.pop("A"), out.pop("B"), out.pop("C")
+    torque = float(out["mean_gas_torque_Nm"])
+    work = np.cumsum(total - np.mean(total)) * (engine.cycle_rad / theta.shape[0])
     figures = {
-        "displacement_m3": float(g.displacement_m3 * engine.cylinders),
-        "crank_radius_m": float(g.crank_radius_m),
-        "rod_ratio": float(g.rod_ratio),
-        "mean_piston_speed_m_s": float(mean_piston_speed(g.stroke_m, omega)),
-        "imep_pa": float(imep_pa(engine)),
+        "displacement_m3": float(out["displacement_m3"]),
+        "crank_radius_m": float(out["crank_radius_m"]),
+        "rod_ratio": float(out["rod_ratio"]),
+        "mean_piston_speed_m_s": float(out["mean_piston_speed_m_s"]),
+        "imep_pa": float(out["imep_pa"]),
         "mean_gas_torque_Nm": torque,
         "indicated_power_w": torque * omega,
-        "total_torque_min_Nm": float(jnp.min(total)),
-        "total_torque_max_Nm": float(jnp.max(total)),
+        "total_torque_min_Nm": float(np.min(total)),
+        "total_torque_max_Nm": float(np.max(total)),
         "excess_work_J": float(work.max() - work.min()),
-        "inertia_mean_kgm2": float(mean_reduced_inertia(engine)),
-        "inertia_min_kgm2": float(jnp.min(inertia)),
-        "inertia_max_kgm2": float(jnp.max(inertia)),
+        "inertia_mean_kgm2": float(out["inertia_mean_kgm2"]),
+        "inertia_min_kgm2": float(np.min(inertia)),
+        "inertia_max_kgm2": float(np.max(inertia)),
     }
     coefficients = {"A": float(A[0]), "B": float(B[0]), "C": float(C[0])}
     check_results_finite(
@@ -168,10 +167,32 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
         rpm=rpm,
         **figures,
         inertia_coefficients_kgm2=coefficients,
-        angle_deg=np.rad2deg(np.asarray(theta)),
-        total_torque_Nm=np.asarray(total),
-        inertia_kgm2=np.asarray(inertia),
+        angle_deg=np.rad2deg(theta),
+        total_torque_Nm=total,
+        inertia_kgm2=inertia,
     )
+
+
+@eqx.filter_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
+def _summary_arrays(engine, theta, omega):
+    """What :func:`engine_summary` computes with JAX, at crank angles ``theta`` [rad] and
+    speed ``omega`` [rad/s]."""
+    g = engine.geometry
+    A, B, C = inertia_coefficients(engine)
+    return {
+        "total": total_torque(engine, theta, omega),
+        "inertia": reduced_inertia(engine, theta),
+        "A": A,
+        "B": B,
+        "C": C,
+        "displacement_m3": g.displacement_m3 * engine.cylinders,
+        "crank_radius_m": g.crank_radius_m,
+        "rod_ratio": g.rod_ratio,
+        "mean_piston_speed_m_s": mean_piston_speed(g.stroke_m, omega),
+        "imep_pa": imep_pa(engine),
+        "mean_gas_torque_Nm": mean_gas_torque(engine),
+        "inertia_mean_kgm2": mean_reduced_inertia(engine),
+    }
 
 
 _INERTIA_MODELS = ("exact", "coefficients", "mean")
@@ -295,10 +316,11 @@ def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int 
         "use fewer points per degree, e.g. 2",
     )
     deg = np.linspace(0, cycle_deg, int(rows))
-    theta = jnp.deg2rad(deg)
-    gas = np.asarray(gas_torque(engine, theta))
-    total = np.asarray(total_torque(engine, theta, rpm * RAD_S_PER_RPM))
-    inertia = {m: np.asarray(reduced_inertia(engine, theta, m)) for m in _INERTIA_MODELS}
+    curves = {
+        k: np.asarray(v) for k, v in _curve_arrays(engine, np.deg2rad(deg), np.asarray(rpm * RAD_S_PER_RPM)).items()
+    }
+    gas, total = curves.pop("gas"), curves.pop("total")
+    inertia = {m: curves[m] for m in _INERTIA_MODELS}
     check_results_finite(
         f"the curves of engine {engine.name!r} at {rpm:g} rpm",
         {"gas_torque_Nm": gas, "total_torque_Nm": total, **{f"inertia_{m}_kgm2": v for m, v in inertia.items()}},
@@ -315,3 +337,11 @@ def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int 
         inertia_coefficients_kgm2=inertia["coefficients"],
         inertia_mean_kgm2=inertia["mean"],
     )
+
+
+@eqx.filter_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
+def _curve_arrays(engine, theta, omega):
+    """What :func:`engine_curves` computes with JAX, at crank angles ``theta`` [rad] and
+    speed ``omega`` [rad/s]."""
+    out = {"gas": gas_torque(engine, theta), "total": total_torque(engine, theta, omega)}
+    return out | {m: reduced_inertia(engine, theta, m) for m in _INERTIA_MODELS}

@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
@@ -175,21 +176,29 @@ def crank_table(
     if not 1 <= cylinder <= engine.cylinders:
         raise EngineError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
     angles = table_angles_deg(engine, step_deg)
-    omega = rpm * RAD_S_PER_RPM
+    cols, header = _table_columns(engine, angles, np.asarray(rpm * RAD_S_PER_RPM), cylinder, kinematics)
+    cols = {"angle_deg": angles, **{k: np.asarray(v) for k, v in cols.items()}}
+    header = {k: float(v) for k, v in header.items()}
+    check_results_finite(f"the table of engine {engine.name!r} at {rpm:g} rpm", {**header, **cols})
+    return CrankTable(cols, engine.name, rpm, kinematics, cylinder, **header)
+
+
+@eqx.filter_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
+def _table_columns(engine, angles_deg, omega, cylinder, kinematics):
+    """The forces of the table at ``angles_deg`` (the cylinder's own cycle angle [deg]) and
+    the inputs of its header."""
     # the table is for the cylinder's own cycle angle: shift by its firing angle
     i = cylinder - 1
     offset = engine.firing_angles_rad[i] - (2 * np.pi if engine.strokes == 4 else 0.0)
-    theta = jnp.deg2rad(jnp.asarray(angles)) + offset
-    cols = {k: np.asarray(v) for k, v in crank_forces(engine, theta, omega, cylinder, kinematics).items()}
-    cols = {"angle_deg": angles, **cols}
+    theta = jnp.deg2rad(angles_deg) + offset
+    cols = crank_forces(engine, theta, omega, cylinder, kinematics)
     g = engine.geometry
     m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
     header = {
-        "crank_radius_m": float(g.crank_radius_m),
-        "rod_ratio": float(g.rod_ratio),
-        "reciprocating_kg": float(m_rec),
-        "piston_area_m2": float(g.piston_area_m2),
-        "crankcase_pa": float(engine.pressure.crankcase_pa),
+        "crank_radius_m": g.crank_radius_m,
+        "rod_ratio": g.rod_ratio,
+        "reciprocating_kg": m_rec,
+        "piston_area_m2": g.piston_area_m2,
+        "crankcase_pa": engine.pressure.crankcase_pa,
     }
-    check_results_finite(f"the table of engine {engine.name!r} at {rpm:g} rpm", {**header, **cols})
-    return CrankTable(cols, engine.name, rpm, kinematics, cylinder, **header)
+    return cols, header

@@ -99,3 +99,20 @@ def plot_orders(order: ArrayLike, amplitude_rad_s: ArrayLike, title: str, ax: An
     ax.grid(True, alpha=0.3, axis="y")
     ax.set_title(title)
     return ax
+
+
+def plot_sweep(x: ArrayLike, delta: ArrayLike, x_label: str, title: str, ax: Any = None) -> Any:
+    """δ of many steady states against the input that varies, one dot each.
+
+    **Arguments:** ``x``: the input of each item (its unit in ``x_label``); ``delta``: the
+    speed irregularity of each [-]; ``x_label``; ``title``; ``ax``.
+
+    **Returns:** the Axes.
+    """
+    ax = new_axes(ax)
+    ax.plot(np.asarray(x), np.asarray(delta), ".", ms=3)
+    ax.set_xlabel(x_label)
+    ax.set_ylabel("speed irregularity δ [-]")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(title)
+    return ax

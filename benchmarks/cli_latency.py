@@ -1,0 +1,235 @@
+"""Wall time of `rotor` commands, each in a fresh process, with a cold and a warm
+compilation cache.
+
+The commands that need no JAX (``--help``, ``COMMAND --help``, ``presets``) and the ones
+that compile one small kernel each (``info 4chn15``, ``table 4chn15``) have a target of 1.5 s; the compiled
+ones (``steady 4chn15``, ``simulate 4chn15``) are measured for what the persistent
+compilation cache (rotor/cache.py) saves them. "cold": each run gets a new, empty cache
+folder (``ROTOR_COMPILATION_CACHE``: a user's very first run); "warm": every run shares a
+folder that one untimed run filled first (every later run). The repeats go round the
+commands in turn, so that the load of a shared machine falls on all of them alike; the
+median of each is reported, with every time. Three reference processes put the figures in
+proportion: ``python -c pass``, ``python -c 'import jax'`` and ``python -c 'import jax,
+equinox'`` (JAX's and equinox's imports are the floor of every command that computes).
+Each run's CPU time (user + system) is recorded beside its wall time.
+
+    .venv/bin/python benchmarks/cli_latency.py            # 7 repeats, about 3 min
+    .venv/bin/python benchmarks/cli_latency.py --quick    # 3 repeats, light commands only
+
+Writes benchmarks/results/cli_latency.json (cli_latency_quick.json with --quick).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results"
+TARGET_S = 1.5
+NO_JAX = {  # need no JAX: the cache plays no part, one case each
+    "--help": ["--help"],
+    "table --help": ["table", "--help"],
+    "steady --help": ["steady", "--help"],
+    "presets": ["presets"],
+}
+LIGHT = {  # one small compiled kernel each
+    "info 4chn15": ["info", "4chn15"],
+    "table 4chn15": ["table", "4chn15"],
+}
+COMPILED = {
+    "steady 4chn15": ["steady", "4chn15"],
+    "simulate 4chn15 --cycles 20": ["simulate", "4chn15", "--cycles", "20", "--quiet"],
+}
+REFERENCES = {
+    "python -c pass": "pass",
+    "import jax": "import jax",
+    "import jax, equinox": "import jax, equinox",
+    "import rotor": "import rotor",
+}
+
+
+PHASES = r"""
+import json, sys, time
+t = [time.perf_counter()]
+def lap():
+    t.append(time.perf_counter())
+    return t[-1] - t[-2]
+out = {}
+from rotor.cli.app import build_parser
+from rotor.cache import enable_compilation_cache
+args = build_parser().parse_args(sys.argv[1:])
+enable_compilation_cache(min_compile_time_s=0.0)  # as the command does
+out["cli: parser"] = lap()
+import jax
+out["import jax"] = lap()
+import equinox
+out["import equinox"] = lap()
+from rotor.engine.file import load_engine
+from rotor.engine.summary import engine_summary
+from rotor.engine.table import crank_table
+out["import rotor.engine"] = lap()
+engine = load_engine(args.engine)
+out["load_engine"] = lap()
+if args.command == "table":
+    text = crank_table(engine).to_text()
+else:
+    text = engine_summary(engine).summary()
+out[f"compute ({args.command}, compiled call from the cache)"] = lap()
+if args.command == "table":
+    crank_table(engine).to_text()
+else:
+    engine_summary(engine).summary()
+out["the same again in the process (compiled, no tracing)"] = lap()
+print(json.dumps(out))
+"""
+
+
+def phases(command: str, cache: str, repeats: int) -> dict:
+    """Median seconds of each phase of ``rotor COMMAND 4chn15`` timed inside the process
+    (warm cache), and the process's wall time for comparison."""
+    runs = []
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache)
+    argv = [sys.executable, "-c", PHASES, command, "4chn15"]
+    subprocess.run(argv, env=env, check=True, capture_output=True)  # fills the cache
+    for _ in range(repeats):
+        start = time.perf_counter()
+        out = subprocess.run(argv, env=env, check=True, capture_output=True, text=True)
+        runs.append({"process": time.perf_counter() - start, **json.loads(out.stdout.strip().splitlines()[-1])})
+    return {k: statistics.median(r[k] for r in runs) for k in runs[0]}
+
+
+def rotor_exe() -> list[str]:
+    """The ``rotor`` script next to this Python (the installed entry point), else ``python -m rotor.cli``."""
+    exe = Path(sys.executable).with_name("rotor")
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "rotor.cli"]
+
+
+def wall(argv: list[str], cache: str) -> tuple[float, float]:
+    """Seconds from start to exit of ``argv`` in a fresh process with the compilation cache
+    ``cache``, and the CPU seconds it used (user + system: less sensitive than the wall time
+    to the other jobs of a shared machine, but counting every thread of the process)."""
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    out = subprocess.run(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    took = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if out.returncode:
+        raise RuntimeError(f"{' '.join(argv)}: exit {out.returncode}: {out.stderr.strip()[-500:]}")
+    return took, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def versions() -> dict:
+    import equinox
+    import jax
+    import jaxlib
+    import numpy
+
+    return {m.__name__: m.__version__ for m in (jax, jaxlib, equinox, numpy)} | {
+        "python": platform.python_version(),
+        "cpu_count": os.cpu_count(),
+        "machine": platform.machine(),
+    }
+
+
+def loadavg() -> list[float] | None:
+    try:
+        return list(os.getloadavg())
+    except OSError:
+        return None
+
+
+def summarize(runs: list[tuple[float, float]]) -> dict:
+    times, cpu = [w for w, _ in runs], [c for _, c in runs]
+    return {
+        "median_s": statistics.median(times),
+        "min_s": min(times),
+        "cpu_median_s": statistics.median(cpu),
+        "times_s": times,
+        "cpu_s": cpu,
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="3 repeats, the light commands only")
+    ap.add_argument("--repeats", type=int, help="repeats of each command (default 7, 3 with --quick)")
+    args = ap.parse_args()
+    repeats = args.repeats or (3 if args.quick else 7)
+    rotor = rotor_exe()
+    light = dict(LIGHT)
+    compiled = {} if args.quick else dict(COMPILED)
+    cases: dict[str, tuple[list[str], str]] = {}  # name -> (argv, "cold" | "warm" | "off")
+    for name, code in REFERENCES.items():
+        cases[name] = ([sys.executable, "-c", code], "off")
+    for name, argv in NO_JAX.items():
+        cases[f"rotor {name}"] = ([*rotor, *argv], "warm")
+    for name, argv in {**light, **compiled}.items():
+        for kind in ("cold", "warm"):
+            cases[f"rotor {name} [{kind}]"] = ([*rotor, *argv], kind)
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
+    top = Path(tempfile.mkdtemp(prefix="rotor-cli-latency-"))
+    load_before = loadavg()
+    try:
+        warm = str(top / "warm")
+        for argv, kind in cases.values():  # fill the warm cache (untimed)
+            if kind == "warm":
+                wall(argv, warm)
+        for r in range(repeats):
+            for name, (argv, kind) in cases.items():
+                if kind == "cold":
+                    cache = str(top / f"cold-{r}-{list(cases).index(name)}")
+                elif kind == "warm":
+                    cache = warm
+                else:
+                    cache = "off"
+                times[name].append(wall(argv, cache))
+                if kind == "cold":
+                    shutil.rmtree(cache, ignore_errors=True)
+            print(f"repeat {r + 1}/{repeats} done", flush=True)
+        breakdown = {c: phases(c, str(top / f"phases-{c}"), repeats) for c in ("table", "info")}
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+    out = {
+        "versions": versions(),
+        "target_s": TARGET_S,
+        "repeats": repeats,
+        "loadavg_before": load_before,
+        "loadavg_after": loadavg(),
+        "rotor": rotor,
+        "no_jax_commands": list(NO_JAX),
+        "light_commands": list(light),
+        "compiled_commands": list(compiled),
+        "results": {name: summarize(t) for name, t in times.items()},
+        "phases_warm_median_s": breakdown,
+    }
+    width = max(len(n) for n in times)
+    print(f"{'':{width}s} {'median':>7s} {'min':>7s} {'CPU':>7s}")
+    for name, r in out["results"].items():
+        print(f"{name:{width}s} {r['median_s']:6.2f}s {r['min_s']:6.2f}s {r['cpu_median_s']:6.2f}s")
+    for command, parts in breakdown.items():
+        print(f"rotor {command} 4chn15, warm cache, phases inside the process (medians):")
+        for k, v in parts.items():
+            print(f"  {k:55s} {v:6.3f}s")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    stem = "cli_latency_quick" if args.quick else "cli_latency"
+    sys.path.insert(0, str(ROOT))
+    from rotor.fileio import write_text_atomic
+
+    write_text_atomic(RESULTS / f"{stem}.json", json.dumps(out, indent=1))
+    print(f"wrote {RESULTS / (stem + '.json')}")
+
+
+if __name__ == "__main__":
+    main()

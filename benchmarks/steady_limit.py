@@ -1,0 +1,218 @@
+"""The steady state at its limit: prepared tables, one compiled call, and batches.
+
+Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
+
+1. The baseline: ONE cycle of scipy ``solve_ivp(method="RK45", rtol=1e-8)`` with a plain
+   numpy right-hand side (``simulator_speed.NumpyEngine``), as a user would write it.
+2. rotor's steady state (the whole periodic solution, not one cycle of an ODE):
+   - ``steady_state(engine)`` with its tables built at every call (the cache cleared
+     first: what every call cost before tables were kept);
+   - ``steady_state(engine)`` with the tables kept from the call before (the default);
+   - ``steady_state(rotor.prepare(engine))``;
+   - one compiled call for a prepared engine (``eqx.filter_jit`` around
+     ``steady_state(prepared, rpm).omega``: no Python in the hot path), the whole ω(θ)
+     on 2880 nodes;
+   - one compiled call for δ alone (``steady_sweep``'s kernel with one item);
+   and δ of each against the default ``steady_state(engine)``.
+3. Throughput: ``rotor.steady_sweep`` over speed × flywheel inertia for 1 … 10⁵ items
+   (10⁶ with ``--full``), steady states per second after compiling, the chunk size and
+   the process's peak resident memory after each size.
+
+Compile time is kept apart (the first call); every time is the median of repeats after it.
+Writes ``results/steady_limit.json`` and ``results/steady_limit.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from simulator_speed import NumpyEngine, versions  # noqa: E402
+
+import rotor  # noqa: E402
+from rotor.dynamics import crank_train  # noqa: E402
+from rotor.dynamics.sweep import solve_chunk  # noqa: E402
+from rotor.fileio import write_text_atomic  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def median_time(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return {"median_s": statistics.median(times), "min_s": min(times), "repeats": repeats}
+
+
+def first_and_median(fn, repeats):
+    start = time.perf_counter()
+    fn()
+    first = time.perf_counter() - start
+    return dict(first_call_s=first, **median_time(fn, repeats))
+
+
+def peak_rss_mb():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def bench_single(engine, repeats):
+    rpm = float(engine.operating.rpm)
+    default = rotor.steady_state(engine)
+    delta0 = float(default.delta)
+    ne = NumpyEngine(engine)
+    omega0, m_load = float(default.omega[0]), float(default.load_torque_Nm)
+    rk45 = median_time(lambda: ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8), max(3, repeats // 10))
+    out = {"rpm": rpm, "delta_default": delta0, "scipy_rk45_one_cycle": rk45}
+
+    def cold():
+        crank_train.clear_table_cache()
+        return float(rotor.steady_state(engine).delta)
+
+    def warm():
+        return float(rotor.steady_state(engine).delta)
+
+    prepared = rotor.prepare(engine)
+
+    def python_prepared():
+        return float(rotor.steady_state(prepared).delta)
+
+    solve = eqx.filter_jit(lambda p, r: rotor.steady_state(p, r).omega)
+    rpm_a = jax.numpy.asarray(rpm)
+
+    def compiled():
+        return solve(prepared, rpm_a).block_until_ready()
+
+    one = (rpm_a.reshape(1), None, None, None)
+    varies = (True, False, False, False)
+    fr = None
+    delta_kernel = solve_chunk.lower(prepared, *one, fr, varies, True).compile()
+
+    def compiled_delta():
+        return jax.block_until_ready(delta_kernel(prepared, *one, fr, varies, True))
+
+    rows = {
+        "steady_state(engine), tables built every call": (cold, max(3, repeats // 10)),
+        "steady_state(engine), tables kept": (warm, repeats),
+        "steady_state(prepared)": (python_prepared, repeats),
+        "compiled call, prepared engine, whole omega(theta)": (compiled, repeats),
+        "compiled call, prepared engine, delta only": (compiled_delta, repeats),
+    }
+    deltas = {
+        "steady_state(engine), tables built every call": cold(),
+        "steady_state(engine), tables kept": warm(),
+        "steady_state(prepared)": python_prepared(),
+        "compiled call, prepared engine, whole omega(theta)": float(
+            eqx.filter_jit(lambda p, r: rotor.steady_state(p, r).delta)(prepared, rpm_a)
+        ),
+        "compiled call, prepared engine, delta only": float(np.asarray(compiled_delta()[0])[0]),
+    }
+    out["rotor"] = {}
+    for name, (fn, n) in rows.items():
+        t = first_and_median(fn, n)
+        t["speedup_over_rk45_one_cycle"] = rk45["median_s"] / t["median_s"]
+        t["delta"] = deltas[name]
+        t["delta_minus_default"] = deltas[name] - delta0
+        out["rotor"][name] = t
+    return out
+
+
+def bench_batches(engine, sizes, repeats):
+    prepared = rotor.prepare(engine)
+    rpm0 = float(engine.operating.rpm)
+    J0 = float(engine.crankshaft.inertia_kgm2)
+    out = []
+    for n in sizes:
+        side = int(np.ceil(np.sqrt(n)))
+        rpm = np.repeat(np.linspace(0.6 * rpm0, 1.6 * rpm0, side), side)[:n]
+        J = np.tile(np.linspace(0.5 * J0, 3.0 * J0, side), side)[:n]
+        first = rotor.steady_sweep(prepared, rpm=rpm, inertia_kgm2=J, progress=False)
+        reps = repeats if n <= 10**4 else 1
+        runs = [first] + [
+            rotor.steady_sweep(prepared, rpm=rpm, inertia_kgm2=J, progress=False) for _ in range(reps - 1)
+        ]
+        run_s = statistics.median([r.wall_s - r.compile_s for r in runs])
+        out.append(
+            {
+                "items": n,
+                "chunk": first.chunk,
+                "compile_s": first.compile_s,
+                "run_s_after_compile": run_s,
+                "steady_states_per_s": n / run_s,
+                "converged": int(np.sum(first.converged)),
+                "peak_rss_mb": peak_rss_mb(),
+                "repeats": reps,
+            }
+        )
+        print(
+            f"  {n:>8} items: {run_s:8.3f} s after {first.compile_s:.2f} s compiling, "
+            f"{n / run_s:10.0f} per s (chunks of {first.chunk}), peak RSS {peak_rss_mb():.0f} MB",
+            flush=True,
+        )
+    return out
+
+
+def plot(res, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(13, 4.8))
+    single = res["single"]
+    names = ["scipy RK45, one cycle"] + list(single["rotor"])
+    times = [single["scipy_rk45_one_cycle"]["median_s"]] + [v["median_s"] for v in single["rotor"].values()]
+    a.barh(range(len(names)), np.asarray(times) * 1e6, color=["C1"] + ["C0"] * (len(names) - 1))
+    a.set_yticks(range(len(names)), [n.replace(", ", ",\n", 1) for n in names], fontsize=7)
+    a.set_xscale("log")
+    a.set_xlabel("median time after compile [µs]")
+    a.set_title(f"{res['engine']}: one steady state vs one RK45 cycle")
+    rows = res["batches"]
+    b.loglog([r["items"] for r in rows], [r["steady_states_per_s"] for r in rows], "o-")
+    b.set_xlabel("items in the sweep")
+    b.set_ylabel("steady states per second (after compile)")
+    b.set_title("rotor.steady_sweep, speed × flywheel inertia")
+    b.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--engine", default="4chn15")
+    ap.add_argument("--quick", action="store_true", help="fewer repeats, batches up to 10⁴")
+    ap.add_argument("--full", action="store_true", help="batches up to 10⁶ items")
+    args = ap.parse_args()
+    repeats = 21 if args.quick else 101
+    sizes = [1, 10, 100, 1000, 10**4] + ([] if args.quick else [10**5]) + ([10**6] if args.full else [])
+    engine = rotor.load_engine(args.engine)
+    res = {"engine": args.engine, "quick": args.quick, "versions": versions(), "notes": __doc__}
+    res["single"] = bench_single(engine, repeats)
+    rk = res["single"]["scipy_rk45_one_cycle"]["median_s"]
+    print(f"{args.engine} at {res['single']['rpm']:g} rpm; one cycle of scipy RK45 (rtol 1e-8): {rk * 1e3:.2f} ms")
+    for name, t in res["single"]["rotor"].items():
+        print(
+            f"  {name:<52} {t['median_s'] * 1e6:10.1f} µs  {t['speedup_over_rk45_one_cycle']:8.0f}×  "
+            f"δ − default {t['delta_minus_default']:+.1e}  (first call {t['first_call_s']:.2f} s)"
+        )
+    print("throughput of rotor.steady_sweep (speed × inertia grid):")
+    res["batches"] = bench_batches(engine, sizes, 3)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(RESULTS / "steady_limit.json", json.dumps(res, indent=2, ensure_ascii=False))
+    plot(res, RESULTS / "steady_limit.png")
+    print(f"wrote {RESULTS / 'steady_limit.json'} and {RESULTS / 'steady_limit.png'}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,392 @@
+"""Steady states in bulk: ``jax.vmap`` over speeds, flywheels, fuelling and loads.
+
+:func:`steady_sweep` prepares the engine once (:func:`rotor.prepare`) and solves
+:func:`rotor.steady_state` for every item of the given arrays in one compiled,
+vectorised call per chunk of items, so that the memory stays bounded however many items
+there are (the chunk's size follows the memory budget, :func:`rotor.checks.memory_budget_bytes`).
+The speed, the crankshaft inertia, the combustion scale and a constant load change
+nothing prepared. Any other field of the engine (masses, geometry) is swept by passing
+``jax.vmap`` an engine whose field is batched, e.g.::
+
+    engines = eqx.tree_at(lambda e: e.masses.reciprocating_kg, engine, masses_kg)
+    delta = jax.vmap(lambda e: rotor.steady_state(e).delta)(
+        jax.tree_util.tree_map(lambda x: x, engines))   # in_axes as the batch requires
+
+where every item builds its own tables in the trace (about the cost of one unprepared
+steady state each). Under ``vmap`` no error can be raised on a traced value: each item's
+``converged`` says whether it is a solution.
+
+The same code runs on a GPU where JAX has one (``pip install -U "jax[cuda12]"``): arrays
+then live on the device and a chunk of 10⁴–10⁵ items fills it; nothing in rotor requires
+one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any, Literal
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import ArrayLike
+
+from ..checks import memory_budget_bytes
+from ..engine.friction import Friction
+from ..engine.model import Engine
+from ..engine.plausible import PLAUSIBLE
+from ..errors import EngineError
+from ..results import Result, json_safe
+from ..units import RPM_PER_RAD_S
+from .crank_train import COL_COMBUSTION, COL_I, COL_MOTORED
+from .equation import friction_coefficients
+from .loads import ConstantLoad
+from .prepared import PreparedEngine, checked_reference, prepare
+from .result import parabola_peak
+from .steady import STOP_FRACTION, flat_balance, flat_energy, steady_state
+from .transient import Progress
+
+__all__ = ["SteadySweep", "steady_sweep"]
+
+# memory of one item while a chunk is solved, per node of the cycle grid [bytes]: the
+# vectorised closed-form solution keeps about 40 float64 arrays over the grid per item
+BYTES_PER_ITEM_NODE = 8 * 40
+MAX_CHUNK = 8192
+
+
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class SteadySweep(Result):
+    """Steady states of many operating points or designs (:func:`steady_sweep`), one row each.
+
+    **Fields:** ``rpm`` [rpm], ``inertia_kgm2`` [kg·m²], ``imep_scale`` [-] (items ×
+    cylinders), ``load_Nm`` [N·m] (the given constant load, or None): the inputs;
+    ``delta`` [-]: the speed irregularity δ of each steady state; ``min_rpm``,
+    ``max_rpm`` [rpm]; ``load_torque_Nm`` [N·m] (the balancing load, with no load given)
+    or ``fuel_scale`` [-] (the fuelling that carries a given load); ``textbook_delta``
+    [-]; ``converged``: whether each item is a solution; ``engine_name``, ``fidelity``,
+    ``grid_deg`` [deg]; ``chunk``: items per compiled call; ``compile_s`` and ``wall_s``
+    [s]: compiling, and everything.
+    """
+
+    rpm: np.ndarray
+    inertia_kgm2: np.ndarray
+    imep_scale: np.ndarray
+    load_Nm: np.ndarray | None
+    delta: np.ndarray
+    min_rpm: np.ndarray
+    max_rpm: np.ndarray
+    load_torque_Nm: np.ndarray | None
+    fuel_scale: np.ndarray | None
+    textbook_delta: np.ndarray
+    converged: np.ndarray
+    engine_name: str
+    fidelity: str
+    grid_deg: float
+    chunk: int
+    compile_s: float
+    wall_s: float
+
+    @property
+    def size(self) -> int:
+        """Number of items."""
+        return int(self.delta.shape[0])
+
+    def _columns(self) -> dict[str, np.ndarray]:
+        cols: dict[str, np.ndarray] = {"rpm": self.rpm, "inertia_kgm2": self.inertia_kgm2}
+        for c in range(self.imep_scale.shape[1]):
+            cols[f"imep_scale_{c + 1}"] = self.imep_scale[:, c]
+        if self.load_Nm is not None:
+            cols["load_Nm"] = self.load_Nm
+        cols.update(delta=self.delta, min_rpm=self.min_rpm, max_rpm=self.max_rpm)
+        if self.load_torque_Nm is not None:
+            cols["load_torque_Nm"] = self.load_torque_Nm
+        if self.fuel_scale is not None:
+            cols["fuel_scale"] = self.fuel_scale
+        cols.update(textbook_delta=self.textbook_delta, converged=self.converged)
+        return cols
+
+    def summary(self) -> str:
+        """Counts, the range of δ and of each input, and the time taken."""
+        ok = self.converged
+        n_ok = int(np.sum(ok))
+        lines = [
+            f"steady sweep of {self.engine_name}: {self.size} items, {n_ok} converged "
+            f"({self.fidelity} inertia, {self.grid_deg:g}° grid)",
+        ]
+        if n_ok:
+            d = self.delta[ok]
+            lines.append(f"  delta            {np.min(d):.6g} … {np.max(d):.6g}")
+        for name, unit, x in (("rpm", "rpm", self.rpm), ("inertia_kgm2", "kg·m²", self.inertia_kgm2)):
+            lines.append(f"  {name:<16} {np.min(x):.6g} … {np.max(x):.6g} {unit}")
+        if self.load_torque_Nm is not None and n_ok:
+            x = self.load_torque_Nm[ok]
+            lines.append(f"  load_torque_Nm   {np.min(x):.6g} … {np.max(x):.6g} N·m (balancing the engine)")
+        if self.fuel_scale is not None and n_ok:
+            x = self.fuel_scale[ok]
+            lines.append(f"  fuel_scale       {np.min(x):.6g} … {np.max(x):.6g} (carrying the given load)")
+        per = self.wall_s - self.compile_s
+        lines.append(
+            f"  time             {self.wall_s:.3g} s ({self.compile_s:.3g} s compiling; "
+            f"{self.size / per if per > 0 else float('nan'):.3g} steady states per second after it, "
+            f"chunks of {self.chunk})"
+        )
+        if n_ok < self.size:
+            lines.append(
+                f"  {self.size - n_ok} items have no steady state (the crankshaft would stop once a cycle): "
+                "their rows say converged = False"
+            )
+        return "\n".join(lines) + "\n"
+
+    def to_pandas(self) -> Any:
+        """One row per item: the inputs, δ, the speed range and the balancing figure."""
+        import pandas as pd
+
+        return pd.DataFrame(self._columns())
+
+    def to_json_dict(self) -> dict:
+        """The columns as lists (NaN as None), with the settings and times."""
+        out: dict[str, Any] = {
+            "engine": self.engine_name,
+            "fidelity": self.fidelity,
+            "grid_deg": self.grid_deg,
+            "items": self.size,
+            "converged_items": int(np.sum(self.converged)),
+            "chunk": self.chunk,
+            "compile_s": self.compile_s,
+            "wall_s": self.wall_s,
+        }
+        out.update({k: v.tolist() for k, v in self._columns().items()})
+        return json_safe(out)
+
+    def plot(self, ax: Any = None) -> Any:
+        """δ against the input that varies most (rpm, else the inertia, else the first
+        cylinder's scale, else the load), one dot per converged item."""
+        from ..plotting.speed import plot_sweep
+
+        cols = self._columns()
+        x_name = next(
+            (k for k in ("rpm", "inertia_kgm2", "imep_scale_1", "load_Nm") if k in cols and np.ptp(cols[k]) > 0),
+            "rpm",
+        )
+        labels = {"rpm": "speed [rpm]", "inertia_kgm2": "crankshaft inertia [kg·m²]", "load_Nm": "load [N·m]"}
+        ok = self.converged
+        title = f"{self.engine_name}: steady-state δ of {int(np.sum(ok))} items"
+        return plot_sweep(cols[x_name][ok], self.delta[ok], labels.get(x_name, "combustion scale [-]"), title, ax=ax)
+
+
+def _column(name: str, value: Any, unit: str) -> np.ndarray:
+    a = np.asarray(value, dtype=np.float64)
+    if a.ndim > 1:
+        raise EngineError(f"{name}: takes a number or a 1-D array of numbers [{unit}], got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        i = int(np.argmax(~np.isfinite(a.ravel())))
+        raise EngineError(f"{name}[{i}] = {a.ravel()[i]!r}: must be a finite number [{unit}]")
+    return a.reshape(-1)
+
+
+def _items(rpm, inertia, scale, load, cylinders):
+    """The inputs as arrays of one common length (a single value is repeated)."""
+    cols = {"rpm": rpm, "inertia_kgm2": inertia} | ({} if load is None else {"load_torque_Nm": load})
+    sizes = {k: v.shape[0] for k, v in cols.items()} | {"imep_scale": scale.shape[0]}
+    n = max(sizes.values())
+    bad = {k: s for k, s in sizes.items() if s not in (1, n)}
+    if bad:
+        raise EngineError(
+            "steady_sweep: the inputs must have one length (or be single values); got "
+            + ", ".join(f"{k}: {s}" for k, s in sizes.items())
+        )
+    del cylinders
+    return n
+
+
+def _check_values(rpm, inertia, scale):
+    lo, hi, _, _ = PLAUSIBLE[("operating", "rpm")]
+    if np.any((rpm < lo) | (rpm > hi)):
+        i = int(np.argmax((rpm < lo) | (rpm > hi)))
+        raise EngineError(f"rpm[{i}] = {rpm[i]:g}: must be a speed between {lo:g} and {hi:g} rpm")
+    if np.any(inertia <= 0):
+        i = int(np.argmax(inertia <= 0))
+        raise EngineError(f"inertia_kgm2[{i}] = {inertia[i]:g}: must be positive [kg·m²]")
+    if np.any(scale < 0):
+        i = int(np.argmax(np.any(scale < 0, axis=1)))
+        raise EngineError(f"imep_scale[{i}] = {scale[i].tolist()}: must not be negative")
+
+
+def default_chunk(points: int, cylinders: int, n: int) -> int:
+    """Items per compiled call for ``n`` items on a grid of ``points`` nodes of an engine
+    of ``cylinders``: at most :data:`MAX_CHUNK` (the arrays of a chunk then stay in the
+    processor's cache), and no more than a quarter of the memory budget holds."""
+    per_item = points * (BYTES_PER_ITEM_NODE + 16 * cylinders)
+    return int(max(1, min(MAX_CHUNK, n, memory_budget_bytes() // 4 // per_item)))
+
+
+def _flat_item(train, d_inertia, s, a, omega_m, balance):
+    """One item by the flat closed form (:func:`rotor.dynamics.steady.flat_balance`), with
+    only the figures of :class:`SteadySweep`: the same definitions as
+    :class:`rotor.SpeedResult`'s (δ from the parabola through the extreme node and its
+    neighbours; the textbook δ of Shishkov, "Dinamika dvigatelei", §3.2.12), E(0) as
+    :func:`rotor.dynamics.steady.flat_energy` finds it (the coarse grid, then one Newton
+    step on the full grid)."""
+    h = train.step_rad
+    beta, _, x = flat_balance(train, s, a, balance)
+    E0, ok = flat_energy(train, d_inertia, beta, omega_m)
+    # ω = √(2E/I) is largest and smallest where E/I is: no square root at every node
+    half_w2 = (E0 + beta[:-1]) / (train.values[:, COL_I] + d_inertia)
+    n = half_w2.shape[0]
+
+    def omega_at(j):
+        return jnp.sqrt(2 * jnp.maximum(half_w2[j % n], 0.0))
+
+    i_hi, i_lo = jnp.argmax(half_w2), jnp.argmin(half_w2)
+    hi = parabola_peak(omega_at(i_hi - 1), omega_at(i_hi), omega_at(i_hi + 1), 1.0)
+    lo = parabola_peak(omega_at(i_lo - 1), omega_at(i_lo), omega_at(i_lo + 1), -1.0)
+    delta = (hi - lo) / omega_m
+    e_ratio = (E0 + jnp.min(beta)) / (E0 + jnp.mean(beta[:-1]))
+    converged = ok & jnp.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION)
+    scales = s if balance == "load" else x * s
+    v = train.values
+    gas = v[:, COL_MOTORED] + v[:, COL_COMBUSTION:] @ scales
+    work_gas = jnp.cumsum(gas - jnp.mean(gas)) * h
+    work_k = jnp.cumsum(train.textbook_k - jnp.mean(train.textbook_k)) * h
+    work = work_gas + work_k * omega_m**2
+    textbook = (jnp.max(work) - jnp.min(work)) / ((train.mean_inertia + d_inertia) * omega_m**2)
+    return delta, omega_at(i_lo) * RPM_PER_RAD_S, omega_at(i_hi) * RPM_PER_RAD_S, x, textbook, converged
+
+
+@eqx.filter_jit
+def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies, flat):
+    """Every item of one chunk: the figures of :class:`SteadySweep` per item. ``varies``
+    (static): which of (rpm, inertia, scale, load) hold one value per item; the others hold
+    one value for all, so that what depends on them alone is computed once per chunk.
+    ``flat`` (static): no loss grows with ω² (:func:`_flat_item`); else each item is a
+    whole :func:`rotor.steady_state`."""
+    train = prepared.train
+    d_ref = checked_reference(prepared)
+    fr = friction_coefficients(prepared.engine, friction)
+
+    def one(rpm_i, inertia_i, scale_i, load_i):
+        s = jnp.broadcast_to(scale_i, (train.cylinders,))
+        omega_m = rpm_i / RPM_PER_RAD_S
+        if flat:
+            a = fr[0] + (0.0 if load_i is None else load_i)
+            return _flat_item(train, inertia_i - d_ref, s, a, omega_m, "load" if load_i is None else "fuel")
+        load_obj = None if load_i is None else ConstantLoad(load_i)
+        r = steady_state(prepared.with_inertia(inertia_i), rpm_i, load_obj, imep_scale=s, friction=friction)
+        x = r.load_torque_Nm if r.load_torque_Nm is not None else r.fuel_scale
+        return r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged
+
+    in_axes = tuple(0 if v else None for v in varies)
+    out = jax.vmap(one, in_axes=in_axes)(rpm, inertia, scale, load)
+    size = next(a.shape[0] for a, v in zip((rpm, inertia, scale, load), varies) if v) if any(varies) else 1
+    return tuple(jnp.broadcast_to(o, (size,)) for o in out)
+
+
+def steady_sweep(
+    engine: Engine | PreparedEngine,
+    rpm: ArrayLike | None = None,
+    *,
+    inertia_kgm2: ArrayLike | None = None,
+    imep_scale: ArrayLike = 1.0,
+    load_torque_Nm: ArrayLike | None = None,
+    friction: Friction | Literal[False] | None = None,
+    fidelity: str | None = None,
+    grid_deg: float | None = None,
+    chunk: int | None = None,
+    progress: bool | None = None,
+) -> SteadySweep:
+    """Steady states (:func:`rotor.steady_state`) of many items in vectorised, compiled chunks.
+
+    **Arguments** (each a single value or a 1-D array; arrays share one length, the items):
+    - ``engine``: a :class:`rotor.Engine` (prepared here) or a :class:`rotor.PreparedEngine`.
+    - ``rpm``: time-mean speed [rpm]; default the engine's ``[operating] rpm``.
+    - ``inertia_kgm2``: crankshaft inertia, flywheel included [kg·m²]; default the engine's.
+    - ``imep_scale``: combustion scale [-]: a number per item, or an array of shape
+      (items, cylinders) (or (1, cylinders)) for each cylinder.
+    - ``load_torque_Nm``: None (each item's load balances the engine's mean torque, as
+      ``steady_state(load=None)``), or a constant load [N·m] per item that the fuelling
+      is scaled to carry (``fuel_scale``).
+    - ``friction``, ``fidelity``, ``grid_deg``: as :func:`rotor.steady_state` (a prepared
+      engine's fidelity and grid are its own).
+    - ``chunk``: items per compiled call (default: as many as a quarter of the memory
+      budget holds, at most 8192); the last chunk is padded, so every chunk has one shape
+      and is compiled once.
+    - ``progress``: a progress bar on stderr (None: on a terminal, after ~2 s).
+
+    **Returns:** a :class:`rotor.SteadySweep`, one row per item; ``converged`` is False
+    where an item has no steady state (no error is raised for one item).
+    """
+    start = time.perf_counter()
+    if isinstance(engine, PreparedEngine):
+        for name, given, own in (("fidelity", fidelity, engine.fidelity), ("grid_deg", grid_deg, engine.grid_deg)):
+            if given is not None and given != own:
+                raise EngineError(
+                    f"{name} = {given!r}: this engine was prepared with {name} = {own!r}; prepare it again "
+                    f"(rotor.prepare(engine, {name}={given!r}))"
+                )
+        prepared = engine
+    else:
+        prepared = prepare(engine, fidelity or "variable", 0.25 if grid_deg is None else grid_deg)
+    base = prepared.engine
+    n_cyl = base.cylinders
+    rpm_a = _column("rpm", base.operating.rpm if rpm is None else rpm, "rpm")
+    inertia_a = _column("inertia_kgm2", base.crankshaft.inertia_kgm2 if inertia_kgm2 is None else inertia_kgm2, "kg·m²")
+    scale = np.asarray(imep_scale, dtype=np.float64)
+    if scale.ndim <= 1:
+        scale = np.broadcast_to(scale.reshape(-1, 1), (scale.size, n_cyl))
+    if scale.ndim != 2 or scale.shape[1] != n_cyl or not np.all(np.isfinite(scale)):
+        raise EngineError(
+            f"imep_scale: takes a number, one per item, or shape (items, {n_cyl}) of finite numbers; "
+            f"got shape {np.shape(imep_scale)}"
+        )
+    load_a = None if load_torque_Nm is None else _column("load_torque_Nm", load_torque_Nm, "N·m")
+    n = _items(rpm_a, inertia_a, scale, load_a, n_cyl)
+    rpm_a, inertia_a = np.broadcast_to(rpm_a, (n,)), np.broadcast_to(inertia_a, (n,))
+    scale = np.broadcast_to(scale, (n, n_cyl))
+    load_a = None if load_a is None else np.broadcast_to(load_a, (n,))
+    _check_values(rpm_a, inertia_a, scale)
+    if chunk is None:
+        size = default_chunk(prepared.points, n_cyl, n)
+    elif isinstance(chunk, (int, np.integer)) and not isinstance(chunk, bool) and chunk >= 1:
+        size = int(min(chunk, n))
+    else:
+        raise EngineError(f"chunk = {chunk!r}: must be a whole number of items, 1 or more")
+    outs: list[list[np.ndarray]] = []
+    bar = Progress(n, progress, verb="solving", unit="steady states")
+    compile_s = 0.0
+    fr = np.asarray(friction_coefficients(base, friction))
+    flat = bool(prepared.fidelity != "constant" and fr[1] == 0 and fr[2] == 0)  # no loss grows with ω: E = E0 + β(θ)
+    columns = (rpm_a, inertia_a, scale, load_a)
+    varies = tuple(c is not None and bool(np.any(c != c[:1])) for c in columns)
+    for first in range(0, n, size):
+        idx = np.minimum(np.arange(first, first + size), n - 1)  # the last chunk repeats its last item
+        args = tuple(None if c is None else jnp.asarray(c[idx] if v else c[0]) for c, v in zip(columns, varies))
+        t0 = time.perf_counter()
+        if first == 0:
+            compiled = solve_chunk.lower(prepared, *args, friction, varies, flat).compile()  # type: ignore[attr-defined]
+            compile_s = time.perf_counter() - t0
+        res = jax.device_get(compiled(prepared, *args, friction, varies, flat))
+        outs.append([np.broadcast_to(np.asarray(r), (size,))[: min(size, n - first)] for r in res])
+        bar.update(min(first + size, n))
+    bar.close()
+    delta, lo, hi, x, tb, ok = (np.concatenate(c) for c in zip(*outs))
+    return SteadySweep(
+        rpm=np.array(rpm_a),
+        inertia_kgm2=np.array(inertia_a),
+        imep_scale=np.array(scale),
+        load_Nm=None if load_a is None else np.array(load_a),
+        delta=delta,
+        min_rpm=lo,
+        max_rpm=hi,
+        load_torque_Nm=x if load_a is None else None,
+        fuel_scale=x if load_a is not None else None,
+        textbook_delta=tb,
+        converged=ok.astype(bool),
+        engine_name=base.name,
+        fidelity=prepared.fidelity,
+        grid_deg=prepared.grid_deg,
+        chunk=size,
+        compile_s=compile_s,
+        wall_s=time.perf_counter() - start,
+    )

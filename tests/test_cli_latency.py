@@ -1,0 +1,135 @@
+"""What keeps the command line fast: ``import rotor`` and the commands that compute nothing
+with JAX (``--help``, ``COMMAND --help``, ``presets``) import none of the heavy packages
+(JAX's import alone takes about a second), and the lazy top level still offers every
+public name. These check imported modules, not wall time: ``benchmarks/cli_latency.py``
+measures the speed."""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+
+import pytest
+from conftest import ROOT
+
+import rotor
+from rotor.cli.app import build_parser
+
+HEAVY = ("jax", "jaxlib", "equinox", "diffrax", "optimistix", "lineax", "matplotlib", "scipy", "pandas")
+
+CHILD = r"""
+import json, sys
+from rotor.cli.app import main
+try:
+    status = main(sys.argv[1:])
+except SystemExit as e:  # --help
+    status = e.code
+heavy = sorted(m for m in sys.modules if m.split(".")[0] in HEAVY)
+print(json.dumps({"status": status, "heavy": heavy}))
+"""
+
+
+def _commands() -> list[str]:
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    return list(sub.choices)
+
+
+def _heavy_after(*argv: str) -> dict:
+    code = f"HEAVY = {HEAVY!r}\n{CHILD}"
+    out = subprocess.run(
+        [sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=ROOT, timeout=120, check=False
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_import_rotor_imports_no_heavy_package():
+    code = "import json, sys, rotor; print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in %r)))"
+    out = subprocess.run([sys.executable, "-c", code % (HEAVY,)], capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout) == []
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["presets"], ["presets", "--json"], ["--version"]], ids=" ".join)
+def test_a_light_command_imports_no_heavy_package(argv):
+    r = _heavy_after(*argv)
+    assert r["status"] in (0, None), r
+    assert r["heavy"] == [], f"rotor {' '.join(argv)} imported {r['heavy']}"
+
+
+@pytest.mark.parametrize("command", _commands())
+def test_a_commands_help_imports_no_heavy_package(command):
+    r = _heavy_after(command, "--help")
+    assert r["status"] == 0, r
+    assert r["heavy"] == [], f"rotor {command} --help imported {r['heavy']}"
+
+
+def test_the_checks_see_a_heavy_import():
+    """The check above can fail: a command that computes does import JAX."""
+    r = _heavy_after("info", "4chn15", "--json")
+    assert r["status"] == 0 and "jax" in r["heavy"] and "equinox" in r["heavy"]
+
+
+def test_presets_lists_the_engines_load_engine_builds():
+    from rotor.cli.engine import preset_listing
+
+    assert preset_listing() == {name: rotor.load_engine(name).name for name in rotor.preset_names()}
+
+
+def _lazy_tables():
+    """The top level's TYPE_CHECKING imports {name: module} and its _PUBLIC mapping."""
+    tree = ast.parse((ROOT / "rotor" / "__init__.py").read_text(encoding="utf-8"))
+    imported, public = {}, {}
+    for node in tree.body:
+        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
+            for imp in node.body:
+                assert isinstance(imp, ast.ImportFrom) and imp.level == 1, ast.dump(imp)
+                imported.update({a.name: imp.module for a in imp.names})
+        if isinstance(node, ast.AnnAssign) and getattr(node.target, "id", None) == "_PUBLIC":
+            for key, names in zip(node.value.keys, node.value.values):
+                public.update({n.value: key.value for n in names.elts})
+    return imported, public
+
+
+def test_the_lazy_top_level_has_one_list_of_names():
+    """``__all__``, the imports type checkers and the documentation see, and the mapping
+    that imports each name on first use agree."""
+    imported, public = _lazy_tables()
+    assert imported == public
+    assert sorted(public) == sorted(rotor.__all__)
+    assert set(rotor.__all__) <= set(dir(rotor))
+
+
+def test_every_public_name_comes_from_its_module():
+    _, public = _lazy_tables()
+    for name, module in public.items():
+        value = getattr(rotor, name)
+        assert value is getattr(sys.modules[f"rotor.{module}"], name), name
+    assert isinstance(rotor.engine, type(rotor))  # a room, as a submodule
+    with pytest.raises(AttributeError):
+        rotor.no_such_name  # noqa: B018
+
+
+def test_float64_is_on_however_jax_is_imported():
+    for code in (
+        "import rotor, jax.numpy as jnp; print(jnp.zeros(1).dtype)",
+        "import jax.numpy as jnp, rotor; print(jnp.zeros(1).dtype)",
+        "import rotor; from jax import numpy as jnp; print(jnp.zeros(1).dtype)",
+    ):
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+        assert out.stdout.strip() == "float64", code
+
+
+def test_the_cache_waits_for_jax(tmp_path):
+    """``enable_compilation_cache`` before JAX is imported does not import it, and sets the
+    cache once JAX is imported."""
+    code = (
+        "import json, sys, rotor; used = rotor.enable_compilation_cache(); before = 'jax' in sys.modules; "
+        "import jax; print(json.dumps([used, before, jax.config.jax_compilation_cache_dir, "
+        "jax.config.jax_persistent_cache_min_compile_time_secs]))"
+    )
+    env = {"ROTOR_COMPILATION_CACHE": str(tmp_path / "c"), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    used, before, folder, threshold = json.loads(out.stdout)
+    assert used == folder == str(tmp_path / "c") and not before and threshold == 0.1
