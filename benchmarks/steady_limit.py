@@ -94,7 +94,7 @@ def bench_single(engine, repeats):
     def compiled():
         return solve(prepared, rpm_a).block_until_ready()
 
-    one = (rpm_a.reshape(1), None, None, None)
+    one = (rpm_a.reshape(1), jax.numpy.asarray(float(engine.crankshaft.inertia_kgm2)), jax.numpy.asarray(1.0), None)
     varies = (True, False, False, False)
     fr = None
     delta_kernel = solve_chunk.lower(prepared, *one, fr, varies, True).compile()

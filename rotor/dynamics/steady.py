@@ -208,9 +208,10 @@ def flat_energy(train, d_inertia, beta, omega_m):
     for log(T/T_m) = 0, T = ∫dθ/ω = h·Σ√(I/2E) and T_m = Θ/ω_m: first on the coarse grid
     (:func:`coarse_stride`; its quadrature is within 1e-8 of the full grid's on the
     presets), then on the full grid until a step is below 1e-7 (one pass where the coarse
-    root is good; more near a stall, where the coarse grid misses the slow spot), with
-    T′ summed in the same pass as T. A last step outside the loops makes E(0)
-    differentiable by the implicit function theorem (see :func:`scalar_newton`)."""
+    root is good, its error then of order step²; more near a stall, where the coarse grid
+    misses the slow spot), with T′ summed in the same pass as T. The derivatives of E(0)
+    are those of the first full-grid step (the implicit function theorem, as in
+    :func:`scalar_newton`), exact where that step is small."""
     h = train.step_rad
     inertia = train.values[:, COL_I] + d_inertia  # the N nodes of the cycle (periodic)
     e_ref = 0.5 * (train.mean_inertia + d_inertia) * omega_m**2
@@ -241,13 +242,19 @@ def flat_energy(train, d_inertia, beta, omega_m):
         step = res / slope
         return eta - step, step, i + 1
 
-    eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
-    eta, _ = scalar_newton(coarse, eta0)
-    eta, _, _ = jax.lax.while_loop(cond, body, (jax.lax.stop_gradient(eta), jnp.full_like(eta, 1e300), 0))
-    eta = jax.lax.stop_gradient(eta)
-    res, slope = fine(eta)
-    eta = eta - res / jax.lax.stop_gradient(slope)
-    ok = jnp.isfinite(eta) & (jnp.abs(jax.lax.stop_gradient(res)) < 1e-8)
+    # start where the cycle-mean energy is ½·Ī·ω_m² (E0 = that − mean β: off by O(δ²)), and
+    # iterate only to 1e-10: the full-grid step finishes the job
+    guess = e_ref - jnp.mean(beta[:-1:k])
+    eta0 = jnp.log(jnp.maximum(guess - e_star, 1e-6 * e_ref) / e_ref)
+    eta_c, _ = scalar_newton(coarse, eta0, tol=1e-10)
+    eta_c = jax.lax.stop_gradient(eta_c)
+    res, slope = fine(eta_c)  # the derivatives of E(0) come from this pass
+    step = jax.lax.stop_gradient(res / slope)
+    # usually the step is below 1e-7 and the loop does nothing: the one step from the
+    # coarse root leaves an error of order step²
+    eta, step, _ = jax.lax.while_loop(cond, body, (eta_c - step, step, 0))
+    eta = jax.lax.stop_gradient(eta) - (res - jax.lax.stop_gradient(res)) / jax.lax.stop_gradient(slope)
+    ok = jnp.isfinite(eta) & (jnp.abs(step) <= 1e-7 * (1.0 + jnp.abs(eta)))
     return energy(eta), ok
 
 
@@ -511,9 +518,11 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
     converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
     if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
         good, i_min, x_found, e_ratio = jax.device_get((converged, a["i_min"], x, a["e_ratio"]))
-        if not (np.all(np.isfinite(x_found)) and np.isfinite(e_ratio)):
+        # a fuel scale of a million or more that leaves no finite speed: a load in the wrong units
+        absurd = balance == "fuel" and not np.isfinite(e_ratio) and np.all(np.abs(x_found) >= 1e6)
+        if not np.all(np.isfinite(x_found)) or absurd:
             what = "load torque" if balance == "load" else "fuel scale"
-            trouble = "is not a finite number" if not np.all(np.isfinite(x_found)) else "gives no finite speed"
+            trouble = f"gives no finite speed (it is {float(x_found):.3g})" if absurd else "is not a finite number"
             raise NoSteadyStateError(
                 f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the periodic solution's balancing "
                 f"{what} {trouble}; check that the "

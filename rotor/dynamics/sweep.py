@@ -50,10 +50,10 @@ from .transient import Progress
 
 __all__ = ["SteadySweep", "steady_sweep"]
 
-# memory of one item while a chunk is solved, per node of the cycle grid [bytes]: the
-# vectorised closed-form solution keeps about 40 float64 arrays over the grid per item
+# memory of one item while a chunk is solved, per node of the cycle grid [bytes]: at most
+# about 40 float64 arrays over the grid per item (a whole steady state, shooting included)
 BYTES_PER_ITEM_NODE = 8 * 40
-MAX_CHUNK = 8192
+MAX_CHUNK = 256
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -309,9 +309,9 @@ def steady_sweep(
       is scaled to carry (``fuel_scale``).
     - ``friction``, ``fidelity``, ``grid_deg``: as :func:`rotor.steady_state` (a prepared
       engine's fidelity and grid are its own).
-    - ``chunk``: items per compiled call (default: as many as a quarter of the memory
-      budget holds, at most 8192); the last chunk is padded, so every chunk has one shape
-      and is compiled once.
+    - ``chunk``: items per compiled call (default: at most 256, which keeps a chunk's
+      arrays in the processor's cache, and no more than a quarter of the memory budget
+      holds); the last chunk is padded, so every chunk has one shape and is compiled once.
     - ``progress``: a progress bar on stderr (None: on a terminal, after ~2 s).
 
     **Returns:** a :class:`rotor.SteadySweep`, one row per item; ``converged`` is False
@@ -354,20 +354,28 @@ def steady_sweep(
         raise EngineError(f"chunk = {chunk!r}: must be a whole number of items, 1 or more")
     outs: list[list[np.ndarray]] = []
     bar = Progress(n, progress, verb="solving", unit="steady states")
-    compile_s = 0.0
     fr = np.asarray(friction_coefficients(base, friction))
     flat = bool(prepared.fidelity != "constant" and fr[1] == 0 and fr[2] == 0)  # no loss grows with ω: E = E0 + β(θ)
     columns = (rpm_a, inertia_a, scale, load_a)
     varies = tuple(c is not None and bool(np.any(c != c[:1])) for c in columns)
-    for first in range(0, n, size):
+    if not any(varies):  # one item, or the same one many times: a batch over rpm all the same
+        varies = (True,) + varies[1:]
+    firsts = list(range(0, n, size))
+
+    def chunk_args(first):
         idx = np.minimum(np.arange(first, first + size), n - 1)  # the last chunk repeats its last item
-        args = tuple(None if c is None else jnp.asarray(c[idx] if v else c[0]) for c, v in zip(columns, varies))
-        t0 = time.perf_counter()
-        if first == 0:
-            compiled = solve_chunk.lower(prepared, *args, friction, varies, flat).compile()  # type: ignore[attr-defined]
-            compile_s = time.perf_counter() - t0
-        res = jax.device_get(compiled(prepared, *args, friction, varies, flat))
-        outs.append([np.broadcast_to(np.asarray(r), (size,))[: min(size, n - first)] for r in res])
+        return tuple(None if c is None else jnp.asarray(c[idx] if v else c[0]) for c, v in zip(columns, varies))
+
+    t0 = time.perf_counter()
+    compiled = solve_chunk.lower(prepared, *chunk_args(0), friction, varies, flat).compile()  # type: ignore[attr-defined]
+    compile_s = time.perf_counter() - t0
+
+    def run(first):
+        res = jax.device_get(compiled(prepared, *chunk_args(first), friction, varies, flat))
+        return [np.broadcast_to(np.asarray(r), (size,))[: min(size, n - first)] for r in res]
+
+    for first in firsts:
+        outs.append(run(first))
         bar.update(min(first + size, n))
     bar.close()
     delta, lo, hi, x, tb, ok = (np.concatenate(c) for c in zip(*outs))

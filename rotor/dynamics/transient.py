@@ -572,6 +572,11 @@ def _run(
 def _samples(scene, theta, t, E, omega, z):
     """ω (from E where given), engine and load torque, dω/dt and fuel at the samples."""
     count_trace()
+    return _samples_at(scene, theta, t, E, omega, z)
+
+
+def _samples_at(scene, theta, t, E, omega, z):
+    """:func:`_samples`, not compiled on its own (inside another compiled call)."""
     val, der, s = scene.terms(theta)
     inertia, dinertia = val[:, 0], der[:, 0]
     if E is not None:
@@ -651,7 +656,7 @@ def _gather(scene, pieces, P: int):
             parts.append((th, t) + _cycle_samples(scene, first, t, E, w, z, P))
         else:
             z = jnp.zeros_like(th) if z is None else z
-            parts.append((th, t) + _samples(scene, th, t, E, w, z))
+            parts.append((th, t) + _samples_at(scene, th, t, E, w, z))
     if len(parts) == 1:
         return parts[0]
     return tuple(jnp.concatenate(a) for a in zip(*parts))
