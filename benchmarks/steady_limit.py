@@ -29,7 +29,6 @@ import json
 import resource
 import statistics
 import sys
-import time
 from pathlib import Path
 
 import equinox as eqx
@@ -38,6 +37,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simulator_speed import NumpyEngine, versions  # noqa: E402
+from torsion_modes import time_it  # noqa: E402
 
 import rotor  # noqa: E402
 from rotor.dynamics import crank_train  # noqa: E402
@@ -45,22 +45,6 @@ from rotor.dynamics.sweep import solve_chunk  # noqa: E402
 from rotor.fileio import write_text_atomic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
-
-
-def median_time(fn, repeats):
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return {"median_s": statistics.median(times), "min_s": min(times), "repeats": repeats}
-
-
-def first_and_median(fn, repeats):
-    start = time.perf_counter()
-    fn()
-    first = time.perf_counter() - start
-    return dict(first_call_s=first, **median_time(fn, repeats))
 
 
 def peak_rss_mb():
@@ -73,7 +57,7 @@ def bench_single(engine, repeats):
     delta0 = float(default.delta)
     ne = NumpyEngine(engine)
     omega0, m_load = float(default.omega[0]), float(default.load_torque_Nm)
-    rk45 = median_time(lambda: ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8), max(3, repeats // 10))
+    rk45 = time_it(lambda: ne.run(omega0, lambda w: m_load, 1, "RK45", 1e-8), max(3, repeats // 10))
     out = {"rpm": rpm, "delta_default": delta0, "scipy_rk45_one_cycle": rk45}
 
     def cold():
@@ -120,7 +104,7 @@ def bench_single(engine, repeats):
     }
     out["rotor"] = {}
     for name, (fn, n) in rows.items():
-        t = first_and_median(fn, n)
+        t = time_it(fn, n)
         t["speedup_over_rk45_one_cycle"] = rk45["median_s"] / t["median_s"]
         t["delta"] = deltas[name]
         t["delta_minus_default"] = deltas[name] - delta0

@@ -19,8 +19,7 @@ import argparse
 import json
 import os
 import platform
-import statistics
-import time
+import sys
 from pathlib import Path
 
 import jax
@@ -30,29 +29,13 @@ import scipy
 
 import rotor
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from torsion_modes import time_it  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "torsion_response.json"
 RPM = 1500.0
 SWEEP = np.linspace(900.0, 2500.0, 50)
-
-
-def time_it(fn, repeats):
-    """(first call [s], median wall [s], every run's wall [s], median CPU [s])."""
-    t0 = time.perf_counter()
-    fn()
-    first = time.perf_counter() - t0
-    walls, cpus = [], []
-    for _ in range(repeats):
-        t0, c0 = time.perf_counter(), time.process_time()
-        fn()
-        walls.append(time.perf_counter() - t0)
-        cpus.append(time.process_time() - c0)
-    return {
-        "first_call_s": first,
-        "median_s": statistics.median(walls),
-        "runs_s": walls,
-        "median_cpu_s": statistics.median(cpus),
-    }
 
 
 def main(argv=None):

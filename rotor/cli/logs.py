@@ -310,7 +310,8 @@ def for_each_log(
     ``one_only``: options (``args`` names) that take a single LOG."""
     import functools
 
-    from ..diagnostics.bulk import FileProgress, expand_logs, is_pattern, map_files
+    from ..diagnostics.bulk import expand_logs, is_pattern, map_files
+    from ..dynamics.transient import Progress
     from ..errors import LogError
 
     logs = [args.log] if isinstance(args.log, str) else list(args.log)
@@ -324,7 +325,7 @@ def for_each_log(
                 raise LogError(f"--{name.replace('_', '-')} takes a single LOG, not several")
         paths = expand_logs(logs)
         fn = functools.partial(_bulk_file, one, args)
-        bar = FileProgress(len(paths), False if args.quiet else None, verb)
+        bar = Progress(len(paths), False if args.quiet else None, verb, unit="files")
         outcomes = map_files(fn, paths, jobs=args.jobs, client=client, progress=False)
         pending: dict[int, dict] = {}
         nxt, failed, worst = 0, 0, 0

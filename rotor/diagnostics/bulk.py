@@ -33,7 +33,6 @@ import functools
 import glob
 import os
 import pickle
-import sys
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -42,7 +41,6 @@ from ..errors import EngineError, LogError
 
 __all__ = [
     "DASK_HINT",
-    "FileProgress",
     "analyze_many",
     "default_jobs",
     "diagnose_many",
@@ -97,41 +95,6 @@ def default_jobs() -> int:
         return max(len(os.sched_getaffinity(0)), 1)
     except AttributeError:  # not on Linux
         return max(os.cpu_count() or 1, 1)
-
-
-class FileProgress(Progress):
-    """The progress bar of :class:`rotor.dynamics.transient.Progress` (stderr, only on a
-    terminal, only once the run has taken ~2 s), counting files.
-
-    ``total``: files; ``enabled``: True, False or None (when stderr is a terminal);
-    ``verb``: what is done to them (``"diagnosing"``)."""
-
-    def __init__(self, total: int, enabled: bool | None, verb: str = "doing"):
-        super().__init__(total, enabled)
-        self.verb = verb
-
-    def update(self, done: int) -> None:
-        """Show that ``done`` of the files are done (once the run has taken ~2 s)."""
-        import time
-
-        if not self.enabled or (self.shown and done < self.last):
-            return
-        self.last = done
-        elapsed = time.perf_counter() - self.start
-        if elapsed < 2.0 and done < self.total:
-            return
-        frac = done / self.total
-        bar = "#" * int(30 * frac)
-        left = f", ~{elapsed / frac - elapsed:4.0f} s left" if frac > 0 else ""
-        sys.stderr.write(f"\r{self.verb} [{bar:<30}] {done}/{self.total} files, {elapsed:5.1f} s{left}")
-        sys.stderr.flush()
-        self.shown = True
-
-    def clear(self) -> None:
-        """Blank the bar's line (before a line of its own on stderr); the next update redraws it."""
-        if self.shown:
-            sys.stderr.write("\r" + " " * 79 + "\r")
-            sys.stderr.flush()
 
 
 # ----------------------------------------------------------------------------- workers
@@ -202,7 +165,7 @@ def map_files(
         raise EngineError(f"jobs = {jobs!r}: a whole number of workers, 1 or more")
     if pool not in ("process", "thread"):
         raise EngineError(f"pool = {pool!r}: 'process' or 'thread'")
-    bar = FileProgress(n, progress, verb)
+    bar = Progress(n, progress, verb, unit="files")
     try:
         if client is not None:
             yield from _on_dask(client, fn, items, bar)

@@ -43,7 +43,6 @@ from .crank_train import (
     check_fidelity,
     grid_points,
     remember_tables,
-    shift_inertia,
     table_inputs,
     table_key,
     train_from_engine,
@@ -84,14 +83,6 @@ class PreparedEngine(eqx.Module):
         (``[crankshaft] inertia_kgm2``, flywheel included): nothing is built again."""
         value = jnp.asarray(inertia_kgm2, dtype=jnp.float64)
         return eqx.tree_at(lambda p: p.engine.crankshaft.inertia_kgm2, self, value)
-
-    def current_train(self) -> CrankTrain:
-        """The tables at the engine's present crankshaft inertia, after checking that
-        nothing else they depend on has changed since :func:`prepare`."""
-        d = self.engine.crankshaft.inertia_kgm2 - checked_reference(self)
-        if not isinstance(d, jax.core.Tracer) and float(d) == 0.0:
-            return self.train
-        return shift_inertia(self.train, d)
 
 
 def prepare(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.25) -> PreparedEngine:

@@ -84,7 +84,7 @@ def _check_rpm(rpm, what="rpm"):
 
 
 def _closed_solution(train, s_nodes, a, c, omega_m, balance):
-    """E on the nodes 0…N, t on the nodes, x (load or fuel), Newton result."""
+    """E on the nodes 0…N, t on the nodes, x (load or fuel), whether Newton converged."""
     parts0 = linear_parts(train, s_nodes, a, c)
     inertia, dinertia, F, dF, G, dG = parts0
     v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
@@ -128,19 +128,16 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
     x = x0 + x1 * E0
     parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
     E, omega, t, _ = linear_cycle(train, parts, E0, 0.0)
-    return E, t, x, ok, Q1[-1]
+    return E, t, x, ok
 
 
-def scalar_newton(residual: Any, x0: Any, coarse: Any = None, tol: float = 1e-14, max_steps: int = 60):
+def scalar_newton(residual: Any, x0: Any, tol: float = 1e-14, max_steps: int = 60) -> tuple[Any, Any]:
     """Newton's method on a scalar ``residual(x) = 0`` from ``x0``: a ``lax.while_loop``
     with the derivative by forward-mode differentiation (one pass per step), stopped when
-    a step is below ``tol``·(1 + |x|); on ``coarse`` (a cheaper residual with nearly the
-    same root) if given, then one step on ``residual``. That last step, outside the loop,
-    makes the root differentiable by the implicit function theorem: its derivative is
-    divided by the (constant) slope, dx/dp = −(∂r/∂p)/(∂r/∂x). Returns the root and
-    whether it is one (finite, |r| < 1e-8 before the last step, which then leaves an
-    error of order r²)."""
-    loop_residual = residual if coarse is None else coarse
+    a step is below ``tol``·(1 + |x|). One more step, outside the loop, makes the root
+    differentiable by the implicit function theorem: its derivative is divided by the
+    (constant) slope, dx/dp = −(∂r/∂p)/(∂r/∂x). Returns the root and whether it is one
+    (finite, |r| < 1e-8 before the last step, which then leaves an error of order r²)."""
 
     def cond(state):
         x, step, i = state
@@ -148,7 +145,7 @@ def scalar_newton(residual: Any, x0: Any, coarse: Any = None, tol: float = 1e-14
 
     def body(state):
         x, _, i = state
-        r, dr = jax.jvp(loop_residual, (x,), (jnp.ones_like(x),))
+        r, dr = jax.jvp(residual, (x,), (jnp.ones_like(x),))
         step = r / dr
         return x - step, step, i + 1
 
@@ -289,7 +286,7 @@ def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
         return _flat_solution(train, d_inertia, s, a, omega_m, balance)
     train = shift_inertia(train, d_inertia)
     s_nodes = jnp.broadcast_to(s, (train.points + 1, train.cylinders))
-    return _closed_solution(train, s_nodes, a, c, omega_m, balance)[:4]
+    return _closed_solution(train, s_nodes, a, c, omega_m, balance)
 
 
 @eqx.filter_jit

@@ -186,7 +186,7 @@ def _column(name: str, value: Any, unit: str) -> np.ndarray:
     return a.reshape(-1)
 
 
-def _items(rpm, inertia, scale, load, cylinders):
+def _items(rpm, inertia, scale, load):
     """The inputs as arrays of one common length (a single value is repeated)."""
     cols = {"rpm": rpm, "inertia_kgm2": inertia} | ({} if load is None else {"load_torque_Nm": load})
     sizes = {k: v.shape[0] for k, v in cols.items()} | {"imep_scale": scale.shape[0]}
@@ -197,7 +197,6 @@ def _items(rpm, inertia, scale, load, cylinders):
             "steady_sweep: the inputs must have one length (or be single values); got "
             + ", ".join(f"{k}: {s}" for k, s in sizes.items())
         )
-    del cylinders
     return n
 
 
@@ -341,7 +340,7 @@ def steady_sweep(
             f"got shape {np.shape(imep_scale)}"
         )
     load_a = None if load_torque_Nm is None else _column("load_torque_Nm", load_torque_Nm, "N·m")
-    n = _items(rpm_a, inertia_a, scale, load_a, n_cyl)
+    n = _items(rpm_a, inertia_a, scale, load_a)
     rpm_a, inertia_a = np.broadcast_to(rpm_a, (n,)), np.broadcast_to(inertia_a, (n,))
     scale = np.broadcast_to(scale, (n, n_cyl))
     load_a = None if load_a is None else np.broadcast_to(load_a, (n,))

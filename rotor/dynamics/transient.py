@@ -111,6 +111,12 @@ class Progress:
         sys.stderr.flush()
         self.shown = True
 
+    def clear(self) -> None:
+        """Blank the bar's line (before a line of its own on stderr); the next update redraws it."""
+        if self.shown:
+            sys.stderr.write("\r" + " " * 79 + "\r")
+            sys.stderr.flush()
+
     def close(self) -> None:
         """End the bar's line, if it was shown."""
         if self.shown:
