@@ -17,6 +17,7 @@ imports it.
 
 from __future__ import annotations
 
+import importlib
 import importlib.abc
 import os
 import sys
@@ -25,7 +26,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-__all__ = ["MAX_BYTES", "enable_compilation_cache", "on_jax_import"]
+__all__ = ["MAX_BYTES", "enable_compilation_cache", "on_jax_import", "submodules_on_demand"]
 
 _OFF = ("0", "off", "no", "false", "")
 MAX_BYTES = 1 << 30
@@ -137,3 +138,20 @@ def enable_compilation_cache(
     folder = str(path)
     on_jax_import(lambda jax: _configure(jax, folder, float(min_compile_time_s)))
     return folder
+
+
+def submodules_on_demand(package: str) -> Callable[[str], ModuleType]:
+    """A module ``__getattr__`` for a room's ``__init__``: ``rotor.diagnostics.calibration``
+    imports :mod:`rotor.diagnostics.calibration` on first use, as an eager ``import`` of
+    every module once did, while ``import rotor`` stays cheap."""
+
+    def __getattr__(name: str) -> ModuleType:
+        if not name.startswith("_"):
+            try:
+                return importlib.import_module(f"{package}.{name}")
+            except ModuleNotFoundError as e:
+                if e.name != f"{package}.{name}":
+                    raise
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    return __getattr__

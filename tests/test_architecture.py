@@ -135,3 +135,24 @@ def test_top_level_all_is_one_sorted_list():
     assert len(set(rotor.__all__)) == len(rotor.__all__)
     for name in rotor.__all__:
         assert hasattr(rotor, name), name
+
+
+def test_every_module_is_reachable_as_an_attribute_of_its_room():
+    """``import rotor`` is lazy, yet ``rotor.diagnostics.calibration.preset_calibration``
+    works in a fresh process, as it did when every module was imported eagerly."""
+    import sys
+
+    code = (
+        "import pkgutil, rotor\n"
+        f"for room in {ROOMS!r}:\n"
+        "    package = getattr(rotor, room)\n"
+        "    for m in pkgutil.iter_modules(package.__path__):\n"
+        "        if not m.name.startswith('_'):\n"
+        "            getattr(package, m.name)\n"
+        "try:\n"
+        "    rotor.dynamics.no_such_module\n"
+        "except AttributeError:\n"
+        "    print('ok')\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]

@@ -15,3 +15,7 @@ May import: everything (the top layer). Import lazily inside the commands, so th
 from .app import main
 
 __all__ = ["main"]
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)

@@ -17,3 +17,7 @@ May import: :mod:`rotor.dynamics`, :mod:`rotor.engine`, :mod:`rotor.plotting` (t
 results) and the ground floor. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or
 :mod:`rotor.cli`.
 """
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)

@@ -10,3 +10,7 @@ May import: :mod:`rotor.dynamics`, :mod:`rotor.logs`, :mod:`rotor.engine`,
 :mod:`rotor.plotting` (to draw its results) and the ground floor. Never
 :mod:`rotor.design` or :mod:`rotor.cli`.
 """
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)

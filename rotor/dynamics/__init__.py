@@ -10,3 +10,7 @@ once and reused: :mod:`.prepared`), the equation of motion and its integrators
 May import: :mod:`rotor.engine`, :mod:`rotor.plotting` (to draw its results) and the
 ground floor. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or :mod:`rotor.design`.
 """
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)

@@ -14,3 +14,7 @@ May import: the ground floor (:mod:`rotor.units`, :mod:`rotor.errors`,
 :mod:`rotor.checks`, :mod:`rotor.fileio`, :mod:`rotor.results`) and :mod:`rotor.plotting`
 (its results draw themselves there). Nothing here integrates an equation of motion.
 """
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)

@@ -9,3 +9,7 @@ May import: :mod:`rotor.engine` (the engine's inertia ripple), :mod:`rotor.plott
 draw its results) and the ground floor. Never :mod:`rotor.dynamics` or
 :mod:`rotor.diagnostics`.
 """
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)

@@ -11,3 +11,7 @@ May import: :mod:`rotor.dynamics`, :mod:`rotor.engine`, :mod:`rotor.plotting` (i
 results draw themselves there) and the ground floor. Never :mod:`rotor.logs`,
 :mod:`rotor.diagnostics`, :mod:`rotor.design` or :mod:`rotor.cli`.
 """
+
+from ..cache import submodules_on_demand
+
+__getattr__ = submodules_on_demand(__name__)
