@@ -218,12 +218,15 @@ def test_a_sweep_reports_items_without_a_steady_state_and_refuses_bad_input(prep
             rotor.steady_sweep(prepared, progress=False, **kwargs)
 
 
-def test_a_sweep_of_a_million_items_plans_bounded_chunks(prepared, monkeypatch):
-    """The default chunk follows the memory budget: with 64 MB, a few dozen items a call."""
-    from rotor.dynamics.sweep import default_chunk
+def test_a_sweep_of_a_million_items_plans_bounded_chunks():
+    """Chunks of at most MAX_CHUNK items, in equal calls, a multiple of the threads of
+    them; every item is in one call."""
+    from rotor.dynamics.sweep import MAX_CHUNK, default_chunk
 
-    monkeypatch.setenv("ROTOR_MEMORY_LIMIT_GB", "0.064")
-    size = default_chunk(prepared.points, 4, 10**6)
-    assert 1 <= size <= 200
-    monkeypatch.setenv("ROTOR_MEMORY_LIMIT_GB", "64")
-    assert default_chunk(prepared.points, 4, 10**6) == 256
+    for n, workers in ((10**6, 2), (10**5, 2), (10**5, 16), (7, 2), (1, 4), (4097, 1)):
+        size = default_chunk(n, workers)
+        calls = -(-n // size)
+        assert 1 <= size <= MAX_CHUNK and size * calls >= n
+        assert size * calls - n < calls, (n, workers, size)  # equal calls: less than an item padded each
+    assert default_chunk(10**5, 2) == 3847  # 25 calls of 4000 would leave a thread idle at the end: 26
+    assert default_chunk(10**5, 1) == 4000

@@ -123,7 +123,13 @@ class CrankTrain(eqx.Module):
     [0, Θ) [rad]; ``imep_motored_pa``, ``imep_combustion_pa``: each cylinder's IMEP
     without firing and the part added by its combustion [Pa]; ``mean_inertia``: cycle
     mean of I [kg·m²]; ``textbook_k``: the textbook reciprocating inertia torque per ω²,
-    −Σ m_rec·s″·s′, on the nodes [kg·m²]; ``fidelity`` (static).
+    −Σ m_rec·s″·s′, on the nodes [kg·m²]; ``torque_means``: the cycle means of the
+    motored and of each combustion torque column [N·m]; ``work``: (N + 1, 1 + cylinders)
+    the work of those columns with their means removed, from node 0 to each node by the
+    Hermite rule [J]; ``textbook_work``: (N, 2 + cylinders) the running sums (rectangle
+    rule, the textbook's) of ``textbook_k`` [J per (rad/s)²], the motored and each
+    combustion column, means removed [J]; ``fidelity`` (static). The works depend on the
+    tables alone: the steady state's closed form and a sweep read them instead of summing.
     """
 
     values: jnp.ndarray
@@ -133,6 +139,9 @@ class CrankTrain(eqx.Module):
     imep_combustion_pa: jnp.ndarray
     mean_inertia: jnp.ndarray
     textbook_k: jnp.ndarray
+    torque_means: jnp.ndarray
+    work: jnp.ndarray
+    textbook_work: jnp.ndarray
     cycle_rad: float = eqx.field(static=True)
     strokes: int = eqx.field(static=True)
     fidelity: str = eqx.field(static=True)
@@ -293,7 +302,33 @@ def _build(engine, fidelity, points):
     vh = engine.geometry.displacement_m3
     imep_c = jnp.sum(values[:, COL_COMBUSTION:], axis=0) * w / vh
     firing = jnp.mod(engine.firing_angles_rad, cycle)
-    return values, slopes, work_m / vh, imep_c, jnp.mean(values[:, COL_I]), firing, textbook_k
+    torque_cols = jnp.concatenate([values[:, COL_MOTORED : COL_MOTORED + 1], values[:, COL_COMBUSTION:]], axis=1)
+    torque_slopes = jnp.concatenate([slopes[:, COL_MOTORED : COL_MOTORED + 1], slopes[:, COL_COMBUSTION:]], axis=1)
+    means = jnp.mean(torque_cols, axis=0)  # periodic: the Hermite rule is the trapezoid rule
+    wrap = jnp.concatenate([torque_cols, torque_cols[:1]]) - means, jnp.concatenate([torque_slopes, torque_slopes[:1]])
+    work = cumulative_columns(*wrap, w)
+    plain = jnp.concatenate([textbook_k[:, None], torque_cols], axis=1)
+    textbook_work = jnp.cumsum(plain - jnp.mean(plain, axis=0), axis=0) * w
+    return (
+        values,
+        slopes,
+        work_m / vh,
+        imep_c,
+        jnp.mean(values[:, COL_I]),
+        firing,
+        textbook_k,
+        means,
+        work,
+        textbook_work,
+    )
+
+
+def cumulative_columns(f, df, h):
+    """∫ from node 0 to each node of every column of ``f`` (nodes 0…N down the rows, with
+    their dθ-derivatives ``df``) by the Hermite rule, step ``h`` [rad]:
+    h/2·(f₀+f₁) + h²/12·(f₀′−f₁′) per step."""
+    seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
+    return jnp.concatenate([jnp.zeros((1, f.shape[1])), jnp.cumsum(seg, axis=0)])
 
 
 def crank_train(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.25) -> CrankTrain:
@@ -323,10 +358,24 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     key = table_key(engine, fidelity, points)
     hit = _TABLES.get(key) if key is not None else None
     if hit is None:
-        values, slopes, imep_m, imep_c, mean_i, firing, textbook_k = _build(engine, fidelity, points)
+        values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work = _build(
+            engine, fidelity, points
+        )
         check_tables(values, slopes, mean_i, engine)
         train = CrankTrain(
-            values, slopes, firing, imep_m, imep_c, mean_i, textbook_k, engine.cycle_rad, engine.strokes, fidelity
+            values,
+            slopes,
+            firing,
+            imep_m,
+            imep_c,
+            mean_i,
+            textbook_k,
+            means,
+            work,
+            tb_work,
+            engine.cycle_rad,
+            engine.strokes,
+            fidelity,
         )
         if key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None:  # never keep a tracer
             remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values[:, COL_I])))))

@@ -169,22 +169,13 @@ def coarse_stride(points: int) -> int:
     return 1
 
 
-def _cumulative_columns(f, df, h):
-    """:func:`hermite_cumulative` of every column of ``f`` (nodes 0…N down the rows)."""
-    seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
-    return jnp.concatenate([jnp.zeros((1, f.shape[1])), jnp.cumsum(seg, axis=0)])
-
-
 def flat_balance(train, s, a, balance):
     """The parts of the flat closed form (:func:`_flat_solution`) that depend on the
     tables, the fuelling ``s`` and the losses ``a`` alone: β(θ) and dE/dθ on the nodes
     0…N, and x (the balancing load [N·m] or the fuel scale [-])."""
-    h = train.step_rad
-    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
+    v = wrap_periodic(train.values)
     cols = jnp.concatenate([v[:, COL_MOTORED : COL_MOTORED + 1], v[:, COL_COMBUSTION:]], axis=1)
-    dcols = jnp.concatenate([d[:, COL_MOTORED : COL_MOTORED + 1], d[:, COL_COMBUSTION:]], axis=1)
-    means = jnp.sum(cols[:-1], axis=0) * h / train.cycle_rad  # periodic: the Hermite rule is the trapezoid rule
-    B = _cumulative_columns(cols - means, dcols, h)
+    means, B = train.torque_means, train.work
     mot_mean, comb_mean = means[0], means[1:]
     if balance == "load":
         x = mot_mean + comb_mean @ s - a  # the load that balances the mean torque
@@ -197,37 +188,93 @@ def flat_balance(train, s, a, balance):
     return beta, dE, x
 
 
-def flat_energy(train, d_inertia, beta, omega_m):
+# the mean-speed condition expanded in the fluctuations: the coefficient of y^j·x^k in
+# (1+y)^(1/2)·(1+x)^(-1/2), binomial series, total order up to 4
+_SERIES_ORDER = 4
+
+
+def _binomial(a: float, n: int) -> float:
+    out = 1.0
+    for i in range(n):
+        out *= (a - i) / (i + 1)
+    return out
+
+
+_SERIES = np.array(
+    [
+        [_binomial(0.5, j) * _binomial(-0.5, k) if j + k <= _SERIES_ORDER else 0.0 for k in range(_SERIES_ORDER + 1)]
+        for j in range(_SERIES_ORDER + 1)
+    ]
+)
+
+
+def energy_moments(train, beta):
+    """The cycle means of (I − Ī)^j·(β − β̄)^k, j, k = 0…4, and β̄ [J]: what
+    :func:`flat_energy`'s first estimate of E(0) needs from the tables and β. They depend
+    on the fuelling but on neither the speed nor the crankshaft inertia, so that a sweep
+    over those computes them once."""
+    inertia = train.values[:, COL_I]
+    d = inertia - jnp.mean(inertia)
+    beta_mean = jnp.mean(beta[:-1])
+    b = beta[:-1] - beta_mean
+    powers_d = jnp.stack([d**j for j in range(_SERIES_ORDER + 1)], axis=1)
+    powers_b = jnp.stack([b**k for k in range(_SERIES_ORDER + 1)], axis=1)
+    return powers_d.T @ powers_b / d.shape[0], beta_mean
+
+
+def mean_energy_estimate(moments, mean_inertia, omega_m):
+    """The cycle-mean energy ē = E(0) + β̄ [J] at time-mean speed ``omega_m`` [rad/s] by
+    the mean-speed condition ∫dθ/ω = Θ/ω_m expanded to fourth order in the fluctuations
+    y = (I − Ī)/(Ī + J) and x = (β − β̄)/ē (``moments``: :func:`energy_moments`,
+    ``mean_inertia`` Ī + J [kg·m²]): mean((1+y)^½(1+x)^−½) = ω_m⁻¹·√(2ē/(Ī+J)), solved for
+    ē by fixed-point iteration. Its error is of fifth order in the fluctuations: a start for
+    Newton's method on the full grid that one step finishes where δ is small."""
+    j = np.arange(_SERIES_ORDER + 1)
+    scaled = jnp.asarray(_SERIES) * moments / mean_inertia ** j[:, None]
+    e = 0.5 * mean_inertia * omega_m**2
+    for _ in range(4):  # contracts by the square of the fluctuation each time
+        f = jnp.sum(scaled / e ** j[None, :])
+        e = 0.5 * mean_inertia * omega_m**2 * f**2
+    return e
+
+
+def flat_energy(train, d_inertia, beta, omega_m, moments=None):
     """E(0) [J] of the flat closed form with β(θ) (:func:`flat_balance`) at time-mean
-    speed ``omega_m`` [rad/s], and whether Newton converged.
+    speed ``omega_m`` [rad/s], whether Newton converged, and the blocks of
+    :func:`coarse_stride` nodes where ω is largest and smallest at the first estimate
+    (the caller looks for the extreme node in and beside them).
 
     Newton's method on η, E(0) = E* + E_ref·e^η (E* the smallest E(0) that keeps E ≥ 0),
-    for log(T/T_m) = 0, T = ∫dθ/ω = h·Σ√(I/2E) and T_m = Θ/ω_m: first on the coarse grid
-    (:func:`coarse_stride`; its quadrature is within 1e-8 of the full grid's on the
-    presets), then on the full grid until a step is below 1e-7 (one pass where the coarse
-    root is good, its error then of order step²; more near a stall, where the coarse grid
-    misses the slow spot), with T′ summed in the same pass as T. The derivatives of E(0)
-    are those of the first full-grid step (the implicit function theorem, as in
-    :func:`scalar_newton`), exact where that step is small."""
+    for log(T/T_m) = 0, T = ∫dθ/ω = h·Σ√(I/2E) and T_m = Θ/ω_m on the full grid, from
+    the fourth-order estimate of :func:`mean_energy_estimate` (``moments``:
+    :func:`energy_moments`, computed here if not given), until a step is below 1e-7: one
+    pass over the nodes where δ is small (the step then leaves an error of order step²),
+    more where the fluctuation is large or near a stall. T′ is summed in the same pass as
+    T. The derivatives of E(0) are those of the first pass (the implicit function theorem,
+    as in :func:`scalar_newton`), exact where its step is small."""
     h = train.step_rad
     inertia = train.values[:, COL_I] + d_inertia  # the N nodes of the cycle (periodic)
+    mean_inertia = jnp.mean(train.values[:, COL_I]) + d_inertia  # over the nodes, as the moments
     e_ref = 0.5 * (train.mean_inertia + d_inertia) * omega_m**2
     e_star = jax.lax.stop_gradient(jnp.maximum(jnp.max(-beta), 0.0))
     period = train.cycle_rad / omega_m
     k = coarse_stride(train.points)
+    if moments is None:
+        moments = energy_moments(train, beta)
+    mom, beta_mean = moments
 
     def energy(eta):
         return e_star + e_ref * jnp.exp(eta)
 
-    def coarse(eta):
-        E = energy(eta) + beta[:-1:k]
-        return jnp.log(h * k * jnp.sum(jnp.sqrt(0.5 * inertia[::k] / jnp.maximum(E, 1e-300))) / period)
-
     def fine(eta):  # the residual and its slope in η, in one pass over the nodes
         E = jnp.maximum(energy(eta) + beta[:-1], 1e-300)
-        r = jnp.sqrt(0.5 * inertia / E)
-        T, dT = h * jnp.sum(r), -0.5 * h * jnp.sum(r / E)
-        return jnp.log(T / period), dT * e_ref * jnp.exp(eta) / T
+        inv_e = 1.0 / E
+        q = 0.5 * inertia * inv_e  # 1/ω²
+        r = jnp.sqrt(q)
+        T, dT = h * jnp.sum(r), -0.5 * h * jnp.sum(r * inv_e)
+        blocks = q.reshape(-1, k)  # where ω is largest and smallest, to a block of k nodes
+        extremes = jnp.argmin(jnp.min(blocks, axis=1)), jnp.argmax(jnp.max(blocks, axis=1))
+        return jnp.log(T / period), dT * e_ref * jnp.exp(eta) / T, extremes
 
     def cond(state):
         eta, step, i = state
@@ -235,24 +282,22 @@ def flat_energy(train, d_inertia, beta, omega_m):
 
     def body(state):
         eta, _, i = state
-        res, slope = fine(eta)
+        res, slope, _ = fine(eta)
         step = res / slope
         return eta - step, step, i + 1
 
-    # start where the cycle-mean energy is ½·Ī·ω_m² (E0 = that − mean β: off by O(δ²)), and
-    # iterate only to 1e-10: the full-grid step finishes the job
-    guess = e_ref - jnp.mean(beta[:-1:k])
-    eta0 = jnp.log(jnp.maximum(guess - e_star, 1e-6 * e_ref) / e_ref)
-    eta_c, _ = scalar_newton(coarse, eta0, tol=1e-10)
-    eta_c = jax.lax.stop_gradient(eta_c)
-    res, slope = fine(eta_c)  # the derivatives of E(0) come from this pass
+    guess = mean_energy_estimate(jax.lax.stop_gradient(mom), jax.lax.stop_gradient(mean_inertia), omega_m)
+    guess = jax.lax.stop_gradient(guess - beta_mean)
+    eta_g = jnp.log(jnp.maximum(guess - e_star, 1e-6 * e_ref) / e_ref)
+    eta_g = jax.lax.stop_gradient(jnp.where(jnp.isfinite(eta_g), eta_g, 0.0))
+    res, slope, extremes = fine(eta_g)  # the derivatives of E(0) come from this pass
     step = jax.lax.stop_gradient(res / slope)
     # usually the step is below 1e-7 and the loop does nothing: the one step from the
-    # coarse root leaves an error of order step²
-    eta, step, _ = jax.lax.while_loop(cond, body, (eta_c - step, step, 0))
+    # estimate leaves an error of order step²
+    eta, step, _ = jax.lax.while_loop(cond, body, (eta_g - step, step, 0))
     eta = jax.lax.stop_gradient(eta) - (res - jax.lax.stop_gradient(res)) / jax.lax.stop_gradient(slope)
     ok = jnp.isfinite(eta) & (jnp.abs(step) <= 1e-7 * (1.0 + jnp.abs(eta)))
-    return energy(eta), ok
+    return energy(eta), ok, extremes
 
 
 def _flat_solution(train, d_inertia, s, a, omega_m, balance):
@@ -267,7 +312,7 @@ def _flat_solution(train, d_inertia, s, a, omega_m, balance):
     crankshaft inertia than the tables'). Returns E and t on the nodes 0…N, x (load [N·m]
     or fuel scale [-]) and whether Newton converged."""
     beta, dE, x = flat_balance(train, s, a, balance)
-    E0, ok = flat_energy(train, d_inertia, beta, omega_m)
+    E0, ok, _ = flat_energy(train, d_inertia, beta, omega_m)
     v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
     inertia, dinertia = v[:, COL_I] + d_inertia, d[:, COL_I]
     E = E0 + beta
@@ -473,6 +518,18 @@ def _check_combustion(train, balance):
         )
 
 
+def textbook_excess(train, scales, omega_m):
+    """The excess work [J] of the textbook total torque at constant speed ``omega_m``
+    [rad/s] (Shishkov, "Dinamika dvigatelei" (SUSU 2014) §3.2.12: δ ≈ L_excess/(J·ω²)):
+    the largest minus the smallest cumulative work of the gas torque at the fuelling
+    ``scales`` [-] plus the reciprocating inertia torque. The cumulative work is linear in
+    the fuelling and in ω²: its two parts depend on the tables and the fuelling alone, so
+    that a sweep over speed or inertia sums them once."""
+    w = train.textbook_work  # (textbook_k, motored, combustion…) summed once with the tables
+    work = w[:, 1] + w[:, 2:] @ scales + w[:, 0] * omega_m**2
+    return jnp.max(work) - jnp.min(work)
+
+
 @eqx.filter_jit
 def _finish_arrays(scene, E, t, omega_m, d_inertia):
     """The result's arrays on the table nodes; ``d_inertia`` [kg·m²] is added to the
@@ -486,15 +543,7 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
     m_eng = scene.engine_torque(val, sc, omega, 0.0)
     m_loss = scene.loss(omega, t)
     accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
-    # Shishkov, "Dinamika dvigatelei" (SUSU 2014) §3.2.12: δ ≈ L_excess / (J·ω²) from the textbook total torque at constant speed:
-    # the gas torque at this point's fuelling plus the reciprocating inertia torque
-    # (the cumulative work is linear in the fuelling and in ω²: its two parts depend on the
-    # tables and the fuelling alone, so a sweep over speed or inertia sums them once)
-    gas = val[:, COL_MOTORED] + jnp.sum(sc * val[:, COL_COMBUSTION:], axis=1)
-    work_gas = jnp.cumsum(gas - jnp.mean(gas)) * train.step_rad
-    work_k = jnp.cumsum(train.textbook_k - jnp.mean(train.textbook_k)) * train.step_rad
-    work = work_gas + work_k * omega_m**2
-    excess = jnp.max(work) - jnp.min(work)
+    excess = textbook_excess(train, sc, omega_m)
     return {
         "theta": theta,
         "omega": omega,

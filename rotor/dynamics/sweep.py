@@ -1,9 +1,10 @@
 """Steady states in bulk: ``jax.vmap`` over speeds, flywheels, fuelling and loads.
 
 :func:`steady_sweep` prepares the engine once (:func:`rotor.prepare`) and solves
-:func:`rotor.steady_state` for every item of the given arrays in one compiled,
-vectorised call per chunk of items, so that the memory stays bounded however many items
-there are (the chunk's size follows the memory budget, :func:`rotor.checks.memory_budget_bytes`).
+:func:`rotor.steady_state` for every item of the given arrays in compiled calls of up to
+:data:`MAX_CHUNK` items, one thread per processor core; inside a call the items are
+solved :data:`BATCH` at a time (vectorised), so that their arrays stay in the
+processor's cache and the memory stays bounded however many items there are.
 The speed, the crankshaft inertia, the combustion scale and a constant load change
 nothing prepared. Any other field of the engine (masses, geometry) is swept by passing
 ``jax.vmap`` an engine whose field is batched, e.g.::
@@ -17,14 +18,17 @@ steady state each). Under ``vmap`` no error can be raised on a traced value: eac
 ``converged`` says whether it is a solution.
 
 The same code runs on a GPU where JAX has one (``pip install -U "jax[cuda12]"``): arrays
-then live on the device and a chunk of 10⁴–10⁵ items fills it; nothing in rotor requires
-one.
+then live on the device, a chunk's items are vectorised all together, and a chunk of
+10⁴–10⁵ items fills it; nothing in rotor requires one.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Literal
 
 import equinox as eqx
@@ -33,27 +37,24 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
-from ..checks import memory_budget_bytes
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
 from ..errors import EngineError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
-from .crank_train import COL_COMBUSTION, COL_I, COL_MOTORED
+from .crank_train import COL_I
 from .equation import friction_coefficients
 from .loads import ConstantLoad
 from .prepared import PreparedEngine, checked_reference, prepare
 from .result import parabola_peak
-from .steady import STOP_FRACTION, flat_balance, flat_energy, steady_state
+from .steady import STOP_FRACTION, coarse_stride, flat_balance, flat_energy, steady_state, textbook_excess
 from .transient import Progress
 
 __all__ = ["SteadySweep", "steady_sweep"]
 
-# memory of one item while a chunk is solved, per node of the cycle grid [bytes]: at most
-# about 40 float64 arrays over the grid per item (a whole steady state, shooting included)
-BYTES_PER_ITEM_NODE = 8 * 40
-MAX_CHUNK = 256
+MAX_CHUNK = 4096  # items per compiled call at most: progress is reported after each
+BATCH = 8  # items solved together inside a chunk: their (8 × grid) arrays stay in a core's cache
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -213,73 +214,96 @@ def _check_values(rpm, inertia, scale):
         raise EngineError(f"imep_scale[{i}] = {scale[i].tolist()}: must not be negative")
 
 
-def default_chunk(points: int, cylinders: int, n: int) -> int:
-    """Items per compiled call for ``n`` items on a grid of ``points`` nodes of an engine
-    of ``cylinders``: at most :data:`MAX_CHUNK` (the arrays of a chunk then stay in the
-    processor's cache), and no more than a quarter of the memory budget holds."""
-    per_item = points * (BYTES_PER_ITEM_NODE + 16 * cylinders)
-    return int(max(1, min(MAX_CHUNK, n, memory_budget_bytes() // 4 // per_item)))
+def default_chunk(n: int, workers: int) -> int:
+    """Items per compiled call for ``n`` items on ``workers`` threads: as few calls as
+    :data:`MAX_CHUNK` allows, a multiple of ``workers`` of them (every thread busy to the
+    end), of equal size (the last one padded least). The memory does not grow with the
+    chunk: inside it the items are solved :data:`BATCH` at a time."""
+    calls = -(-n // MAX_CHUNK)
+    calls = -(-calls // workers) * workers
+    return max(1, -(-n // calls))
 
 
-def _flat_item(train, d_inertia, s, a, omega_m, balance):
+def _flat_item(train, d_inertia, s, a, omega_m, balance, moments=None):
     """One item by the flat closed form (:func:`rotor.dynamics.steady.flat_balance`), with
     only the figures of :class:`SteadySweep`: the same definitions as
     :class:`rotor.SpeedResult`'s (δ from the parabola through the extreme node and its
     neighbours; the textbook δ of Shishkov, "Dinamika dvigatelei", §3.2.12), E(0) as
-    :func:`rotor.dynamics.steady.flat_energy` finds it (the coarse grid, then one Newton
-    step on the full grid)."""
-    h = train.step_rad
+    :func:`rotor.dynamics.steady.flat_energy` finds it. The extreme nodes are those of its
+    first pass over the grid: the largest (smallest) at the final E(0) of the nodes in the
+    block it found and two either side; no other pass over the grid."""
     beta, _, x = flat_balance(train, s, a, balance)
-    E0, ok = flat_energy(train, d_inertia, beta, omega_m)
-    # ω = √(2E/I) is largest and smallest where E/I is: no square root at every node
-    half_w2 = (E0 + beta[:-1]) / (train.values[:, COL_I] + d_inertia)
-    n = half_w2.shape[0]
+    E0, ok, (block_hi, block_lo) = flat_energy(train, d_inertia, beta, omega_m, moments)
+    k = coarse_stride(train.points)
+    inertia = train.values[:, COL_I] + d_inertia
+    n = inertia.shape[0]
 
     def omega_at(j):
-        return jnp.sqrt(2 * jnp.maximum(half_w2[j % n], 0.0))
+        j = j % n
+        return jnp.sqrt(2 * jnp.maximum(E0 + beta[j], 0.0) / inertia[j])
 
-    i_hi, i_lo = jnp.argmax(half_w2), jnp.argmin(half_w2)
-    hi = parabola_peak(omega_at(i_hi - 1), omega_at(i_hi), omega_at(i_hi + 1), 1.0)
-    lo = parabola_peak(omega_at(i_lo - 1), omega_at(i_lo), omega_at(i_lo + 1), -1.0)
-    delta = (hi - lo) / omega_m
+    def extreme(block, sign):  # the extreme node's value and the parabola's peak
+        near = block * k + jnp.arange(-2, k + 2)
+        i = near[jnp.argmax(sign * omega_at(near))]
+        return omega_at(i), parabola_peak(omega_at(i - 1), omega_at(i), omega_at(i + 1), sign)
+
+    (hi, hi_peak), (lo, lo_peak) = extreme(block_hi, 1.0), extreme(block_lo, -1.0)
+    delta = (hi_peak - lo_peak) / omega_m
     e_ratio = (E0 + jnp.min(beta)) / (E0 + jnp.mean(beta[:-1]))
     converged = ok & jnp.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION)
-    scales = s if balance == "load" else x * s
-    v = train.values
-    gas = v[:, COL_MOTORED] + v[:, COL_COMBUSTION:] @ scales
-    work_gas = jnp.cumsum(gas - jnp.mean(gas)) * h
-    work_k = jnp.cumsum(train.textbook_k - jnp.mean(train.textbook_k)) * h
-    work = work_gas + work_k * omega_m**2
-    textbook = (jnp.max(work) - jnp.min(work)) / ((train.mean_inertia + d_inertia) * omega_m**2)
-    return delta, omega_at(i_lo) * RPM_PER_RAD_S, omega_at(i_hi) * RPM_PER_RAD_S, x, textbook, converged
+    textbook = textbook_excess(train, s if balance == "load" else x * s, omega_m)
+    textbook = textbook / ((train.mean_inertia + d_inertia) * omega_m**2)
+    return delta, lo * RPM_PER_RAD_S, hi * RPM_PER_RAD_S, x, textbook, converged
 
 
 @eqx.filter_jit
-def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies, flat):
-    """Every item of one chunk: the figures of :class:`SteadySweep` per item. ``varies``
-    (static): which of (rpm, inertia, scale, load) hold one value per item; the others hold
-    one value for all, so that what depends on them alone is computed once per chunk.
-    ``flat`` (static): no loss grows with ω² (:func:`_flat_item`); else each item is a
-    whole :func:`rotor.steady_state`."""
-    train = prepared.train
-    d_ref = checked_reference(prepared)
-    fr = friction_coefficients(prepared.engine, friction)
+def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies):
+    """Every item of one chunk by whole :func:`rotor.steady_state` calls (losses that grow
+    with ω): the figures of :class:`SteadySweep` per item. ``varies`` (static): which of
+    (rpm, inertia, scale, load) hold one value per item; the others hold one value for
+    all, so that what depends on them alone is computed once per chunk."""
 
     def one(rpm_i, inertia_i, scale_i, load_i):
-        s = jnp.broadcast_to(scale_i, (train.cylinders,))
-        omega_m = rpm_i / RPM_PER_RAD_S
-        if flat:
-            a = fr[0] + (0.0 if load_i is None else load_i)
-            return _flat_item(train, inertia_i - d_ref, s, a, omega_m, "load" if load_i is None else "fuel")
+        s = jnp.broadcast_to(scale_i, (prepared.train.cylinders,))
         load_obj = None if load_i is None else ConstantLoad(load_i)
         r = steady_state(prepared.with_inertia(inertia_i), rpm_i, load_obj, imep_scale=s, friction=friction)
         x = r.load_torque_Nm if r.load_torque_Nm is not None else r.fuel_scale
         return r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged
 
-    in_axes = tuple(0 if v else None for v in varies)
-    out = jax.vmap(one, in_axes=in_axes)(rpm, inertia, scale, load)
-    size = next(a.shape[0] for a, v in zip((rpm, inertia, scale, load), varies) if v) if any(varies) else 1
-    return tuple(jnp.broadcast_to(o, (size,)) for o in out)
+    return _batched(one, (rpm, inertia, scale, load), varies)
+
+
+@functools.partial(jax.jit, static_argnames="varies")
+def solve_flat_chunk(train, inertia_ref, loss, rpm, inertia, scale, load, varies):
+    """Every item of one chunk by the flat closed form (:func:`_flat_item`; no loss grows
+    with ω): the figures of :class:`SteadySweep` per item. ``train``: the prepared tables
+    at crankshaft inertia ``inertia_ref`` [kg·m²]; ``loss``: the constant friction torque
+    [N·m]; ``varies`` as :func:`solve_chunk`'s. Only arrays cross into the compiled call:
+    the caller checks the prepared engine once (:func:`rotor.dynamics.prepared.checked_reference`)."""
+
+    def one(rpm_i, inertia_i, scale_i, load_i):
+        s = jnp.broadcast_to(scale_i, (train.cylinders,))
+        a = loss + (0.0 if load_i is None else load_i)
+        balance = "load" if load_i is None else "fuel"
+        return _flat_item(train, inertia_i - inertia_ref, s, a, rpm_i / RPM_PER_RAD_S, balance)
+
+    return _batched(one, (rpm, inertia, scale, load), varies)
+
+
+def _batched(one, args, varies):
+    """``one`` over the items of ``args`` (those where ``varies``), :data:`BATCH` at a time
+    on a CPU (``lax.map``): a batch's arrays over the grid stay in the processor's cache,
+    where a ``vmap`` over the whole chunk would write them to memory and read them back."""
+    fixed = [None if v else a for a, v in zip(args, varies)]
+
+    def batch(xs):
+        given = iter(xs)
+        return one(*(next(given) if v else a for v, a in zip(varies, fixed)))
+
+    items = tuple(a for a, v in zip(args, varies) if v)
+    if jax.default_backend() != "cpu":  # an accelerator wants the whole chunk at once
+        return tuple(jax.vmap(batch)(items))
+    return tuple(jax.lax.map(batch, items, batch_size=BATCH))
 
 
 def steady_sweep(
@@ -293,6 +317,7 @@ def steady_sweep(
     fidelity: str | None = None,
     grid_deg: float | None = None,
     chunk: int | None = None,
+    threads: int | None = None,
     progress: bool | None = None,
 ) -> SteadySweep:
     """Steady states (:func:`rotor.steady_state`) of many items in vectorised, compiled chunks.
@@ -308,9 +333,10 @@ def steady_sweep(
       is scaled to carry (``fuel_scale``).
     - ``friction``, ``fidelity``, ``grid_deg``: as :func:`rotor.steady_state` (a prepared
       engine's fidelity and grid are its own).
-    - ``chunk``: items per compiled call (default: at most 256, which keeps a chunk's
-      arrays in the processor's cache, and no more than a quarter of the memory budget
-      holds); the last chunk is padded, so every chunk has one shape and is compiled once.
+    - ``chunk``: items per compiled call (default: up to :data:`MAX_CHUNK`, in equal
+      calls, a multiple of ``threads`` of them); the last chunk is padded, so every chunk
+      has one shape and is compiled once.
+    - ``threads``: chunks solved at once (default: one per processor core).
     - ``progress``: a progress bar on stderr (None: on a terminal, after ~2 s).
 
     **Returns:** a :class:`rotor.SteadySweep`, one row per item; ``converged`` is False
@@ -345,8 +371,13 @@ def steady_sweep(
     scale = np.broadcast_to(scale, (n, n_cyl))
     load_a = None if load_a is None else np.broadcast_to(load_a, (n,))
     _check_values(rpm_a, inertia_a, scale)
+    if threads is not None and not (
+        isinstance(threads, (int, np.integer)) and not isinstance(threads, bool) and threads >= 1
+    ):
+        raise EngineError(f"threads = {threads!r}: must be a whole number, 1 or more")
+    workers = (os.cpu_count() or 1) if threads is None else int(threads)
     if chunk is None:
-        size = default_chunk(prepared.points, n_cyl, n)
+        size = default_chunk(n, workers)
     elif isinstance(chunk, (int, np.integer)) and not isinstance(chunk, bool) and chunk >= 1:
         size = int(min(chunk, n))
     else:
@@ -366,16 +397,23 @@ def steady_sweep(
         return tuple(None if c is None else jnp.asarray(c[idx] if v else c[0]) for c, v in zip(columns, varies))
 
     t0 = time.perf_counter()
-    compiled = solve_chunk.lower(prepared, *chunk_args(0), friction, varies, flat).compile()  # type: ignore[attr-defined]
+    if flat:  # checked once here: only the tables cross into the compiled call
+        fixed: tuple = (prepared.train, np.float64(checked_reference(prepared)), jnp.asarray(fr[0]))
+        kernel = solve_flat_chunk.lower(*fixed, *chunk_args(0), varies).compile()
+    else:
+        fixed = (prepared,)
+        kernel = solve_chunk.lower(prepared, *chunk_args(0), friction, varies).compile()  # type: ignore[attr-defined]
     compile_s = time.perf_counter() - t0
+    extra = () if flat else (friction, varies)
 
     def run(first):
-        res = jax.device_get(compiled(prepared, *chunk_args(first), friction, varies, flat))
+        res = jax.device_get(kernel(*fixed, *chunk_args(first), *extra))
         return [np.broadcast_to(np.asarray(r), (size,))[: min(size, n - first)] for r in res]
 
-    for first in firsts:
-        outs.append(run(first))
-        bar.update(min(first + size, n))
+    with ThreadPoolExecutor(min(workers, len(firsts))) as pool:  # a compiled call runs without the GIL
+        for first, out in zip(firsts, pool.map(run, firsts)):
+            outs.append(out)
+            bar.update(min(first + size, n))
     bar.close()
     delta, lo, hi, x, tb, ok = (np.concatenate(c) for c in zip(*outs))
     return SteadySweep(
