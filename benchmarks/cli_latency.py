@@ -6,7 +6,9 @@ that compile one small kernel each (``info 4chn15``, ``table 4chn15``) have a ta
 ones (``steady 4chn15``, ``simulate 4chn15``) are measured for what the persistent
 compilation cache (rotor/cache.py) saves them. "cold": each run gets a new, empty cache
 folder (``ROTOR_COMPILATION_CACHE``: a user's very first run); "warm": every run shares a
-folder that one untimed run filled first (every later run). The repeats go round the
+folder that one untimed run filled first (every later run); "kept": warm, and the output
+of the same call kept by an untimed run (rotor/cli/kept.py: ``table`` and ``info`` then
+print it without importing JAX). "cold" and "warm" compute every time. The repeats go round the
 commands in turn, so that the load of a shared machine falls on all of them alike; the
 median of each is reported, with every time. Three reference processes put the figures in
 proportion: ``python -c pass``, ``python -c 'import jax'`` and ``python -c 'import jax,
@@ -99,7 +101,7 @@ def phases(command: str, cache: str, repeats: int) -> dict:
     """Median seconds of each phase of ``rotor COMMAND 4chn15`` timed inside the process
     (warm cache), and the process's wall time for comparison."""
     runs = []
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache)
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache, ROTOR_OUTPUT_CACHE="off")
     argv = [sys.executable, "-c", PHASES, command, "4chn15"]
     subprocess.run(argv, env=env, check=True, capture_output=True)  # fills the cache
     for _ in range(repeats):
@@ -115,11 +117,12 @@ def rotor_exe() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "rotor.cli"]
 
 
-def wall(argv: list[str], cache: str) -> tuple[float, float]:
+def wall(argv: list[str], cache: str, outputs: str = "off") -> tuple[float, float]:
     """Seconds from start to exit of ``argv`` in a fresh process with the compilation cache
-    ``cache``, and the CPU seconds it used (user + system: less sensitive than the wall time
+    ``cache`` and the kept outputs ``outputs`` (rotor/cli/kept.py; "off": computed every
+    time), and the CPU seconds it used (user + system: less sensitive than the wall time
     to the other jobs of a shared machine, but counting every thread of the process)."""
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache)
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache, ROTOR_OUTPUT_CACHE=outputs)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     out = subprocess.run(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -176,25 +179,25 @@ def main() -> None:
     for name, argv in NO_JAX.items():
         cases[f"rotor {name}"] = ([*rotor, *argv], "warm")
     for name, argv in {**light, **compiled}.items():
-        for kind in ("cold", "warm"):
+        for kind in ("cold", "warm") + (("kept",) if name in light else ()):
             cases[f"rotor {name} [{kind}]"] = ([*rotor, *argv], kind)
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     top = Path(tempfile.mkdtemp(prefix="rotor-cli-latency-"))
     load_before = loadavg()
     try:
-        warm = str(top / "warm")
-        for argv, kind in cases.values():  # fill the warm cache (untimed)
-            if kind == "warm":
-                wall(argv, warm)
+        warm, kept = str(top / "warm"), str(top / "outputs")
+        for argv, kind in cases.values():  # fill the warm cache and the kept outputs (untimed)
+            if kind in ("warm", "kept"):
+                wall(argv, warm, kept if kind == "kept" else "off")
         for r in range(repeats):
             for name, (argv, kind) in cases.items():
                 if kind == "cold":
                     cache = str(top / f"cold-{r}-{list(cases).index(name)}")
-                elif kind == "warm":
+                elif kind in ("warm", "kept"):
                     cache = warm
                 else:
                     cache = "off"
-                times[name].append(wall(argv, cache))
+                times[name].append(wall(argv, cache, kept if kind == "kept" else "off"))
                 if kind == "cold":
                     shutil.rmtree(cache, ignore_errors=True)
             print(f"repeat {r + 1}/{repeats} done", flush=True)

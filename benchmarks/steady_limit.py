@@ -9,14 +9,18 @@ Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
      first: what every call cost before tables were kept);
    - ``steady_state(engine)`` with the tables kept from the call before (the default);
    - ``steady_state(rotor.prepare(engine))``;
-   - one compiled call for a prepared engine (``eqx.filter_jit`` around
-     ``steady_state(prepared, rpm).omega``: no Python in the hot path), the whole ω(θ)
-     on 2880 nodes;
-   - one compiled call for δ alone (``steady_sweep``'s kernel with one item);
-   and δ of each against the default ``steady_state(engine)``.
+   - one compiled call with the prepared engine as an argument (``eqx.filter_jit``
+     around ``steady_state(prepared, rpm).omega``), the whole ω(θ) on 2880 nodes;
+   - one compiled call with the prepared engine closed over (``jax.jit(lambda rpm:
+     steady_state(prepared, rpm).omega)``, compiled ahead of time: the tables are
+     constants of the call and only the speed crosses into it), the whole ω(θ);
+   - the same for δ alone;
+   and δ of each (or ω, for the rows that return it) against the default
+   ``steady_state(engine)``.
 3. Throughput: ``rotor.steady_sweep`` over speed × flywheel inertia for 1 … 10⁵ items
-   (10⁶ with ``--full``), steady states per second after compiling, the chunk size and
-   the process's peak resident memory after each size.
+   (10⁶ with ``--full``) on every core, and 10⁵ on one thread: steady states per second
+   after compiling, the chunk size and the process's peak resident memory after each
+   size.
 
 Compile time is kept apart (the first call); every time is the median of repeats after it.
 Writes ``results/steady_limit.json`` and ``results/steady_limit.png``.
@@ -26,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import statistics
 import sys
@@ -41,7 +46,6 @@ from torsion_modes import time_it  # noqa: E402
 
 import rotor  # noqa: E402
 from rotor.dynamics import crank_train  # noqa: E402
-from rotor.dynamics.sweep import solve_chunk  # noqa: E402
 from rotor.fileio import write_text_atomic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -72,42 +76,58 @@ def bench_single(engine, repeats):
     def python_prepared():
         return float(rotor.steady_state(prepared).delta)
 
-    solve = eqx.filter_jit(lambda p, r: rotor.steady_state(p, r).omega)
     rpm_a = jax.numpy.asarray(rpm)
+    as_argument = eqx.filter_jit(lambda p, r: rotor.steady_state(p, r).omega)
 
-    def compiled():
-        return solve(prepared, rpm_a).block_until_ready()
+    def compiled_argument():
+        return as_argument(prepared, rpm_a).block_until_ready()
 
-    one = (rpm_a.reshape(1), jax.numpy.asarray(float(engine.crankshaft.inertia_kgm2)), jax.numpy.asarray(1.0), None)
-    varies = (True, False, False, False)
-    fr = None
-    delta_kernel = solve_chunk.lower(prepared, *one, fr, varies, True).compile()
+    # the prepared engine closed over: its tables are constants of the compiled call, and
+    # only the speed crosses into it (compiled ahead of time: no tracing cache to look up)
+    omega_closed = jax.jit(lambda r: rotor.steady_state(prepared, r).omega).lower(rpm_a).compile()
+    delta_closed = jax.jit(lambda r: rotor.steady_state(prepared, r).delta).lower(rpm_a).compile()
+
+    def compiled_closed():
+        return omega_closed(rpm_a).block_until_ready()
 
     def compiled_delta():
-        return jax.block_until_ready(delta_kernel(prepared, *one, fr, varies, True))
+        return delta_closed(rpm_a).block_until_ready()
 
     rows = {
         "steady_state(engine), tables built every call": (cold, max(3, repeats // 10)),
         "steady_state(engine), tables kept": (warm, repeats),
         "steady_state(prepared)": (python_prepared, repeats),
-        "compiled call, prepared engine, whole omega(theta)": (compiled, repeats),
-        "compiled call, prepared engine, delta only": (compiled_delta, repeats),
+        "compiled call, prepared engine as an argument, whole omega(theta)": (compiled_argument, repeats),
+        "compiled call, prepared engine closed over, whole omega(theta)": (compiled_closed, repeats),
+        "compiled call, prepared engine closed over, delta only": (compiled_delta, repeats),
     }
-    deltas = {
-        "steady_state(engine), tables built every call": cold(),
-        "steady_state(engine), tables kept": warm(),
-        "steady_state(prepared)": python_prepared(),
-        "compiled call, prepared engine, whole omega(theta)": float(
-            eqx.filter_jit(lambda p, r: rotor.steady_state(p, r).delta)(prepared, rpm_a)
+    omega0 = np.asarray(default.omega)
+
+    def omega_gap(omega):  # the largest difference from the default steady state's ω, relative
+        return float(np.max(np.abs(np.asarray(omega) - omega0)) / np.mean(omega0))
+
+    checks = {
+        "steady_state(engine), tables built every call": ("delta_minus_default", cold() - delta0),
+        "steady_state(engine), tables kept": ("delta_minus_default", warm() - delta0),
+        "steady_state(prepared)": ("delta_minus_default", python_prepared() - delta0),
+        "compiled call, prepared engine as an argument, whole omega(theta)": (
+            "omega_max_rel_diff",
+            omega_gap(compiled_argument()),
         ),
-        "compiled call, prepared engine, delta only": float(np.asarray(compiled_delta()[0])[0]),
+        "compiled call, prepared engine closed over, whole omega(theta)": (
+            "omega_max_rel_diff",
+            omega_gap(compiled_closed()),
+        ),
+        "compiled call, prepared engine closed over, delta only": (
+            "delta_minus_default",
+            float(compiled_delta()) - delta0,
+        ),
     }
     out["rotor"] = {}
     for name, (fn, n) in rows.items():
         t = time_it(fn, n)
         t["speedup_over_rk45_one_cycle"] = rk45["median_s"] / t["median_s"]
-        t["delta"] = deltas[name]
-        t["delta_minus_default"] = deltas[name] - delta0
+        t[checks[name][0]] = checks[name][1]
         out["rotor"][name] = t
     return out
 
@@ -117,31 +137,34 @@ def bench_batches(engine, sizes, repeats):
     rpm0 = float(engine.operating.rpm)
     J0 = float(engine.crankshaft.inertia_kgm2)
     out = []
-    for n in sizes:
+    plan = [(n, None) for n in sizes] + [(n, 1) for n in sizes if n == 10**5]
+    for n, threads in plan:
         side = int(np.ceil(np.sqrt(n)))
         rpm = np.repeat(np.linspace(0.6 * rpm0, 1.6 * rpm0, side), side)[:n]
         J = np.tile(np.linspace(0.5 * J0, 3.0 * J0, side), side)[:n]
-        first = rotor.steady_sweep(prepared, rpm=rpm, inertia_kgm2=J, progress=False)
-        reps = repeats if n <= 10**4 else 1
-        runs = [first] + [
-            rotor.steady_sweep(prepared, rpm=rpm, inertia_kgm2=J, progress=False) for _ in range(reps - 1)
+        runs = [
+            rotor.steady_sweep(prepared, rpm=rpm, inertia_kgm2=J, threads=threads, progress=False)
+            for _ in range(repeats if n <= 10**5 else 1)
         ]
+        first = runs[0]
         run_s = statistics.median([r.wall_s - r.compile_s for r in runs])
         out.append(
             {
                 "items": n,
+                "threads": threads or os.cpu_count(),
                 "chunk": first.chunk,
                 "compile_s": first.compile_s,
                 "run_s_after_compile": run_s,
                 "steady_states_per_s": n / run_s,
                 "converged": int(np.sum(first.converged)),
                 "peak_rss_mb": peak_rss_mb(),
-                "repeats": reps,
+                "repeats": len(runs),
             }
         )
         print(
-            f"  {n:>8} items: {run_s:8.3f} s after {first.compile_s:.2f} s compiling, "
-            f"{n / run_s:10.0f} per s (chunks of {first.chunk}), peak RSS {peak_rss_mb():.0f} MB",
+            f"  {n:>8} items on {threads or os.cpu_count()} threads: {run_s:8.3f} s after "
+            f"{first.compile_s:.2f} s compiling, {n / run_s:10.0f} per s (chunks of {first.chunk}), "
+            f"peak RSS {peak_rss_mb():.0f} MB",
             flush=True,
         )
     return out
@@ -162,8 +185,10 @@ def plot(res, path):
     a.set_xscale("log")
     a.set_xlabel("median time after compile [µs]")
     a.set_title(f"{res['engine']}: one steady state vs one RK45 cycle")
-    rows = res["batches"]
-    b.loglog([r["items"] for r in rows], [r["steady_states_per_s"] for r in rows], "o-")
+    for threads in sorted({r["threads"] for r in res["batches"]}):
+        rows = [r for r in res["batches"] if r["threads"] == threads]
+        b.loglog([r["items"] for r in rows], [r["steady_states_per_s"] for r in rows], "o-", label=f"{threads} threads")
+    b.legend()
     b.set_xlabel("items in the sweep")
     b.set_ylabel("steady states per second (after compile)")
     b.set_title("rotor.steady_sweep, speed × flywheel inertia")
@@ -187,8 +212,13 @@ def main():
     print(f"{args.engine} at {res['single']['rpm']:g} rpm; one cycle of scipy RK45 (rtol 1e-8): {rk * 1e3:.2f} ms")
     for name, t in res["single"]["rotor"].items():
         print(
-            f"  {name:<52} {t['median_s'] * 1e6:10.1f} µs  {t['speedup_over_rk45_one_cycle']:8.0f}×  "
-            f"δ − default {t['delta_minus_default']:+.1e}  (first call {t['first_call_s']:.2f} s)"
+            f"  {name:<66} {t['median_s'] * 1e6:10.1f} µs  {t['speedup_over_rk45_one_cycle']:8.0f}×  "
+            + (
+                f"δ − default {t['delta_minus_default']:+.1e}"
+                if "delta_minus_default" in t
+                else f"max |ω − default|/ω̄ {t['omega_max_rel_diff']:.1e}"
+            )
+            + f"  (first call {t['first_call_s']:.2f} s)"
         )
     print("throughput of rotor.steady_sweep (speed × inertia grid):")
     res["batches"] = bench_batches(engine, sizes, 3)

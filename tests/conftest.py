@@ -18,6 +18,11 @@ if "ROTOR_COMPILATION_CACHE" not in os.environ:
     _OWN_CACHE = os.environ["ROTOR_COMPILATION_CACHE"] = tempfile.mkdtemp(prefix="rotor-test-jax-cache-")
 
 
+# The kept outputs of `rotor table` and `rotor info` (rotor/cli/kept.py) are off: every CLI
+# test computes what it checks; tests/test_cli_latency.py switches them on in a folder of its own.
+os.environ.setdefault("ROTOR_OUTPUT_CACHE", "off")
+
+
 def pytest_sessionfinish(session, exitstatus):
     if _OWN_CACHE is not None:
         shutil.rmtree(_OWN_CACHE, ignore_errors=True)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import ast
 import json
+import os
+import re
 import subprocess
 import sys
 
@@ -133,3 +135,39 @@ def test_the_cache_waits_for_jax(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
     used, before, folder, threshold = json.loads(out.stdout)
     assert used == folder == str(tmp_path / "c") and not before and threshold == 0.1
+
+
+def _run_kept(tmp_path, *argv):
+    code = f"HEAVY = {HEAVY!r}\n" + CHILD.replace("print(json.dumps(", "sys.stdout.flush(); print('\\n' + json.dumps(")
+    env = dict(os.environ, ROTOR_OUTPUT_CACHE=str(tmp_path / "outputs"))
+    out = subprocess.run(
+        [sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=ROOT, env=env, timeout=300
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    text, _, tail = out.stdout.rpartition("\n\n")
+    return text, json.loads(tail)
+
+
+@pytest.mark.parametrize("argv", [["table", "4chn15", "--format", "csv"], ["info", "4chn15", "--json"]], ids=" ".join)
+def test_a_repeated_table_or_info_reads_its_kept_output_without_jax(tmp_path, argv):
+    first, r1 = _run_kept(tmp_path, *argv)
+    assert r1["status"] in (0, None) and "jax" in r1["heavy"]
+    again, r2 = _run_kept(tmp_path, *argv)
+    assert r2["status"] in (0, None) and r2["heavy"] == [], r2
+    assert again == first and len(first) > 200
+
+
+def test_a_changed_engine_file_or_option_is_computed_afresh(tmp_path):
+    """The kept output is keyed on the engine file's bytes and the options: a changed
+    speed in the file, or another --rpm, computes again (and prints other figures)."""
+    engine = tmp_path / "e.toml"
+    engine.write_text((ROOT / "rotor" / "presets" / "4chn15.toml").read_text(encoding="utf-8"), encoding="utf-8")
+    first, _ = _run_kept(tmp_path, "info", str(engine), "--json")
+    assert json.loads(first)["rpm"] == 1250
+    text, count = re.subn(r"(?m)^rpm = 1250$", "rpm = 1350", engine.read_text(encoding="utf-8"))
+    assert count == 1
+    engine.write_text(text, encoding="utf-8")
+    changed, r = _run_kept(tmp_path, "info", str(engine), "--json")
+    assert "jax" in r["heavy"] and json.loads(changed)["rpm"] == 1350
+    other, r = _run_kept(tmp_path, "info", str(engine), "--json", "--rpm", "900")
+    assert "jax" in r["heavy"] and json.loads(other)["rpm"] == 900

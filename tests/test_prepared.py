@@ -230,3 +230,28 @@ def test_a_sweep_of_a_million_items_plans_bounded_chunks():
         assert size * calls - n < calls, (n, workers, size)  # equal calls: less than an item padded each
     assert default_chunk(10**5, 2) == 3847  # 25 calls of 4000 would leave a thread idle at the end: 26
     assert default_chunk(10**5, 1) == 4000
+
+
+def test_the_first_estimate_of_the_mean_energy_is_of_fifth_order():
+    """The flat closed form starts Newton from the mean-speed condition expanded to fourth
+    order in the fluctuations of I and of the energy: doubling Ī + J halves both, so the
+    estimate's error must fall 2⁵ = 32 times (the single cylinder: the largest fluctuation)."""
+    import jax.numpy as jnp
+
+    from rotor.dynamics.crank_train import COL_I
+    from rotor.dynamics.steady import energy_moments, flat_balance, flat_energy, mean_energy_estimate
+
+    train = rotor.prepare(rotor.load_engine("tue-single")).train
+    beta, _, _ = flat_balance(train, jnp.ones(1), 0.0, "load")
+    moments, beta_mean = energy_moments(train, beta)
+    mean_i = float(jnp.mean(train.values[:, COL_I]))
+    omega = 1500.0 / 9.549296585513721
+    errors = []
+    for factor in (2, 4, 8, 16):
+        J = mean_i * (factor - 1)
+        E0, ok, _ = flat_energy(train, J, beta, omega)
+        assert bool(ok)
+        estimate = mean_energy_estimate(moments, mean_i + J, omega) - beta_mean
+        errors.append(abs(float(estimate / E0) - 1.0))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all((ratios > 28) & (ratios < 40)), ratios

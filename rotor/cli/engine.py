@@ -52,19 +52,30 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_table(args: argparse.Namespace) -> None:
-    """The textbook table of one cylinder (Shishkov 2014, appendix 5): text, CSV or JSON, to standard output or ``--output``."""
-    from ..engine.file import load_engine
-    from ..engine.table import TABLE_COLUMNS, crank_table
+    """The textbook table of one cylinder (Shishkov 2014, appendix 5): text, CSV or JSON, to
+    standard output or ``--output``; the same call again reads its kept output
+    (:mod:`rotor.cli.kept`) without importing JAX."""
     from ..fileio import write_text_atomic
+    from .kept import keep_output, kept_output, output_key
 
-    engine = load_engine(args.engine)
-    table = crank_table(engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics, cylinder=args.cylinder)
-    if args.json:
-        text = json_text(table.to_json_dict())
-    elif args.format == "csv":
-        text = csv_text(TABLE_COLUMNS, zip(*(table.columns[c] for c in TABLE_COLUMNS)), what="the crank table")
-    else:
-        text = table.to_text()
+    options = {k: getattr(args, k) for k in ("rpm", "step", "kinematics", "cylinder", "json", "format")}
+    key = output_key("table", args.engine, options)
+    text = kept_output(key)
+    if text is None:
+        from ..engine.file import load_engine
+        from ..engine.table import TABLE_COLUMNS, crank_table
+
+        engine = load_engine(args.engine)
+        table = crank_table(
+            engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics, cylinder=args.cylinder
+        )
+        if args.json:
+            text = json_text(table.to_json_dict())
+        elif args.format == "csv":
+            text = csv_text(TABLE_COLUMNS, zip(*(table.columns[c] for c in TABLE_COLUMNS)), what="the crank table")
+        else:
+            text = table.to_text()
+        keep_output(key, text)
     if args.output:
         write_text_atomic(args.output, text)
     else:
@@ -72,15 +83,20 @@ def cmd_table(args: argparse.Namespace) -> None:
 
 
 def cmd_info(args: argparse.Namespace) -> None:
-    """The engine's key figures at ``--rpm``."""
-    from ..engine.file import load_engine
-    from ..engine.summary import engine_summary
+    """The engine's key figures at ``--rpm``; the same call again reads its kept output
+    (:mod:`rotor.cli.kept`) without importing JAX."""
+    from .kept import keep_output, kept_output, output_key
 
-    summary = engine_summary(load_engine(args.engine), rpm=args.rpm)
-    if args.json:
-        print_json(summary.to_json_dict())
-    else:
-        print_text(summary.summary())
+    key = output_key("info", args.engine, {"rpm": args.rpm, "json": args.json})
+    text = kept_output(key)
+    if text is None:
+        from ..engine.file import load_engine
+        from ..engine.summary import engine_summary
+
+        summary = engine_summary(load_engine(args.engine), rpm=args.rpm)
+        text = json_text(summary.to_json_dict()) if args.json else summary.summary()
+        keep_output(key, text)
+    print_text(text)
 
 
 def engine_plots(engine: Engine, rpm: float | None, folder: str) -> list[str]:

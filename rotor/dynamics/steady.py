@@ -157,7 +157,7 @@ def scalar_newton(residual: Any, x0: Any, tol: float = 1e-14, max_steps: int = 6
     return root, jnp.isfinite(root) & (jnp.abs(jax.lax.stop_gradient(r)) < 1e-8)
 
 
-COARSE_NODES = 360  # nodes per cycle of the coarse grid on which the flat closed form iterates
+COARSE_NODES = 360  # nodes per cycle of the coarse grid: blocks in which the flat closed form finds ω's extremes
 
 
 def coarse_stride(points: int) -> int:
@@ -304,11 +304,10 @@ def _flat_solution(train, d_inertia, s, a, omega_m, balance):
     """The closed form where nothing in the losses grows with ω² and I(θ) carries the
     reciprocating inertia (G = 2(c − k)/I ≡ 0): E(θ) = E0 + β(θ), β the cumulative
     integral of the torque with its cycle mean balanced, β = B_mot + Σ w_c·B_c, where the
-    cumulative integrals B of the motored and of each combustion column depend on the
-    tables alone (under ``vmap`` over speed or inertia they are computed once per batch).
-    The mean-speed condition ∫dθ/ω = Θ/ω_m is iterated on a coarse grid (every
-    :func:`coarse_stride` node; the trapezoid rule on a periodic integrand) and finished
-    by one Newton step on the full grid. ``d_inertia`` [kg·m²] is added to I(θ) (another
+    cumulative integrals B of the motored and of each combustion column are kept with the
+    tables (``train.work``). The mean-speed condition ∫dθ/ω = Θ/ω_m starts from its
+    fourth-order expansion in the fluctuations (:func:`mean_energy_estimate`) and is
+    finished by Newton's method on the full grid (:func:`flat_energy`). ``d_inertia`` [kg·m²] is added to I(θ) (another
     crankshaft inertia than the tables'). Returns E and t on the nodes 0…N, x (load [N·m]
     or fuel scale [-]) and whether Newton converged."""
     beta, dE, x = flat_balance(train, s, a, balance)
