@@ -561,10 +561,10 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
 def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
     a = arrays
     converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
-    if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the three checks
-        good, i_min, x_found, e_ratio = jax.device_get((converged, a["i_min"], x, a["e_ratio"]))
-        # a fuel scale of a million or more that leaves no finite speed: a load in the wrong units
-        absurd = balance == "fuel" and not np.isfinite(e_ratio) and np.all(np.abs(x_found) >= 1e6)
+    if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the checks
+        good, i_min, x_found = jax.device_get((converged, a["i_min"], x))
+        # a fuel scale of a million or more and no steady state: a load in the wrong units
+        absurd = balance == "fuel" and not np.all(good) and np.all(np.abs(x_found) >= 1e6)
         if not np.all(np.isfinite(x_found)) or absurd:
             what = "load torque" if balance == "load" else "fuel scale"
             trouble = f"gives no finite speed (it is {float(x_found):.3g})" if absurd else "is not a finite number"
