@@ -128,3 +128,18 @@ def test_no_internal_seed_references():
             if SEED.search(line):
                 found.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()[:100]}")
     assert not found, "internal 'seed 00N' references:\n" + "\n".join(found)
+
+
+def test_a_block_marked_no_test_is_left_out():
+    """The marker works only on the line right above the fence: a marked block is not run."""
+    text = "a\n\n<!-- no-test -->\n```python\nraise SystemExit\n```\n\n```python\nx = 1\n```\n"
+    assert [src for _, src in python_blocks(text)] == ["x = 1"]
+    assert len(python_blocks(text.replace("<!-- no-test -->\n", ""))) == 2
+
+
+def test_every_no_test_marker_in_the_readme_sits_on_a_block():
+    lines = README.read_text(encoding="utf-8").splitlines()
+    for i, line in enumerate(lines):
+        if line.strip() == NO_TEST:
+            after = next(ln.strip() for ln in lines[i + 1 :] if ln.strip())
+            assert after == "```python", f"README.md:{i + 1}: {NO_TEST} is not right above a python block"
