@@ -21,6 +21,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from .cache import on_jax_import as _on_jax_import
+from .cache import submodules_on_demand as _submodules_on_demand
 
 
 def _enable_x64(jax: ModuleType) -> None:
@@ -481,6 +482,9 @@ __all__ = [
 ]
 
 
+_submodule = _submodules_on_demand(__name__)
+
+
 def __getattr__(name: str) -> Any:
     """A public name, imported from its module on first use (and then kept here), or a
     submodule (``rotor.engine``)."""
@@ -489,13 +493,7 @@ def __getattr__(name: str) -> Any:
         value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
         globals()[name] = value
         return value
-    if not name.startswith("_"):
-        try:
-            return importlib.import_module(f"{__name__}.{name}")
-        except ModuleNotFoundError as e:
-            if e.name != f"{__name__}.{name}":
-                raise
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return _submodule(name)
 
 
 def __dir__() -> list[str]:

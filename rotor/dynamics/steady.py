@@ -213,8 +213,7 @@ def energy_moments(train, beta):
     :func:`flat_energy`'s first estimate of E(0) needs from the tables and β. They depend
     on the fuelling but on neither the speed nor the crankshaft inertia, so that a sweep
     over those computes them once."""
-    inertia = train.values[:, COL_I]
-    d = inertia - jnp.mean(inertia)
+    d = train.values[:, COL_I] - train.mean_inertia  # the node mean (with the tables)
     beta_mean = jnp.mean(beta[:-1])
     b = beta[:-1] - beta_mean
     powers_d = jnp.stack([d**j for j in range(_SERIES_ORDER + 1)], axis=1)
@@ -238,7 +237,7 @@ def mean_energy_estimate(moments, mean_inertia, omega_m):
     return e
 
 
-def flat_energy(train, d_inertia, beta, omega_m, moments=None):
+def flat_energy(train, d_inertia, beta, omega_m):
     """E(0) [J] of the flat closed form with β(θ) (:func:`flat_balance`) at time-mean
     speed ``omega_m`` [rad/s], whether Newton converged, and the blocks of
     :func:`coarse_stride` nodes where ω is largest and smallest at the first estimate
@@ -246,22 +245,19 @@ def flat_energy(train, d_inertia, beta, omega_m, moments=None):
 
     Newton's method on η, E(0) = E* + E_ref·e^η (E* the smallest E(0) that keeps E ≥ 0),
     for log(T/T_m) = 0, T = ∫dθ/ω = h·Σ√(I/2E) and T_m = Θ/ω_m on the full grid, from
-    the fourth-order estimate of :func:`mean_energy_estimate` (``moments``:
-    :func:`energy_moments`, computed here if not given), until a step is below 1e-7: one
+    the fourth-order estimate of :func:`mean_energy_estimate`, until a step is below 1e-7: one
     pass over the nodes where δ is small (the step then leaves an error of order step²),
     more where the fluctuation is large or near a stall. T′ is summed in the same pass as
     T. The derivatives of E(0) are those of the first pass (the implicit function theorem,
     as in :func:`scalar_newton`), exact where its step is small."""
     h = train.step_rad
     inertia = train.values[:, COL_I] + d_inertia  # the N nodes of the cycle (periodic)
-    mean_inertia = jnp.mean(train.values[:, COL_I]) + d_inertia  # over the nodes, as the moments
-    e_ref = 0.5 * (train.mean_inertia + d_inertia) * omega_m**2
+    mean_inertia = train.mean_inertia + d_inertia
+    e_ref = 0.5 * mean_inertia * omega_m**2
     e_star = jax.lax.stop_gradient(jnp.maximum(jnp.max(-beta), 0.0))
     period = train.cycle_rad / omega_m
     k = coarse_stride(train.points)
-    if moments is None:
-        moments = energy_moments(train, beta)
-    mom, beta_mean = moments
+    mom, beta_mean = energy_moments(train, beta)  # once per batch under vmap over speed or inertia
 
     def energy(eta):
         return e_star + e_ref * jnp.exp(eta)

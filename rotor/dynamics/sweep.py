@@ -224,7 +224,7 @@ def default_chunk(n: int, workers: int) -> int:
     return max(1, -(-n // calls))
 
 
-def _flat_item(train, d_inertia, s, a, omega_m, balance, moments=None):
+def _flat_item(train, d_inertia, s, a, omega_m, balance):
     """One item by the flat closed form (:func:`rotor.dynamics.steady.flat_balance`), with
     only the figures of :class:`SteadySweep`: the same definitions as
     :class:`rotor.SpeedResult`'s (δ from the parabola through the extreme node and its
@@ -233,7 +233,7 @@ def _flat_item(train, d_inertia, s, a, omega_m, balance, moments=None):
     first pass over the grid: the largest (smallest) at the final E(0) of the nodes in the
     block it found and two either side; no other pass over the grid."""
     beta, _, x = flat_balance(train, s, a, balance)
-    E0, ok, (block_hi, block_lo) = flat_energy(train, d_inertia, beta, omega_m, moments)
+    E0, ok, (block_hi, block_lo) = flat_energy(train, d_inertia, beta, omega_m)
     k = coarse_stride(train.points)
     inertia = train.values[:, COL_I] + d_inertia
     n = inertia.shape[0]
