@@ -32,6 +32,7 @@ __all__ = [
     "add_json",
     "add_plot",
     "add_quiet",
+    "angle_deg",
     "delta_list",
     "fidelity_option",
     "nonnegative_float",
@@ -104,6 +105,22 @@ def nonnegative_float(text: str) -> float:
     v = _number(text)
     if not (0 <= v < math.inf):
         raise argparse.ArgumentTypeError(f"{text!r} must be zero or positive")
+    return v
+
+
+MAX_ANGLE_DEG = 3600.0
+"""The largest angle option taken, in magnitude [deg]: ten revolutions. Beyond it an angle is
+no plausible input (a float of 10¹⁹ degrees has no digits left below a revolution) and is
+refused, as an engine file's angles are."""
+
+
+def angle_deg(text: str) -> float:
+    """An angle [deg], finite and within ±:data:`MAX_ANGLE_DEG` (an angle option, as ``--tdc-deg``)."""
+    v = _number(text)
+    if not (-MAX_ANGLE_DEG <= v <= MAX_ANGLE_DEG):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is no angle to use: give a finite angle from {-MAX_ANGLE_DEG:g} to {MAX_ANGLE_DEG:g} degrees"
+        )
     return v
 
 

@@ -6,7 +6,7 @@ import argparse
 import os
 from typing import Any
 
-from .args import add_edge, add_json, add_plot, positive_float
+from .args import add_edge, add_json, add_plot, angle_deg, positive_float
 from .logs import BULK_HELP, PLOT_LOCK, FileOutput, add_bulk, for_each_log, log_plot
 from .output import print_json, print_text, print_written
 
@@ -91,12 +91,9 @@ def _tdc_arg(text: str) -> float | str:
     if text.strip().lower() == "speed":
         return "speed"
     try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: an angle [deg] or 'speed'") from None
-    if x != x or x in (float("inf"), float("-inf")):
-        raise argparse.ArgumentTypeError(f"{text!r}: a finite angle [deg] or 'speed'")
-    return x
+        return angle_deg(text)
+    except argparse.ArgumentTypeError as e:
+        raise argparse.ArgumentTypeError(f"{e}, or 'speed'") from None
 
 
 def _gain_arg(text: str) -> float | str:

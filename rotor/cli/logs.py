@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from .args import add_edge, add_json, add_plot, add_quiet, positive_float, whole
+from .args import add_edge, add_json, add_plot, add_quiet, angle_deg, positive_float, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
 __all__ = ["PLOT_LOCK", "FileOutput", "add_bulk", "add_parsers", "cmd_analyze", "for_each_log", "log_plot"]
@@ -64,7 +64,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--tdc-deg",
-        type=float,
+        type=angle_deg,
         metavar="DEG",
         help="angle from the gap to TDC of cylinder 1 [deg] (default: from the pressure channel, else 0)",
     )

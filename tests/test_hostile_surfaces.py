@@ -1,0 +1,79 @@
+"""Hostile inputs against the later surfaces of the command line and the library: absurd
+finite option values, the kept-output cache, wheel specs and wheel files, digital captures,
+user text in plots, interrupts, output locations and the sizes of torsion work.
+
+Each case ends cleanly: exit 2 for bad input with one line naming the problem, 130 on
+Ctrl-C, 0 only with a whole, finite result; no traceback, no partial or temporary file, none
+of the user's files touched. Everything runs in-process through :func:`rotor.cli.app.main`
+unless the real process is the point (signals)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rotor.cli import app
+
+TWO_PI = 2 * np.pi
+
+
+def tooth_times(rpm: float = 3000.0, revs: int = 12, teeth: int = 60, missing: int = 2) -> np.ndarray:
+    """Edge times [s] of an N−M wheel at ``rpm`` with a small half-order fluctuation."""
+    w = TWO_PI * rpm / 60
+    ang = 0.37 + TWO_PI * np.arange(revs)[:, None] + TWO_PI / teeth * np.arange(teeth - missing)[None, :]
+    ang = ang.ravel()
+    return ang / w + 0.02 * np.sin(ang / 2) / w
+
+
+@pytest.fixture(scope="module")
+def teeth_log(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """A clean 60-2 tooth-time log."""
+    path = tmp_path_factory.mktemp("surfaces") / "teeth.csv"
+    np.savetxt(path, tooth_times(), fmt="%.12g")
+    return str(path)
+
+
+def run(capsys: pytest.CaptureFixture, argv: list[str]) -> tuple[int, str, str]:
+    """``rotor argv`` in-process: (exit status, stdout, stderr)."""
+    try:
+        rc = app.main(argv)
+    except SystemExit as e:  # argparse's own usage errors
+        rc = int(e.code or 0)
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def assert_refused(rc: int, err: str, *fragments: str) -> None:
+    """Exit 2 with one line on stderr holding every fragment, no traceback."""
+    assert rc == 2, err
+    assert "Traceback" not in err and "internal error" not in err, err
+    lines = [line for line in err.splitlines() if line.strip() and not line.startswith("rotor: warning:")]
+    assert len(lines) == 1, err
+    for f in fragments:
+        assert f in lines[0], err
+
+
+# ----------------------------------------------------------------------------- absurd option values
+TOOTH = ["--wheel", "60-2", "--columns", "tooth_time_s"]
+
+
+@pytest.mark.parametrize("value", ["9223372036854775808", "-9223372036854775808", "1e300", "3601"])
+def test_an_absurd_finite_angle_is_refused_in_one_line(
+    value: str, teeth_log: str, capsys: pytest.CaptureFixture
+) -> None:
+    rc, _, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", value])
+    assert_refused(rc, err, "--tdc-deg", "from -3600 to 3600 degrees")
+
+
+def test_diagnose_refuses_an_absurd_angle_too(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
+    argv = ["diagnose", teeth_log, "--engine", "4chn15", *TOOTH, "--tdc-deg", "9223372036854775808"]
+    rc, _, err = run(capsys, argv)
+    assert_refused(rc, err, "--tdc-deg", "or 'speed'")
+
+
+def test_a_plausible_angle_still_runs(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
+    rc, out, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", "-710"])
+    assert rc == 0, err
+    json.loads(out, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
