@@ -10,6 +10,8 @@ unless the real process is the point (signals)."""
 from __future__ import annotations
 
 import json
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -77,3 +79,59 @@ def test_a_plausible_angle_still_runs(teeth_log: str, capsys: pytest.CaptureFixt
     rc, out, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", "-710"])
     assert rc == 0, err
     json.loads(out, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
+
+
+# ----------------------------------------------------------------------------- the kept-output cache
+@pytest.fixture
+def kept_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """An output cache of its own for the test."""
+    folder = tmp_path / "kept"
+    monkeypatch.setenv("ROTOR_OUTPUT_CACHE", str(folder))
+    return folder
+
+
+def only_entry(folder: Path, before: set[Path] = frozenset()) -> Path:  # type: ignore[assignment]
+    entries = [p for p in folder.iterdir() if p not in before]
+    assert len(entries) == 1, entries
+    return entries[0]
+
+
+@pytest.mark.parametrize(
+    "spoil",
+    [
+        lambda raw: b'{"displacement_m3": NaN}',
+        lambda raw: b"",
+        lambda raw: raw[: len(raw) // 2],
+        lambda raw: raw.replace(b"0.", b"9.", 1),
+    ],
+    ids=["overwritten with NaN", "empty", "cut off", "one digit changed"],
+)
+def test_a_spoilt_kept_output_is_computed_afresh(spoil, kept_folder: Path, capsys: pytest.CaptureFixture) -> None:
+    argv = ["info", "4chn15", "--json"]
+    rc, first, err = run(capsys, argv)
+    assert rc == 0, err
+    entry = only_entry(kept_folder)
+    entry.write_bytes(spoil(entry.read_bytes()))
+    rc, again, err = run(capsys, argv)
+    assert rc == 0 and again == first, err
+    json.loads(again, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
+    rc, third, err = run(capsys, argv)  # the entry is whole again
+    assert rc == 0 and third == first, err
+    assert json.loads(only_entry(kept_folder).read_bytes().partition(b"\n")[2]) == json.loads(first)
+
+
+def test_pruning_keeps_the_users_own_files(kept_folder: Path, capsys: pytest.CaptureFixture, monkeypatch) -> None:
+    from rotor.cli import kept
+
+    kept_folder.mkdir()
+    mine = [kept_folder / f"notes{i:03d}.txt" for i in range(300)]
+    for i, p in enumerate(mine):
+        p.write_text(f"the user's note {i}\n")
+        os.utime(p, ns=(i * 10**9, i * 10**9))
+    monkeypatch.setattr(kept, "MAX_FILES", 2)
+    for rpm in ("900", "1000", "1100"):
+        rc, _, err = run(capsys, ["info", "4chn15", "--json", "--rpm", rpm])
+        assert rc == 0, err
+    assert all(p.read_text() == f"the user's note {i}\n" for i, p in enumerate(mine))
+    own = set(kept_folder.iterdir()) - set(mine)
+    assert len(own) == 2, own  # rotor's own entries are pruned to the newest

@@ -10,18 +10,28 @@ a whole, successful output is kept; an error is never.
 The outputs live in ``$ROTOR_OUTPUT_CACHE`` if set (``0``, ``off`` or ``no`` switches
 them off), else in ``$XDG_CACHE_HOME/rotor/outputs`` (``~/.cache/rotor/outputs``); the
 newest :data:`MAX_FILES` are kept. Nothing is kept where the folder cannot be written.
+
+**An entry proves itself.** Each is one file named ``rotor-output-<digest>.kept``, written
+whole or not at all, whose first line holds the length of the output and a checksum of it
+(blake2b, over the digest under which it is kept and the output): an entry that is empty,
+cut off, changed or copied under another name is a miss, and the command computes afresh
+(and keeps the new output in its place). Pruning touches only files of that name: a folder
+shared with other files (the user's own) loses none of them.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_FILES", "keep_output", "kept_output", "output_key"]
+__all__ = ["MAX_FILES", "entry_path", "keep_output", "kept_output", "output_key"]
 
 MAX_FILES = 256
+_ENTRY = re.compile(r"^rotor-output-[0-9a-f]{40}\.kept$")
+_MAGIC = "rotor kept output 1"
 _OFF = {"0", "off", "no", "false"}
 _PACKAGES = ("jax", "jaxlib", "equinox", "numpy")
 
@@ -88,30 +98,60 @@ def output_key(command: str, engine: str, options: dict[str, Any]) -> str | None
     return h.hexdigest()
 
 
-def kept_output(key: str | None) -> str | None:
-    """The output kept under ``key``, or None."""
+def entry_path(key: str) -> Path | None:
+    """The file of the entry kept under ``key`` (None where outputs are not kept)."""
     folder = _folder()
-    if key is None or folder is None:
+    return None if folder is None else folder / f"rotor-output-{key}.kept"
+
+
+def _checksum(key: str, body: bytes) -> str:
+    return hashlib.blake2b(key.encode() + b"\0" + body, digest_size=20).hexdigest()
+
+
+def kept_output(key: str | None) -> str | None:
+    """The output kept under ``key``, or None: also where the entry is not whole and
+    unchanged (its length and checksum do not match), which is then computed afresh."""
+    path = None if key is None else entry_path(key)
+    if key is None or path is None:
         return None
     try:
-        return (folder / f"{key}.txt").read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+        raw = path.read_bytes()
+    except OSError:
+        return None
+    head, newline, body = raw.partition(b"\n")
+    parts = head.decode("ascii", errors="replace").rsplit(" ", 2)
+    if not newline or len(parts) != 3 or parts[0] != _MAGIC or parts[1] != str(len(body)):
+        return None
+    if parts[2] != _checksum(key, body):
+        return None
+    try:
+        return body.decode("utf-8")
+    except UnicodeDecodeError:
         return None
 
 
 def keep_output(key: str | None, text: str) -> None:
-    """Keep ``text`` under ``key`` (whole or not at all), and only the newest
-    :data:`MAX_FILES` outputs; silently nothing where the folder cannot be written."""
-    folder = _folder()
-    if key is None or folder is None:
+    """Keep ``text`` under ``key`` (whole or not at all, with its length and checksum), and
+    only the newest :data:`MAX_FILES` of rotor's entries (no other file of the folder);
+    silently nothing where the folder cannot be written."""
+    path = None if key is None else entry_path(key)
+    if key is None or path is None:
         return
-    from ..fileio import write_text_atomic
+    from ..fileio import atomic_path
 
+    body = text.encode("utf-8")
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(folder / f"{key}.txt", text)
-        kept = sorted(folder.glob("*.txt"), key=lambda p: p.stat().st_mtime_ns)
-        for old in kept[:-MAX_FILES]:
-            old.unlink(missing_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+            f.write(f"{_MAGIC} {len(body)} {_checksum(key, body)}\n".encode("ascii") + body)
+        kept = []
+        for entry in os.scandir(path.parent):
+            if _ENTRY.match(entry.name) and entry.is_file(follow_symlinks=False):
+                try:
+                    kept.append((entry.stat(follow_symlinks=False).st_mtime_ns, entry.path))
+                except OSError:
+                    continue
+        for _, old in sorted(kept)[:-MAX_FILES]:
+            Path(old).unlink(missing_ok=True)
     except OSError:
         return
