@@ -15,7 +15,18 @@ __all__ = ["RotorError", "EngineError", "LogError", "SolverError", "NoSteadyStat
 
 
 class RotorError(Exception):
-    """Base of every error rotor raises on purpose."""
+    """Base of every error rotor raises on purpose.
+
+    ``argument``: the name of the function argument at fault (``"wheel"``), where the error
+    is about one; its message then starts with ``argument=`` (``wheel='36-2-…': …``), which
+    the command line turns into the option's flag (``--wheel '36-2-…': …``)."""
+
+    def __init__(self, *args: object, argument: str | None = None) -> None:
+        super().__init__(*args)
+        self.argument = argument
+
+    def __reduce__(self):  # the argument survives a copy or a trip to another process
+        return (type(self), self.args, {"argument": self.argument})
 
 
 class EngineError(RotorError, ValueError):

@@ -135,3 +135,47 @@ def test_pruning_keeps_the_users_own_files(kept_folder: Path, capsys: pytest.Cap
     assert all(p.read_text() == f"the user's note {i}\n" for i, p in enumerate(mine))
     own = set(kept_folder.iterdir()) - set(mine)
     assert len(own) == 2, own  # rotor's own entries are pruned to the newest
+
+
+# ----------------------------------------------------------------------------- wheel specs
+SEVENTEEN_GAPS = "36" + "-2" * 17
+HUGE_N = "9" * 5000 + "-2"
+
+
+@pytest.mark.parametrize(
+    "spec,fragment",
+    [
+        (SEVENTEEN_GAPS, "17 gaps need 51 positions or more"),
+        ("36-20-20", "40 missing teeth in 2 gaps on 36 positions; at most 32 fit"),
+        ("60-59", "59 missing teeth in 1 gap on 60 positions; at most 58 fit"),
+        (HUGE_N, "a number of 5000 digits"),
+        ("100001-2", "from 3 to 100000"),
+    ],
+    ids=["17 gaps", "two big gaps", "one gap too big", "5000 digits", "too many positions"],
+)
+def test_a_wheel_spec_beyond_the_real_limit_names_wheel(spec: str, fragment: str, capsys, teeth_log: str) -> None:
+    from rotor import parse_wheel
+    from rotor.errors import LogError
+
+    with pytest.raises(LogError) as info:
+        parse_wheel(spec)
+    assert info.value.argument == "wheel" and str(info.value).startswith("wheel=")
+    assert fragment in str(info.value)
+    rc, _, err = run(capsys, ["analyze", teeth_log, "--wheel", spec, "--columns", "tooth_time_s"])
+    assert_refused(rc, err, "rotor: error: --wheel ", fragment)
+    assert "set_int_max_str_digits" not in err and "need 0 …" not in err and len(err) < 400
+
+
+@pytest.mark.parametrize("spec", [3.5, None, ["60-2"], True])
+def test_a_wheel_of_the_wrong_type_names_wheel(spec) -> None:
+    from rotor import parse_wheel
+
+    with pytest.raises(TypeError, match=r"^wheel="):
+        parse_wheel(spec)
+
+
+def test_a_wheel_at_the_real_limit_is_taken() -> None:
+    from rotor import parse_wheel
+
+    assert parse_wheel("36" + "-1" * 12).missing == 12  # 36 − 2 × 12 = 12: just fits
+    assert parse_wheel("60-58").edges_per_rev == 2

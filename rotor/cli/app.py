@@ -22,13 +22,14 @@ import os
 import re
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
 from . import demo, design, diagnostics, engine, logs, report, run, torsion  # light: see test_cli_latency.py
-from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser
+from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
 
-__all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error"]
+__all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error", "warning_line"]
 
 COMMAND_GROUPS = (engine, run, logs, diagnostics, design, torsion, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
@@ -113,7 +114,7 @@ def _raised_outside(e: BaseException) -> bool:
 
 
 def _one_line(e: BaseException) -> str:
-    return " ".join(str(e).split("\n")).strip()
+    return error_text(e)
 
 
 _ERROR_LINE = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception): ", re.MULTILINE)
@@ -139,6 +140,27 @@ def _silence_stdout() -> None:
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError, AttributeError):  # no real file behind sys.stdout (a test's capture)
         pass
+
+
+def warning_line(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: object = None,
+    line: object = None,
+) -> None:
+    """Show a Python warning to a command-line user (``warnings.showwarning`` while a command
+    runs): rotor's own as one line ``rotor: warning: …`` on stderr, without a source path;
+    numpy's floating-point complaints ("divide by zero"), deprecations and other packages'
+    warnings are not the user's business and are not shown."""
+    where = str(filename).replace(os.sep, "/")
+    if not issubclass(category, UserWarning) or "/site-packages/" in where or "/dist-packages/" in where:
+        return
+    print(
+        f"rotor: warning: {_one_line(message if isinstance(message, BaseException) else Exception(message))}",
+        file=sys.stderr,
+    )
 
 
 def report_error(e: BaseException, debug: bool = False) -> int:
@@ -205,7 +227,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         # (argv None, a process of its own) its small eager kernels too, which a long
         # Python session calling main(argv) should not pile up in the cache
         enable_compilation_cache(min_compile_time_s=0.0 if argv is None else 0.1)
-        args.func(args)
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")  # each distinct warning once
+            warnings.showwarning = warning_line
+            args.func(args)
         sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
     except SystemExit:
         raise

@@ -34,6 +34,7 @@ __all__ = [
     "add_quiet",
     "angle_deg",
     "delta_list",
+    "error_text",
     "fidelity_option",
     "nonnegative_float",
     "positive_float",
@@ -69,7 +70,9 @@ class Parser(argparse.ArgumentParser):
 
     def help_later(self, action: argparse.Action, make: Callable[[], str]) -> None:
         """Set ``action``'s help to ``make()`` when this parser's help is shown, not before:
-        for a help text that lives in a module too slow to import for every command."""
+        for a help text that lives in a module too slow to import for every command. A later
+        call for the same action replaces an earlier one."""
+        self._help_later = [(a, m) for a, m in self._help_later if a is not action]
         self._help_later.append((action, make))
 
     def format_help(self) -> str:
@@ -82,6 +85,17 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """One line on stderr, exit status 2, as for any bad input."""
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+def error_text(e: BaseException) -> str:
+    """``e``'s message as one line, in the command line's words: where a library error
+    names its argument (``RotorError.argument``, the message starting ``wheel=…``), the
+    option's flag in its place (``--wheel …``)."""
+    text = " ".join(str(e).split("\n")).strip()
+    argument = getattr(e, "argument", None)
+    if isinstance(argument, str) and text.startswith(f"{argument}="):
+        text = f"--{argument.replace('_', '-')} {text[len(argument) + 1 :]}"
+    return text
 
 
 # ----------------------------------------------------------------------------- types
@@ -189,12 +203,14 @@ def add_plot(p: argparse.ArgumentParser, what: str = "plots", default: str | Non
 
 
 def add_edge(p: argparse.ArgumentParser) -> None:
-    """``--edge rising|falling``: which edges of the wheel signal (analog or digital) mark the teeth."""
+    """``--edge auto|rising|falling``: which edges of the wheel signal (analog or digital) mark the teeth."""
     p.add_argument(
         "--edge",
-        choices=("rising", "falling"),
-        default="rising",
-        help="which edges of the wheel signal (analog or digital) mark the teeth (default rising)",
+        choices=("auto", "rising", "falling"),
+        default="auto",
+        help="which edges of the wheel signal (analog or digital) mark the teeth (default auto: both are read, the "
+        "one that fits the wheel with the fewest repairs, then the lower tooth-period jitter, is taken; the summary "
+        "says which)",
     )
 
 

@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from .args import add_edge, add_json, add_plot, add_quiet, angle_deg, positive_float, whole
+from .args import add_edge, add_json, add_plot, add_quiet, angle_deg, error_text, positive_float, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
 __all__ = ["PLOT_LOCK", "FileOutput", "add_bulk", "add_parsers", "cmd_analyze", "for_each_log", "log_plot"]
@@ -242,7 +242,7 @@ def _error_line(e: Exception) -> tuple[int, str]:
 
     from ..errors import InternalError, RotorError, SolverError
 
-    text = " ".join(str(e).split("\n")).strip()
+    text = error_text(e)
     if isinstance(e, MemoryError) or (isinstance(e, RuntimeError) and "RESOURCE_EXHAUSTED" in str(e)):
         return 2, "rotor: error: the machine ran out of memory: reduce the size of the run (a shorter log)"
     if isinstance(e, SolverError):

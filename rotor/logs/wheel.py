@@ -177,30 +177,84 @@ class Wheel:
         return f"{self.teeth} positions going round from tooth 0: " + ", ".join(parts)
 
 
-def parse_wheel(spec: str | int | Wheel) -> Wheel:
+MAX_POSITIONS = 100_000
+"""The most tooth positions a wheel spec may name (an encoder of 10⁵ lines per revolution)."""
+
+
+def _shown(spec: object, limit: int = 40) -> str:
+    text = repr(spec)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def parse_wheel(spec: str | int | os.PathLike | Wheel) -> Wheel:
     """A :class:`Wheel` from ``"60-2"``, ``"36-1"`` (N−M), ``"36-2-1"``, ``"36-2-2-2"``
     (N positions and the missing teeth of each gap, gap 1 first: where the gaps lie is
-    found from the log), ``"60"`` (with an index) or a wheel file (``*.toml``, see
-    :func:`read_wheel_file`)."""
+    found from the log), ``"60"`` or ``60`` (with an index) or a wheel file (``*.toml``, see
+    :func:`read_wheel_file`).
+
+    **Errors:** a spec that names no wheel raises :class:`LogError` with ``argument="wheel"``
+    and a message starting ``wheel=``: N from 3 to :data:`MAX_POSITIONS`, each gap 1 or
+    more, and at most N − 2 × gaps missing teeth in all (a tooth on either side of each
+    gap). A ``spec`` of another type (a float, a list, None) raises ``TypeError`` naming
+    ``wheel``."""
     if isinstance(spec, Wheel):
         return spec
+    if isinstance(spec, bool) or not isinstance(spec, (str, int, np.integer, os.PathLike)):
+        raise TypeError(
+            f"wheel={_shown(spec)}: expected a spec such as '60-2' (a str), a tooth count (an int), a wheel "
+            f"file's path or a Wheel, not {type(spec).__name__}"
+        )
+    if isinstance(spec, os.PathLike):
+        return read_wheel_file(spec)
     text = str(spec).strip()
     if text.lower().endswith(".toml"):
         return read_wheel_file(text)
     m = re.fullmatch(r"(\d+)((?:\s*-\s*\d+)*)", text)
     if not m:
         raise LogError(
-            f"wheel {spec!r}: expected N-M teeth such as 60-2, 36-1, 36-2, N-g1-g2 such as 36-2-1, "
-            f"a wheel file (.toml), auto, or N for a wheel with an index"
+            f"wheel={_shown(spec)}: expected N-M teeth such as 60-2, 36-1, 36-2, N-g1-g2 such as 36-2-1, "
+            f"a wheel file (.toml), auto, or N for a wheel with an index",
+            argument="wheel",
         )
-    gaps = tuple(int(g) for g in re.findall(r"\d+", m.group(2)))
-    if any(g == 0 for g in gaps):
-        Wheel(int(m.group(1)))  # the tooth count's own message first (e.g. 0 teeth)
+    digits = [d.lstrip("0") for d in re.findall(r"\d+", text)]
+    if any(len(d) > len(str(MAX_POSITIONS)) for d in digits):
+        longest = max(len(d) for d in digits)
         raise LogError(
-            f"wheel {spec!r}: a gap of 0 missing teeth; give each gap 1 or more (e.g. 60-2, 36-2-1), "
-            "or N alone for a wheel with an index"
+            f"wheel={_shown(spec)}: a number of {longest} digits; a wheel has 3 to {MAX_POSITIONS} tooth "
+            "positions (e.g. 60-2)",
+            argument="wheel",
         )
-    return Wheel(int(m.group(1)), sum(gaps), gaps)
+    n = int(m.group(1))
+    gaps = tuple(int(g) for g in re.findall(r"\d+", m.group(2)))
+    if not 3 <= n <= MAX_POSITIONS:
+        raise LogError(
+            f"wheel={_shown(spec)}: {n} teeth; need a whole number of tooth positions from 3 to {MAX_POSITIONS}",
+            argument="wheel",
+        )
+    if any(g == 0 for g in gaps):
+        raise LogError(
+            f"wheel={_shown(spec)}: a gap of 0 missing teeth; give each gap 1 or more (e.g. 60-2, 36-2-1), "
+            "or N alone for a wheel with an index",
+            argument="wheel",
+        )
+    limit = n - 2 * max(len(gaps), 1)
+    count = f"{len(gaps)} gaps" if len(gaps) > 1 else "1 gap"
+    if len(gaps) > limit:
+        raise LogError(
+            f"wheel={_shown(spec)}: {count} need {3 * len(gaps)} positions or more (each gap a missing tooth and "
+            f"a tooth on either side); the wheel has {n}",
+            argument="wheel",
+        )
+    if sum(gaps) > limit:
+        raise LogError(
+            f"wheel={_shown(spec)}: {sum(gaps)} missing teeth in {count} on {n} positions; at most "
+            f"{max(limit, 0)} fit (N − 2 × gaps: a tooth on either side of each gap)",
+            argument="wheel",
+        )
+    try:
+        return Wheel(n, sum(gaps), gaps)
+    except LogError as e:
+        raise LogError(f"wheel={_shown(spec)}: {e}", argument="wheel") from None
 
 
 def read_wheel_file(path: str | os.PathLike) -> Wheel:
@@ -544,7 +598,7 @@ class ToothErrors(Result):
 
         try:
             wheel = parse_wheel(d["wheel"])
-        except LogError as e:
+        except (LogError, TypeError) as e:
             raise LogError(f"{path}: 'wheel': {e}") from None
         errors = numbers("errors_rad")
         if errors.size != wheel.edges_per_rev:
