@@ -179,3 +179,52 @@ def test_a_wheel_at_the_real_limit_is_taken() -> None:
 
     assert parse_wheel("36" + "-1" * 12).missing == 12  # 36 − 2 × 12 = 12: just fits
     assert parse_wheel("60-58").edges_per_rev == 2
+
+
+# ----------------------------------------------------------------------------- wheel files
+WHEEL_36_2 = "positions = 36\nmissing = [34, 35]\n"
+
+
+@pytest.mark.parametrize(
+    "text,fragment",
+    [
+        ("positions = 36\nmissing = [true]\n", "'missing' must be a list of positions 0 … 35"),
+        (
+            WHEEL_36_2 + "angle_deg = [" + ", ".join(str(10.0 * i) for i in range(34)) + "]\n",
+            "did you mean 'angles_deg'",
+        ),
+        (WHEEL_36_2 + "[extra]\nx = 1\n", "extra: unknown key"),
+        ("positions = 36.0\nmissing = [35]\n", "'positions' must be a whole number"),
+        ("positions = 36\nmissing = [35, 35]\n", "position 35 twice"),
+        ("positions = 36\nmissing = [35]\nangles_deg = [true]\n", "'angles_deg' must be 35 numbers"),
+        ("positions = " + "9" * 30 + "\n", "from 3 to 100000"),
+    ],
+    ids=["missing true", "misspelt angles", "unknown table", "float positions", "twice", "bool angle", "huge"],
+)
+def test_a_malformed_wheel_file_is_refused_by_key(text: str, fragment: str, tmp_path: Path, capsys) -> None:
+    from rotor.logs.wheel import read_wheel_file
+    from rotor.errors import LogError
+
+    path = tmp_path / "w.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(LogError, match="^" + str(path).replace("\\", "\\\\")) as info:
+        read_wheel_file(path)
+    assert fragment in str(info.value)
+    rc, _, err = run(capsys, ["analyze", str(tmp_path / "none.csv"), "--wheel", str(path)])
+    assert rc == 2 and "Traceback" not in err and "internal error" not in err, err
+
+
+def test_a_wheel_file_with_a_byte_order_mark_is_read(tmp_path: Path) -> None:
+    from rotor.logs.wheel import read_wheel_file
+
+    path = tmp_path / "w.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + WHEEL_36_2.encode())
+    w = read_wheel_file(path)
+    assert (w.teeth, w.gaps) == (36, (2,))
+
+
+def test_a_folder_named_like_a_wheel_file_is_named_a_folder(tmp_path: Path, teeth_log: str, capsys) -> None:
+    folder = tmp_path / "x.toml"
+    folder.mkdir()
+    rc, _, err = run(capsys, ["analyze", teeth_log, "--wheel", str(folder), "--columns", "tooth_time_s"])
+    assert_refused(rc, err, "x.toml: is a folder, not a wheel file")

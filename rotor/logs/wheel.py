@@ -179,6 +179,10 @@ class Wheel:
 
 MAX_POSITIONS = 100_000
 """The most tooth positions a wheel spec may name (an encoder of 10⁵ lines per revolution)."""
+WHEEL_FILE_KEYS = ("positions", "missing", "angles_deg")
+"""The keys of a wheel file; any other is refused by name."""
+MAX_WHEEL_FILE_BYTES = 10_000_000
+"""The largest wheel file read [bytes]: 10⁵ measured angles take about 2 MB."""
 
 
 def _shown(spec: object, limit: int = 40) -> str:
@@ -269,22 +273,50 @@ def read_wheel_file(path: str | os.PathLike) -> Wheel:
     order); the measured angles are taken relative to their nominal places, so their frame
     does not matter. A malformed file raises :class:`LogError` naming the file and key.
     """
+    import difflib
     import tomllib
 
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path = {_shown(path)}: a wheel file's path (str or os.PathLike), not {type(path).__name__}")
     path = os.fspath(path)
+    if os.path.isdir(path):
+        raise LogError(f"{path}: is a folder, not a wheel file; give the .toml file inside it")
     if not os.path.isfile(path):
         raise LogError(f"{path}: No such wheel file")
     try:
+        size = os.path.getsize(path)
+        if size > MAX_WHEEL_FILE_BYTES:
+            raise LogError(
+                f"{path}: {size / 1e6:.3g} MB is far too large for a wheel file (at most "
+                f"{MAX_WHEEL_FILE_BYTES / 1e6:g} MB): is it the wheel's TOML file?"
+            )
         with open(path, "rb") as f:
-            d = tomllib.load(f)
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+            text = f.read().decode("utf-8-sig")  # a byte-order mark at the start is accepted
+        if "\x00" in text:
+            raise LogError(f"{path}: not a wheel file (it holds NUL bytes: a binary file?)")
+        d = tomllib.loads(text)
+    except UnicodeDecodeError as e:
+        raise LogError(f"{path}: not a wheel file: byte {e.start} is not UTF-8 text (save the file as UTF-8)") from None
+    except (OSError, tomllib.TOMLDecodeError) as e:
         raise LogError(f"{path}: not a wheel file ({e})") from None
+    for key in d:
+        if key not in WHEEL_FILE_KEYS:
+            close = difflib.get_close_matches(key, WHEEL_FILE_KEYS, n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise LogError(f"{path}: {key}: unknown key{hint}; known keys: {', '.join(WHEEL_FILE_KEYS)}")
     n = d.get("positions")
-    if not isinstance(n, int) or isinstance(n, bool) or n < 3:
-        raise LogError(f"{path}: 'positions' must be a whole number of tooth positions, 3 or more, not {n!r}")
+    if not isinstance(n, int) or isinstance(n, bool) or not 3 <= n <= MAX_POSITIONS:
+        raise LogError(
+            f"{path}: 'positions' must be a whole number of tooth positions from 3 to {MAX_POSITIONS}, not {_shown(n)}"
+        )
     miss = d.get("missing", [])
-    if not isinstance(miss, list) or not all(isinstance(x, int) and 0 <= x < n for x in miss):
+    if not isinstance(miss, list) or not all(
+        isinstance(x, int) and not isinstance(x, bool) and 0 <= x < n for x in miss
+    ):
         raise LogError(f"{path}: 'missing' must be a list of positions 0 … {n - 1}, not {str(miss)[:40]!r}")
+    twice = sorted(p for p, c in Counter(miss).items() if c > 1)
+    if twice:
+        raise LogError(f"{path}: 'missing' names position {twice[0]} twice; name each missing position once")
     present = np.ones(n, bool)
     present[miss] = False
     if not miss:
@@ -306,7 +338,7 @@ def read_wheel_file(path: str | os.PathLike) -> Wheel:
     gaps = tuple(gap_runs[i][1] for i in k)
     layout = tuple(teeth_runs[(i + 1) % len(teeth_runs)][1] for i in k)
     tooth0 = teeth_runs[(g1 + 1) % len(teeth_runs)][2]
-    angles = None
+    rolled = None
     if d.get("angles_deg") is not None:
         a = d["angles_deg"]
         if (
@@ -318,9 +350,13 @@ def read_wheel_file(path: str | os.PathLike) -> Wheel:
         pos = np.flatnonzero(present)
         err = np.asarray(a, dtype=np.float64) - pos * 360.0 / n
         rolled = np.roll(err, -int(np.searchsorted(pos, tooth0)))
+    try:
         w0 = Wheel(n, sum(gaps), gaps, layout)
-        angles = tuple(w0.positions * 360.0 / n + rolled - rolled[0])
-    return Wheel(n, sum(gaps), gaps, layout, angles)
+        if rolled is None:
+            return w0
+        return Wheel(n, sum(gaps), gaps, layout, tuple(w0.positions * 360.0 / n + rolled - rolled[0]))
+    except LogError as e:
+        raise LogError(f"{path}: {e}") from None
 
 
 @dataclasses.dataclass(frozen=True)
