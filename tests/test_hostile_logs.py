@@ -253,11 +253,12 @@ def test_inverted_wheel_signal_suggests_the_falling_edge(tmp_path, capsys):
     p = tmp_path / "inverted.csv"
     np.savetxt(p, np.c_[t, 2.0 - 3.0 * v], delimiter=",", header="time,encoder_v", comments="", fmt="%.8g")
     with pytest.raises(LogError, match=r"inverted.csv: the 60-2 wheel does not fit .* rising edges.*edge='falling'"):
-        rotor.analyze_log(p, "60-2")
-    err = one_line_error(capsys, "analyze", p, "--wheel", "60-2")
+        rotor.analyze_log(p, "60-2", edge="rising")
+    err = one_line_error(capsys, "analyze", p, "--wheel", "60-2", "--edge", "rising")
     assert "--edge falling" in err and "is the wheel right" not in err
-    a = rotor.analyze_log(p, "60-2", edge="falling")
-    assert np.mean(a.mean_rpm) == pytest.approx(3000.0, rel=1e-3)
+    for edge in ("falling", "auto"):  # given, or found: both edges are read and the falling ones fit
+        a = rotor.analyze_log(p, "60-2", edge=edge)
+        assert a.edges.inverted and np.mean(a.mean_rpm) == pytest.approx(3000.0, rel=1e-3)
 
 
 def test_decimal_commas_are_read(tmp_path):

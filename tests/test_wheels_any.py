@@ -8,7 +8,6 @@ Every synthetic edge is checked against its true place: within a stated fraction
 tooth pitch (TOL_PITCH for measured edges, TOL_INFERRED for edges inferred from the
 pattern at a steady speed)."""
 
-import dataclasses
 import json
 import re
 
@@ -19,7 +18,7 @@ from conftest import SHARED_DATA
 import rotor
 from rotor import LogError
 from rotor.cli import main
-from rotor.logs.pattern import find_wheel
+from rotor.logs.identify import find_wheel
 from rotor.logs.wheel import TWO_PI, Wheel, read_wheel_file
 
 ECU = SHARED_DATA / "ecu-triggers"
@@ -270,11 +269,18 @@ def test_weak_tooth_after_the_gap_next_to_merged_teeth(dip, tmp_path, capsys):
     and 2 merge (their low stays above the threshold): 56 crossings per revolution. Timing alone cannot tell tooth
     0 from tooth 57 as the missed one; the signal does: the weak tooth is found there, within TOL_PITCH. The merged
     tooth is found at its own small rise (within TOL_PITCH) or, with no low between the teeth at all, inferred
-    (within TOL_INFERRED). The same through `rotor analyze --columns time,pressure_v,encoder_v` with no option."""
+    (within TOL_INFERRED) — but a tooth inferred in every revolution is past the repair budget, so such a reading
+    is refused, naming the budget. The same through `rotor analyze --columns time,pressure_v,encoder_v --edge
+    rising`."""
     w = Wheel(60, 2)
     t, v, true, tooth, _ = analog(w, weak=0.2, merged=True, dip=dip)
     assert set(crossings_per_revolution(t, v, w)) == {56}
-    a = rotor.analyze_log(rotor.Log.from_arrays(time=t, encoder_v=v), "60-2", tooth_errors=None, firing=0)
+    log = rotor.Log.from_arrays(time=t, encoder_v=v)
+    if dip is None:
+        with pytest.raises(LogError, match=r"10 edges inferred in 8 revolutions \(at most 1"):
+            rotor.analyze_log(log, "60-2", tooth_errors=None, firing=0, edge="rising")
+        return
+    a = rotor.analyze_log(log, "60-2", tooth_errors=None, firing=0, edge="rising")
     tr = a.track
     at = {r.time_s: r for r in tr.repairs}
     by_tooth = {k: [at[x] for x in tr.t[tr.tooth == k] if x in at] for k in (0, 2)}
@@ -283,20 +289,11 @@ def test_weak_tooth_after_the_gap_next_to_merged_teeth(dip, tmp_path, capsys):
     assert all(r.kind == "missed edge found" for r in by_tooth[0])  # … and found, as a weak tooth
     swing = [float(re.search(r"\((\d+)% of the swing\)", r.detail).group(1)) for r in by_tooth[0]]
     assert 15 <= min(swing) and max(swing) <= 30
-    merged_kind = "missed edge found" if dip is not None else "missed edge inferred"
+    merged_kind = "missed edge found"
     assert len(by_tooth[2]) == np.count_nonzero(tr.tooth == 2)
     assert all(r.kind == merged_kind for r in by_tooth[2])
     assert len(tr.repairs) == len(by_tooth[0]) + len(by_tooth[2])
-    assert_placed(tr, true, tooth, w, TOL_PITCH if dip is not None else TOL_INFERRED)
-    if dip is None:
-        measured = tr.tooth != 2
-        assert_placed(
-            dataclasses.replace(tr, t=tr.t[measured], tooth=tr.tooth[measured], rev=tr.rev[measured]),
-            true[tooth != 2],
-            tooth[tooth != 2],
-            w,
-            TOL_PITCH,
-        )
+    assert_placed(tr, true, tooth, w, TOL_PITCH)
     assert "signal shows" in tr.placement and any("placement" in n for n in a.notes)
     assert any("repaired" in n for n in a.notes)
     assert a.mean_rpm.mean() == pytest.approx(3000, rel=1e-3)
@@ -305,7 +302,18 @@ def test_weak_tooth_after_the_gap_next_to_merged_teeth(dip, tmp_path, capsys):
     phase = np.interp(t, true[tooth == 0], np.arange(np.count_nonzero(tooth == 0)) * TWO_PI, period=None)
     pressure = 0.5 + 2.0 * np.exp(-(((np.mod(phase - 0.9, 2 * TWO_PI) - np.pi) / 0.4) ** 2))
     np.savetxt(p, np.c_[t, pressure, v], delimiter=",", header="t,p,crank", comments="", fmt="%.9g")
-    assert main(["analyze", str(p), "--wheel", "60-2", "--columns", "time,pressure_v,encoder_v", "--json"]) == 0
+    argv = [
+        "analyze",
+        str(p),
+        "--wheel",
+        "60-2",
+        "--columns",
+        "time,pressure_v,encoder_v",
+        "--json",
+        "--edge",
+        "rising",
+    ]
+    assert main(argv) == 0
     d = json.loads(capsys.readouterr().out)
     rep = d["wheel"]["repairs"]
     assert rep["by_kind"].get("missed edge found", 0) >= revs and rep["count"] == len(tr.repairs)
@@ -323,7 +331,9 @@ def test_weak_tooth_seen_at_some_speeds_only():
     )
     per_rev = crossings_per_revolution(t, v, w)
     assert set(per_rev) == {57, 58} and per_rev[0] == 58 and per_rev[-1] == 57
-    a = rotor.analyze_log(rotor.Log.from_arrays(time=t, encoder_v=v), "60-2", tooth_errors=None, firing=0)
+    a = rotor.analyze_log(
+        rotor.Log.from_arrays(time=t, encoder_v=v), "60-2", tooth_errors=None, firing=0, edge="rising"
+    )
     tr = a.track
     assert {r.kind for r in tr.repairs} == {"missed edge found"}
     found = np.array([r.time_s for r in tr.repairs])
@@ -454,7 +464,9 @@ def test_capture_6g75_compression_ranks_above_no_compression():
 @needs_ecu
 def test_capture_rising_edges_of_6g75_refused_with_the_other_edge_offered(capsys):
     with pytest.raises(LogError, match="fits its falling ones.*--edge falling"):
-        rotor.analyze_log(ECU / "6g75-without-spark-crank.csv", "36-2-1-1")
+        rotor.analyze_log(ECU / "6g75-without-spark-crank.csv", "36-2-1-1", edge="rising")
+    a = rotor.analyze_log(ECU / "6g75-without-spark-crank.csv", "36-2-1-1")  # both edges read: the falling ones fit
+    assert a.edges.inverted and a.track.revolutions >= 6
     assert main(["analyze", str(ECU / "4b11-running.csv"), "--wheel", "auto"]) == 0
     out = capsys.readouterr().out
     assert "36-2-1" in out and "160 complete revolutions" in out

@@ -94,6 +94,7 @@ and ``docs/diagnostics.md``.
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 import os
 from collections.abc import Sequence
@@ -105,10 +106,12 @@ import numpy as np
 from ..errors import EngineError, LogError
 from ..fileio import load_json, save_json
 from ..logs.analysis import LogAnalysis
+from ..logs.reader import read_log
+from ..logs.track import read_track
 from ..logs.wheel import ToothErrors
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
-from .identification import POOR_FIT_R2, Identification
+from .identification import NO_FIRING_NOTE, POOR_FIT_R2, Identification
 from .phase import TOOTH_MISMATCH, TdcCheck
 
 if TYPE_CHECKING:
@@ -652,7 +655,7 @@ def calibrate(
     refine: bool = True,
     tooth_errors: str | os.PathLike | ToothErrors | None = "estimate",
     load_per: str = "block",
-    edge: str = "rising",
+    edge: str = "auto",
 ) -> Calibration:
     """Calibrate inertia, losses, TDC, tooth errors and the pressure offset from a recording
     with a cylinder-pressure channel (see the module doc).
@@ -675,7 +678,8 @@ def calibrate(
     - ``scaling``: ``"charge"`` (default) or ``"none"`` (see the module doc).
     - ``refine``: find the identification inertia (default) or keep the energy balance's.
     - ``tooth_errors``, ``load_per``: passed to :func:`rotor.analyze_log` and :func:`diagnose`.
-    - ``edge``: ``"rising"`` (default) or ``"falling"`` edges of an analog wheel signal.
+    - ``edge``: ``"auto"`` (default: both read, the one that fits the wheel better taken,
+      :func:`rotor.logs.track.read_track`), ``"rising"`` or ``"falling"`` edges of the wheel signal.
 
     **Returns:** :class:`Calibration`. Raises :class:`rotor.EngineError` /
     :class:`rotor.LogError` for what cannot be calibrated.
@@ -809,6 +813,14 @@ def calibrate(
     )
 
 
+class DiagnosisVerdict(enum.Enum):
+    """What a diagnosis concludes about the recording as a whole (a typed state)."""
+
+    FITS = "the engine model explains the speed"
+    NO_FIRING = "no firing found: the engine does not fire in this record (a coast-down or motored run)"
+    MODEL_DOES_NOT_FIT = "the engine model does not fit this recording"
+
+
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
 class Diagnosis(Identification):
     """What :func:`diagnose` found: an :class:`rotor.Identification` (every field of it)
@@ -830,7 +842,10 @@ class Diagnosis(Identification):
     the first whole cycle and after the last [deg], not diagnosed; ``phase_warning``: where
     the firing revolution came from a cam or pressure channel (or was given) and the speed's
     fit puts it in the other revolution, the line that says so (also among ``warnings``),
-    else ``""``.
+    else ``""``; ``verdict``: :class:`DiagnosisVerdict` — where the model does not explain
+    the speed (a poor fit, an implausible IMEP, speed or firing pattern), the misfire flags
+    are not judged (all ``False``) and no firing is concluded, and ``verdict_reason`` says
+    what to check.
 
     ``summary()`` and ``to_json_dict()`` are what ``rotor diagnose`` prints.
     """
@@ -848,6 +863,8 @@ class Diagnosis(Identification):
     cycle_flags: tuple = ()
     partial_deg: tuple = (0.0, 0.0)
     phase_warning: str = ""
+    verdict: DiagnosisVerdict = DiagnosisVerdict.FITS
+    verdict_reason: str = ""
 
     @property
     def warnings(self) -> tuple[str, ...]:
@@ -887,8 +904,10 @@ class Diagnosis(Identification):
             text += self.calibration.summary() + f"  calibration: {self.calibration_source}\n"
         if self.tdc_check is not None and not self.tdc_check.corrected:
             text += f"  {self.tdc_check.message}\n"
+        if self.verdict is DiagnosisVerdict.MODEL_DOES_NOT_FIT:
+            text += f"  verdict: {self.verdict.value}: {self.verdict_reason}\n"
         text += Identification.summary(self)
-        flagged = [(k, f) for k, f in enumerate(self.cycle_flags) if f]
+        flagged = [(k, f) for k, f in enumerate(self.cycle_flags, start=1) if f]  # cycles from 1
         if flagged:
             text += f"  {len(flagged)} of {self.cycles} cycles not supported by the data:\n" + "".join(
                 f"    cycle {k}: {f}\n" for k, f in flagged[:8]
@@ -934,8 +953,8 @@ class Diagnosis(Identification):
         )
 
     def to_json_dict(self, written: Sequence[str] = ()) -> dict:
-        """What ``rotor diagnose --json`` prints: per cycle the start time [s], mean speed
-        [rpm], each cylinder's IMEP and its standard deviation [Pa], misfire flags,
+        """What ``rotor diagnose --json`` prints: per cycle its number ``cycle`` (from 1, as
+        in ``misfires`` and ``unsupported_cycles``), the start time [s], mean speed [rpm], each cylinder's IMEP and its standard deviation [Pa], misfire flags,
         contributions, load torque [N·m] (and the IMEP measured by the pressure channel);
         the misfires, the calibration, σ, TDC and the fit. ``written``: the files the
         command wrote, listed last. ``None``, never NaN."""
@@ -944,6 +963,7 @@ class Diagnosis(Identification):
         cycles = []
         for k in range(self.cycles):
             row = {
+                "cycle": k + 1,
                 "t_start_s": None if t0 is None else t0[k],
                 "mean_rpm": self.mean_omega[k] * RPM_PER_RAD_S,
                 "imep_pa": self.imep_pa[k],
@@ -966,6 +986,8 @@ class Diagnosis(Identification):
                 "cylinders": self.cylinders,
                 "cycles": cycles,
                 "misfires": self.misfires(),
+                "verdict": self.verdict.name.lower(),
+                "verdict_reason": self.verdict_reason or None,
                 "calibration": None if cal is None else {**cal.to_json_dict(), "loaded_from": self.calibration_source},
                 "calibration_source": self.calibration_source,
                 "ambiguous_pairs": [list(p) for p in self.ambiguous_pairs],
@@ -974,7 +996,7 @@ class Diagnosis(Identification):
                 "tdc_after_gap_deg": None if a is None else np.rad2deg(a.tdc_rad),
                 "tdc_check": None if self.tdc_check is None else self.tdc_check.to_json_dict(),
                 "partial_cycles_deg": {"before_first": self.partial_deg[0], "after_last": self.partial_deg[1]},
-                "unsupported_cycles": [k for k, f in enumerate(self.cycle_flags) if f],
+                "unsupported_cycles": [k for k, f in enumerate(self.cycle_flags, start=1) if f],
                 "tdc_method": None if a is None else a.tdc_method,
                 "firing_method": None if a is None else a.firing_method,
                 "rms_residual_rad_s": self.rms_residual,
@@ -1002,7 +1024,7 @@ def diagnose(
     scaling: str | None = None,
     max_iterations: int = 8,
     calibration_source: str | None = None,
-    edge: str = "rising",
+    edge: str = "auto",
     check_tdc: bool = True,
     **identify_kwargs: Any,
 ) -> Diagnosis:
@@ -1025,7 +1047,8 @@ def diagnose(
       :func:`rotor.identify`.
     - ``calibration_source``: how the result names where the calibration came from
       (default ``"preset <path>"``, ``"file <path>"`` or ``"given"``).
-    - ``edge``: ``"rising"`` (default) or ``"falling"`` edges of an analog wheel signal.
+    - ``edge``: ``"auto"`` (default: both read, the one that fits the wheel better taken,
+      :func:`rotor.logs.track.read_track`), ``"rising"`` or ``"falling"`` edges of the wheel signal.
     - ``tdc_deg``: angle from the gap to cylinder 1's TDC [deg] (default the calibration's,
       else from a pressure channel), or ``"speed"``: found from the recording's speed alone
       (:func:`rotor.diagnostics.phase.tdc_from_speed`); refused with the reason
@@ -1105,9 +1128,17 @@ def diagnose(
         rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
         cr = getattr(engine.pressure, "compression_ratio", None)
 
+        # the file is read and its wheel signal placed once; each TDC or firing revolution tried reuses it
+        source_log = read_log(log, columns)
+        reading = (
+            read_track(source_log, w, edge=edge, name=os.path.basename(os.fspath(log)))
+            if source_log.kind != "speed" and w is not None
+            else None
+        )
+
         def read(tdc, fire, teeth):
             return analyze_log(
-                log,
+                reading if reading is not None else source_log,
                 w,
                 columns=columns,
                 strokes=engine.strokes,
@@ -1193,7 +1224,7 @@ def diagnose(
         ident = identify(eng, speed, load_per=load_per, **identify_kwargs)
         if ident.identified.any() and not _mean_scale(ident) > FLOOR_SCALE:
             no_firing = True
-            if not any("does not fire" in n for n in ident.notes):
+            if NO_FIRING_NOTE not in ident.notes:
                 extra.append(
                     f"no firing (mean combustion scale below the misfire floor {FLOOR_SCALE:g}): every firing a misfire"
                 )
@@ -1213,6 +1244,21 @@ def diagnose(
     if no_firing:
         fields["misfire"] = ident.misfire | ident.identified
     mismatch = _mismatch(engine, ident, fields["misfire"])
+    verdict = DiagnosisVerdict.NO_FIRING if no_firing else DiagnosisVerdict.FITS
+    verdict_reason = ""
+    poor = not float(ident.fit_r2) >= POOR_FIT_R2
+    if poor or mismatch:
+        # a model that does not explain the speed says nothing about firing or misfires
+        verdict = DiagnosisVerdict.MODEL_DOES_NOT_FIT
+        why = [f"it explains {max(float(ident.fit_r2), 0.0):.0%} of the speed's fluctuation (R² below {POOR_FIT_R2:g})"]
+        if not poor:
+            why = ["the identified figures are implausible (see the warnings)"]
+        verdict_reason = (
+            "; ".join(why) + ": check the engine file, the wheel and its edge, and TDC; the misfires are not judged"
+        )
+        no_firing = False
+        fields["misfire"] = np.zeros_like(np.asarray(ident.misfire, dtype=bool))
+        fields["notes"] = tuple(n for n in fields["notes"] if n != NO_FIRING_NOTE)
     return Diagnosis(
         **fields,
         calibration=calibration,
@@ -1228,6 +1274,8 @@ def diagnose(
         cycle_flags=_cycle_flags(ident, fields["misfire"]),
         partial_deg=_partial(analysis),
         phase_warning=phase_warning,
+        verdict=verdict,
+        verdict_reason=verdict_reason,
     )
 
 

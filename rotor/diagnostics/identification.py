@@ -107,13 +107,14 @@ if TYPE_CHECKING:
     from ..engine.model import Engine
     from ..logs.analysis import LogAnalysis
 
-__all__ = ["Identification", "identify", "PARAMETERS", "POOR_FIT_R2"]
+__all__ = ["Identification", "identify", "NO_FIRING_NOTE", "PARAMETERS", "POOR_FIT_R2"]
 
 PARAMETERS = ("imep_scale",)
 TIED_BELOW = 0.5  # a firing with less than this share of its combustion torque inside the block: not identified
 FITTED_FROM = 0.01  # … and with less than this share not fitted either (tied to its neighbour)
 DEFAULT_BLOCK = 8
 DEFAULT_OVERLAP = 2
+NO_FIRING_NOTE = "no firing found: the engine does not fire in this record (a coast-down or motored run)"
 POOR_FIT_R2 = 0.7
 """Below this R² of the whole fit (the share of the speed fluctuation the model explains) a
 result warns that the fit is poor and its IMEP uncertain beyond the ± it reports (which
@@ -133,7 +134,9 @@ class Identification(Result):
     scale: 1 = the engine file's cycle, 0 = none), ``scale_std`` [-], ``imep_pa`` and
     ``imep_std_pa`` [Pa], ``identified`` (False: a firing cut by the record's end, tied to
     its neighbour), ``contribution`` (index, 1 = a normal firing) [-], ``misfire`` (bool).
-    Firing k of cylinder c has its TDC at cycle angle θ_fire,c in cycle k.
+    Row k − 1 holds cycle k (cycles and cylinders count from 1 in every output; the
+    arrays' rows and columns are 0-based positions): the firing of cylinder c in cycle k
+    has its TDC at cycle angle θ_fire,c in that cycle.
 
     **Per cycle:** ``load_torque_Nm`` (the mean load torque: the fitted constant torque
     less the friction's, plus the load model's c·ω²) and ``load_std_Nm`` [N·m];
@@ -200,8 +203,9 @@ class Identification(Result):
         return int(self.scale.shape[1])
 
     def misfires(self) -> list:
-        """The misfires as (cycle from 0, cylinder from 1) pairs."""
-        return [(int(k), int(c) + 1) for k, c in np.argwhere(self.misfire)]
+        """The misfires as (cycle, cylinder) pairs, both counted from 1 (cycle 1 the record's
+        first; row ``cycle − 1`` of the per-cycle arrays)."""
+        return [(int(k) + 1, int(c) + 1) for k, c in np.argwhere(self.misfire)]
 
     def cylinder_torques(self) -> np.ndarray:
         """The identified gas torque of each cylinder on each cycle's grid: the motored torque
@@ -262,7 +266,7 @@ class Identification(Result):
         return "\n".join(lines) + "\n"
 
     def to_pandas(self) -> Any:
-        """Tidy: one row per cycle and cylinder: ``cycle``, ``cylinder`` (from 1),
+        """Tidy: one row per cycle and cylinder: ``cycle`` and ``cylinder`` (both from 1),
         ``t_start_s``, ``mean_rpm``, ``scale``, ``scale_std``, ``imep_bar``, ``imep_std_bar``,
         ``identified``, ``contribution``, ``misfire``, ``load_torque_Nm``, ``load_std_Nm``."""
         import pandas as pd
@@ -274,7 +278,7 @@ class Identification(Result):
         t0 = np.full(C, np.nan) if self.t_start_s is None else np.asarray(self.t_start_s, dtype=np.float64)
         return pd.DataFrame(
             {
-                "cycle": k,
+                "cycle": k + 1,
                 "cylinder": np.tile(np.arange(1, n + 1), C),
                 "t_start_s": t0[k],
                 "mean_rpm": np.asarray(self.mean_omega)[k] * RPM_PER_RAD_S,
@@ -790,7 +794,7 @@ def identify(
     index, misfire, ref = contribution_index(scale, scale_std, threshold=threshold, floor=misfire_floor, valid=ident)
     notes = []
     if not ident.all():
-        cut = [(int(k), int(c) + 1) for k, c in np.argwhere(~ident)]
+        cut = [(int(k) + 1, int(c) + 1) for k, c in np.argwhere(~ident)]
         notes.append(
             f"firings {cut} (cycle, cylinder) lie mostly outside the record: each shares the scale of the "
             f"nearest firing of its cylinder (not identified on its own)"
@@ -812,7 +816,7 @@ def identify(
             f"firing=0/1 to analyze_log, or phase_reference=True)"
         )
     if np.all(misfire[ident]) and ident.any():
-        notes.append("no firing found: the engine does not fire in this record (a coast-down or motored run)")
+        notes.append(NO_FIRING_NOTE)
     return Identification(
         scale=scale,
         scale_std=scale_std,

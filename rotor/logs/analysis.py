@@ -40,11 +40,12 @@ from ..errors import LogError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 from .digital import digital_edges
-from .edges import Edges, find_edges, find_weak_edges, noise_rms, two_level_locally
-from .pattern import find_wheel, locate_teeth, place, repairs_summary
-from .plausibility import check_speed_time_base, check_time_base, check_time_resolution
+from .edges import Edges, find_edges
+from .pattern import repairs_summary
+from .plausibility import check_speed_time_base
 from .reader import Log, read_log
-from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors, parse_wheel
+from .track import ChoiceSource, WheelReading, named, read_track
+from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
@@ -454,7 +455,7 @@ def _cam_parity(name, log, edge, t_of, phi_of, phi_lo, phi_hi, tdc, required, no
     firing TDC is the first TDC after each rising cam edge. ``None`` (and a
     note) where the cam edges do not fall once per cycle and the cam is not ``required``."""
     if "cam_d" in log:
-        cam = _named(name, digital_edges, log["time"], log["cam_d"], name="cam_d").times
+        cam = named(name, digital_edges, log["time"], log["cam_d"], name="cam_d").times
     else:
         cam = find_edges(log["time"], log["cam_v"], name="cam_v").times
     cam_phi = phi_of(cam[(cam >= t_of(phi_lo)) & (cam <= t_of(phi_hi))])
@@ -536,146 +537,12 @@ class _Lazy:
         return self._f(x)
 
 
-def _named(log_name, fn, *args, **kwargs):
-    """``fn(*args, **kwargs)`` with a LogError's message prefixed by the log's name ``log_name``."""
-    try:
-        return fn(*args, **kwargs)
-    except LogError as e:
-        text = str(e)
-        if text.startswith(f"{log_name}:"):
-            raise
-        raise LogError(f"{log_name}: {text}") from None
-
-
-def _edges_of(name, log, edge):
-    """The wheel's edges of an analog (``encoder_v``) or digital (``encoder_d``) channel."""
-    if log.kind == "digital":
-        return _named(name, digital_edges, log["time"], log["encoder_d"], edge=edge)
-    try:
-        return _named(name, find_edges, log["time"], log["encoder_v"], edge=edge)
-    except LogError as e:
-        if "no clear pulses" not in str(e):
-            raise
-        if two_level_locally(log["encoder_v"]):
-            # a pulse train whose levels drift (an air gap, a conditioner's offset): levels that follow it
-            return _named(name, find_edges, log["time"], log["encoder_v"], edge=edge, levels="adaptive")
-        # not a two-level pulse train: a variable-reluctance sensor's signal (amplitude ∝ speed, sign changes)
-        return _named(name, find_edges, log["time"], log["encoder_v"], edge=edge, levels="vr")
-
-
-def _other_edge_fits(log, wheel, edge, index_times):
-    """Whether the wheel fits the other edges of the log's analog or digital wheel signal
-    as they are (a digital channel's glitches removed)."""
-    try:
-        other = _edges_of("", log, "falling" if edge == "rising" else "rising")
-        locate_teeth(
-            other.times, wheel, index_times=index_times, repair=not wheel.needs_index and log.kind == "digital"
-        )
-    except LogError:
-        return False
-    return True
-
-
-def _probe(log, edges):
-    """A probe for :func:`rotor.logs.pattern.follow_pattern`: looks for a missed edge in the
-    sampled wheel signal at a lower level (:func:`rotor.logs.edges.find_weak_edges`), at
-    the fraction of its own swing that ``edges`` were placed at."""
-    tt, vv = log["time"], log["encoder_v"]
-    noise = noise_rms(vv)
-    span = edges.high_v - edges.low_v
-    frac = float(np.clip((edges.level_v - edges.low_v) / span, 0.05, 0.95)) if span > 0 else 0.5
-
-    def probe(guess_s, pitch_s):
-        return find_weak_edges(
-            tt,
-            vv,
-            guess_s,
-            pitch_s,
-            edges.low_v,
-            edges.high_v,
-            inverted=edges.inverted,
-            level=frac,
-            noise_v=noise,
-        )
-
-    return probe
-
-
-def _uncovered(log, track):
-    """In words, where the edges of ``track`` leave more than the wheel's longest period
-    and two teeth of the sampled record uncovered at its start or end; empty if nowhere."""
-    t = log["time"]
-    d = np.diff(track.t)
-    if d.size < 20:
-        return ""
-    w = track.wheel
-    longest = (max(w.gaps) + 3) if w.gaps else 3
-    head = float(np.median(d[:10])) * longest
-    tail = float(np.median(d[-10:])) * longest
-    out = []
-    if track.t[0] - t[0] > head:
-        out.append(f"no edge in the first {track.t[0] - t[0]:.4g} s")
-    if t[-1] - track.t[-1] > tail:
-        out.append(f"no edge in the last {t[-1] - track.t[-1]:.4g} s")
-    return " and ".join(out) + (" of the record" if out else "")
-
-
-def _guessed(track):
-    """How many edges of ``track`` were guessed rather than measured (inferred, or removed as extra)."""
-    return sum(r.kind in ("missed edge inferred", "extra edge removed") for r in track.repairs)
-
-
-def _fit_with_repairs(name, log, w, edge, times, edges, index_times):
-    """The track of a log whose edges did not fit the wheel as found (with global levels):
-    for an analog signal, its edges found with adaptive levels where they fit as they are;
-    else the edges repaired to follow the pattern (a missed edge looked for in the signal,
-    :func:`_probe`), with global or adaptive levels, whichever leaves fewer edges guessed.
-
-    **Returns:** (track, the edges used, notes)."""
-    notes = []
-    adaptive = None
-    analog = log.kind == "encoder" and edges is not None and edges.method == "global levels"
-    if analog:
-        try:
-            adaptive = find_edges(log["time"], log["encoder_v"], edge=edge, levels="adaptive")
-        except LogError:
-            adaptive = None
-    said = (
-        "edges found with adaptive levels (the running minimum and maximum of the signal over about three "
-        "tooth periods): with the signal's global levels they did not fit the {} wheel"
-    )
-    if adaptive is not None:
-        try:
-            track = locate_teeth(adaptive.times, w, index_times=index_times)
-            return track, adaptive, [said.format(w.spec)]
-        except LogError:
-            pass
-    if w.needs_index:
-        return locate_teeth(times, w, index_times=index_times), edges, notes  # raises, naming where
-    probe = _probe(log, edges) if log.kind == "encoder" and edges is not None else None
-    try:
-        track = _named(name, locate_teeth, times, w, repair=True, probe=probe)
-        err = None
-    except LogError as e:
-        track, err = None, e
-    if adaptive is not None and (track is None or _guessed(track)):
-        try:
-            other = locate_teeth(adaptive.times, w, repair=True, probe=_probe(log, adaptive))
-        except LogError:
-            other = None
-        if other is not None and (track is None or _guessed(other) < _guessed(track)):
-            return other, adaptive, [said.format(w.spec) + " without guessing more edges"]
-    if track is None:
-        assert err is not None
-        raise err
-    return track, edges, notes
-
-
 def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise):
     """TypeError naming the argument of :func:`analyze_log` that has the wrong type."""
     from ..engine.model import Engine
+    from .track import WheelReading
 
-    if not isinstance(source, (str, os.PathLike, Log)):
+    if not isinstance(source, (str, os.PathLike, Log, WheelReading)):
         raise TypeError(
             f"source = {source!r}: a log file's name (str or os.PathLike) or a rotor.Log, not {type(source).__name__}"
         )
@@ -711,7 +578,7 @@ def analyze_log(
     engine_orders: str | Sequence[int] = "auto",
     max_order: float | None = None,
     points_per_cycle: int | None = None,
-    edge: str = "rising",
+    edge: str = "auto",
     compression_ratio: float | None = None,
     rod_ratio: float | None = None,
     denoise: bool = True,
@@ -800,8 +667,12 @@ def analyze_log(
         raise TypeError(f"points_per_cycle = {points_per_cycle!r}: a whole number of grid points per cycle, or None")
     if points_per_cycle is not None and points_per_cycle < 1:
         raise LogError(f"points_per_cycle = {points_per_cycle!r} (--points-per-cycle): 1 or more")
-    log = source if isinstance(source, Log) else read_log(source, columns)
-    name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
+    reading = source if isinstance(source, WheelReading) else None
+    if reading is not None:
+        log, name = reading.log, reading.source
+    else:
+        log = source if isinstance(source, Log) else read_log(source, columns)
+        name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
     revs = strokes // 2
     cycle = TWO_PI * revs
     notes = list(log.notes)  # e.g. a header line that was skipped
@@ -826,61 +697,17 @@ def analyze_log(
             )
         tooth_errors = None
     else:
-        if wheel is None:
+        if wheel is None and reading is None:
             raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2', --wheel 60-2)")
-        if log.kind == "teeth":
-            times = log["tooth_time_s"]
-        else:
-            edges = _edges_of(name, log, edge)
-            times = edges.times
-        if isinstance(wheel, str) and wheel.strip().lower() == "auto":
-            w, found = _named(name, find_wheel, times)
-            notes.append(found)
-        else:
-            w = parse_wheel(wheel)
-        check_time_base(times, w.teeth, name, log.kind)
-        resolution = check_time_resolution(
-            times,
-            name,
-            sample_times=log["time"] if "time" in log else None,
-            column="tooth_time_s" if log.kind == "teeth" else "time",
-        )
-        if resolution is not None:
-            notes.append(resolution)
-        index_times = None
-        if "index_v" in log:
-            index_times = _named(name, find_edges, log["time"], log["index_v"], name="index_v").times
-        try:
-            track = _named(name, locate_teeth, times, w, index_times=index_times)
-        except LogError as e:
-            if log.kind in ("encoder", "digital") and _other_edge_fits(log, w, edge, index_times):
-                other = "falling" if edge == "rising" else "rising"
-                raise LogError(
-                    f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges but fits its {other} "
-                    f"ones (an inverted signal?): give edge={other!r} (--edge {other})"
-                ) from e
-            if w.needs_index and log.kind != "encoder":
-                raise
-            track, edges, more = _fit_with_repairs(name, log, w, edge, times, edges, index_times)
-            notes += more
-        else:
-            if edges is not None and edges.method == "global levels" and (cut := _uncovered(log, track)):
-                # the edges stop (or start) well inside the record: teeth the global levels do not see
-                try:
-                    adaptive = find_edges(log["time"], log["encoder_v"], edge=edge, levels="adaptive")
-                    refit: ToothTrack | None = locate_teeth(adaptive.times, w, index_times=index_times)
-                except LogError:
-                    refit = None
-                if refit is not None and refit.t.size > track.t.size:
-                    notes.append(
-                        f"edges found with adaptive levels (the running minimum and maximum of the signal over "
-                        f"each tooth period and two either side): with its global levels {cut}"
-                    )
-                    track, edges = refit, adaptive
-        if track.placement:
-            notes.append(f"the wheel's placement: {track.placement}")
-        if edges is not None and edges.repairs:
-            track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
+        if reading is None:
+            reading = read_track(log, wheel, edge=edge, name=name)
+        track, edges = reading.track, reading.edges
+        notes += list(reading.notes)
+        if reading.choice("wheel").source is ChoiceSource.FOUND:
+            notes.append(reading.choice("wheel").evidence)
+        edge_choice = reading.choice("edge")
+        if edge_choice is not None and edge_choice.source is ChoiceSource.FOUND:
+            notes.append(f"edge: {edge_choice.value} ({edge_choice.evidence})")
         if track.repairs:
             notes.append(f"edges repaired to follow the {track.wheel.spec} wheel: {repairs_summary(track.repairs)}")
         w = track.wheel

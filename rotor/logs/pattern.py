@@ -88,7 +88,7 @@ def pitches(dt: np.ndarray, refine: int = 4) -> tuple[np.ndarray, np.ndarray]:
     return p, p0
 
 
-def _remove_extra(t: np.ndarray, repair: bool, what: str):
+def remove_extra_edges(t: np.ndarray, repair: bool, what: str):
     """``t`` without the edges that split a tooth period (periods < SHORT pitches), the
     repairs, and the periods of the edges kept in pitches (:func:`pitches`; None if not
     known)."""
@@ -232,7 +232,7 @@ def follow_pattern(
     """
     t = np.asarray(t, dtype=np.float64)
     N, E = wheel.teeth, wheel.edges_per_rev
-    t, repairs, p = _remove_extra(t, repair, what)
+    t, repairs, p = remove_extra_edges(t, repair, what)
     if t.size < E + 3:
         raise LogError(f"{t.size} tooth edges after removing extra ones: a {wheel.spec} wheel needs {E + 3} or more")
     dt = np.diff(t)
@@ -407,7 +407,7 @@ def find_wheel(times, *, what: str = "the tooth edges") -> tuple[Wheel, str]:
     t = np.asarray(times, dtype=np.float64)
     if t.size < 12:
         raise LogError(f"--wheel auto: {t.size} tooth edges; too few to find the wheel")
-    t, _, p = _remove_extra(t, True, what)
+    t, _, p = remove_extra_edges(t, True, what)
     if p is None:
         p, _ = pitches(np.diff(t))
     n = np.maximum(np.round(p).astype(np.int64), 1)

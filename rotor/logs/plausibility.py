@@ -91,13 +91,21 @@ def check_time_base(tooth_times: ArrayLike, teeth: int, source: str, kind: str =
 
 
 def check_speed_time_base(t: ArrayLike, rpm: ArrayLike, source: str) -> None:
-    """Refuse a speed log whose samples lie more than half a revolution apart at the logged
-    speed (a time column in milliseconds, read as seconds). ``t`` [s], ``rpm`` [rev/min];
+    """Refuse a speed log whose median speed lies outside :data:`MIN_RPM` … :data:`MAX_RPM`
+    (another column read as the speed: a pressure table's, say), or whose samples lie more
+    than half a revolution apart at the logged speed (a time column in milliseconds, read as
+    seconds). ``t`` [s], ``rpm`` [rev/min];
     ``source`` names the log in the message."""
     t = np.asarray(t, dtype=np.float64)
     w = np.asarray(rpm, dtype=np.float64) / RPM_PER_RAD_S
     if t.size < 2:
         return
+    med = float(np.median(np.asarray(rpm, dtype=np.float64)))
+    if not (MIN_RPM <= med <= MAX_RPM):
+        raise LogError(
+            f"{source}: the 'rpm' column's median is {med:.4g} rpm, outside {MIN_RPM:g} … {MAX_RPM:g} rpm, where piston "
+            f"engines run: is that column the engine speed in rpm? (check which column is which, --columns)"
+        )
     rev = np.median(0.5 * (w[1:] + w[:-1]) * np.diff(t)) / (2 * np.pi)
     if rev > 0.5:
         hint = next(

@@ -1,0 +1,432 @@
+"""Which wheel a signal really has, and how well a wheel fits its edges.
+
+**Counting.** The periods between edges are divided by the local tooth period
+(:func:`rotor.logs.pattern.pitches`) and rounded: a regular tooth spans one pitch, a gap of
+g missing teeth g + 1. The edge next to a gap is often displaced (a weak, early or late
+tooth: the magnetic field bends round the gap's edge), which makes the gap look longer or
+shorter and its neighbour shorter or longer by the same amount. Both errors cancel in the
+sum of the gap's period and its two neighbours: a gap's size is counted from that sum, in
+units of the tooth period outside it (the mean of the periods two before and two after).
+
+**Scoring.** Each candidate wheel (the counted one, the one counted without that
+correction, and the standard patterns :data:`STANDARD_WHEELS` with the same edges per
+revolution) is placed on the edges (:func:`rotor.logs.pattern.locate_teeth`; with repairs
+where the pattern proves them) and scored by (1) the edges it had to infer, against a
+budget of one per :data:`REVOLUTIONS_PER_INFERRED_EDGE` revolutions (at least one in the
+record), and (2) its **gap misfit**: the rms, over the gaps, of the relative difference
+between each gap's window (the gap's period and its two neighbours) and the pitches the
+wheel says that window spans. A 60-2 wheel read as 61-3 misfits by about 17 %; the right
+wheel by the speed's change over a few teeth (under 2 % on the bench recordings).
+
+**Refusing.** When the runner-up's misfit is within :data:`MARGIN` × the best's (or both are
+below :data:`MISFIT_FLOOR`, where noise cannot tell them apart), the signal does not tell
+the wheels apart: a standard pattern is preferred over another (a wheel whose pattern
+repeats within a revolution reads as its repeating part: 36-2-2-2 as 12-2), and between
+two standard patterns (or two others) :func:`find_wheel` refuses, naming both.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from collections import Counter
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from jaxtyping import ArrayLike
+
+from ..errors import LogError
+from .pattern import locate_teeth, pitches, remove_extra_edges
+from .wheel import ToothTrack, Wheel, parse_wheel
+
+__all__ = [
+    "FitStatus",
+    "MARGIN",
+    "MISFIT_FLOOR",
+    "REVOLUTIONS_PER_INFERRED_EDGE",
+    "STANDARD_WHEELS",
+    "WheelFit",
+    "candidates",
+    "counted_wheels",
+    "evidence",
+    "rank",
+    "find_wheel",
+    "fit_wheel",
+    "gap_misfit",
+    "inferred_budget",
+    "period_jitter",
+]
+
+STANDARD_WHEELS = ("60-2", "60-1", "36-1", "36-2", "36-2-1", "36-2-1-1", "36-2-2-2", "24-1", "12-1")
+MARGIN = 3.0  # the best wheel's gap misfit must be this many times below the runner-up's
+MISFIT_FLOOR = 0.03  # below this relative misfit, two wheels fit alike whatever their ratio
+REVOLUTIONS_PER_INFERRED_EDGE = 20  # a wheel may need one inferred edge per this many revolutions
+
+
+class FitStatus(enum.Enum):
+    """How a wheel fits a signal's edges (a typed state: decisions test this, never a message)."""
+
+    FITS = "fits as found"
+    REPAIRED = "fits with repairs within the budget"
+    OVER_BUDGET = "needs more inferred edges than the budget allows"
+    NO_FIT = "does not fit"
+    NO_EDGES = "no edges found"
+
+    @property
+    def ok(self) -> bool:
+        return self in (FitStatus.FITS, FitStatus.REPAIRED)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class WheelFit:
+    """One wheel tried on one set of edges: the evidence for choosing it or not.
+
+    **Attributes:** ``spec``: the wheel; ``edge``: ``"rising"``/``"falling"`` (``None``
+    for tooth times); ``status``: :class:`FitStatus`; ``revolutions``: complete
+    revolutions placed; ``inferred``: edges inferred from the pattern; ``removed``: extra
+    edges removed; ``found``: weak edges found in the signal where the pattern has a
+    tooth; ``budget``: inferred edges allowed; ``gap_misfit`` [-]: rms relative misfit of
+    the gap windows; ``jitter`` [-]: rms relative change of the tooth period from one
+    regular tooth to the next; ``reason``: in words, why it does not fit (empty if it
+    does); ``track``: the placed edges (``None`` if it does not fit).
+    """
+
+    spec: str
+    edge: str | None
+    status: FitStatus
+    revolutions: int = 0
+    inferred: int = 0
+    removed: int = 0
+    found: int = 0
+    budget: int = 0
+    gap_misfit: float = float("nan")
+    jitter: float = float("nan")
+    reason: str = ""
+    track: ToothTrack | None = None
+    standard: bool = False
+
+    @property
+    def repairs(self) -> int:
+        """Edges guessed rather than measured: inferred and removed."""
+        return self.inferred + self.removed
+
+    def describe(self) -> str:
+        """One line: the wheel, the edge, how it fits."""
+        e = f" ({self.edge} edges)" if self.edge else ""
+        if not self.status.ok:
+            return f"{self.spec}{e}: {self.status.value}" + (f" — {self.reason}" if self.reason else "")
+        rep = f", {self.inferred} inferred / {self.removed} removed / {self.found} weak found" if self.repairs else ""
+        return (
+            f"{self.spec}{e}: {self.revolutions} revolutions, gap misfit {100 * self.gap_misfit:.1f} %, "
+            f"jitter {100 * self.jitter:.2f} %{rep}"
+        )
+
+    def to_json_dict(self) -> dict:
+        def num(x):
+            return float(x) if np.isfinite(x) else None
+
+        return {
+            "wheel": self.spec,
+            "edge": self.edge,
+            "status": self.status.name.lower(),
+            "standard": self.standard,
+            "revolutions": int(self.revolutions),
+            "inferred_edges": int(self.inferred),
+            "removed_edges": int(self.removed),
+            "weak_edges_found": int(self.found),
+            "inferred_budget": int(self.budget),
+            "gap_misfit": num(self.gap_misfit),
+            "jitter": num(self.jitter),
+            "reason": self.reason or None,
+        }
+
+
+def inferred_budget(revolutions: int) -> int:
+    """Inferred edges a wheel may need in ``revolutions`` revolutions: one per
+    :data:`REVOLUTIONS_PER_INFERRED_EDGE`, and at least one (the odd missed tooth)."""
+    return max(1, int(revolutions) // REVOLUTIONS_PER_INFERRED_EDGE)
+
+
+def _unit_periods(track: ToothTrack) -> tuple[np.ndarray, np.ndarray]:
+    """(periods [s], pitches each spans [-]) of a placed track."""
+    w = track.wheel
+    pitch = 2 * np.pi / w.teeth
+    k = np.rint(np.diff(track.nominal_angle) / pitch).astype(np.int64)
+    return np.diff(track.t), k
+
+
+def gap_misfit(track: ToothTrack) -> float:
+    """The rms relative misfit [-] of the gap windows of ``track``: each gap's period plus
+    its two neighbours against the pitches the wheel says they span, in units of the
+    tooth period outside the window (the mean of the periods two before and two after, where
+    those are single pitches; else the median single-pitch period near it)."""
+    dt, k = _unit_periods(track)
+    n = dt.size
+    g = np.flatnonzero(k > 1)
+    g = g[(g >= 2) & (g <= n - 3)]
+    if g.size == 0:
+        return 0.0
+    u = dt / np.maximum(k, 1)
+    single = k == 1
+    a, b = g - 2, g + 2
+    ok = single[a] & single[b]
+    unit = np.where(ok, 0.5 * (u[a] + u[b]), np.nan)
+    if not np.all(ok):
+        from scipy.ndimage import median_filter
+
+        med = median_filter(np.where(single, u, np.median(u[single]) if single.any() else 1.0), 9, mode="nearest")
+        unit = np.where(ok, unit, med[g])
+    span = dt[g - 1] + dt[g] + dt[g + 1]
+    want = (k[g - 1] + k[g] + k[g + 1]) * unit
+    e = span / want - 1.0
+    return float(np.sqrt(np.mean(e**2)))
+
+
+def period_jitter(track: ToothTrack) -> float:
+    """The rms relative change [-] of the tooth period from one single-pitch period to the
+    next (a timer's or a flank's noise, and edges displaced near the gaps)."""
+    dt, k = _unit_periods(track)
+    both = (k[1:] == 1) & (k[:-1] == 1)
+    if not np.any(both):
+        return float("nan")
+    r = np.diff(dt)[both] / (0.5 * (dt[1:] + dt[:-1])[both])
+    return float(np.sqrt(np.mean(r**2)))
+
+
+def fit_wheel(
+    times: ArrayLike,
+    wheel: str | Wheel,
+    *,
+    edge: str | None = None,
+    index_times: ArrayLike | None = None,
+    probe: Callable | None = None,
+    repair: bool = True,
+) -> WheelFit:
+    """Place the edge ``times`` [s] on ``wheel`` and say how it fits (:class:`WheelFit`).
+
+    The edges are placed as they are; where that fails and ``repair`` is set, with the
+    repairs the pattern proves (:func:`rotor.logs.pattern.locate_teeth`; ``probe`` looks
+    for a weak tooth in the signal). A wheel that needs more inferred edges than
+    :func:`inferred_budget` allows is :attr:`FitStatus.OVER_BUDGET`: repairs are for the
+    odd glitch or missed tooth, not for making a wrong wheel fit.
+    """
+    w = parse_wheel(wheel)
+    std = w.spec in STANDARD_WHEELS
+    try:
+        track = locate_teeth(times, w, index_times=index_times)
+    except LogError as e:
+        if not repair or w.needs_index:
+            return WheelFit(w.spec, edge, FitStatus.NO_FIT, reason=str(e), standard=std)
+        try:
+            track = locate_teeth(times, w, index_times=index_times, repair=True, probe=probe)
+        except LogError as e2:
+            return WheelFit(w.spec, edge, FitStatus.NO_FIT, reason=str(e2), standard=std)
+    kinds = Counter(r.kind for r in track.repairs)
+    inferred = kinds.get("missed edge inferred", 0)
+    removed = kinds.get("extra edge removed", 0)
+    found = kinds.get("missed edge found", 0)
+    revs = max(track.revolutions, 0)
+    budget = inferred_budget(revs)
+    status = FitStatus.FITS if not track.repairs else FitStatus.REPAIRED
+    reason = ""
+    if inferred > budget:
+        status = FitStatus.OVER_BUDGET
+        reason = (
+            f"{inferred} edges inferred in {revs} revolutions (at most {budget}: one per "
+            f"{REVOLUTIONS_PER_INFERRED_EDGE} revolutions)"
+        )
+    return WheelFit(
+        w.spec,
+        edge,
+        status,
+        revs,
+        inferred,
+        removed,
+        found,
+        budget,
+        gap_misfit(track),
+        period_jitter(track),
+        reason,
+        track if status.ok else None,
+        std,
+    )
+
+
+# ---------------------------------------------------------------------- counting
+def _gap_pitches(dt: np.ndarray, p: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """The pitches each long period spans, counted from its window (itself and its two
+    neighbours, where those are single pitches) in units of the periods just outside it: a
+    displaced edge next to the gap cancels."""
+    out = n.copy()
+    L = np.flatnonzero(n >= 2)
+    for i in L:
+        if i < 2 or i > dt.size - 3:
+            continue
+        lo = i - 1 if n[i - 1] == 1 else i
+        hi = i + 1 if n[i + 1] == 1 else i
+        a, b = lo - 1, hi + 1
+        if n[a] != 1 or n[b] != 1:
+            continue
+        unit = 0.5 * (dt[a] + dt[b])
+        total = float(np.sum(dt[lo : hi + 1]) / unit)
+        out[i] = max(int(round(total - (i - lo) - (hi - i))), 2)
+    return out
+
+
+def _pattern(n: np.ndarray) -> Wheel:
+    """The wheel whose gaps repeat in the periods ``n`` [pitches]; LogError if none does."""
+    L = np.flatnonzero(n >= 2)
+    if L.size < 3:
+        raise LogError(
+            f"{L.size} gap(s) in {n.size + 1} tooth edges: no repeating gap found (a wheel without a gap needs its "
+            f"tooth count and an index column, e.g. wheel='60' with index_v)"
+        )
+    s = n[L] - 1
+    run = np.diff(L)
+    s = s[:-1]
+    C = np.concatenate([[0], np.cumsum(n)])
+    for G in range(1, min(8, s.size - 1) + 1):
+        same = (s[G:] == s[:-G]) & (run[G:] == run[:-G])
+        if same.size and np.mean(same) >= 0.8:
+            break
+    else:
+        raise LogError(
+            f"the gaps in the log (missing {', '.join(map(str, s[:8]))} …) do not repeat; give the wheel "
+            f"(wheel='N-g1-g2…')"
+        )
+    span = C[L[G:]] - C[L[:-G]]
+    N = int(Counter(span.tolist()).most_common(1)[0][0])
+    windows = Counter(
+        (tuple(int(x) for x in s[j : j + G]), tuple(int(x) for x in run[j : j + G]))
+        for j in range(min(s.size - G + 1, 400))
+        if C[L[j + G]] - C[L[j]] == N
+    )
+    if not windows:
+        raise LogError("no revolution of the log repeats its gaps; give the wheel (wheel='N-g1-g2…')")
+    (gaps, lay), _ = windows.most_common(1)[0]
+    r = max(range(G), key=lambda k: (gaps[k], lay[k:] + lay[:k]))
+    gaps, lay = gaps[r:] + gaps[:r], lay[r:] + lay[:r]
+    return Wheel(N, sum(gaps), gaps, lay)
+
+
+def counted_wheels(times: ArrayLike) -> list[Wheel]:
+    """The wheels counted from the edges: with the gap windows corrected for a displaced
+    neighbour, and as counted plainly (distinct, the corrected one first)."""
+    t = np.asarray(times, dtype=np.float64)
+    if t.size < 12:
+        raise LogError(f"{t.size} tooth edges: too few to find the wheel")
+    t, _, p = remove_extra_edges(t, True, "the tooth edges")
+    dt = np.diff(t)
+    if p is None:
+        p, _ = pitches(dt)
+    n = np.maximum(np.round(p).astype(np.int64), 1)
+    out: list[Wheel] = []
+    err: LogError | None = None
+    for m in (_gap_pitches(dt, p, n), n):
+        try:
+            w = _pattern(m)
+        except LogError as e:
+            err = err or e
+            continue
+        if all(w.spec != o.spec or w.layout != o.layout for o in out):
+            out.append(w)
+    if not out:
+        assert err is not None
+        raise err
+    return out
+
+
+def _repeats(w: Wheel, std: Wheel) -> bool:
+    """Whether the standard wheel ``std`` is ``w``'s pattern repeated a whole number of times."""
+    if std.teeth % w.teeth or std.teeth == w.teeth:
+        return False
+    k = std.teeth // w.teeth
+    return std.gaps == w.gaps * k
+
+
+def candidates(times: ArrayLike) -> list[Wheel]:
+    """The wheels worth trying on these edges: those counted (:func:`counted_wheels`) and the
+    standard patterns with as many edges per revolution, or that repeat a counted one."""
+    counted = counted_wheels(times)
+    out = list(counted)
+    for spec in STANDARD_WHEELS:
+        s = parse_wheel(spec)
+        if any(s.spec == c.spec for c in out):
+            continue
+        if any(s.edges_per_rev == c.edges_per_rev or _repeats(c, s) for c in counted):
+            out.append(s)
+    return out
+
+
+def rank(fits: Sequence[WheelFit]) -> tuple[WheelFit | None, WheelFit | None, str]:
+    """The best fit of ``fits``, the runner-up, and why in words; ``(None, runner-up, why)``
+    where the signal does not tell the two best apart (both standard patterns, or neither)."""
+    ok = [f for f in fits if f.status.ok]
+    if not ok:
+        return None, None, "no wheel fits"
+    ok.sort(key=lambda f: (f.inferred, f.gap_misfit))
+    best = ok[0]
+    if len(ok) == 1:
+        return best, None, "the only wheel that fits"
+    rest = [f for f in ok[1:] if f.spec != best.spec]
+    if not rest:
+        return best, None, "the only wheel that fits"
+    second = rest[0]
+    close = second.inferred == best.inferred and (
+        second.gap_misfit < MARGIN * best.gap_misfit or second.gap_misfit < MISFIT_FLOOR
+    )
+    if not close:
+        why = (
+            f"gap misfit {100 * best.gap_misfit:.1f} % against {100 * second.gap_misfit:.1f} % for {second.spec}"
+            if second.inferred == best.inferred
+            else f"{best.inferred} inferred edges against {second.inferred} for {second.spec}"
+        )
+        return best, second, why
+    if best.standard != second.standard:
+        std = best if best.standard else second
+        other = second if best.standard else best
+        return (
+            std,
+            other,
+            f"a standard pattern, where {other.spec} fits alike (gap misfit {100 * std.gap_misfit:.1f} % and "
+            f"{100 * other.gap_misfit:.1f} %)",
+        )
+    return None, second, f"{best.spec} and {second.spec} fit alike"
+
+
+def find_wheel(times: ArrayLike, *, what: str = "the tooth edges") -> tuple[Wheel, str]:
+    """The wheel of a log, found from its edge times [s] (``wheel="auto"``).
+
+    The candidates (:func:`candidates`) are placed on the edges and ranked (:func:`rank`):
+    fewest inferred edges, then the smallest gap misfit. Raises :class:`LogError` naming
+    both where the signal does not tell the two best apart, or where none fits.
+
+    **Returns:** (the wheel with its layout, the evidence in words).
+    """
+    t = np.asarray(times, dtype=np.float64)
+    cands = candidates(t)
+    fits = [fit_wheel(t, w) for w in cands]
+    best, second, why = rank(fits)
+    if best is None:
+        if second is None:
+            reasons = "; ".join(f.describe() for f in fits)
+            raise LogError(f"no wheel fits {what}: {reasons}; give the wheel (wheel='N-g1-g2…')")
+        ok = sorted((f for f in fits if f.status.ok), key=lambda f: (f.inferred, f.gap_misfit))
+        raise LogError(
+            f"{what} fit {ok[0].describe()} and {second.describe()} alike (within {MARGIN:g}× gap misfit); "
+            f"give the wheel (wheel='{ok[0].spec}' or wheel='{second.spec}')"
+        )
+    assert best.track is not None
+    return best.track.wheel, evidence(best, second, why)
+
+
+def evidence(best: WheelFit, second: WheelFit | None, why: str) -> str:
+    """In words: the wheel found, what it rests on, and the runner-up."""
+    w = best.track.wheel if best.track is not None else parse_wheel(best.spec)
+    said = (
+        f"wheel found from the log: {w.spec} ({w.describe()}); {best.revolutions} revolutions of "
+        f"{w.edges_per_rev} edges, gap misfit {100 * best.gap_misfit:.1f} %"
+    )
+    if second is not None:
+        said += f"; chosen over {second.spec}: {why}"
+    return said

@@ -1,0 +1,418 @@
+"""The wheel-track stage: a log's edges placed on its wheel, with every choice made on the way.
+
+A recording's signal is read once into a :class:`WheelReading` (edges → wheel track,
+independent of TDC); the phasing and analysis stages that follow reuse it.
+
+**Which edge.** Which edge of a signal is the clean one differs between installations (a
+sensor's polarity, a conditioner's output stage). With ``edge="auto"`` (the default) both
+are read and placed on the wheel; the edge whose placement needs the fewest repairs is
+taken, then (with ``wheel="auto"``) the one whose wheel is a standard pattern, then the
+one with the lower tooth-period jitter (:func:`rotor.logs.identify.period_jitter`).
+
+**Which wheel.** ``wheel="auto"`` tries the candidates of :func:`rotor.logs.identify.candidates`
+on each edge and ranks them (:func:`rotor.logs.identify.rank`); a given wheel is placed as
+given. A wheel that needs more inferred edges than the budget allows
+(:func:`rotor.logs.identify.inferred_budget`) is refused, naming the wheel that fits.
+
+**Which levels.** An analog signal's edges are found with its global levels, or with levels
+that follow the signal (:func:`rotor.logs.edges.find_edges`, ``levels="adaptive"``) where
+those leave fewer edges guessed or cover more of the record (an amplitude that changes
+with speed, a weak tooth next to the gap).
+
+Every choice is recorded in :attr:`WheelReading.choices` with its evidence, and
+:meth:`WheelReading.pins` gives the arguments that pin them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+
+import numpy as np
+
+from ..errors import LogError
+from .digital import digital_edges
+from .edges import Edges, find_edges, find_weak_edges, noise_rms, two_level_locally
+from .identify import FitStatus, WheelFit, candidates, evidence, fit_wheel, rank
+from .pattern import place
+from .plausibility import check_time_base, check_time_resolution
+from .reader import Log
+from .wheel import ToothTrack, Wheel, parse_wheel
+
+JITTER_MARGIN = 0.8
+"""Where both edges fit alike, the falling edges are taken only where their tooth-period jitter
+is below this fraction of the rising edges' (else the rising edge, the convention)."""
+
+__all__ = [
+    "JITTER_MARGIN",
+    "ChoiceSource",
+    "Choice",
+    "WheelReading",
+    "read_track",
+    "edges_of",
+    "named",
+    "weak_edge_probe",
+]
+
+
+class ChoiceSource(enum.Enum):
+    """Where a choice came from."""
+
+    GIVEN = "given"
+    FOUND = "found from the signal"
+    FIXED = "fixed by the log's kind"
+
+
+@dataclasses.dataclass(frozen=True)
+class Choice:
+    """One choice made while reading a signal: what (``name``), the value taken, where it
+    came from, and the evidence in words."""
+
+    name: str
+    value: str
+    source: ChoiceSource
+    evidence: str = ""
+
+    def to_json_dict(self) -> dict:
+        return {"value": self.value, "source": self.source.name.lower(), "evidence": self.evidence or None}
+
+
+def named(log_name: str, fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` with a LogError's message prefixed by the log's name ``name``."""
+    try:
+        return fn(*args, **kwargs)
+    except LogError as e:
+        text = str(e)
+        if not log_name or text.startswith(f"{log_name}:"):
+            raise
+        raise LogError(f"{log_name}: {text}") from None
+
+
+def edges_of(log: Log, edge: str, *, levels: str | None = None, name: str = "") -> Edges:
+    """The wheel's ``edge`` (``"rising"``/``"falling"``) edges of an analog (``encoder_v``) or
+    digital (``encoder_d``) channel. An analog two-level pulse train is read with its global
+    levels (``levels=None``), a drifting one with adaptive levels, a variable-reluctance
+    signal at its zero crossings; ``levels`` forces one."""
+    if log.kind == "digital":
+        return named(name, digital_edges, log["time"], log["encoder_d"], edge=edge)
+    t, v = log["time"], log["encoder_v"]
+    if levels is not None:
+        return named(name, find_edges, t, v, edge=edge, levels=levels)
+    try:
+        return named(name, find_edges, t, v, edge=edge)
+    except LogError:
+        pass
+    if two_level_locally(v):
+        return named(name, find_edges, t, v, edge=edge, levels="adaptive")
+    return named(name, find_edges, t, v, edge=edge, levels="vr")
+
+
+def weak_edge_probe(log: Log, edges: Edges):
+    """A probe for :func:`rotor.logs.pattern.follow_pattern`: looks for a missed edge in the
+    sampled signal at a lower level (:func:`rotor.logs.edges.find_weak_edges`), at the
+    fraction of its own swing that ``edges`` were placed at."""
+    tt, vv = log["time"], log["encoder_v"]
+    noise = noise_rms(vv)
+    span = edges.high_v - edges.low_v
+    frac = float(np.clip((edges.level_v - edges.low_v) / span, 0.05, 0.95)) if span > 0 else 0.5
+
+    def probe(guess_s, pitch_s):
+        return find_weak_edges(
+            tt, vv, guess_s, pitch_s, edges.low_v, edges.high_v, inverted=edges.inverted, level=frac, noise_v=noise
+        )
+
+    return probe
+
+
+def _uncovered(log: Log, track: ToothTrack) -> str:
+    """In words, where the edges of ``track`` leave more than the wheel's longest period and
+    two teeth of the sampled record uncovered at its start or end; empty if nowhere."""
+    t = log["time"]
+    d = np.diff(track.t)
+    if d.size < 20:
+        return ""
+    w = track.wheel
+    longest = (max(w.gaps) + 3) if w.gaps else 3
+    out = []
+    if track.t[0] - t[0] > float(np.median(d[:10])) * longest:
+        out.append(f"no edge in the first {track.t[0] - t[0]:.4g} s")
+    if t[-1] - track.t[-1] > float(np.median(d[-10:])) * longest:
+        out.append(f"no edge in the last {t[-1] - track.t[-1]:.4g} s")
+    return " and ".join(out) + (" of the record" if out else "")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class WheelReading:
+    """A recording's wheel signal read: its edges placed on its wheel (before any phasing).
+
+    **Attributes:** ``source``: the log's name; ``log``: the :class:`rotor.logs.reader.Log`;
+    ``track``: the placed edges (:class:`rotor.logs.wheel.ToothTrack`, repairs included);
+    ``edges``: the :class:`rotor.logs.edges.Edges` of a sampled signal (``None`` for tooth
+    times); ``fit``: the chosen :class:`rotor.logs.identify.WheelFit`; ``fits``: every
+    (edge, wheel) tried; ``choices``: the edge, the levels and the wheel, each a
+    :class:`Choice` with its evidence; ``notes``: what else was found.
+    """
+
+    source: str
+    log: Log
+    track: ToothTrack
+    edges: Edges | None
+    fit: WheelFit
+    fits: tuple
+    choices: tuple
+    notes: tuple = ()
+
+    @property
+    def wheel(self) -> Wheel:
+        return self.track.wheel
+
+    @property
+    def edge(self) -> str | None:
+        return self.fit.edge
+
+    def choice(self, name: str) -> Choice | None:
+        return next((c for c in self.choices if c.name == name), None)
+
+    def pins(self) -> str:
+        """The command-line options that pin the automatic choices (``--wheel … --edge …``)."""
+        out = f"--wheel {self.wheel.spec}"
+        if self.edge is not None:
+            out += f" --edge {self.edge}"
+        return out
+
+    def to_json_dict(self) -> dict:
+        return {
+            "choices": {c.name: c.to_json_dict() for c in self.choices},
+            "pins": self.pins(),
+            "tried": [f.to_json_dict() for f in self.fits],
+        }
+
+
+def _fit_edges(log, name, edges, times, wheel, edge, index_times, auto):
+    """The fits of the candidate wheels on one set of edges."""
+    probe = weak_edge_probe(log, edges) if log.kind == "encoder" and edges is not None else None
+    if auto:
+        try:
+            wheels = candidates(times)
+        except LogError as e:
+            return [WheelFit("auto", edge, FitStatus.NO_FIT, reason=str(e))]
+    else:
+        wheels = [wheel]
+    return [fit_wheel(times, w, edge=edge, index_times=index_times, probe=probe) for w in wheels]
+
+
+def _best_of(fits, auto):
+    """(best fit, runner-up, why) of one edge's fits; best ``None`` where ambiguous or none fits."""
+    if not auto:
+        f = fits[0]
+        return (f if f.status.ok else None), None, "given"
+    return rank(fits)
+
+
+def read_track(
+    log: Log,
+    wheel: str | Wheel | int,
+    *,
+    edge: str = "auto",
+    name: str | None = None,
+) -> WheelReading:
+    """Read the wheel signal of ``log``: its edges, placed on its wheel (see the module notes).
+
+    **Arguments:** ``log``: a :class:`rotor.logs.reader.Log` with a tooth-time, analog or
+    digital wheel channel; ``wheel``: a spec (``"60-2"``, ``"36-2-1"``), a wheel file, a
+    :class:`rotor.logs.wheel.Wheel`, or ``"auto"``; ``edge``: ``"auto"`` (default: both
+    tried), ``"rising"`` or ``"falling"``; ``name``: the log's name in messages.
+
+    **Returns:** :class:`WheelReading`. Raises :class:`LogError` (naming the file, what was
+    expected and what to try) where no edge fits the wheel, or where two wheels fit alike.
+    """
+    name = log.source if name is None else name
+    if edge not in ("auto", "rising", "falling"):
+        raise LogError(f"edge = {edge!r}: 'auto', 'rising' or 'falling'")
+    if log.kind == "speed":
+        raise LogError(f"{name}: a speed log has no wheel signal")
+    auto = isinstance(wheel, str) and wheel.strip().lower() == "auto"
+    w = None if auto else parse_wheel(wheel)
+    index_times = None
+    if "index_v" in log:
+        index_times = named(name, find_edges, log["time"], log["index_v"], name="index_v").times
+    polarities: list[str | None] = (
+        [None] if log.kind == "teeth" else (["rising", "falling"] if edge == "auto" else [edge])
+    )
+    tried: list[WheelFit] = []
+    per_edge: list[tuple] = []  # (best, runner-up, why, edges, times)
+    edge_errors: dict = {}
+    level_notes: dict = {}
+    for pol in polarities:
+        if pol is None:
+            edges, times = None, log["tooth_time_s"]
+        else:
+            try:
+                edges = edges_of(log, pol, name=name)
+            except LogError as e:
+                edge_errors[pol] = e
+                tried.append(WheelFit(w.spec if w else "auto", pol, FitStatus.NO_EDGES, reason=str(e)))
+                continue
+            times = edges.times
+        fits = _fit_edges(log, name, edges, times, w, pol, index_times, auto)
+        best, second, why = _best_of(fits, auto)
+        # an analog signal: levels that follow it, where the global ones guess edges or leave the record uncovered
+        if (
+            log.kind == "encoder"
+            and edges is not None
+            and edges.method == "global levels"
+            and (best is None or best.repairs or (best.track is not None and _uncovered(log, best.track)))
+        ):
+            try:
+                adaptive = edges_of(log, pol, levels="adaptive", name=name)
+            except LogError:
+                adaptive = None
+            if adaptive is not None:
+                fits_a = _fit_edges(log, name, adaptive, adaptive.times, w, pol, index_times, auto)
+                best_a, second_a, why_a = _best_of(fits_a, auto)
+                if best_a is not None and (
+                    best is None
+                    or best_a.repairs < best.repairs
+                    or (best_a.repairs == best.repairs and best_a.track.t.size > best.track.t.size)
+                ):
+                    if best is None:
+                        level_notes[pol] = "with its global levels the edges did not fit the wheel"
+                    elif best.repairs > best_a.repairs:
+                        level_notes[pol] = f"with its global levels {best.repairs} edges were guessed"
+                    else:
+                        level_notes[pol] = f"with its global levels {_uncovered(log, best.track)}"
+                    fits, best, second, why, edges, times = fits_a, best_a, second_a, why_a, adaptive, adaptive.times
+        tried += fits
+        per_edge.append((best, second, why, edges, times, fits))
+    ok = [p for p in per_edge if p[0] is not None]
+    if not ok:
+        raise _refusal(name, log, w, edge, per_edge, tried, edge_errors)
+    ok.sort(key=lambda p: (p[0].repairs, (not p[0].standard) if auto else False, p[0].edge != "rising"))
+    if len(ok) > 1 and ok[1][0].repairs == ok[0][0].repairs and ok[1][0].standard == ok[0][0].standard:
+        # alike but for the jitter: the other edge only where it is clearly steadier
+        if ok[1][0].jitter < JITTER_MARGIN * ok[0][0].jitter:
+            ok = [ok[1], ok[0], *ok[2:]]
+    best, second, why, edges, times, _ = ok[0]
+    track = best.track
+    assert track is not None
+    wname = track.wheel.spec
+    check_time_base(track.t, track.wheel.teeth, name, log.kind)
+    notes: list[str] = []
+    resolution = check_time_resolution(
+        times,
+        name,
+        sample_times=log["time"] if "time" in log else None,
+        column="tooth_time_s" if log.kind == "teeth" else "time",
+    )
+    if resolution is not None:
+        notes.append(resolution)
+    choices = []
+    if best.edge is not None:
+        if edge == "auto" and len(ok) > 1:
+            other = ok[1][0]
+            if best.repairs != other.repairs:
+                rule = "fewer repairs"
+            elif auto and best.standard != other.standard:
+                rule = f"{best.spec} is a standard pattern, {other.spec} is not"
+            elif best.jitter < JITTER_MARGIN * other.jitter:
+                rule = "lower tooth-period jitter"
+            else:
+                rule = f"the rising edge, where the two fit alike (jitter within {1 / JITTER_MARGIN:.2g}×)"
+            ev = (
+                f"{rule}: {best.edge} edges ({best.spec}) {best.repairs} repairs, jitter {100 * best.jitter:.2f} %; "
+                f"{other.edge} edges ({other.spec}) {other.repairs} repairs, jitter {100 * other.jitter:.2f} %"
+            )
+        elif edge == "auto":
+            bad = next((f for f in tried if f.edge != best.edge), None)
+            ev = f"only the {best.edge} edges fit" + (f" ({bad.describe()})" if bad is not None else "")
+        else:
+            ev = ""
+        choices.append(Choice("edge", best.edge, ChoiceSource.FOUND if edge == "auto" else ChoiceSource.GIVEN, ev))
+        assert edges is not None
+        choices.append(
+            Choice(
+                "levels",
+                edges.method,
+                ChoiceSource.FOUND,
+                f"low {edges.low_v:.4g} V, high {edges.high_v:.4g} V, edge timed at {edges.level_v:.4g} V",
+            )
+        )
+    choices.append(
+        Choice(
+            "wheel",
+            wname,
+            ChoiceSource.FOUND if auto else ChoiceSource.GIVEN,
+            evidence(best, second, why) if auto else best.describe(),
+        )
+    )
+    if best.edge in level_notes:
+        notes.append(
+            "edges found with adaptive levels (the running minimum and maximum of the signal over each tooth period "
+            f"and two either side): {level_notes[best.edge]}"
+        )
+    if track.placement:
+        notes.append(f"the wheel's placement: {track.placement}")
+    if edges is not None and edges.repairs:
+        track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
+    return WheelReading(name, log, track, edges, best, tuple(tried), tuple(choices), tuple(notes))
+
+
+def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
+    """The one-line error where no edge fits: what was expected, and what to try."""
+    if w is None:
+        ambiguous = [p for p in per_edge if p[1] is not None and p[0] is None]
+        if ambiguous:
+            fits = sorted((f for f in ambiguous[0][5] if f.status.ok), key=lambda f: (f.inferred, f.gap_misfit))
+            a, b = fits[0], ambiguous[0][1]
+            return LogError(
+                f"{name}: the signal fits {a.describe()} and {b.describe()} alike; give the wheel "
+                f"(wheel='{a.spec}' or wheel='{b.spec}', --wheel)"
+            )
+        reasons = "; ".join(f.describe() for f in tried[:4])
+        return LogError(f"{name}: no wheel found that fits the signal: {reasons}; give the wheel (--wheel N-g1-g2…)")
+    mine = [f for f in tried if f.spec == w.spec]
+    over = [f for f in mine if f.status == FitStatus.OVER_BUDGET]
+    better = _what_fits(log, per_edge)
+    hint = f"; {better}" if better else "; check the wheel (--wheel auto finds it) and which column is the wheel"
+    if edge != "auto" and log.kind in ("encoder", "digital"):
+        other = "falling" if edge == "rising" else "rising"
+        try:
+            o = edges_of(log, other, name=name)
+            of = fit_wheel(o.times, w, edge=other, probe=weak_edge_probe(log, o) if log.kind == "encoder" else None)
+        except LogError:
+            of = None
+        if of is not None and of.status.ok and not over:
+            return LogError(
+                f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges but fits its {other} ones "
+                f"(an inverted signal?): give edge={other!r} (--edge {other}), or leave the edge out (--edge auto)"
+            )
+    if over:
+        f = over[0]
+        return LogError(
+            f"{name}: the {w.spec} wheel does not fit the {f.edge + ' ' if f.edge else ''}edges: {f.reason}, so it "
+            f"is not this signal's wheel{hint}"
+        )
+    if edge_errors and len(edge_errors) == len([p for p in (["rising", "falling"] if edge == "auto" else [edge])]):
+        return next(iter(edge_errors.values()))
+    f = mine[0] if mine else tried[0]
+    reason = f.reason or f.status.value
+    if reason.startswith(f"{name}:"):
+        reason = reason[len(name) + 1 :].strip()
+    return LogError(f"{name}: {reason}{hint}")
+
+
+def _what_fits(log, per_edge) -> str:
+    """In words, the wheel that fits the edges read (``wheel="auto"`` on them), or empty."""
+    found = []
+    for _, _, _, edges, times, _ in per_edge:
+        if times is None:
+            continue
+        pol = None if edges is None else ("falling" if edges.inverted else "rising")
+        best, _, _ = rank(_fit_edges(log, "", edges, times, None, pol, None, True))
+        if best is not None:
+            found.append(best)
+    if not found:
+        return ""
+    best = min(found, key=lambda f: (f.repairs, not f.standard, f.jitter))
+    e = f" --edge {best.edge}" if best.edge else ""
+    return f"the {best.spec} wheel fits ({best.describe()}): give --wheel {best.spec}{e}"
