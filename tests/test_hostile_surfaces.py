@@ -202,8 +202,8 @@ WHEEL_36_2 = "positions = 36\nmissing = [34, 35]\n"
     ids=["missing true", "misspelt angles", "unknown table", "float positions", "twice", "bool angle", "huge"],
 )
 def test_a_malformed_wheel_file_is_refused_by_key(text: str, fragment: str, tmp_path: Path, capsys) -> None:
-    from rotor.logs.wheel import read_wheel_file
     from rotor.errors import LogError
+    from rotor.logs.wheel import read_wheel_file
 
     path = tmp_path / "w.toml"
     path.write_text(text, encoding="utf-8")
@@ -228,3 +228,61 @@ def test_a_folder_named_like_a_wheel_file_is_named_a_folder(tmp_path: Path, teet
     folder.mkdir()
     rc, _, err = run(capsys, ["analyze", teeth_log, "--wheel", str(folder), "--columns", "tooth_time_s"])
     assert_refused(rc, err, "x.toml: is a folder, not a wheel file")
+
+
+# ----------------------------------------------------------------------------- user text in plots
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def with_dollars(tmp_path: Path, preset: str) -> Path:
+    """``preset``'s file with a name, and (for a torsional chain) a mass name, of dollars."""
+    import re
+
+    text = (ROOT / "rotor" / "presets" / f"{preset}.toml").read_text(encoding="utf-8")
+    text = re.sub(r'(?m)^name = ".*"$', 'name = "Test $x_$ engine"', text, count=1)
+    text = re.sub(r'(?m)^names = \["[^"]*"', 'names = ["$damper_$"', text, count=1)
+    path = tmp_path / "dollar $a_$.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_dollars_in_names_are_drawn_as_they_are(tmp_path: Path, capsys) -> None:
+    engine = with_dollars(tmp_path, "mwm6")
+    out = tmp_path / "out $b_$"
+    rc, _, err = run(capsys, ["modes", str(engine), "--plot", str(out)])
+    assert rc == 0, err
+    assert [p.name for p in out.iterdir()] == ["modes.png"] and (out / "modes.png").stat().st_size > 1000
+
+
+def test_an_engine_named_with_dollars_is_drawn(tmp_path: Path) -> None:
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rotor import load_engine
+    from rotor.engine.table import crank_table
+
+    table = crank_table(load_engine(with_dollars(tmp_path, "4chn15")), step_deg=30.0)
+    axes = table.plot()
+    fig = np.ravel(axes)[0].figure
+    fig.savefig(io.BytesIO(), format="png")  # mathematics is parsed while drawing
+    assert "Test \\$x_\\$ engine" in np.ravel(axes)[0].get_title()
+    plt.close(fig)
+
+
+def test_plain_keeps_every_letter_of_a_users_text() -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rotor.plotting.common import plain
+
+    fig, ax = plt.subplots()
+    title = ax.set_title(plain("Test $x_$ engine, 5 $ and \\$"))
+    fig.canvas.draw()
+    assert title.get_text() == "Test \\$x_\\$ engine, 5 \\$ and \\\\$"
+    plt.close(fig)

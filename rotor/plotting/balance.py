@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from .common import plain
+
 __all__ = ["plot_balance_orders", "plot_balance_ellipses"]
 
 _UNITS = {"force": "N", "moment": "N·m"}
@@ -56,7 +58,7 @@ def plot_balance_orders(
             axis.text(0.5, 0.5, f"no free {quantity} at these orders", transform=axis.transAxes, ha="center")
         axis.set_xlabel("order (× crank speed)")
         axis.set_ylabel(f"free {quantity} [{_UNITS[quantity]}]")
-        axis.set_title(f"{title}\nfree {quantity}s by order", fontsize=10)
+        axis.set_title(f"{plain(title)}\nfree {quantity}s by order", fontsize=10)
         axis.grid(True, axis="y", alpha=0.3)
         axis.legend(fontsize=8)
     return axes
@@ -84,7 +86,7 @@ def plot_balance_ellipses(
         unit = _UNITS[quantity]
         axis.set_xlabel(f"horizontal [{unit}]")
         axis.set_ylabel(f"vertical [{unit}]")
-        axis.set_title(f"{title}\nfree {quantity} of the low orders (dot: crank angle 0)", fontsize=10)
+        axis.set_title(f"{plain(title)}\nfree {quantity} of the low orders (dot: crank angle 0)", fontsize=10)
         axis.grid(True, alpha=0.3)
         if curves.get(quantity):
             axis.legend(fontsize=8)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike
 
-from .common import angle_axis, new_axes
+from .common import angle_axis, new_axes, plain
 
 __all__ = ["plot_polar_load", "plot_developed_load", "plot_wear", "plot_running_torques", "plot_bearing_loads"]
 
@@ -70,7 +70,7 @@ def plot_polar_load(
         ax.invert_yaxis()
     ax.set_xlabel(t_label)
     ax.set_ylabel(z_label + " (downward)")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(plain(title), fontsize=10)
     ax.legend(fontsize=8, loc="best")
     ax.grid(True, alpha=0.3)
     return ax
@@ -93,7 +93,7 @@ def plot_developed_load(angle_deg: ArrayLike, q_N: ArrayLike, *, title: str, cyc
     ax.set_xlabel("crank angle [deg]")
     ax.set_ylabel("load [kN]")
     ax.set_ylim(bottom=0)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(plain(title), fontsize=10)
     ax.legend(fontsize=8)
     angle_axis(ax, cycle_deg)
     return ax
@@ -138,7 +138,7 @@ def plot_wear(ray_angles_deg: ArrayLike, wear_N: ArrayLike, *, title: str, ax: A
     ax.set_ylim(-1.8, 1.8)
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.set_title(f"{title}\nlargest wear index {top / 1e3:.2f} kN", fontsize=10)
+    ax.set_title(f"{plain(title)}\nlargest wear index {top / 1e3:.2f} kN", fontsize=10)
     return ax
 
 
@@ -159,7 +159,7 @@ def plot_running_torques(
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("crank angle [deg]")
     ax.set_ylabel("running torque [N·m]")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(plain(title), fontsize=10)
     ax.legend(fontsize=7, ncol=2)
     angle_axis(ax, cycle_deg)
     return ax

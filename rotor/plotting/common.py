@@ -7,7 +7,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["new_axes", "angle_axis", "save_figure"]
+__all__ = ["new_axes", "angle_axis", "plain", "save_figure"]
+
+
+def plain(text: object) -> str:
+    """``text`` as matplotlib shows it, letter for letter: every ``$`` escaped, so that what a
+    user wrote (the name of an engine, a mass or a file) is never read as mathematics (an
+    engine named ``Test $x_$ engine`` would stop the drawing). Every text of the user's
+    passes here on its way to a figure."""
+    return str(text).replace("$", r"\$")
 
 
 def new_axes(ax, nrows=1, figsize=(8, 4.5)):

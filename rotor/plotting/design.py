@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 from jaxtyping import Float
 
+from .common import plain
+
 __all__ = ["plot_flywheel_design", "plot_textbook_flywheel", "plot_disc_flywheel"]
 
 
@@ -79,7 +81,7 @@ def plot_flywheel_design(
         bx.set_ylabel("[crankshaft] inertia for δ target [kg·m²]")
         bx.legend(fontsize=8)
         bx.grid(True, axis="y", alpha=0.3)
-    left.set_title(design.engine_name, fontsize=10)
+    left.set_title(plain(design.engine_name), fontsize=10)
     return ax
 
 

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
+from .common import plain
 
 __all__ = [
     "plot_calibration",
@@ -62,7 +63,7 @@ def plot_identification(
     ax_w.set_xlim(0, C)
     ax_w.grid(True, alpha=0.3)
     ax_w.legend(fontsize=8)
-    ax_w.set_title(title)
+    ax_w.set_title(plain(title))
     m = np.asarray(cylinder_torques)
     for c in range(m.shape[2]):
         ax_m.plot(x, m[:, :, c].reshape(-1), lw=0.8, label=f"cylinder {c + 1}")
@@ -72,7 +73,7 @@ def plot_identification(
         ax_m.legend(fontsize=8, ncol=min(4, m.shape[2]))
     ax_m.set_xlim(0, C)
     ax_m.grid(True, alpha=0.3)
-    k = np.arange(C)
+    k = np.arange(1, C + 1)  # cycles count from 1
     for c in range(cylinders):
         ax_i.errorbar(
             k + 0.08 * (c - (cylinders - 1) / 2),
@@ -87,7 +88,7 @@ def plot_identification(
     if measured_imep_pa is not None:
         measured = np.asarray(measured_imep_pa, dtype=np.float64).reshape(-1)
         ax_i.plot(
-            np.arange(measured.size),
+            np.arange(1, measured.size + 1),
             measured / PA_PER_BAR,
             "s--",
             ms=4,
@@ -98,8 +99,8 @@ def plot_identification(
         )
     mk, mc = np.nonzero(misfire)
     if mk.size:
-        ax_i.plot(mk, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
-    ax_i.set_xlabel("cycle")
+        ax_i.plot(mk + 1, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
+    ax_i.set_xlabel("cycle (from 1)")
     ax_i.set_ylabel("IMEP [bar]")
     ax_i.grid(True, alpha=0.3)
     ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
@@ -132,15 +133,15 @@ def plot_calibration(
     ax_p, ax_l = axes[:2]
     imep = np.asarray(imep_measured_pa, dtype=np.float64)
     loss = np.asarray(loss_torque_Nm, dtype=np.float64)
-    ax_p.plot(np.arange(imep.size), imep / PA_PER_BAR, "o-", ms=4, color="C0", label="pressure channel")
+    ax_p.plot(np.arange(1, imep.size + 1), imep / PA_PER_BAR, "o-", ms=4, color="C0", label="pressure channel")
     if imep_file_pa is not None:
         ax_p.axhline(imep_file_pa / PA_PER_BAR, color="0.4", ls="--", lw=1, label="engine file")
     ax_p.set_ylabel("IMEP [bar]")
     ax_p.grid(True, alpha=0.3)
     ax_p.legend(fontsize=8)
-    ax_p.set_title(title)
-    ax_l.plot(np.arange(loss.size), loss, "s-", ms=4, color="C3")
-    ax_l.set_xlabel("cycle")
+    ax_p.set_title(plain(title))
+    ax_l.plot(np.arange(1, loss.size + 1), loss, "s-", ms=4, color="C3")
+    ax_l.set_xlabel("cycle (from 1)")
     ax_l.set_ylabel("friction + load [N·m]")
     ax_l.grid(True, alpha=0.3)
     return axes
@@ -165,7 +166,7 @@ def plot_indicated_torque(*, theta: Any, torque: Any, net_torque: Any, title: st
     ax.set_ylabel("torque [N·m]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title(title)
+    ax.set_title(plain(title))
     return ax
 
 
@@ -185,7 +186,7 @@ def plot_torque_orders(*, order: Any, amplitude_Nm: Any, title: str, ax: Any = N
     ax.set_xlabel("engine order [per revolution]")
     ax.set_ylabel("torque amplitude [N·m]")
     ax.grid(True, alpha=0.3, axis="y")
-    ax.set_title(title)
+    ax.set_title(plain(title))
     return ax
 
 
@@ -249,5 +250,5 @@ def plot_motored_gain(
     ax.set_ylabel("pressure [bar]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(plain(title), fontsize=9)
     return ax

@@ -12,7 +12,7 @@ from typing import Any
 
 from jaxtyping import ArrayLike
 
-from .common import angle_axis, new_axes
+from .common import angle_axis, new_axes, plain
 
 __all__ = ["plot_table", "plot_torque", "plot_inertia"]
 
@@ -33,7 +33,7 @@ def plot_table(table: Any, which: str = "forces", ax: Any = None) -> Any:
             axis.plot(a, c[col], lw=1.5)
             axis.set_ylabel(label)
             angle_axis(axis, min(cycle, 360))
-        axes[0].set_title(f"{table.engine_name}: piston kinematics at {table.rpm:g} rpm ({table.kinematics})")
+        axes[0].set_title(f"{plain(table.engine_name)}: piston kinematics at {table.rpm:g} rpm ({table.kinematics})")
         axes[-1].set_xlabel("crank angle [deg]")
         return axes
     axis = new_axes(ax)
@@ -50,11 +50,11 @@ def plot_table(table: Any, which: str = "forces", ax: Any = None) -> Any:
             axis.plot(a, c[col] / 1e3, lw=1.3, label=label)
         axis.set_ylabel("force [kN]")
         axis.legend(ncol=4, fontsize=8)
-        axis.set_title(f"{table.engine_name}: forces of cylinder {table.cylinder} at {table.rpm:g} rpm")
+        axis.set_title(f"{plain(table.engine_name)}: forces of cylinder {table.cylinder} at {table.rpm:g} rpm")
     elif which == "torque":
         axis.plot(a, c["m_Nm"], lw=1.5)
         axis.set_ylabel("torque of one cylinder [N·m]")
-        axis.set_title(f"{table.engine_name}: cylinder {table.cylinder} torque at {table.rpm:g} rpm")
+        axis.set_title(f"{plain(table.engine_name)}: cylinder {table.cylinder} torque at {table.rpm:g} rpm")
     else:
         raise ValueError(f"which must be 'kinematics', 'forces' or 'torque', got {which!r}")
     axis.axhline(0, color="k", lw=0.6)
@@ -94,7 +94,7 @@ def plot_torque(
     axis.axhline(0, color="k", lw=0.5)
     axis.set_xlabel(xlabel)
     axis.set_ylabel("torque [N·m]")
-    axis.set_title(title)
+    axis.set_title(plain(title))
     axis.legend(fontsize=8, ncol=2)
     angle_axis(axis, cycle_deg)
     return axis
@@ -117,7 +117,7 @@ def plot_inertia(angle_deg: ArrayLike, curves: Mapping[str, ArrayLike], title: s
         axis.plot(angle_deg, y, _STYLES.get(model, "-"), lw=1.5, label=model)
     axis.set_xlabel("crank angle [deg]")
     axis.set_ylabel("I(θ) [kg·m²]")
-    axis.set_title(title)
+    axis.set_title(plain(title))
     axis.legend(fontsize=8)
     angle_axis(axis, 360)
     return axis

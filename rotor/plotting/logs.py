@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from ..units import RPM_PER_RAD_S
-from .common import angle_axis, new_axes
+from .common import angle_axis, new_axes, plain
 
 __all__ = ["plot_log_analysis", "plot_tooth_errors"]
 
@@ -55,7 +55,7 @@ def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
     ax_w.set_ylabel("speed [rpm]")
     ax_w.legend(fontsize=8)
     angle_axis(ax_w, cycle_deg)
-    ax_w.set_title(f"{a.source}: speed over the cycle")
+    ax_w.set_title(f"{plain(a.source)}: speed over the cycle")
     k = np.arange(a.cycles)
     ax_c.plot(k, a.mean_rpm, "o-", color="C0", ms=4)
     ax_c.set_xlabel("cycle")

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import angle_axis, new_axes
+from .common import angle_axis, new_axes, plain
 
 __all__ = ["plot_curves", "plot_tangential_forces", "plot_turning_moment"]
 
@@ -27,7 +27,7 @@ def plot_curves(
     ax.axhline(0, color="k", lw=0.6)
     ax.set_xlabel("crank angle [deg]")
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(plain(title), fontsize=10)
     ax.legend(fontsize=8, ncol=3)
     angle_axis(ax, cycle)
     return ax
@@ -46,7 +46,7 @@ def plot_tangential_forces(
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("crank angle [deg]")
     ax.set_ylabel("tangential force [kN]")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(plain(title), fontsize=10)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the plot: many cylinders
     angle_axis(ax, cycle)
     return ax
@@ -64,7 +64,7 @@ def plot_turning_moment(
     top.fill_between(angle, torque, mean, where=torque < mean, color="C0", alpha=0.3, label="deficit (below mean)")
     top.axhline(0, color="k", lw=0.5)
     top.set_ylabel("torque [N·m]")
-    top.set_title(title, fontsize=10)
+    top.set_title(plain(title), fontsize=10)
     top.legend(fontsize=8, ncol=2)
     angle_axis(top, cycle)
     bottom.plot(angle, work, color="C4", lw=1.5, label="∫(M_Σ − M_mean)dθ")

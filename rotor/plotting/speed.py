@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike
 
-from .common import angle_axis, new_axes
+from .common import angle_axis, new_axes, plain
 
 __all__ = ["plot_speed", "plot_speed_time", "plot_cycle_torque", "plot_orders"]
 
@@ -32,7 +32,7 @@ def plot_speed(
     ax.axhline(mean_rpm, color="0.5", lw=0.8, ls="--", label="time mean")
     ax.set_ylabel("speed [rpm]")
     ax.legend()
-    ax.set_title(title)
+    ax.set_title(plain(title))
     ax.set_xlabel("crank angle in the cycle [deg]")
     angle_axis(ax, cycle_deg)
     return ax
@@ -56,7 +56,7 @@ def plot_speed_time(
     ax.set_xlabel("time [s]")
     ax.set_ylabel("speed [rpm]")
     ax.grid(True, alpha=0.3)
-    ax.set_title(title)
+    ax.set_title(plain(title))
     return ax
 
 
@@ -75,7 +75,7 @@ def plot_cycle_torque(
     ax.plot(angle_deg, load_Nm, lw=1.2, label="load + friction")
     ax.set_ylabel("torque [N·m]")
     ax.legend()
-    ax.set_title(title)
+    ax.set_title(plain(title))
     ax.set_xlabel("crank angle in the cycle [deg]")
     angle_axis(ax, cycle_deg)
     return ax
@@ -97,7 +97,7 @@ def plot_orders(order: ArrayLike, amplitude_rad_s: ArrayLike, title: str, ax: An
     ax.set_ylabel("speed amplitude [rad/s]")
     ax.set_xticks(order[1::2] if len(order) > 12 else order)
     ax.grid(True, alpha=0.3, axis="y")
-    ax.set_title(title)
+    ax.set_title(plain(title))
     return ax
 
 
@@ -114,5 +114,5 @@ def plot_sweep(x: ArrayLike, delta: ArrayLike, x_label: str, title: str, ax: Any
     ax.set_xlabel(x_label)
     ax.set_ylabel("speed irregularity δ [-]")
     ax.grid(True, alpha=0.3)
-    ax.set_title(title)
+    ax.set_title(plain(title))
     return ax

@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from .common import plain
+
 __all__ = ["plot_mode_shapes", "plot_campbell"]
 
 
@@ -56,8 +58,8 @@ def plot_mode_shapes(
         axis.legend(loc="upper right", fontsize=8)
     last = axes[-1] if not single else axes[0]
     last.set_xticks(x)
-    last.set_xticklabels(list(mass_names), rotation=30, ha="right", fontsize=8)
-    axes[0].set_title(title + ("  (shaded: crank throws)" if len(throw_masses) else ""))
+    last.set_xticklabels([plain(n) for n in mass_names], rotation=30, ha="right", fontsize=8)
+    axes[0].set_title(plain(title) + ("  (shaded: crank throws)" if len(throw_masses) else ""))
     return axes[0] if single else axes
 
 
@@ -121,6 +123,6 @@ def plot_campbell(
     ax.set_ylim(0, top)
     ax.set_xlabel("engine speed [rpm]")
     ax.set_ylabel("frequency [Hz]")
-    ax.set_title(title)
+    ax.set_title(plain(title))
     ax.grid(True, alpha=0.3)
     return ax

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import Float
 
-from .common import angle_axis
+from .common import angle_axis, plain
 
 __all__ = ["plot_torsional_response", "plot_torsional_sweep", "plot_torsional_run"]
 
@@ -47,16 +47,16 @@ def plot_torsional_response(
     axes = _axes(ax, 3, (9, 8.5))
     a0, a1, a2 = np.ravel(axes)[:3]
     cycle = float(np.round(angle_deg[-1] + (angle_deg[1] - angle_deg[0])))
-    a0.plot(angle_deg, rpm_reference, lw=1.6, label=f"{names[0]} (reference)")
+    a0.plot(angle_deg, rpm_reference, lw=1.6, label=f"{plain(names[0])} (reference)")
     if names[1] != names[0]:
-        a0.plot(angle_deg, rpm_front, lw=1.0, label=names[1])
+        a0.plot(angle_deg, rpm_front, lw=1.0, label=plain(names[1]))
     a0.set_ylabel("speed [rpm]")
-    a0.set_title(title)
+    a0.set_title(plain(title))
     a0.legend(fontsize=8)
     many = len(section_names) > 10
     for i, name in enumerate(section_names):
-        a1.plot(angle_deg, np.asarray(twist_rad[i]) * 1e3, lw=0.9, label=None if many else name)
-        a2.plot(angle_deg, vibratory_torque_Nm[i], lw=0.9, label=None if many else name)
+        a1.plot(angle_deg, np.asarray(twist_rad[i]) * 1e3, lw=0.9, label=None if many else plain(name))
+        a2.plot(angle_deg, vibratory_torque_Nm[i], lw=0.9, label=None if many else plain(name))
     a1.set_ylabel("twist θᵢ − θᵢ₊₁ [mrad]")
     a2.set_ylabel("vibratory torque [N·m]")
     a2.set_xlabel("crank angle of the reference mass [deg]")
@@ -83,7 +83,7 @@ def plot_torsional_sweep(
 
         _, ax = plt.subplots(figsize=(9, 4.8), layout="constrained")
     for i, name in enumerate(section_names):
-        ax.plot(rpm, torque_pp_Nm[:, i], lw=1.0, label=name)
+        ax.plot(rpm, torque_pp_Nm[:, i], lw=1.0, label=plain(name))
     for r in critical_rpm:
         ax.axvline(r, color="k", lw=0.6, ls=":", alpha=0.6)
     finite = np.asarray(torque_pp_Nm)[np.isfinite(torque_pp_Nm)]
@@ -91,7 +91,7 @@ def plot_torsional_sweep(
         ax.set_yscale("log")
     ax.set_xlabel("mean speed [rpm]" + (" (dotted: critical speeds of the strong orders)" if critical_rpm else ""))
     ax.set_ylabel("vibratory torque, peak to peak [N·m]")
-    ax.set_title(title)
+    ax.set_title(plain(title))
     ax.grid(True, alpha=0.3)
     if len(section_names) <= 12:
         ax.legend(fontsize=7, ncol=2)
@@ -114,11 +114,11 @@ def plot_torsional_run(
     a0, a1 = np.ravel(axes)[:2]
     many = len(names) > 10
     for j, name in enumerate(names):
-        a0.plot(t_s, rpm[:, j], lw=0.9, label=None if many else name)
+        a0.plot(t_s, rpm[:, j], lw=0.9, label=None if many else plain(name))
     for i, name in enumerate(section_names):
         a1.plot(t_s, torque_Nm[:, i], lw=0.8, label=None if len(section_names) > 10 else name)
     a0.set_ylabel("speed [rpm]")
-    a0.set_title(title)
+    a0.set_title(plain(title))
     a1.set_ylabel("shaft torque [N·m]")
     a1.set_xlabel("time [s]")
     for a in (a0, a1):
