@@ -8,6 +8,8 @@ Holds the log readers (:mod:`.reader`), edge finding in sampled wheel signals
 May import: :mod:`rotor.engine` (the engine's inertia ripple), :mod:`rotor.plotting` (to
 draw its results) and the ground floor. Never :mod:`rotor.dynamics` or
 :mod:`rotor.diagnostics`.
+
+Simulated analog wheel signals with their true edges, to test the readers: :mod:`.synthetic`.
 """
 
 from ..cache import submodules_on_demand
