@@ -95,7 +95,9 @@ class LogAnalysis(Result):
     ``pressure``: (cycle angle [rad], pressure signal) of the complete cycles when a
     pressure channel was given, for the plot. ``cylinders``: as given; ``delta_weight``:
     the weight of each order in the speed whose max − min is δ (1: taken whole; see
-    ``denoise`` of :func:`analyze_log`).
+    ``denoise`` of :func:`analyze_log`). ``reading``: the wheel signal as read
+    (:class:`rotor.logs.track.WheelReading`: the edge, levels and wheel chosen, with their
+    evidence, every wheel tried; ``None`` for a speed log).
     """
 
     source: str
@@ -122,6 +124,7 @@ class LogAnalysis(Result):
     notes: tuple = ()
     cylinders: int = 1
     delta_weight: np.ndarray | None = None
+    reading: WheelReading | None = None
 
     # ------------------------------------------------------------------ numbers
     @property
@@ -205,6 +208,8 @@ class LogAnalysis(Result):
         wheel = self.track.to_json_dict() if self.track is not None else None
         if wheel is not None and self.edges is not None:
             wheel["encoder"] = self.edges.to_json_dict()
+        if wheel is not None and self.reading is not None:
+            wheel["reading"] = self.reading.to_json_dict()
         return json_safe(
             {
                 "source": self.source,
@@ -233,6 +238,12 @@ class LogAnalysis(Result):
             lines.append(
                 f"  wheel {w['spec']}: {w['edges']} edges, {w['complete_revolutions']} complete revolutions, "
                 f"{w['edges_per_rev']} per revolution, gap period ratio {w['gap_period_ratio']:.2f}"
+            )
+        if self.reading is not None:
+            found = [f"{c.name} {c.value}" for c in self.reading.choices if c.source is ChoiceSource.FOUND]
+            lines.append(
+                f"  read as {self.reading.pins()}"
+                + (f" (found from the signal: {', '.join(found)}; these options pin them)" if found else "")
             )
         if self.tooth_errors is not None:
             te = self.tooth_errors
@@ -924,4 +935,5 @@ def analyze_log(
         notes=tuple(notes),
         cylinders=int(cylinders),
         delta_weight=gain[1:],
+        reading=reading,
     )
