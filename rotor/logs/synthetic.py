@@ -726,14 +726,17 @@ def wheel_signal(
             "give a shorter one"
         )
     a0, a1, a2, a3 = _hermite(pn, wn, h)
-    # per row (grid step) k and sample j: x = wheel angle in pitches = c0 + s(c1 + s(c2 + s·c3)), s = j/m;
-    # c0 reduced to one revolution, so that x indexes the per-position tables directly
+    # per row (grid step) k and sample j: the wheel angle in pitches is row_base + x, x = c0 + s(c1 + s(c2 +
+    # s·c3)), s = j/m; row_base, the position at the row's start within one revolution, indexes the
+    # per-position tables; x, below a few pitches, is computed in single precision (rounding < 1e-6 pitch)
     ip = 1.0 / pitch
-    c0 = (a0 + theta0) * ip
-    c0 -= N * np.floor(c0 / N)
-    c1, c2, c3 = a1 * ip, a2 * ip, a3 * ip
-    d1, d2, d3 = a1 / h, 2.0 * a2 / h, 3.0 * a3 / h  # ω = d1 + s(d2 + s·d3)
-    sj = np.arange(m) / m
+    start = (a0 + theta0) * ip
+    start -= N * np.floor(start / N)
+    row_base = np.floor(start).astype(np.intp)
+    f32 = np.float32
+    c0, c1, c2, c3 = (c.astype(f32) for c in (start - row_base, a1 * ip, a2 * ip, a3 * ip))
+    d1, d2, d3 = ((c / h).astype(f32) for c in (a1, 2.0 * a2, 3.0 * a3))  # ω = d1 + s(d2 + s·d3)
+    sj = (np.arange(m) / m).astype(f32)
 
     # the positions whose tooth can reach a sample: base = floor(x + b), candidates base + d
     if sensor == "vr":
@@ -753,47 +756,51 @@ def wheel_signal(
     span = int(math.ceil(float(np.max(np.diff(pn))) * ip)) + 2  # pitches a row can cover
     lo_pad, hi_pad = max(0, -d_min) + 1, d_max + span + 1
     ext = np.arange(-lo_pad, N + hi_pad) % N
-    amp_x, on_x, wid_x = amp[ext], on[ext], width[ext]
-    on_x = np.where(present[ext], on_x, 1e6)  # a missing tooth: an edge far away, never reached
+    amp_x, wid_x = amp[ext].astype(f32), width[ext].astype(f32)
+    on_x = np.where(present[ext], on[ext], 1e6).astype(f32)  # a missing tooth: an edge far away, never reached
 
     sign = -1.0 if inverted else 1.0
+    scale, base = (-sens / _PULSE_PEAK, offset) if sensor == "vr" else (hi - lo, lo)
     rng_noise = np.random.default_rng([int(seed), 2])
     v = np.empty(n)
     rows = max(1, _CHUNK // m)
     for r0 in range(0, K, rows):
         r1 = min(K, r0 + rows)
-        x = (c0[r0:r1, None] + sj * (c1[r0:r1, None] + sj * (c2[r0:r1, None] + sj * c3[r0:r1, None]))).ravel()
+        x = c0[r0:r1, None] + sj * (c1[r0:r1, None] + sj * (c2[r0:r1, None] + sj * c3[r0:r1, None]))
         om = (d1[r0:r1, None] + sj * (d2[r0:r1, None] + sj * d3[r0:r1, None])).ravel()
-        x += b_shift
+        x += f32(b_shift)
         f = np.floor(x)
-        fr = x - f - b_shift  # x − base
-        p0 = f.astype(np.int64) + lo_pad
-        acc = np.zeros_like(x)
+        fr = x - f
+        fr -= f32(b_shift)  # x − base
+        p0 = (f.astype(np.intp) + (row_base[r0:r1, None] + lo_pad)).ravel()
+        fr = fr.ravel()
         if sensor == "vr":
-            inv_s = 1.0 / sigma
+            acc = np.zeros(fr.size, f32)
+            inv_s = f32(1.0 / sigma)
             for d in range(d_min, d_max + 1):
                 idx = p0 + d
-                u = (fr - d - on_x[idx]) * inv_s
-                g = np.maximum(1.0 - u * u, 0.0)
+                u = (fr - f32(d) - on_x[idx]) * inv_s
+                g = np.maximum(f32(1.0) - u * u, f32(0.0))
                 acc += amp_x[idx] * u * g * g
-            out = acc * om
-            out *= -sens / _PULSE_PEAK
-            if offset:
-                out += offset
+            acc *= om
+            out = acc
         else:
-            q = pitch / (om * tau)  # pitches → ramps
+            acc = np.zeros(fr.size, f32)
+            q = f32(pitch / tau) / om  # pitches → ramps
             for d in range(d_min, d_max + 1):
                 idx = p0 + d
-                z = (fr - d - on_x[idx]) * q
-                up = np.minimum(np.maximum(z + 0.5, 0.0), 1.0)
-                down = np.minimum(np.maximum((wid_x[idx] * q - z) + 0.5, 0.0), 1.0)
+                z = (fr - f32(d) - on_x[idx]) * q
+                up = np.minimum(np.maximum(z + f32(0.5), f32(0.0)), f32(1.0))
+                down = np.minimum(np.maximum((wid_x[idx] * q - z) + f32(0.5), f32(0.0)), f32(1.0))
                 acc += up * down
-            out = lo + (hi - lo) * np.minimum(acc, 1.0)
+            out = np.minimum(acc, f32(1.0))
+        seg = v[r0 * m : r1 * m]
+        np.multiply(out, scale, out=seg)
+        seg += base
         if noise > 0:
-            out += noise * rng_noise.standard_normal(out.size)
+            seg += noise * rng_noise.standard_normal(seg.size)
         if inverted:
-            np.negative(out, out=out)
-        v[r0 * m : r1 * m] = out
+            np.negative(seg, out=seg)
 
     # the truth: every tooth edge at least half a pitch inside the record
     th_first = float(pn[0]) + theta0
