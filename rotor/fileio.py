@@ -19,10 +19,135 @@ from typing import Any
 
 from .errors import InternalError
 
-__all__ = ["atomic_path", "csv_text", "find_nonfinite", "key_path_text", "load_json", "save_json", "write_text_atomic"]
+__all__ = [
+    "INTERRUPT",
+    "atomic_path",
+    "check_folder_writable",
+    "check_writable_file",
+    "csv_text",
+    "find_nonfinite",
+    "key_path_text",
+    "load_json",
+    "made_folders",
+    "save_json",
+    "write_text_atomic",
+]
 
 PathArg = str | os.PathLike
 """A file's path: a ``str`` or a path-like object (``pathlib.Path``)."""
+
+
+class _Interrupt:
+    """Whether an interrupt (Ctrl-C) has arrived, kept as a flag: a ``KeyboardInterrupt``
+    raised where Python cannot pass it on (inside a garbage collector's callback, which
+    JAX registers) is only printed and dropped, and the flag is what is left of it.
+
+    The command line sets it from its SIGINT handler (:meth:`set`); every writer of this
+    module asks it (:meth:`check`) before it puts a file in place, and the command line
+    again before it exits 0, so that a dropped interrupt still stops the run (exit 130)
+    with nothing put in place."""
+
+    def __init__(self) -> None:
+        self._set = False
+
+    def set(self) -> None:
+        self._set = True
+
+    def clear(self) -> None:
+        self._set = False
+
+    def __bool__(self) -> bool:
+        return self._set
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if an interrupt has arrived."""
+        if self._set:
+            raise KeyboardInterrupt
+
+
+INTERRUPT = _Interrupt()
+"""The interrupt flag of this process (see :class:`_Interrupt`)."""
+
+
+def _writable_folder(folder: str) -> bool:
+    """Whether files can be made in the existing ``folder``: by this user, on this file
+    system (read-only, or one that refuses new files whatever the permissions say). Tried:
+    a hidden folder of a fresh name is made and removed at once."""
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return False
+    for _ in range(10):
+        probe = os.path.join(folder, f".rotor-probe-{secrets.token_hex(4)}")
+        try:
+            os.mkdir(probe)
+        except FileExistsError:
+            continue
+        except OSError:
+            return False
+        try:
+            os.rmdir(probe)
+        except OSError:
+            pass
+        return True
+    return True
+
+
+def check_folder_writable(folder: PathArg, what: str = "the output") -> None:
+    """A one-line ``OSError`` naming ``folder`` where ``what`` could not be written into it:
+    a link that points nowhere, a file, or a folder (the nearest existing one above a new
+    folder) that this user cannot write. Nothing is made: a check before the work starts."""
+    folder = _check_path(folder, "folder")
+    if os.path.islink(folder) and not os.path.exists(folder):
+        raise FileNotFoundError(
+            errno.ENOENT, f"is a link to {os.readlink(folder)}, which does not exist: give a folder for {what}", folder
+        )
+    if os.path.exists(folder):
+        if not os.path.isdir(folder):
+            raise NotADirectoryError(errno.ENOTDIR, f"is a file, not a folder for {what}: give a folder", folder)
+        if not _writable_folder(folder):
+            raise PermissionError(errno.EACCES, f"cannot write {what} into this folder (permission denied)", folder)
+        return
+    parent = os.path.dirname(os.path.abspath(folder))
+    while not os.path.exists(parent) and os.path.dirname(parent) != parent:
+        if os.path.islink(parent):
+            raise FileNotFoundError(errno.ENOENT, f"{parent} is a link to nothing: give a folder for {what}", folder)
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent):
+        raise NotADirectoryError(errno.ENOTDIR, f"{parent} is a file, not a folder", folder)
+    if not _writable_folder(parent):
+        raise PermissionError(errno.EACCES, f"cannot make the folder for {what}: {parent} is not writable", folder)
+
+
+@contextmanager
+def made_folders(folder: PathArg) -> Iterator[str]:
+    """Make ``folder`` and its missing parents (``os.makedirs``); yield it; if the block
+    fails (an error or Ctrl-C), remove again every folder made here that is still empty,
+    so that a failed command leaves none of its folders behind. An ``OSError`` while
+    making them names ``folder``."""
+    folder = _check_path(folder, "folder")
+    made = []
+    here = os.path.abspath(folder)
+    while not os.path.exists(here) and os.path.dirname(here) != here:
+        made.append(here)
+        here = os.path.dirname(here)
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as e:
+        _remove_empty(made)
+        raise type(e)(e.errno or errno.EIO, e.strerror or str(e), folder) from None
+    try:
+        yield folder
+    except BaseException:
+        _remove_empty(made)
+        raise
+
+
+def _remove_empty(folders: list[str]) -> None:
+    """Remove ``folders`` (deepest first) where they are empty; leave the others."""
+    for f in folders:
+        try:
+            os.rmdir(f)
+        except OSError:
+            break
 
 
 def _check_path(path: object, argument: str = "path") -> str:
@@ -81,14 +206,18 @@ def _new_file_beside(path: str) -> str:
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except FileExistsError:
             continue
+        except OSError as e:  # named by the user's path, never the temporary name
+            raise type(e)(e.errno or errno.EIO, e.strerror or str(e), path) from None
         os.close(fd)
         return tmp
     raise FileExistsError(errno.EEXIST, "no free temporary name in the folder", path)
 
 
-def _check_writable_path(path: str) -> None:
+def check_writable_file(path: PathArg) -> None:
     """A one-line ``OSError`` naming ``path`` when no file can be written there: a folder's
-    name, a folder that does not exist, or a "folder" that is a file."""
+    name, a folder that does not exist, a "folder" that is a file, or a folder this user
+    cannot write. Nothing is made: a check before the work starts."""
+    path = _check_path(path)
     if path.endswith(("/", os.sep)) or os.path.isdir(path):
         raise IsADirectoryError(errno.EISDIR, "is a folder: give a file name", path)
     folder = os.path.dirname(os.path.abspath(path))
@@ -99,6 +228,8 @@ def _check_writable_path(path: str) -> None:
         if os.path.exists(parent) and not os.path.isdir(parent):
             raise NotADirectoryError(errno.ENOTDIR, f"{parent} is a file, not a folder", path)
         raise FileNotFoundError(errno.ENOENT, f"no folder {folder} (make it first)", path)
+    if not _writable_folder(folder):
+        raise PermissionError(errno.EACCES, f"cannot write into the folder {folder} (permission denied)", path)
 
 
 @contextmanager
@@ -114,7 +245,7 @@ def atomic_path(path: PathArg) -> Iterator[str]:
     refused before anything is written. A ``path`` that is not a ``str`` or path-like
     object raises ``TypeError``."""
     path = _check_path(path)
-    _check_writable_path(path)
+    check_writable_file(path)
     tmp = None
     try:
         tmp = _new_file_beside(path)
@@ -125,6 +256,7 @@ def atomic_path(path: PathArg) -> Iterator[str]:
         except OSError:
             pass  # keeping the old mode is a courtesy; the write goes on with the umask's
         yield tmp
+        INTERRUPT.check()  # an interrupt that was dropped still stops the file being put in place
         os.replace(tmp, path)
     except OSError as e:
         names_tmp = tmp is not None and (str(e.filename).startswith(tmp) or e.filename2 == tmp)

@@ -118,7 +118,7 @@ CASES = [
     (["info", "4chn15", "--rpm", "1e300", "--json"], 2, "rpm = 1e+300"),
     # plot
     (["plot", "4chn15", "--plot", "{file}"], 2, "{file}: is a file, not a folder"),
-    (["plot", "4chn15", "--plot", "{file}/sub"], 2, "{file}/sub: cannot make the folder"),
+    (["plot", "4chn15", "--plot", "{file}/sub"], 2, "{file}/sub: {file} is a file, not a folder"),
     (["plot", "nosuchpreset"], 2, "neither an engine file nor a preset"),
     # presets
     (["presets", "extra"], 2, "unrecognized arguments"),
@@ -151,8 +151,12 @@ CASES = [
     (["analyze", "{log}", *TOOTH, "--engine-orders", "x"], 2, "--engine-orders 'x'"),
     (["analyze", "{log}", *TOOTH, "--tooth-errors", "{file}"], 2, "{file}: not a tooth-error file"),
     (["analyze", "{log}", *TOOTH, "--tooth-errors", "{dir}"], 2, "{dir}: is a folder"),
-    (["analyze", "{log}", *TOOTH, "--save-tooth-errors", "{dir}"], 2, "{dir}: cannot write the tooth errors"),
-    (["analyze", "{log}", *TOOTH, "--save-tooth-errors", "{file}/x.json"], 2, "{file}/x.json: cannot write"),
+    (["analyze", "{log}", *TOOTH, "--save-tooth-errors", "{dir}"], 2, "{dir}: is a folder: give a file name"),
+    (
+        ["analyze", "{log}", *TOOTH, "--save-tooth-errors", "{file}/x.json"],
+        2,
+        "{file}/x.json: {file} is a file, not a folder",
+    ),
     (["analyze", "{log}", *TOOTH, "--plot", "{file}"], 2, "{file}: is a file, not a folder"),
     (["analyze", "{file}", "--wheel", "60-2"], 2, "{file}: line 1"),
     (["analyze", "{dir}", "--wheel", "60-2"], 2, "{dir}: is a folder"),
@@ -169,7 +173,11 @@ CASES = [
     (["diagnose", "{log}", "{log}", "--engine", "4chn15", "--save-calibration", "{dir}/c.json"], 2, "a single LOG"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--calibration", "{file}"], 2, "not a calibration file"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--calibration", "{dir}"], 2, "{dir}: is a folder"),
-    (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--save-calibration", "{file}/c.json"], 2, "no folder"),
+    (
+        ["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--save-calibration", "{file}/c.json"],
+        2,
+        "{file}/c.json: {file} is a file, not a folder",
+    ),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH, "--threshold", "-1"], 2, "must be a positive number"),
     (["diagnose", "{log}", "--engine", "4chn15", *TOOTH], 2, "TDC is not known"),
     # calibrate
@@ -178,7 +186,11 @@ CASES = [
     (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--pressure-gain", "abc"], 2, "'abc': a positive gain"),
     (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--pressure-gain", "-5"], 2, "'-5': a positive gain"),
     (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--intake-pa", "-1"], 2, "must be a positive number"),
-    (["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--output", "{file}/c.json"], 2, "no folder"),
+    (
+        ["calibrate", "{log}", "--engine", "tue-single", *TOOTH, "--output", "{file}/c.json"],
+        2,
+        "{file}/c.json: {file} is a file, not a folder",
+    ),
     # flywheel
     (["flywheel", "4chn15", "--delta", "0"], 2, "must be a positive number"),
     (["flywheel", "4chn15", "--delta", "nan"], 2, "must be a positive number"),

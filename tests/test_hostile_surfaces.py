@@ -286,3 +286,136 @@ def test_plain_keeps_every_letter_of_a_users_text() -> None:
     fig.canvas.draw()
     assert title.get_text() == "Test \\$x_\\$ engine, 5 \\$ and \\\\$"
     plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- output locations
+needs_sysfs = pytest.mark.skipif(
+    not os.path.isdir("/sys/kernel"), reason="needs Linux's /sys, where no file can be made"
+)
+
+
+@needs_sysfs
+@pytest.mark.parametrize(
+    "argv,path",
+    [
+        (["table", "4chn15", "--format", "csv", "--output", "/sys/x.csv"], "/sys/x.csv"),
+        (["balance", "4chn15", "--plot", "/sys/plots"], "/sys/plots"),
+        (["report", "4chn15", "--out", "/sys/report"], "/sys/report"),
+        (["report", "4chn15", "--out", "/sys/new/a/report"], "/sys/new/a/report"),
+    ],
+    ids=["table --output", "--plot", "report", "report in new folders"],
+)
+def test_an_unwritable_output_is_refused_before_the_work_naming_the_users_path(
+    argv: list[str], path: str, capsys, monkeypatch
+) -> None:
+    import rotor.engine.table
+
+    def no_work(*a, **k):
+        raise AssertionError("the work started before the output was checked")
+
+    monkeypatch.setattr(rotor.engine.table, "crank_table", no_work)
+    monkeypatch.setattr("rotor.design.balance.balance", no_work)
+    rc, _, err = run(capsys, argv)
+    assert_refused(rc, err, f"rotor: error: {path}: ")
+    assert ".rotor" not in err
+
+
+@pytest.mark.parametrize("option", ["--out", "--plot"])
+def test_a_dangling_link_as_the_output_folder_is_refused_before_the_work(
+    option: str, tmp_path: Path, capsys, monkeypatch
+) -> None:
+    link = tmp_path / "link"
+    link.symlink_to(tmp_path / "nowhere")
+    monkeypatch.setattr("rotor.design.balance.balance", lambda *a, **k: pytest.fail("the work started"))
+    argv = ["report", "4chn15", "--out", str(link)] if option == "--out" else ["balance", "4chn15", "--plot", str(link)]
+    rc, _, err = run(capsys, argv)
+    assert_refused(rc, err, f"{link}: is a link to {tmp_path / 'nowhere'}, which does not exist")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link"]
+
+
+def test_two_reports_put_in_place_at_once_end_as_one_whole_report(tmp_path: Path) -> None:
+    import threading
+
+    from rotor.design.report import report_folder
+
+    out = tmp_path / "new" / "report"
+    both_written = threading.Barrier(2)
+    errors: list[BaseException] = []
+
+    def write(who: str) -> None:
+        try:
+            with report_folder(str(out)) as tmp:
+                for name in ("figures", "tables"):
+                    os.mkdir(os.path.join(tmp, name))
+                    Path(tmp, name, f"{name}.txt").write_text(who)
+                Path(tmp, "index.html").write_text(who)
+                both_written.wait(timeout=10)  # both put their report in place at once
+        except BaseException as e:  # noqa: BLE001 - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=write, args=(who,)) for who in ("first", "second")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=30)
+    assert not errors, errors
+    assert sorted(p.name for p in out.iterdir()) == ["figures", "index.html", "tables"]
+    texts = {(out / "index.html").read_text(), (out / "figures" / "figures.txt").read_text()}
+    texts.add((out / "tables" / "tables.txt").read_text())
+    assert len(texts) == 1, texts  # one run's report, whole
+    assert sorted(p.name for p in out.parent.iterdir()) == ["report"]  # no temporary folder left
+
+
+# ----------------------------------------------------------------------------- interrupts
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_an_interrupt_dropped_in_a_garbage_collector_callback_still_stops_the_run(
+    tmp_path: Path, capsys, monkeypatch
+) -> None:
+    import gc
+    import signal
+
+    import rotor.engine.table
+
+    fired = []
+
+    def interrupt_once(phase: str, info: dict) -> None:
+        if phase == "start" and not fired:
+            fired.append(True)
+            signal.raise_signal(signal.SIGINT)  # its KeyboardInterrupt is raised here, and dropped
+
+    real = rotor.engine.table.crank_table
+
+    def crank_table_with_a_collection(*args, **kwargs):
+        gc.callbacks.append(interrupt_once)
+        try:
+            gc.collect()
+        finally:
+            gc.callbacks.remove(interrupt_once)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(rotor.engine.table, "crank_table", crank_table_with_a_collection)
+    out = tmp_path / "table.csv"
+    rc, _, err = run(capsys, ["table", "4chn15", "--format", "csv", "--output", str(out)])
+    assert fired and rc == 130, err
+    assert "rotor: interrupted" in err and not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("stop", [KeyboardInterrupt, OSError])
+def test_a_report_that_fails_removes_the_folders_it_made(stop, tmp_path: Path) -> None:
+    from rotor.design.report import report_folder
+
+    with pytest.raises(stop):
+        with report_folder(str(tmp_path / "new" / "a" / "b" / "rep")) as tmp:
+            Path(tmp, "index.html").write_text("half")
+            raise stop()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_command_that_fails_removes_the_plot_folders_it_made(tmp_path: Path, capsys, monkeypatch) -> None:
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("rotor.cli.report.save_plot", interrupted)
+    rc, _, err = run(capsys, ["balance", "4chn15", "--plot", str(tmp_path / "new" / "a" / "b")])
+    assert rc == 130 and "rotor: interrupted" in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -20,16 +20,19 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import signal
 import sys
+import threading
 import traceback
 import warnings
 from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
+from ..fileio import INTERRUPT
 from . import demo, design, diagnostics, engine, logs, report, run, torsion  # light: see test_cli_latency.py
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
 
-__all__ = ["COMMAND_GROUPS", "build_parser", "main", "report_error", "warning_line"]
+__all__ = ["COMMAND_GROUPS", "build_parser", "check_outputs", "main", "report_error", "warning_line"]
 
 COMMAND_GROUPS = (engine, run, logs, diagnostics, design, torsion, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
@@ -208,6 +211,50 @@ def report_error(e: BaseException, debug: bool = False) -> int:
     return EXIT_INTERNAL
 
 
+OUTPUT_FILES = ("output", "save_calibration", "save_tooth_errors")
+"""The options (``args`` attributes) that name a file a command writes."""
+OUTPUT_FOLDERS = {"plot": "the plots", "out": "the report"}
+"""The options that name a folder a command writes into, and what it writes there."""
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse, before the work starts, an output the command could not write: a file option
+    (:data:`OUTPUT_FILES`) naming a folder, a missing folder or one this user cannot write;
+    a folder option (:data:`OUTPUT_FOLDERS`) naming a file, a link to nothing or a folder
+    that cannot be written or made. Each is a one-line ``OSError`` naming the user's path."""
+    from ..fileio import check_folder_writable, check_writable_file
+
+    for key in OUTPUT_FILES:
+        value = getattr(args, key, None)
+        if isinstance(value, str) and value:
+            check_writable_file(value)
+    for key, what in OUTPUT_FOLDERS.items():
+        value = getattr(args, key, None)
+        if isinstance(value, str) and value:
+            check_folder_writable(value, what)
+
+
+def _on_interrupt(signum: int, frame: object) -> None:
+    """SIGINT: note the interrupt as a flag (:data:`rotor.fileio.INTERRUPT`), then raise
+    ``KeyboardInterrupt`` as Python does. Where that exception is dropped (raised inside a
+    garbage collector's callback), the flag still stops the run: before a file is put in
+    place and before the exit."""
+    INTERRUPT.set()
+    raise KeyboardInterrupt
+
+
+def _catch_interrupts() -> object:
+    """Install :func:`_on_interrupt` for SIGINT (in the main thread, where Python's own
+    handler is in place); the handler it replaced, or None."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is not signal.default_int_handler:
+        return None  # SIGINT ignored, or handled by the caller: theirs stays
+    signal.signal(signal.SIGINT, _on_interrupt)
+    return previous
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rotor`` command: run ``argv`` (default ``sys.argv[1:]``); the exit
     status (see the module's docstring: 0, 1, 2, 70 or 130).
@@ -215,25 +262,41 @@ def main(argv: Sequence[str] | None = None) -> int:
     Switches JAX's persistent compilation cache on (:func:`rotor.enable_compilation_cache`;
     with ``argv`` None, a command line of its own, for every kernel however small). Builds
     the parser without importing JAX: the commands import what they compute with, so that
-    ``rotor --help`` and ``rotor presets`` never import it."""
-    try:
-        args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
-    except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
-        return report_error(e)
-    try:
-        from ..cache import enable_compilation_cache
+    ``rotor --help`` and ``rotor presets`` never import it.
 
-        # the command's compiled kernels are reused by its next run; from the command line
-        # (argv None, a process of its own) its small eager kernels too, which a long
-        # Python session calling main(argv) should not pile up in the cache
-        enable_compilation_cache(min_compile_time_s=0.0 if argv is None else 0.1)
-        with warnings.catch_warnings():
-            warnings.simplefilter("default")  # each distinct warning once
-            warnings.showwarning = warning_line
-            args.func(args)
-        sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
-    except SystemExit:
-        raise
-    except BaseException as e:  # noqa: BLE001 - every exception is reported, none as a raw traceback
-        return report_error(e, debug=args.debug)
-    return 0
+    Ctrl-C is noted as a flag as well as raised (:func:`_on_interrupt`): a command whose
+    interrupt was dropped on the way still ends with exit status 130, its files not put in
+    place. A command that fails removes the folders it made for its output."""
+    from .output import MADE_FOLDERS, remove_made_folders
+
+    INTERRUPT.clear()
+    MADE_FOLDERS.clear()
+    previous = _catch_interrupts()
+    try:
+        try:
+            args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
+        except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
+            return report_error(e)
+        try:
+            from ..cache import enable_compilation_cache
+
+            # the command's compiled kernels are reused by its next run; from the command line
+            # (argv None, a process of its own) its small eager kernels too, which a long
+            # Python session calling main(argv) should not pile up in the cache
+            enable_compilation_cache(min_compile_time_s=0.0 if argv is None else 0.1)
+            check_outputs(args)
+            with warnings.catch_warnings():
+                warnings.simplefilter("default")  # each distinct warning once
+                warnings.showwarning = warning_line
+                args.func(args)
+            INTERRUPT.check()  # an interrupt dropped on the way: not a finished run
+            sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
+        except SystemExit:
+            raise
+        except BaseException as e:  # noqa: BLE001 - every exception is reported, none as a raw traceback
+            remove_made_folders()
+            return report_error(e, debug=args.debug)
+        return 0
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)  # type: ignore[arg-type]

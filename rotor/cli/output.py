@@ -15,12 +15,14 @@ from ..errors import InternalError
 from ..fileio import csv_text, find_nonfinite, key_path_text
 
 __all__ = [
+    "MADE_FOLDERS",
     "csv_text",
     "json_text",
     "plot_folder",
     "print_json",
     "print_text",
     "print_written",
+    "remove_made_folders",
     "save_plot",
 ]
 
@@ -54,20 +56,44 @@ def print_json(data: Any, indent: int = 2) -> None:
     sys.stdout.write(json_text(data, indent))
 
 
+MADE_FOLDERS: list[str] = []
+"""The folders this command made for its output; :func:`remove_made_folders` removes those
+still empty when it fails, so that a failed command leaves none of its folders behind."""
+
+
 def plot_folder(folder: str) -> str:
     """Make ``folder`` (``--plot DIR``, a folder's path) and select matplotlib's file
-    backend; ``folder``. A ``folder`` that is a file, or lies under one, raises an
-    ``OSError`` naming it."""
+    backend; ``folder``. A ``folder`` that cannot hold the plots (a file, or under one, a
+    link to nothing, a folder this user cannot write) raises an ``OSError`` naming it,
+    before the work starts; the folders made are noted in :data:`MADE_FOLDERS`."""
     import matplotlib
 
+    from ..fileio import check_folder_writable
+
     matplotlib.use("Agg")
-    if os.path.exists(folder) and not os.path.isdir(folder):
-        raise NotADirectoryError(errno.ENOTDIR, "is a file, not a folder for the plots: give a folder", folder)
+    check_folder_writable(folder, "the plots")
+    here = os.path.abspath(folder)
+    made = []
+    while not os.path.exists(here) and os.path.dirname(here) != here:
+        made.append(here)
+        here = os.path.dirname(here)
     try:
         os.makedirs(folder, exist_ok=True)
     except OSError as e:
-        raise type(e)(e.errno, f"cannot make the folder for the plots ({e.strerror})", folder) from None
+        raise type(e)(e.errno or errno.EIO, f"cannot make the folder for the plots ({e.strerror})", folder) from None
+    finally:
+        MADE_FOLDERS.extend(made)
     return folder
+
+
+def remove_made_folders() -> None:
+    """Remove the folders of :data:`MADE_FOLDERS` that are empty (deepest first) and forget them all."""
+    for folder in sorted(set(MADE_FOLDERS), key=len, reverse=True):
+        try:
+            os.rmdir(folder)
+        except OSError:
+            pass
+    MADE_FOLDERS.clear()
 
 
 def save_plot(drawn: Any, folder: str, name: str) -> str:

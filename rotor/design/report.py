@@ -58,7 +58,7 @@ from ..engine.model import Engine
 from ..engine.plausible import check_results_finite, check_speed_rpm, require_engine, require_number, require_whole
 from ..engine.table import CrankTable, crank_table
 from ..errors import EngineError
-from ..fileio import csv_text
+from ..fileio import INTERRUPT, check_folder_writable, csv_text, made_folders
 from ..plotting.common import save_figure
 from ..plotting.report import plot_curves, plot_tangential_forces, plot_turning_moment
 from ..results import json_safe
@@ -67,7 +67,15 @@ from .balance import balance
 from .bearings import bearing_loads
 from .flywheel import DELTA_MIN, textbook_flywheel
 
-__all__ = ["Report", "report", "REPORT_ENTRIES", "TEMPORARY_PREFIX", "FIGURE_STEP_DEG", "DEFAULT_DELTA"]
+__all__ = [
+    "Report",
+    "report",
+    "report_folder",
+    "REPORT_ENTRIES",
+    "TEMPORARY_PREFIX",
+    "FIGURE_STEP_DEG",
+    "DEFAULT_DELTA",
+]
 
 REPORT_ENTRIES = frozenset({"index.html", "figures", "tables"})
 """What a report folder holds: a folder holding only these is a previous report, which
@@ -170,7 +178,8 @@ class Report:
 # ----------------------------------------------------------------------------- the folder
 def _check_out_dir(out_dir: Any) -> str:
     """``out_dir`` as a ``str`` if a report can be written there, else a one-line
-    ``OSError`` naming it (a file, a folder with other files, a parent that is a file)."""
+    ``OSError`` naming it (a file, a folder with other files, a parent that is a file, a
+    link that points nowhere, a folder this user cannot write): checked before the work."""
     if isinstance(out_dir, bytes) or not isinstance(out_dir, (str, os.PathLike)):
         raise TypeError(f"report(out_dir) = {out_dir!r}: expected a folder's path (a str or pathlib.Path)")
     path = os.fspath(out_dir)
@@ -189,80 +198,104 @@ def _check_out_dir(out_dir: Any) -> str:
                 f"holds other files ({shown}): give a new or empty folder, or a previous report's, for the report",
                 path,
             )
-    parent = os.path.dirname(os.path.abspath(path))
-    while not os.path.exists(parent) and os.path.dirname(parent) != parent:
-        parent = os.path.dirname(parent)
-    if not os.path.isdir(parent):
-        raise NotADirectoryError(errno.ENOTDIR, f"{parent} is a file, not a folder", path)
+    check_folder_writable(path, "the report")
     return path
 
 
 @contextmanager
-def _report_folder(path: str) -> Iterator[str]:
-    """Yield a new hidden folder to write the report into; when the block succeeds, put its
-    entries in place at ``path``; when it fails, delete it.
+def _locked(folder: str) -> Iterator[None]:
+    """Hold an exclusive lock on ``folder`` (``flock``; nothing where the system has none):
+    two reports put in place at once into one folder take turns, so that it ends with one
+    whole report."""
+    try:
+        import fcntl
+    except ImportError:  # not on this system: the renames alone
+        yield
+        return
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # the lock goes with it
 
-    A missing ``path``: the folder is made beside it and renamed onto it. An existing
-    folder (empty, or a previous report's; perhaps the working directory or a mount point,
-    which must stay what they are): the folder is made inside it and its entries replace
-    the old ones one by one, ``index.html`` last."""
+
+@contextmanager
+def report_folder(path: str) -> Iterator[str]:
+    """Yield a new hidden folder to write the report into; when the block succeeds, put its
+    entries in place at ``path``; when it fails (an error or Ctrl-C), delete it and every
+    parent folder made for it.
+
+    A missing ``path``: the folder is made beside it and renamed onto it (where another
+    report got there first, its entries are replaced as below). An existing folder (empty,
+    or a previous report's; perhaps the working directory or a mount point, which must
+    stay what they are): the folder is made inside it and its entries replace the old ones
+    one by one, ``index.html`` last, under a lock on the folder. An interrupt that arrived
+    while the report was written stops it before anything is put in place. An ``OSError``
+    names ``path``, never a temporary folder."""
     target = os.path.realpath(path) if os.path.isdir(path) else os.path.abspath(path)  # a link: where it points
     exists = os.path.isdir(target)
     where = target if exists else os.path.dirname(target)
-    try:
-        os.makedirs(where, exist_ok=True)
-    except OSError as e:
-        raise type(e)(e.errno, f"cannot make the folder for the report ({e.strerror})", path) from None
     tmp = None
     try:
-        for _ in range(100):
-            candidate = os.path.join(where, f"{TEMPORARY_PREFIX}{secrets.token_hex(4)}")
+        with made_folders(where):  # the parents made are removed again on failure, after the temporary folder
             try:
-                os.mkdir(candidate)
-            except FileExistsError:
-                continue
-            tmp = candidate
-            break
-        if tmp is None:
-            raise FileExistsError(errno.EEXIST, "no free temporary name for the report", path)
-        yield tmp
-        if exists:
-            _swap_entries(tmp, target)
-        else:
-            os.rename(tmp, target)
-        tmp = None
+                for _ in range(100):
+                    candidate = os.path.join(where, f"{TEMPORARY_PREFIX}{secrets.token_hex(4)}")
+                    try:
+                        os.mkdir(candidate)
+                    except FileExistsError:
+                        continue
+                    tmp = candidate
+                    break
+                if tmp is None:
+                    raise FileExistsError(errno.EEXIST, "no free temporary name for the report", path)
+                yield tmp
+                INTERRUPT.check()
+                if exists:
+                    _swap_entries(tmp, target)
+                else:
+                    try:
+                        os.rename(tmp, target)
+                    except OSError as e:
+                        if e.errno not in (errno.EEXIST, errno.ENOTEMPTY) or not os.path.isdir(target):
+                            raise
+                        _swap_entries(tmp, target)  # another report was put there meanwhile: replace it
+                tmp = None
+            finally:
+                if tmp is not None:
+                    shutil.rmtree(tmp, ignore_errors=True)
     except OSError as e:
-        if tmp is not None and (e.filename is None or str(e.filename).startswith((tmp, target))):
+        name = "" if e.filename is None else str(e.filename)
+        if not name or os.path.basename(name).startswith(TEMPORARY_PREFIX) or name in (target, where):
             raise type(e)(e.errno or errno.EIO, e.strerror or str(e), path) from None
         raise
-    finally:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _swap_entries(tmp: str, target: str) -> None:
     """Replace the report's entries in the folder ``target`` by those of the folder
     ``tmp`` (inside it), ``index.html`` last; the old ones are set aside and deleted (put
     back where a rename fails)."""
-    _check_out_dir(target)  # still only a report's files
-    aside = f"{tmp}-old"
-    os.mkdir(aside)
-    set_aside: list[str] = []
-    try:
-        for name in ("figures", "tables", "index.html"):
-            here = os.path.join(target, name)
-            if os.path.lexists(here):
-                os.rename(here, os.path.join(aside, name))
-                set_aside.append(name)
-            os.rename(os.path.join(tmp, name), here)
-    except OSError:
-        for name in set_aside:
-            if not os.path.lexists(os.path.join(target, name)):
-                os.rename(os.path.join(aside, name), os.path.join(target, name))
-        raise
-    finally:
-        shutil.rmtree(aside, ignore_errors=True)
-    os.rmdir(tmp)
+    with _locked(target):
+        _check_out_dir(target)  # still only a report's files
+        aside = f"{tmp}-old"
+        os.mkdir(aside)
+        set_aside: list[str] = []
+        try:
+            for name in ("figures", "tables", "index.html"):
+                here = os.path.join(target, name)
+                if os.path.lexists(here):
+                    os.rename(here, os.path.join(aside, name))
+                    set_aside.append(name)
+                os.rename(os.path.join(tmp, name), here)
+        except OSError:
+            for name in set_aside:
+                if not os.path.lexists(os.path.join(target, name)):
+                    os.rename(os.path.join(aside, name), os.path.join(target, name))
+            raise
+        finally:
+            shutil.rmtree(aside, ignore_errors=True)
+        os.rmdir(tmp)
 
 
 # ----------------------------------------------------------------------------- page parts
@@ -641,7 +674,7 @@ def report(
     bal = balance(engine, rpm, orders=orders, model=kinematics)
     vm = float(mean_piston_speed(engine.geometry.stroke_m, omega))
 
-    with _report_folder(path) as tmp:
+    with report_folder(path) as tmp:
         page = _Page(tmp)
         title = f"Dynamic calculation of the {engine.name} at {rpm:g} rpm"
         page.text(
