@@ -158,10 +158,10 @@ def test_plot_identification(tmp_path):
     eng = rotor.load_engine("tue-single")
     ss = rotor.steady_state(eng)
     load = rotor.ConstantLoad(float(ss.load_torque_Nm))
-    pattern = rotor.combustion_pattern(6, 1, misfires=[(3, 1)])
+    pattern = rotor.combustion_pattern(6, 1, misfires=[(4, 1)])
     run = rotor.simulate(eng, rpm=float(ss.omega[0]) * RPM_PER_RAD_S, cycles=6, load=load, combustion=pattern)
     ident = rotor.identify(eng, run)
-    assert ident.misfires() == [(3, 1)]
+    assert ident.misfires() == [(4, 1)]  # cycles count from 1, as planted
     axes = ident.plot()
     assert len(axes) == 3 and "1 misfire" in axes[2].get_title()
     assert "per cylinder" in axes[1].get_title()

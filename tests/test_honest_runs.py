@@ -83,14 +83,16 @@ def test_logged_and_simulated_speed_share_one_detrending():
 # ----------------------------------------------------------------------------- 2. loads mean what they say
 def test_a_constant_load_is_carried_not_replaced(diesel):
     ss = rotor.steady_state(diesel, load=rotor.ConstantLoad(500.0))
-    assert ss.load_torque_Nm is None and 0 < float(ss.fuel_scale) < 1
+    assert float(ss.load_torque_Nm) == pytest.approx(500.0) and 0 < float(ss.fuel_scale) < 1
+    assert ss.solved_for == "fuel_scale"
     # the engine's mean torque meets the 500 N·m (no friction in this engine file)
     assert float(np.mean(np.asarray(ss.load_torque))) == pytest.approx(500.0, rel=1e-9)
     assert float(np.mean(np.asarray(ss.torque))) == pytest.approx(500.0, rel=1e-6)
     balanced = rotor.steady_state(diesel)
     assert float(balanced.load_torque_Nm) == pytest.approx(1131.95, abs=0.01)
-    assert "no load given: balancing the mean engine torque" in balanced.summary()
-    assert "carry the given load" in ss.summary()
+    assert balanced.solved_for == "load" and float(balanced.fuel_scale) == 1.0
+    assert "(solved: the load" in balanced.summary()
+    assert "500.00 N·m (given)" in ss.summary() and "(solved: the fuelling that carries the load" in ss.summary()
 
 
 def test_a_load_on_a_motored_engine_is_refused(diesel):
@@ -110,7 +112,7 @@ def test_simulate_without_load_warns_that_it_accelerates(diesel):
 def test_cli_steady_carries_the_load(capsys):
     cli.main(["steady", "4chn15", "--load", "500", "--json"])
     out = json.loads(capsys.readouterr().out)
-    assert "load_torque_Nm" not in out and 0 < out["fuel_scale"] < 1
+    assert out["load_torque_Nm"] == pytest.approx(500.0) and 0 < out["fuel_scale"] < 1
 
 
 def test_cli_simulate_without_load_balances_at_the_start_speed(capsys):
@@ -120,7 +122,7 @@ def test_cli_simulate_without_load_balances_at_the_start_speed(capsys):
     assert float(out.split("mean speed")[1].split("rpm")[0]) == pytest.approx(1250.0, abs=2.0)
     cli.main(["simulate", "4chn15", "--cycles", "3", "--json"])
     s = json.loads(capsys.readouterr().out)
-    assert s["load"]["torque_Nm"] == pytest.approx(1131.95, abs=0.01) and "balanc" in s["load"]["note"]
+    assert s["load_torque_Nm"] == pytest.approx(1131.95, abs=0.01) and s["solved_for"] == "load"
 
 
 # ----------------------------------------------------------------------------- 3. progress costs nothing

@@ -30,7 +30,7 @@ JITTER_S = 20e-9
 GAP_DEG = -60.0  # TDC of cylinder 1 lies 60° after the gap
 CYCLES = 12  # simulated; the analysis keeps the 10 complete cycles inside the tooth record
 SPREAD = {"4chn15": [1.0, 1.1, 0.9, 1.05], "mwm6": [1.0, 1.1, 0.9, 1.05, 0.95, 0.92]}
-MISFIRES = {"4chn15": [(3, 2), (5, 4), (8, 1)], "mwm6": [(3, 2), (4, 6), (8, 3)]}
+MISFIRES = {"4chn15": [(4, 2), (6, 4), (9, 1)], "mwm6": [(4, 2), (5, 6), (9, 3)]}  # (cycle, cylinder) from 1
 
 
 def tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s=JITTER_S):
@@ -101,7 +101,7 @@ def imep_error(res, k, idf):
 
 
 def true_misfires(scale_true):
-    return [(int(k), int(c) + 1) for k, c in np.argwhere(scale_true == 0)]
+    return [(int(k) + 1, int(c) + 1) for k, c in np.argwhere(scale_true == 0)]
 
 
 # ----------------------------------------------------------------------------- direct (no wheel)
@@ -121,19 +121,16 @@ def test_direct_speed_exact():
     assert idf.identified.all() and idf.ambiguous_pairs == ()
     np.testing.assert_allclose(idf.imep_pa, np.asarray(res.imep_pa), rtol=0, atol=1e-5 * idf.imep_nominal_pa.max())
     assert idf.covariance.shape == (10, 5, 5)
-    assert "misfires (cycle, cylinder): [(3, 2), (5, 4), (8, 1)]" in idf.summary()
-    assert idf.to_json_dict()["misfires"] == [[3, 2], [5, 4], [8, 1]] or idf.to_json_dict()["misfires"] == [
-        (3, 2),
-        (5, 4),
-        (8, 1),
-    ]
+    assert "misfires (cycle, cylinder): [(4, 2), (6, 4), (9, 1)]" in idf.summary()  # as planted, from 1
+    assert [tuple(p) for p in idf.to_json_dict()["misfires"]] == [(4, 2), (6, 4), (9, 1)]
+    assert idf.to_pandas().query("misfire")[["cycle", "cylinder"]].values.tolist() == [[4, 2], [6, 4], [9, 1]]
 
 
 def test_blocks_match_one_fit():
     """26 cycles in blocks of 8 (+2 overlap each side, 4 blocks) with misfires at the block
     edges: as exact as one fit over the whole record (scales within 1e-5 of the truth)."""
     e = rotor.load_engine("4chn15")
-    comb = rotor.combustion_pattern(26, 4, imep_scale=SPREAD["4chn15"], misfires=[(7, 1), (8, 3), (15, 4), (16, 2)])
+    comb = rotor.combustion_pattern(26, 4, imep_scale=SPREAD["4chn15"], misfires=[(8, 1), (9, 3), (16, 4), (17, 2)])
     res = rotor.simulate(
         e, rpm=1250, cycles=26, load=rotor.ConstantLoad(1000.0), combustion=comb, step_deg=3.0, progress=False
     )
@@ -166,7 +163,7 @@ def test_speed_dependent_load_and_friction():
     e = rotor.load_engine("4chn15")
     fr = rotor.Friction(fmep_pa=1.0e5, fmep_per_speed2_pa_s2_per_m2=800.0)
     prop = rotor.PropellerLoad(900.0, 1250.0)
-    comb = rotor.combustion_pattern(10, 4, imep_scale=SPREAD["4chn15"], misfires=[(4, 3)])
+    comb = rotor.combustion_pattern(10, 4, imep_scale=SPREAD["4chn15"], misfires=[(5, 3)])
     res = rotor.simulate(e, rpm=1250, cycles=10, load=prop, friction=fr, combustion=comb, step_deg=3.0, progress=False)
     idf = rotor.identify(e, res, load=prop, friction=fr)
     assert np.abs(idf.scale - comb).max() < 1e-6

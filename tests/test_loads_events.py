@@ -88,15 +88,22 @@ def test_governor_holds_the_speed_after_a_load_step(diesel):
 
 
 def test_combustion_pattern():
-    s = rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0], misfires=[(3, 2)], cov=0.02, seed=7)
-    assert s.shape == (50, 4) and s[3, 1] == 0.0
+    s = rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0], misfires=[(4, 2)], cov=0.02, seed=7)
+    assert s.shape == (50, 4) and s[3, 1] == 0.0  # cycle 4, cylinder 2: both counted from 1
     np.testing.assert_array_equal(
-        s, rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0], misfires=[(3, 2)], cov=0.02, seed=7)
+        s, rotor.combustion_pattern(50, 4, imep_scale=[1.0, 1.1, 0.9, 1.0], misfires=[(4, 2)], cov=0.02, seed=7)
     )
     assert np.mean(s[:, 1] > 0) > 0.9 and abs(np.mean(s[s[:, 1] > 0, 1]) - 1.1) < 0.02
     rate = rotor.combustion_pattern(2000, 4, misfire_rate=0.05, seed=1)
     assert np.mean(rate == 0) == pytest.approx(0.05, abs=0.01)
-    for bad in (dict(misfires=[(50, 1)]), dict(misfires=[(0, 5)]), dict(imep_scale=[1, 2]), dict(cov=-1)):
+    assert rotor.combustion_pattern(50, 4, misfires=[(50, 1)])[49, 0] == 0.0  # the last cycle
+    for bad in (
+        dict(misfires=[(51, 1)]),
+        dict(misfires=[(0, 1)]),
+        dict(misfires=[(1, 5)]),
+        dict(imep_scale=[1, 2]),
+        dict(cov=-1),
+    ):
         with pytest.raises(rotor.EngineError):
             rotor.combustion_pattern(50, 4, **bad)
 
@@ -116,7 +123,7 @@ def test_table_motored_trace_mirrors_compression(diesel):
 def test_misfire_changes_speed_only_after_its_firing(diesel):
     cycles = 6
     load = rotor.PropellerLoad(1100.0, 1250.0)
-    pattern = rotor.combustion_pattern(cycles, 4, misfires=[(2, 3)])
+    pattern = rotor.combustion_pattern(cycles, 4, misfires=[(3, 3)])  # cycle 3 starts at 2 cycles
     fired = rotor.simulate(diesel, rpm=1250.0, cycles=cycles, load=load)
     missed = rotor.simulate(diesel, rpm=1250.0, cycles=cycles, load=load, combustion=pattern)
     theta = np.asarray(fired.theta)

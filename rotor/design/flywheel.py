@@ -977,7 +977,7 @@ def design_flywheel(
             ) from e
         if max_rpm is None:
             peak = max(peak, float(r.max_rpm))
-        fuel = r.fuel_scale
+        fuel = r.fuel_scale if r.solved_for == "fuel_scale" else None
         point_results.append(
             PointResult(
                 rpm=p.rpm,

@@ -10,8 +10,9 @@ a misfire (the cylinder is only compressed and expanded), s = 1.1 a cylinder bur
 more. The cylinder's IMEP is affine in s: IMEP = IMEP_motored + s·(IMEP_fired − IMEP_motored);
 the simulation results report it per cycle and cylinder.
 
-Firing k of cylinder c is the one at engine angle θ_fire,c + k·Θ (Θ the cycle angle,
-θ_fire,c in [0, Θ) the first firing TDC of the cylinder), and its scale applies from
+Cycles and cylinders count from 1. The firing of cylinder c in cycle k is the one at
+engine angle θ_fire,c + (k − 1)·Θ (Θ the cycle angle, θ_fire,c in [0, Θ) the first firing
+TDC of the cylinder), and its scale, s[k − 1, c − 1] of the pattern array, applies from
 half a cycle before to half a cycle after that TDC (where fired and motored traces agree).
 """
 
@@ -42,8 +43,8 @@ def combustion_pattern(
     **Arguments:**
     - ``cycles``, ``cylinders``: the shape of the pattern.
     - ``imep_scale``: nominal scale, a number, one per cylinder, or a (cycles, cylinders) array [-].
-    - ``misfires``: (cycle, cylinder) pairs that misfire (s = 0): cycle counted from 0,
-      cylinder numbered from 1 as in the engine file.
+    - ``misfires``: (cycle, cylinder) pairs that misfire (s = 0), both counted from 1:
+      cycle 1 … ``cycles``, cylinder 1 … ``cylinders`` as numbered in the engine file.
     - ``misfire_rate``: probability that any firing misfires at random [-].
     - ``cov``: coefficient of variation of s from cycle to cycle (normal, clipped at 0) [-].
     - ``seed``: seed of the random generator (``numpy.random.default_rng``), so that a
@@ -78,9 +79,10 @@ def combustion_pattern(
             k, c = (int(v) for v in pair)
         except (TypeError, ValueError):
             raise EngineError(f"misfires: {pair!r} is not a (cycle, cylinder) pair") from None
-        if not (0 <= k < cycles and 1 <= c <= cylinders):
+        if not (1 <= k <= cycles and 1 <= c <= cylinders):
             raise EngineError(
-                f"misfires: ({k}, {c}) is outside the run: cycles 0…{cycles - 1}, cylinders 1…{cylinders}"
+                f"misfires: ({k}, {c}) is outside the run: cycles 1…{cycles}, cylinders 1…{cylinders} (both "
+                "counted from 1)"
             )
-        s[k, c - 1] = 0.0
+        s[k - 1, c - 1] = 0.0
     return s

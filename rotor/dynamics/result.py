@@ -20,9 +20,21 @@ from ..cycles import cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 
-__all__ = ["SpeedResult", "Orders", "CycleSummary", "cycle_extremes"]
+__all__ = ["SpeedResult", "Orders", "CycleSummary", "TORQUE_PARTS", "cycle_extremes"]
 
 _ORDER_KEYS = ("order", "speed_amplitude_rad_s", "speed_phase_rad", "torque_amplitude_Nm", "torque_phase_rad")
+#: the torque's parts (a steady state): field of :class:`SpeedResult`, key of :class:`Orders`, heading
+TORQUE_PARTS = (
+    ("gas_torque", "gas_torque_amplitude_Nm", "gas [N·m]"),
+    ("reciprocating_torque", "reciprocating_torque_amplitude_Nm", "recip. [N·m]"),
+    ("inertia_term_torque", "inertia_term_amplitude_Nm", "−I′ω²/2 [N·m]"),
+    ("total_torque", "total_torque_amplitude_Nm", "total [N·m]"),
+)
+#: what the torque columns of a summary are, in one line
+TORQUE_PARTS_NOTE = (
+    "torque amplitudes: gas; recip. = the reciprocating masses' inertia torque (textbook, at the speed); "
+    "−I′ω²/2 = the varying inertia's term; total = gas − I′ω²/2, the torque that drives the speed"
+)
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -33,8 +45,15 @@ class Orders(Result):
     start of the analysed cycle [rad]. ``order`` 0.5, 1, 1.5, … for a four-stroke engine.
 
     **Fields:** ``order`` [per revolution]; ``speed_amplitude_rad_s`` [rad/s];
-    ``speed_phase_rad`` [rad]; ``torque_amplitude_Nm`` [N·m]; ``torque_phase_rad`` [rad];
-    ``engine_name``.
+    ``speed_phase_rad`` [rad]; ``torque_amplitude_Nm`` and ``torque_phase_rad``: the
+    engine torque of the run's equation (the gas torque; at the ``"constant"`` fidelity
+    with the textbook inertia torque added) [N·m, rad]; ``engine_name``. A steady state
+    also has the amplitudes [N·m] of the torque's parts: ``gas_torque_amplitude_Nm``,
+    ``reciprocating_torque_amplitude_Nm`` (the textbook inertia torque of the reciprocating
+    masses at the sample's speed), ``inertia_term_amplitude_Nm`` (−½·I′(θ)·ω², the varying
+    inertia's term of the equation; zero at the ``"constant"`` fidelity) and
+    ``total_torque_amplitude_Nm`` (the torque that drives the speed: gas plus the inertia
+    torque of the moving masses); None where not known (a transient run).
     """
 
     order: np.ndarray
@@ -43,35 +62,58 @@ class Orders(Result):
     torque_amplitude_Nm: jnp.ndarray
     torque_phase_rad: jnp.ndarray
     engine_name: str = ""
+    gas_torque_amplitude_Nm: jnp.ndarray | None = None
+    reciprocating_torque_amplitude_Nm: jnp.ndarray | None = None
+    inertia_term_amplitude_Nm: jnp.ndarray | None = None
+    total_torque_amplitude_Nm: jnp.ndarray | None = None
+
+    @property
+    def _keys(self) -> tuple[str, ...]:
+        return _ORDER_KEYS + tuple(k for _, k, _ in TORQUE_PARTS if getattr(self, k) is not None)
 
     def to_list(self) -> list[dict]:
-        """One dict per order with the keys of the fields (plain floats)."""
-        cols = [np.asarray(getattr(self, k), dtype=np.float64) for k in _ORDER_KEYS]
-        return [{k: float(v) for k, v in zip(_ORDER_KEYS, row)} for row in zip(*cols)]
+        """One dict per order with the keys of the fields that are known (plain floats)."""
+        keys = self._keys
+        cols = [np.asarray(getattr(self, k), dtype=np.float64) for k in keys]
+        return [{k: float(v) for k, v in zip(keys, row)} for row in zip(*cols)]
 
     def summary(self) -> str:
-        """The orders as a table: speed amplitude [rad/s and rpm], torque amplitude [N·m]."""
-        lines = [
-            f"{self.engine_name + ': ' if self.engine_name else ''}speed and torque harmonics by engine order",
-            "  order  speed amplitude [rad/s]  [rpm]      torque amplitude [N·m]",
-        ]
+        """The orders as a table: speed amplitude [rad/s and rpm] and the torque amplitudes
+        [N·m], each column named (gas, reciprocating inertia, −I′ω²/2, total where known)."""
+        parts = [(k, head) for _, k, head in TORQUE_PARTS if getattr(self, k) is not None]
+        if parts:
+            heads = "".join(f"  {head:>14}" for _, head in parts)
+            lines = [
+                f"{self.engine_name + ': ' if self.engine_name else ''}speed and torque harmonics by engine order",
+                f"  ({TORQUE_PARTS_NOTE})",
+                f"  order  speed amplitude [rad/s]      [rpm]{heads}",
+            ]
+        else:
+            lines = [
+                f"{self.engine_name + ': ' if self.engine_name else ''}speed and torque harmonics by engine order",
+                "  order  speed amplitude [rad/s]  [rpm]      engine (gas) torque amplitude [N·m]",
+            ]
         rows = self.to_list()
         shown = rows if len(rows) <= 50 else rows[:50]
         for o in shown:
-            lines.append(
-                f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  "
-                f"{o['speed_amplitude_rad_s'] * RPM_PER_RAD_S:9.4f}  {o['torque_amplitude_Nm']:22.2f}"
-            )
+            line = f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  {o['speed_amplitude_rad_s'] * RPM_PER_RAD_S:9.4f}"
+            if parts:
+                line += "".join(f"  {o[k]:14.2f}" for k, _ in parts)
+            else:
+                line += f"  {o['torque_amplitude_Nm']:22.2f}"
+            lines.append(line)
         if len(rows) > len(shown):
             lines.append(f"  … {len(rows) - len(shown)} more orders (to_pandas() has them all)")
         return "\n".join(lines) + "\n"
 
     def to_pandas(self) -> Any:
         """One row per order: ``order``, ``speed_amplitude_rad_s``, ``speed_phase_rad``,
-        ``torque_amplitude_Nm``, ``torque_phase_rad``."""
+        ``torque_amplitude_Nm``, ``torque_phase_rad`` and the torque parts' amplitudes where
+        known (``gas_torque_amplitude_Nm``, ``reciprocating_torque_amplitude_Nm``,
+        ``inertia_term_amplitude_Nm``, ``total_torque_amplitude_Nm``)."""
         import pandas as pd
 
-        return pd.DataFrame({k: np.asarray(getattr(self, k), dtype=np.float64) for k in _ORDER_KEYS})
+        return pd.DataFrame({k: np.asarray(getattr(self, k), dtype=np.float64) for k in self._keys})
 
     def to_json_dict(self) -> dict:
         """``{"engine": name, "orders": [one dict per order]}``."""
@@ -220,9 +262,20 @@ class SpeedResult(Result):
     steady state its one periodic cycle's, the classic (ω_max − ω_min)/ω_mean) and
     ``speed_range_ratio`` ((ω_max − ω_min)/ω_mean over the whole run, drift included).
 
-    **A steady state** also has ``period_s`` (the cycle's duration) [s]; either
-    ``load_torque_Nm`` (the load that balances the engine's mean torque minus friction)
-    [N·m] or ``fuel_scale`` (the fuelling that carries a speed-dependent load) [-];
+    **The operating point:** ``load_torque_Nm`` (the load torque carried, friction apart;
+    the time mean of a speed-dependent load) [N·m], ``fuel_scale`` (the combustion as a
+    multiple of the engine file's, the mean over the cylinders) [-] and ``solved_for``:
+    which of the two was solved (``"load"``, ``"fuel_scale"``) while the other was given, or
+    None (both given, a transient run). Either may be None where it is not one number (a
+    load step, a governor).
+
+    **A steady state** also has ``period_s`` (the cycle's duration) [s];
+    the torque's parts over the cycle [N·m]: ``gas_torque``, ``reciprocating_torque`` (the
+    textbook inertia torque of the reciprocating masses at the sample's speed),
+    ``inertia_term_torque`` (−½·I′(θ)·ω², the varying inertia's term of the equation; zero at
+    the ``"constant"`` fidelity, whose ``torque`` holds the textbook inertia torque) and
+    ``total_torque`` (``torque`` + ``inertia_term_torque``: the torque that drives the speed,
+    I(θ)·dω/dt = total − load − friction);
     ``excess_work_J`` (Shishkov, "Dinamika dvigatelei", SUSU 2014, §3.2.12: the largest swing of the work of the textbook
     total torque) [J] and ``textbook_delta`` (its δ ≈ L_excess/(J·ω²)) [-];
     ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting only) [-]; ``converged``: whether
@@ -258,6 +311,11 @@ class SpeedResult(Result):
     period_s: ArrayLike | None = None
     load_torque_Nm: ArrayLike | None = None
     fuel_scale: ArrayLike | None = None
+    solved_for: str | None = None
+    gas_torque: jnp.ndarray | None = None
+    reciprocating_torque: jnp.ndarray | None = None
+    inertia_term_torque: jnp.ndarray | None = None
+    total_torque: jnp.ndarray | None = None
     excess_work_J: ArrayLike | None = None
     textbook_delta: ArrayLike | None = None
     periodicity_error: ArrayLike | None = None
@@ -421,14 +479,21 @@ class SpeedResult(Result):
         else:
             Ws = cycle_spectrum(self._cycle_matrix(self.omega), self.cycle_mean_omega, self.cycle_rad)
             Ms = cycle_spectrum(m, jnp.mean(m, axis=1), self.cycle_rad)
-        if isinstance(cycle, str):  # "mean"
-            W, M = jnp.mean(Ws, axis=0), jnp.mean(Ms, axis=0)
-        else:
-            W, M = Ws[cycle % C - first], Ms[cycle % C - first]
         k_max = min(int(np.floor(max_order * revs + 1e-9)), P // 2 - 1)
+
+        def pick(spectra):
+            one = jnp.mean(spectra, axis=0) if isinstance(cycle, str) else spectra[cycle % C - first]
+            return one[1 : k_max + 1]
+
+        W, M = pick(Ws), pick(Ms)
+        parts = {}
+        for field, key, _ in TORQUE_PARTS:
+            x = getattr(self, field)
+            if x is not None and not self._streamed:
+                xm = self._cycle_matrix(jnp.asarray(x))
+                parts[key] = jnp.abs(pick(cycle_spectrum(xm, jnp.mean(xm, axis=1), self.cycle_rad)))
         k = np.arange(1, k_max + 1)
-        W, M = W[1 : k_max + 1], M[1 : k_max + 1]
-        return Orders(k / revs, jnp.abs(W), jnp.angle(W), jnp.abs(M), jnp.angle(M), self.engine_name)
+        return Orders(k / revs, jnp.abs(W), jnp.angle(W), jnp.abs(M), jnp.angle(M), self.engine_name, **parts)
 
     # ------------------------------------------------------------------ people
     def to_json_dict(self, max_order: float = 6.0) -> dict:
@@ -440,9 +505,12 @@ class SpeedResult(Result):
         ``delta_max`` (the largest per-cycle δ) with ``delta_max_cycle`` (counted from 1) and
         ``speed_range_ratio`` ((ω_max − ω_min)/ω_mean over the whole run, drift included);
         the stall (``stall_cycle`` from 1, ``stall_angle_deg`` within that cycle,
-        ``stall_angle_total_deg`` from the start); wall time; the steady state's balance and
-        textbook figures; and the orders of the last cycle, detrended, up to ``max_order``
-        [per revolution] (speed amplitude [rad/s], torque amplitude [N·m])."""
+        ``stall_angle_total_deg`` from the start); wall time; the operating point
+        (``load_torque_Nm``, ``fuel_scale``, ``solved_for``: see the class); the steady
+        state's textbook figures; and the orders of the last cycle, detrended, up to
+        ``max_order`` [per revolution] (speed amplitude [rad/s], the engine torque's
+        amplitude ``torque_amplitude_Nm`` and, for a steady state, its parts' [N·m]:
+        ``gas_…``, ``reciprocating_…``, ``inertia_term_…``, ``total_torque_amplitude_Nm``)."""
         steady = self.kind == "steady"
         out: dict[str, Any] = {
             "engine": self.engine_name,
@@ -479,15 +547,19 @@ class SpeedResult(Result):
                 "wall_s": float(self.wall_s),
             }
         )
+        out["load_torque_Nm"] = None
+        out["fuel_scale"] = None
+        out["solved_for"] = self.solved_for
         for key in ("load_torque_Nm", "fuel_scale", "excess_work_J", "textbook_delta", "periodicity_error"):
             v = getattr(self, key)
             if v is not None:
                 out[key] = float(v) if np.ndim(v) == 0 else np.asarray(v).tolist()
         if self.uniform_cycles:
             o = self.orders(max_order=max_order)
-            out["orders"] = [
-                {k: d[k] for k in ("order", "speed_amplitude_rad_s", "torque_amplitude_Nm")} for d in o.to_list()
-            ]
+            keys = ("order", "speed_amplitude_rad_s", "torque_amplitude_Nm") + tuple(
+                k for _, k, _ in TORQUE_PARTS if getattr(o, k) is not None
+            )
+            out["orders"] = [{k: d[k] for k in keys} for d in o.to_list()]
         else:
             out["orders"] = []
         return json_safe(out)
@@ -514,12 +586,7 @@ class SpeedResult(Result):
                 f"  textbook δ      {s['textbook_delta']:10.5f}      (Shishkov (2014) §3.2.12: L_excess / (J·ω²), "
                 f"L_excess = {s['excess_work_J']:.1f} J)"
             )
-        if "load_torque_Nm" in s:
-            lines.append(
-                f"  load torque     {s['load_torque_Nm']:10.2f} N·m (no load given: balancing the mean engine torque)"
-            )
-        if "fuel_scale" in s:
-            lines.append(f"  fuel scale      {s['fuel_scale']:10.4f}      (fuelling scaled to carry the given load)")
+        lines.extend(self.operating_point_lines())
         if s["stalled"]:
             lines.append(
                 f"  STALLED at t = {s['stall_time_s']:.4f} s in cycle {s['stall_cycle']}, crank angle "
@@ -533,42 +600,72 @@ class SpeedResult(Result):
                 "δ, speeds and range cover every cycle)"
             )
         if s["orders"]:
+            parts = [(k, head) for _, k, head in TORQUE_PARTS if k in s["orders"][0]]
             lines.append("  orders of the last cycle (trend removed):")
-            lines.append("  order  speed amplitude [rad/s]  torque amplitude [N·m]")
+            if parts:
+                lines.append(f"  ({TORQUE_PARTS_NOTE})")
+                lines.append("  order  speed amplitude [rad/s]" + "".join(f"  {head:>14}" for _, head in parts))
+            else:
+                lines.append("  order  speed amplitude [rad/s]  engine (gas) torque amplitude [N·m]")
             for o in s["orders"]:
-                lines.append(
-                    f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  {o['torque_amplitude_Nm']:22.2f}"
-                )
+                line = f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}"
+                if parts:
+                    line += "".join(f"  {o[k]:14.2f}" for k, _ in parts)
+                else:
+                    line += f"  {o['torque_amplitude_Nm']:22.2f}"
+                lines.append(line)
         lines.append(f"  wall time {s['wall_s']:.3f} s")
         return "\n".join(lines) + "\n"
+
+    def operating_point_lines(self) -> list[str]:
+        """The load and the fuel scale, each marked given or solved, as summary lines."""
+        lines = []
+        load, fuel, solved = self.load_torque_Nm, self.fuel_scale, self.solved_for
+        if load is not None and np.ndim(load) == 0:
+            how = (
+                "solved: the load that the engine's mean torque carries at this fuelling"
+                if solved == "load"
+                else "given"
+            )
+            lines.append(f"  load torque     {float(np.asarray(load)):10.2f} N·m ({how})")
+        if fuel is not None and np.ndim(fuel) == 0:
+            how = "solved: the fuelling that carries the load" if solved == "fuel_scale" else "given"
+            lines.append(f"  fuel scale      {float(np.asarray(fuel)):10.4f}      ({how}; 1 = the engine file's pressure)")
+        return lines
 
     def to_pandas(self) -> Any:
         """The samples as a ``pandas.DataFrame`` (one row per sample, SI units in the names):
         those the result holds (after a ``keep_cycles`` run the last cycles' only; ``cycle``
-        counts over the whole run, from 0)."""
+        counts over the whole run, from 1). ``torque_Nm`` is the engine torque of the
+        equation; a steady state adds its parts, ``gas_torque_Nm``,
+        ``reciprocating_torque_Nm``, ``inertia_term_torque_Nm`` and ``total_torque_Nm``."""
         import pandas as pd
 
-        cycle = np.floor(np.asarray(self.theta) / self.cycle_rad + 1e-9).astype(int)
-        return pd.DataFrame(
-            {
-                "t_s": np.asarray(self.t),
-                "theta_rad": np.asarray(self.theta),
-                "angle_deg": np.rad2deg(np.asarray(self.theta)),
-                "cycle": cycle,
-                "omega_rad_s": np.asarray(self.omega),
-                "rpm": np.asarray(self.omega) * RPM_PER_RAD_S,
-                "accel_rad_s2": np.asarray(self.accel),
-                "torque_Nm": np.asarray(self.torque),
-                "load_torque_Nm": np.asarray(self.load_torque),
-            }
-        )
+        cycle = np.floor(np.asarray(self.theta) / self.cycle_rad + 1e-9).astype(int) + 1
+        cols = {
+            "t_s": np.asarray(self.t),
+            "theta_rad": np.asarray(self.theta),
+            "angle_deg": np.rad2deg(np.asarray(self.theta)),
+            "cycle": cycle,
+            "omega_rad_s": np.asarray(self.omega),
+            "rpm": np.asarray(self.omega) * RPM_PER_RAD_S,
+            "accel_rad_s2": np.asarray(self.accel),
+            "torque_Nm": np.asarray(self.torque),
+        }
+        for field, _, _ in TORQUE_PARTS:
+            x = getattr(self, field)
+            if x is not None:
+                cols[f"{field}_Nm"] = np.asarray(x)
+        cols["load_torque_Nm"] = np.asarray(self.load_torque)
+        return pd.DataFrame(cols)
 
     def plot(self, ax: Any = None, kind: str = "cycle") -> Any:
         """Draw on ``ax`` (a new figure if None) and return it.
 
         ``kind``: ``"cycle"`` (rpm over the last cycle against crank angle, titled with
         its δ), ``"time"`` (rpm against time over the run), ``"torque"`` (engine and load
-        torque over the last cycle) or ``"orders"`` (speed harmonics [rad/s] of the last
+        torque over the last cycle; a steady state's total torque, gas plus the inertia of
+        the moving masses, against the load, with the gas torque thin) or ``"orders"`` (speed harmonics [rad/s] of the last
         cycle by engine order, detrended like δ). After a ``keep_cycles`` run, the time plot
         shows the kept cycles only and its title says so.
         """
@@ -600,5 +697,9 @@ class SpeedResult(Result):
             trend = "" if self.kind == "steady" else " (trend removed)"
             title = f"{title}\nlast cycle, its δ{trend} = {float(self.delta):.4g}"
             return plot_speed(angle, rpm[sl], mean_rpm, title, cycle_deg, ax=ax)
-        torque, load = np.asarray(self.torque)[sl], np.asarray(self.load_torque)[sl]
-        return plot_cycle_torque(angle, torque, load, title, cycle_deg, ax=ax)
+        load = np.asarray(self.load_torque)[sl]
+        if self.total_torque is None:
+            return plot_cycle_torque(angle, np.asarray(self.torque)[sl], load, title, cycle_deg, ax=ax)
+        gas = np.asarray(self.torque if self.gas_torque is None else self.gas_torque)[sl]
+        total = np.asarray(self.total_torque)[sl]
+        return plot_cycle_torque(angle, gas, load, title, cycle_deg, ax=ax, total_Nm=total)

@@ -47,6 +47,7 @@ from ..units import RPM_PER_RAD_S
 from .crank_train import (
     COL_COMBUSTION,
     COL_I,
+    COL_K,
     COL_MOTORED,
     check_fidelity,
     grid_points,
@@ -67,6 +68,7 @@ from .equation import (
     wrap_periodic,
 )
 from .invariants import check_speed_result
+from .operating import check_fuel_scale
 from .loads import Load
 from .prepared import PreparedEngine, checked_reference
 from .result import SpeedResult
@@ -471,6 +473,11 @@ def steady_state(
     assert isinstance(engine, Engine)
     n = engine.cylinders
     xp = jnp if any(isinstance(v, jax.core.Tracer) for v in (rpm, imep_scale)) else np  # numpy: no dispatch
+    given = concrete(s)
+    if given is not None and load is None:  # the fuel scale given: refused or warned about here
+        imep_m, imep_c = jax.device_get((train.imep_motored_pa, train.imep_combustion_pa))
+        for value in np.unique(given):
+            check_fuel_scale(float(value), imep_m, imep_c, solved=False)
     s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
     fr = friction_coefficients(engine, friction)
     omega_m = xp.asarray(rpm, dtype=xp.float64) / RPM_PER_RAD_S
@@ -492,6 +499,7 @@ def steady_state(
     train = shift_inertia(train, d_inertia)
     # start from the closed form with the losses linearised about ω_m
     a_lin, c_lin = fr[0] + fr[1] * omega_m, fr[2]
+        assert load is not None  # a given load is what the fuelling is balanced against
     if balance == "fuel":
         m0 = load.torque(omega_m, 0.0)
         c_l = jax.grad(lambda w: load.torque(w, 0.0))(omega_m) / (2 * omega_m)
@@ -537,11 +545,20 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
     omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
     m_eng = scene.engine_torque(val, sc, omega, 0.0)
     m_loss = scene.loss(omega, t)
-    accel = (m_eng - m_loss - 0.5 * dinertia * omega**2) / inertia
+    m_ripple = -0.5 * dinertia * omega**2  # the varying inertia's term, −½·I′(θ)·ω²
+    accel = (m_eng - m_loss + m_ripple) / inertia
+    dwell = 1.0 / omega  # the time-mean of the load carried (friction apart), where it is a model
+    carried = 0.0 if scene.load is None else jnp.sum(scene.load.torque(omega, t) * dwell) / jnp.sum(dwell)
     excess = textbook_excess(train, sc, omega_m)
     return {
+        "fuel_scale": jnp.mean(sc),
+        "carried_load": carried,
         "theta": theta,
         "omega": omega,
+        "gas_torque": m_eng - val[:, COL_K] * omega**2,
+        "reciprocating_torque": train.textbook_k * omega**2,
+        "inertia_term_torque": m_ripple,
+        "total_torque": m_eng + m_ripple,
         "torque": m_eng,
         "load_torque": m_loss,
         "accel": accel,
@@ -575,6 +592,12 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
                 f"crank angle {float(np.rad2deg(i_min * train.cycle_rad / train.points)):.1f}° of the cycle (the "
                 "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
                 "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
+    load_carried = x if balance == "load" else a["carried_load"]
+    if concrete(a["e_ratio"]) is not None:
+        fuel, carried = np.asarray(a["fuel_scale"]), np.asarray(load_carried)
+        if balance == "fuel" and fuel.ndim == 0:
+            imep_m, imep_c = jax.device_get((train.imep_motored_pa, train.imep_combustion_pa))
+            check_fuel_scale(float(fuel), imep_m, imep_c, solved=True, load_Nm=float(carried))
             )
     result = SpeedResult(
         t=t,
@@ -594,8 +617,13 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         engine_name=engine.name,
         wall_s=time.perf_counter() - start,
         period_s=a["period_s"],
-        load_torque_Nm=x if balance == "load" else None,
-        fuel_scale=x if balance == "fuel" else None,
+        load_torque_Nm=load_carried,
+        fuel_scale=a["fuel_scale"],
+        solved_for="load" if balance == "load" else "fuel_scale",
+        gas_torque=a["gas_torque"],
+        reciprocating_torque=a["reciprocating_torque"],
+        inertia_term_torque=a["inertia_term_torque"],
+        total_torque=a["total_torque"],
         excess_work_J=a["excess_work_J"],
         textbook_delta=a["textbook_delta"],
         periodicity_error=None if E_end is None else jnp.abs(E_end - E[0]) / E[0],

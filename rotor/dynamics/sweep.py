@@ -267,7 +267,7 @@ def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies):
         s = jnp.broadcast_to(scale_i, (prepared.train.cylinders,))
         load_obj = None if load_i is None else ConstantLoad(load_i)
         r = steady_state(prepared.with_inertia(inertia_i), rpm_i, load_obj, imep_scale=s, friction=friction)
-        x = r.load_torque_Nm if r.load_torque_Nm is not None else r.fuel_scale
+        x = r.load_torque_Nm if load_i is None else r.fuel_scale
         return r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged
 
     return _batched(one, (rpm, inertia, scale, load), varies)

@@ -61,18 +61,31 @@ def plot_speed_time(
 
 
 def plot_cycle_torque(
-    angle_deg: ArrayLike, torque_Nm: ArrayLike, load_Nm: ArrayLike, title: str, cycle_deg: float, ax: Any = None
+    angle_deg: ArrayLike,
+    torque_Nm: ArrayLike,
+    load_Nm: ArrayLike,
+    title: str,
+    cycle_deg: float,
+    ax: Any = None,
+    total_Nm: ArrayLike | None = None,
 ) -> Any:
     """Engine torque and load-plus-friction torque over one cycle.
 
-    **Arguments:** ``angle_deg``: crank angle in the cycle [deg]; ``torque_Nm``: engine
-    torque [N·m]; ``load_Nm``: load plus friction [N·m]; ``title``; ``cycle_deg`` [deg]; ``ax``.
+    **Arguments:** ``angle_deg``: crank angle in the cycle [deg]; ``torque_Nm``: the gas
+    torque [N·m]; ``load_Nm``: load plus friction [N·m]; ``title``; ``cycle_deg`` [deg];
+    ``ax``; ``total_Nm``: the total torque that drives the speed, gas plus the inertia
+    torque of the moving masses [N·m], or None. Where it is given it is the solid line
+    against the load (the crank speeds up where it lies above) and the gas torque is thin.
 
     **Returns:** the Axes.
     """
     ax = new_axes(ax)
-    ax.plot(angle_deg, torque_Nm, lw=1.2, label="engine (gas)")
-    ax.plot(angle_deg, load_Nm, lw=1.2, label="load + friction")
+    if total_Nm is None:
+        ax.plot(angle_deg, torque_Nm, lw=1.2, label="engine (gas)")
+    else:
+        ax.plot(angle_deg, torque_Nm, lw=0.8, color="0.6", label="gas torque")
+        ax.plot(angle_deg, total_Nm, lw=1.5, color="C0", label="total torque (gas + inertia of the moving masses)")
+    ax.plot(angle_deg, load_Nm, lw=1.2, color="C1", label="load + friction")
     ax.set_ylabel("torque [N·m]")
     ax.legend()
     ax.set_title(plain(title))
