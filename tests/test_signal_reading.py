@@ -63,7 +63,7 @@ def test_choices_recorded_with_evidence_and_pins(tmp_path):
     neg = rotor.Log.from_arrays(time=log2["time"], encoder_v=-log2["encoder_v"])
     b = rotor.analyze_log(neg, "auto")
     assert b.reading.wheel.spec == "60-2" and b.reading.choice("edge").evidence
-    assert np.mean(b.delta) == pytest.approx(np.mean(a.delta), rel=0.01)
+    assert np.mean(b.delta) == pytest.approx(np.mean(a.delta), rel=0.02)  # the other edge, as the bench files
 
 
 def test_a_speed_column_that_is_not_a_speed_is_refused(tmp_path, capsys):

@@ -1120,6 +1120,17 @@ def diagnose(
     check: TdcCheck | None = None
     phase_warning = phase_note = ""
     if isinstance(log, (str, os.PathLike)):
+        if tdc_deg is None and calibration is None:  # a log that states its phase (rotor simulate --record)
+            from .record import stated_phase
+
+            stated = stated_phase(log)
+            if stated is not None:
+                tdc_deg = stated[0]
+                firing = stated[1] if firing == "auto" else firing
+                phase_note = (
+                    f"TDC {tdc_deg:g}° after the gap and the firing revolution as the log's header states them "
+                    "(# tdc_after_gap_deg, # firing_parity)"
+                )
         from_calibration = tdc_deg is None and calibration is not None
         if from_calibration:
             tdc_deg = calibration.tdc_after_gap_deg  # type: ignore[union-attr]
@@ -1246,11 +1257,15 @@ def diagnose(
     mismatch = _mismatch(engine, ident, fields["misfire"])
     verdict = DiagnosisVerdict.NO_FIRING if no_firing else DiagnosisVerdict.FITS
     verdict_reason = ""
-    poor = not float(ident.fit_r2) >= POOR_FIT_R2
+    structure = _residual_structure(ident, engine.strokes)
+    poor = not float(ident.fit_r2) >= POOR_FIT_R2 and not structure <= RESIDUAL_STRUCTURE_MAX
     if poor or mismatch:
         # a model that does not explain the speed says nothing about firing or misfires
         verdict = DiagnosisVerdict.MODEL_DOES_NOT_FIT
-        why = [f"it explains {max(float(ident.fit_r2), 0.0):.0%} of the speed's fluctuation (R² below {POOR_FIT_R2:g})"]
+        why = [
+            f"it explains {max(float(ident.fit_r2), 0.0):.0%} of the speed's fluctuation (R² below {POOR_FIT_R2:g}), "
+            f"and what it leaves is no noise: {structure:.3g}× more per harmonic at the low orders than at the high ones"
+        ]
         if not poor:
             why = ["the identified figures are implausible (see the warnings)"]
         verdict_reason = (
@@ -1277,6 +1292,27 @@ def diagnose(
         verdict=verdict,
         verdict_reason=verdict_reason,
     )
+
+
+RESIDUAL_STRUCTURE_MAX = 2.0
+"""A fit's residual whose power per harmonic at the engine's low orders (0.5 … 4) is more than
+this many times that at the higher ones is the model's misfit, not the wheel's noise (whose
+power, from timer jitter, grows with the order): with a poor R², the model does not fit."""
+
+
+def _residual_structure(ident, strokes: int) -> float:
+    """The residual's mean power per harmonic at orders up to 4 over that from there to a quarter
+    of the grid's resolution [-], the median over the cycles (NaN where the grid is too coarse)."""
+    r = np.asarray(ident.omega, dtype=np.float64) - np.asarray(ident.omega_model, dtype=np.float64)
+    if r.ndim != 2 or r.shape[1] < 64:
+        return float("nan")
+    revs = max(int(strokes) // 2, 1)
+    k_lo = 4 * revs  # harmonics of the cycle up to order 4
+    X = np.abs(np.fft.rfft(r, axis=1)) ** 2
+    lo = X[:, 1 : k_lo + 1].mean(axis=1)
+    hi = X[:, k_lo + 1 : r.shape[1] // 4].mean(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(np.nanmedian(lo / hi))
 
 
 def _speed_check(eng, analysis, given_deg, te, read):

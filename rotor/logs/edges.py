@@ -395,7 +395,8 @@ def find_weak_edges(
         q = np.argmin(dist, axis=1)
         ok &= up[np.arange(g.size), q]
         jj = jc[np.arange(g.size), q]
-        x = t[jj] + (lev - v[jj]) / (v[jj + 1] - v[jj]) * (t[jj + 1] - t[jj])
+        with np.errstate(divide="ignore", invalid="ignore"):  # a flat pair of samples: no crossing there (NaN)
+            x = t[jj] + (lev - v[jj]) / (v[jj + 1] - v[jj]) * (t[jj + 1] - t[jj])
         ok &= np.abs(x - g) <= reach * p
         out[sl] = np.where(ok, x, np.nan)
     return out, swing

@@ -287,6 +287,21 @@ def read_track(
     ok = [p for p in per_edge if p[0] is not None]
     if not ok:
         raise _refusal(name, log, w, edge, per_edge, tried, edge_errors)
+    if edge != "auto" and w is not None and ok[0][0].repairs + ok[0][0].found and log.kind in ("encoder", "digital"):
+        # the given edge needs repairs: where the other edge fits as it is, the given one is the wrong one
+        other = "falling" if edge == "rising" else "rising"
+        try:
+            o = edges_of(log, other, name=name)
+            clean = fit_wheel(o.times, w, edge=other, index_times=index_times, repair=False).status is FitStatus.FITS
+        except LogError:
+            clean = False
+        if clean:
+            f = ok[0][0]
+            raise LogError(
+                f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges as they are ({f.repairs + f.found} "
+                f"repairs in {f.revolutions} revolutions) but fits its {other} ones (an inverted signal?): give "
+                f"edge={other!r} (--edge {other}), or leave the edge out (--edge auto)"
+            )
     ok.sort(key=lambda p: (p[0].repairs, (not p[0].standard) if auto else False, p[0].edge != "rising"))
     if len(ok) > 1 and ok[1][0].repairs == ok[0][0].repairs and ok[1][0].standard == ok[0][0].standard:
         # alike but for the jitter: the other edge only where it is clearly steadier
