@@ -419,3 +419,65 @@ def test_a_command_that_fails_removes_the_plot_folders_it_made(tmp_path: Path, c
     rc, _, err = run(capsys, ["balance", "4chn15", "--plot", str(tmp_path / "new" / "a" / "b")])
     assert rc == 130 and "rotor: interrupted" in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- digital captures
+def capture_lines(order: tuple[int, int] = (0, 1)) -> list[str]:
+    """A logic analyser's export, ", " separated: a 60-2 crank wheel on Channel 0 and a cam
+    on Channel 1 at 3000 rpm, one row per transition; the columns in ``order`` of channels."""
+    w = TWO_PI * 3000 / 60
+    events = []
+    for rev in range(12):
+        for j in range(58):
+            a = TWO_PI * rev + TWO_PI / 60 * j + 0.37
+            events += [(a / w, 0, 1), ((a + np.pi / 60) / w, 0, 0)]
+    for c in range(6):
+        a = 2 * TWO_PI * c + 1.0
+        events += [(a / w, 1, 1), ((a + 0.5) / w, 1, 0)]
+    level = [0, 0]
+    lines = ["Time[s], " + ", ".join(f"Channel {k}" for k in order), "0.000000000, 0, 0"]
+    for t, channel, v in sorted(events):
+        level[channel] = v
+        lines.append(f"{t:.9f}, " + ", ".join(str(level[k]) for k in order))
+    return lines
+
+
+def test_a_nan_row_of_a_capture_is_named_by_its_line(tmp_path: Path, capsys) -> None:
+    lines = capture_lines()
+    lines.insert(50, "nan, nan, nan")
+    path = tmp_path / "capture.csv"
+    path.write_text("\n".join(lines) + "\n")
+    rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2"])
+    assert_refused(rc, err, "capture.csv: line 51, column 'time': nan is not a finite number")
+    assert "dtype" not in err
+
+
+def test_capture_channels_are_mapped_by_name_wherever_their_columns_stand(tmp_path: Path, capsys) -> None:
+    results = {}
+    for order in ((0, 1), (1, 0)):
+        path = tmp_path / f"capture{order[0]}{order[1]}.csv"
+        path.write_text("\n".join(capture_lines(order)) + "\n")
+        rc, out, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--json"])
+        assert rc == 0, err
+        results[order] = json.loads(out)
+    assert results[(1, 0)]["cycles"] == results[(0, 1)]["cycles"]
+    assert any("Channel 0 → encoder_d" in n and "Channel 1 → cam_d" in n for n in results[(1, 0)]["notes"])
+    # the column names given win over the header's
+    path = tmp_path / "capture10.csv"
+    rc, out, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--json", "--columns", "time,cam_d,encoder_d"])
+    assert rc == 0 and json.loads(out)["cycles"] == results[(0, 1)]["cycles"], err
+    rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_d,cam_d"])
+    assert rc == 2 and "Traceback" not in err, err
+
+
+def test_samples_cut_out_of_a_recording_are_named_without_a_warning(tmp_path: Path, capsys) -> None:
+    w = 1500 / 30 * np.pi
+    t = np.arange(0, 8 * TWO_PI / w, 1e-5)
+    phi = w * t + 0.1
+    tooth = (np.mod(phi, TWO_PI / 60) < np.pi / 60) & (np.floor(np.mod(phi, TWO_PI) / (TWO_PI / 60)) < 58)
+    keep = ~((t > 0.1) & (t < 0.105))  # 5 ms of samples lost
+    path = tmp_path / "bench.csv"
+    np.savetxt(path, np.column_stack([t[keep], tooth[keep] * 4.0 + 0.3]), fmt="%.7g", delimiter=",")
+    rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_v"])
+    assert_refused(rc, err, "bench.csv: line 10002: the samples stop for 5 ms", "samples are missing")
+    assert "Warning" not in err

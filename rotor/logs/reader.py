@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import math
 import os
 import re
 from collections.abc import Sequence
@@ -104,20 +105,32 @@ UNIT_COLUMNS = {
 KNOWN_HEADERS = {
     "Saleae logic analyser (Time[s], Channel 0, Channel 1, …)": (
         re.compile(r"time\s*\[s\]", re.IGNORECASE),
-        re.compile(r"channel\s*\d+", re.IGNORECASE),
+        re.compile(r"channel\s*(\d+)", re.IGNORECASE),
         ("time", "encoder_d", "cam_d"),
     ),
 }
 """Export formats recognised by their header: name → (first column's pattern, the other
-columns' pattern, the columns they are read as in order; further columns are skipped)."""
+columns' pattern with the channel's number, the columns read: the first column's name,
+then that of channel 0, channel 1, …). The channels are mapped by their numbers, wherever
+their columns stand (``Time[s], Channel 1, Channel 0``: the second column is the cam);
+further channels are skipped."""
 
 
 def _known_header(tokens: list) -> tuple[str, list] | None:
     """(format name, column spec) of a known export's header, or None."""
     for fmt, (first, rest, names) in KNOWN_HEADERS.items():
-        if tokens and first.fullmatch(tokens[0]) and len(tokens) > 1 and all(rest.fullmatch(x) for x in tokens[1:]):
-            spec = list(names[: len(tokens)]) + ["-"] * max(len(tokens) - len(names), 0)
-            return fmt, spec
+        if not (tokens and first.fullmatch(tokens[0]) and len(tokens) > 1):
+            continue
+        found = [rest.fullmatch(x) for x in tokens[1:]]
+        if not all(found):
+            continue
+        spec = [names[0]]
+        for m in found:
+            k = int(m.group(1)) if m is not None and len(m.group(1)) < 4 else len(names)
+            spec.append(names[1 + k] if 1 + k < len(names) else "-")
+        if len(set(n for n in spec if n != "-")) != len([n for n in spec if n != "-"]):
+            continue  # one channel named twice: not such an export
+        return fmt, spec
     return None
 
 
@@ -242,6 +255,11 @@ class Log:
         return name in self.columns
 
 
+MAX_SAMPLE_GAP = 20.0
+"""The longest step between two rows of a sampled signal (``encoder_v``), in median sample
+periods; a longer one is samples missing from the recording, refused by name."""
+
+
 def _check(log: Log) -> None:
     cols = log.columns
     if not cols:
@@ -300,6 +318,18 @@ def _check(log: Log) -> None:
                         else ""
                     )
                 )
+    if "encoder_v" in cols and cols["time"].size > 10:  # a sampled signal: evenly spaced samples
+        dt = np.diff(cols["time"])
+        period = float(np.median(dt))
+        gaps = np.flatnonzero(dt > MAX_SAMPLE_GAP * period)
+        if gaps.size:
+            i = int(gaps[0]) + 1
+            raise LogError(
+                f"{log.where(i)}: the samples stop for {dt[i - 1] * 1e3:.3g} ms ({dt[i - 1] / period:.0f} sample "
+                f"periods of {period * 1e6:.3g} µs) before this row: samples are missing from the recording"
+                + (f" ({gaps.size} such gaps)" if gaps.size > 1 else "")
+                + "; cut the log there, or give its parts as separate logs"
+            )
     for k in ("encoder_d", "cam_d"):
         if k in cols:
             v = cols[k]
@@ -550,6 +580,7 @@ def _parse(path, text, sep, header, ncols, use) -> np.ndarray:
         kw["sep"] = r"\s+"
     else:
         kw["sep"] = sep
+        kw["skipinitialspace"] = True  # ", " separators: the blank belongs to the separator
     # drop the header line ourselves: comment/blank lines before it shift skiprows
     body = text
     if header:
@@ -593,7 +624,12 @@ def _find_bad_line(path, text, sep, header, ncols, use, err):
             )
         for i in use:
             try:
-                float(toks[i])
+                x = float(toks[i])
             except ValueError:
                 raise LogError(f"{path}: line {n}, column {i + 1}: {toks[i]!r} is not a number") from None
+            if err is not None and not math.isfinite(x):  # the reader stumbled on it
+                raise LogError(
+                    f"{path}: line {n}, column {i + 1}: {toks[i]!r} is not a finite number; remove the line, or "
+                    "start it with '#' to make it a comment"
+                )
     return None
