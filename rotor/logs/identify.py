@@ -336,24 +336,35 @@ def counted_wheels(times: ArrayLike) -> list[Wheel]:
     return out
 
 
-def _repeats(w: Wheel, std: Wheel) -> bool:
-    """Whether the standard wheel ``std`` is ``w``'s pattern repeated a whole number of times."""
-    if std.teeth % w.teeth or std.teeth == w.teeth:
-        return False
-    k = std.teeth // w.teeth
-    return std.gaps == w.gaps * k
+def _may_be(counted: Wheel, std: Wheel) -> bool:
+    """Whether the edges counted as ``counted`` may be those of the wheel ``std``: over a whole
+    number of either's revolutions, as many edges, or fewer by at most one per gap (a weak tooth
+    next to a gap that the threshold did not see)."""
+    if counted.teeth % std.teeth == 0:
+        k = counted.teeth // std.teeth
+        return k * (std.edges_per_rev - len(std.gaps)) <= counted.edges_per_rev <= k * std.edges_per_rev
+    if std.teeth % counted.teeth == 0:  # a pattern that repeats within a revolution, counted as its part
+        k = std.teeth // counted.teeth
+        return std.edges_per_rev - len(std.gaps) <= k * counted.edges_per_rev <= std.edges_per_rev
+    return False
 
 
 def candidates(times: ArrayLike) -> list[Wheel]:
     """The wheels worth trying on these edges: those counted (:func:`counted_wheels`) and the
-    standard patterns with as many edges per revolution, or that repeat a counted one."""
-    counted = counted_wheels(times)
+    standard patterns with as many edges per revolution, or up to one more per gap (a weak
+    tooth next to each gap that the threshold did not see, which the signal may show), or
+    that repeat a counted one; every standard pattern where counting finds no repeating gap
+    (weak teeth seen in some revolutions only)."""
+    try:
+        counted = counted_wheels(times)
+    except LogError:
+        return [parse_wheel(spec) for spec in STANDARD_WHEELS]
     out = list(counted)
     for spec in STANDARD_WHEELS:
         s = parse_wheel(spec)
         if any(s.spec == c.spec for c in out):
             continue
-        if any(s.edges_per_rev == c.edges_per_rev or _repeats(c, s) for c in counted):
+        if any(_may_be(c, s) for c in counted):
             out.append(s)
     return out
 

@@ -40,8 +40,9 @@ from .reader import Log
 from .wheel import ToothTrack, Wheel, parse_wheel
 
 JITTER_MARGIN = 0.8
-"""Where both edges fit alike, the falling edges are taken only where their tooth-period jitter
-is below this fraction of the rising edges' (else the rising edge, the convention)."""
+"""Where both edges fit alike, the sensor's less usual edge is taken only where its tooth-period
+jitter is below this fraction of the usual one's (the usual edge: a two-level pulse's rising
+edge, a variable-reluctance signal's falling zero crossing)."""
 
 __all__ = [
     "JITTER_MARGIN",
@@ -302,7 +303,8 @@ def read_track(
                 f"repairs in {f.revolutions} revolutions) but fits its {other} ones (an inverted signal?): give "
                 f"edge={other!r} (--edge {other}), or leave the edge out (--edge auto)"
             )
-    ok.sort(key=lambda p: (p[0].repairs, (not p[0].standard) if auto else False, p[0].edge != "rising"))
+    usual = _tooth_edge(log, ok[0][0].track, ok[0][3]) if len(ok) > 1 else None
+    ok.sort(key=lambda p: (p[0].repairs, (not p[0].standard) if auto else False, p[0].edge != usual))
     if len(ok) > 1 and ok[1][0].repairs == ok[0][0].repairs and ok[1][0].standard == ok[0][0].standard:
         # alike but for the jitter: the other edge only where it is clearly steadier
         if ok[1][0].jitter < JITTER_MARGIN * ok[0][0].jitter:
@@ -332,7 +334,10 @@ def read_track(
             elif best.jitter < JITTER_MARGIN * other.jitter:
                 rule = "lower tooth-period jitter"
             else:
-                rule = f"the rising edge, where the two fit alike (jitter within {1 / JITTER_MARGIN:.2g}×)"
+                rule = (
+                    f"the tooth's own edge ({_TOOTH_EDGE_WHY[best.edge == 'falling']}), where the two fit alike "
+                    f"(jitter within {1 / JITTER_MARGIN:.2g}×)"
+                )
             ev = (
                 f"{rule}: {best.edge} edges ({best.spec}) {best.repairs} repairs, jitter {100 * best.jitter:.2f} %; "
                 f"{other.edge} edges ({other.spec}) {other.repairs} repairs, jitter {100 * other.jitter:.2f} %"
@@ -370,6 +375,51 @@ def read_track(
     if edges is not None and edges.repairs:
         track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
     return WheelReading(name, log, track, edges, best, tuple(tried), tuple(choices), tuple(notes))
+
+
+_TOOTH_EDGE_WHY = (
+    "a two-level signal's edge out of its level across the gap, or a variable-reluctance signal's zero crossing "
+    "after a negative first lobe",
+    "a two-level signal's edge out of its level across the gap, or a variable-reluctance signal's zero crossing "
+    "after a positive first lobe",
+)
+
+
+def _tooth_edge(log: Log, track: ToothTrack | None, edges: Edges | None) -> str | None:
+    """The edge that the teeth themselves make, read from the signal across the gaps (the same
+    whatever the signal's sign): for a two-level signal the edge out of the level the gap sits at
+    (the tooth's leading edge: rising where the gap is low); for a variable-reluctance signal,
+    flat across the gap, the zero crossing at the tooth's centre (falling where the first lobe
+    after the gap is positive, as its conditioners time it). ``None`` where it cannot be read."""
+    if track is None or edges is None or log.kind not in ("encoder", "digital"):
+        return None
+    t = log["time"]
+    v = np.asarray(log["encoder_v"] if log.kind == "encoder" else log["encoder_d"], dtype=np.float64)
+    pitch = 2 * np.pi / track.wheel.teeth
+    k = np.rint(np.diff(track.nominal_angle) / pitch)
+    gaps = np.flatnonzero(k > 1)[:200]
+    if gaps.size == 0:
+        return None
+    sub = v[:: max(1, v.size // 1_000_000)]
+    lo, hi = np.percentile(sub, [1.0, 99.0])
+    centre = 0.5 * (lo + hi)
+    mid = 0.5 * (track.t[gaps] + track.t[gaps + 1])
+    if not edges.method.startswith("zero crossings"):
+        level = v[np.clip(np.searchsorted(t, mid), 0, v.size - 1)]
+        return "rising" if np.median(level) < centre else "falling"
+    signs = []
+    for g, m in zip(gaps, mid):
+        step = (track.t[g + 1] - track.t[g]) / k[g]
+        a, b = np.searchsorted(t, [m, track.t[g + 1] + step])
+        seg = v[a:b] - centre
+        if seg.size == 0:
+            continue
+        big = np.flatnonzero(np.abs(seg) > 0.3 * np.max(np.abs(seg)))
+        if big.size:
+            signs.append(np.sign(seg[big[0]]))
+    if not signs:
+        return None
+    return "falling" if np.mean(signs) > 0 else "rising"
 
 
 def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
