@@ -157,8 +157,8 @@ def warning_line(
     runs): rotor's own as one line ``rotor: warning: …`` on stderr, without a source path;
     numpy's floating-point complaints ("divide by zero"), deprecations and other packages'
     warnings are not the user's business and are not shown."""
-    where = str(filename).replace(os.sep, "/")
-    if not issubclass(category, UserWarning) or "/site-packages/" in where or "/dist-packages/" in where:
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # rotor/
+    if not issubclass(category, UserWarning) or not os.path.abspath(str(filename)).startswith(package + os.sep):
         return
     print(
         f"rotor: warning: {_one_line(message if isinstance(message, BaseException) else Exception(message))}",

@@ -53,7 +53,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "time,pressure_v,encoder_v or time,encoder_d,-; a time in ms or µs: time_ms, time_us, tooth_time_ms, "
         "tooth_time_us; a logic analyser's Time[s], Channel 0, Channel 1 header reads as time,encoder_d,cam_d",
     )
-    p.add_argument("--strokes", type=int, choices=(2, 4), default=4)
+    p.add_argument(
+        "--strokes", type=int, choices=(2, 4), default=4, help="strokes per cycle of the engine logged (default 4)"
+    )
     p.add_argument(
         "--cylinders",
         type=whole,

@@ -184,7 +184,7 @@ class Balance(Result):
     θ = 0); ``has_counterweights``; ``reference_m``: the moments' point on the crank axis,
     from main journal 1 [m]; ``force_scale_N``: ω²·Σ m·r of every mass [N];
     ``moment_scale_Nm``: that times the distance between the outer main journals [N·m];
-    ``grid_points``: samples per revolution of the FFT; ``conditions``: the six conditions
+    ``grid_points``: samples per revolution of the FFT; ``conditions``: the textbook's six conditions (and two more of all masses with the counterweights, where the engine has some)
     of a balanced engine (Shishkov (2014) §3.2.10: ΣP_j1 = 0, ΣP_j2 = 0, ΣP_c = 0 for the
     reciprocating masses' forces of orders 1 and 2 and the rotating masses' force, M_1 = 0,
     M_2 = 0, M_c = 0 for their moments) for the crank train without counterweights, and,
@@ -326,7 +326,7 @@ class Balance(Result):
 
     def summary(self) -> str:
         """The free forces and moments by order (total, without counterweights, and each
-        source), the six conditions and the balance shafts, on one screen."""
+        source), the conditions and the balance shafts, on one screen."""
         k_shown = min(len(self.orders), _SUMMARY_ORDERS)
         cw = "with its counterweights" if self.has_counterweights else "no counterweights in the file"
         lines = [
@@ -344,7 +344,11 @@ class Balance(Result):
                 lines.append(f"  {int(self.orders[i]):5d}" + "".join(f"{v[i]:12.1f}" for v in values))
         if k_shown < len(self.orders):
             lines.append(f"  orders {k_shown + 1}...{len(self.orders)}: see to_pandas()")
-        lines.append("  the six conditions (Shishkov (2014) 3.2.10), within 1e-9 of the engine's scale:")
+        extra = len(self.conditions) - len(_CONDITIONS)
+        what = f"the {len(self.conditions)} conditions: the textbook's six (Shishkov (2014) 3.2.10)" + (
+            f" and {'two' if extra == 2 else extra} of all masses with the counterweights" if extra else ""
+        )
+        lines.append(f"  {what}, each within 1e-9 of the engine's scale:")
         for c in self.conditions:
             state, value = ("holds", "0") if c["holds"] else ("FAILS", f"{c['value']:.4g}")
             lines.append(f"    {c['symbol']:<12} {state:<6} {value:>10} {c['unit']:<4} {c['description']}")

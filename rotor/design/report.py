@@ -918,8 +918,8 @@ def _balance_section(page: _Page, bal: Any) -> None:
     page.heading(2, "balance", "Balance", "Уравновешивание")
     page.text(
         "Free forces and free moments of the reciprocating and rotating masses by order, each the largest magnitude "
-        "of that order over the cycle, with and without the counterweights of the engine file; the six conditions "
-        "of a balanced engine and what balance shafts would need (Shishkov 2014, §3.2.10; Popyk)."
+        "of that order over the cycle, with and without the counterweights of the engine file; the textbook's six "
+        "conditions of a balanced engine (two more of all masses where there are counterweights) and what balance shafts would need (Shishkov 2014, §3.2.10; Popyk)."
     )
     page.pre(bal.summary())
     orders = bal.to_json_dict()["orders"]
@@ -936,5 +936,10 @@ def _balance_section(page: _Page, bal: Any) -> None:
     page.table("balance_orders", "free forces and moments by order", cols, data)
     page.figure(bal.plot(), "balance_orders", "Free forces and moments by order, with and without counterweights")
     page.figure(bal.plot(which="ellipses"), "balance_ellipses", "Force and moment ellipses of orders 1 and 2")
-    page.frame("balance_conditions", "the six conditions of a balanced engine", pd.DataFrame(list(bal.conditions)))
+    page.frame(
+        "balance_conditions",
+        f"the {len(bal.conditions)} conditions of a balanced engine (the textbook's six"
+        + (", and two of all masses with the counterweights)" if len(bal.conditions) > 6 else ")"),
+        pd.DataFrame(list(bal.conditions)),
+    )
     page.frame("balance_detail", "every source's force and moment ellipses by order", bal.to_pandas())

@@ -1,0 +1,70 @@
+"""What a command-line user reads: every option explained, warnings as one line of rotor's
+own words, no Python or numpy text on the terminal."""
+
+import argparse
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rotor
+from rotor import cli
+from rotor.cli.app import build_parser, warning_line
+
+
+def _subparsers(parser):
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return action.choices
+
+
+def test_every_option_has_help_text():
+    missing = [
+        f"rotor {name} {' '.join(a.option_strings) or a.dest}"
+        for name, sub in _subparsers(build_parser()).items()
+        for a in sub._actions
+        if not a.help or a.help == argparse.SUPPRESS or not str(a.help).strip()
+    ]
+    assert missing == []
+
+
+def test_a_warning_is_one_line_of_rotors_words(capsys):
+    code = cli.main(["simulate", "4chn15", "--cycles", "2", "--load", "none", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rotor: warning: ") and "will accelerate" in lines[0]
+    assert ".py" not in err and "UserWarning" not in err and "warnings.warn" not in err
+
+
+def test_numpy_and_library_warnings_do_not_reach_the_terminal(capsys, monkeypatch):
+    def noisy(args):
+        np.log(np.zeros(3))  # numpy: "divide by zero encountered in log"
+        np.float64(1.0) / np.float64(0.0)
+        warnings.warn("old", DeprecationWarning, stacklevel=1)
+        warnings.warn("a remark from outside rotor", UserWarning, stacklevel=1)
+
+    parser = build_parser()
+    sub = _subparsers(parser)["presets"]
+    monkeypatch.setattr(sub, "_defaults", {**sub._defaults, "func": noisy})
+    monkeypatch.setattr(cli.app, "build_parser", lambda: parser)
+    assert cli.main(["presets"]) == 0
+    err = capsys.readouterr().err
+    assert err == ""  # numpy's, a deprecation and a warning from outside rotor: none shown
+
+
+ROTOR = Path(rotor.__file__).parent
+
+
+@pytest.mark.parametrize(
+    ("category", "where", "shown"),
+    [
+        (UserWarning, ROTOR / "dynamics" / "transient.py", True),
+        (RuntimeWarning, ROTOR / "dynamics" / "transient.py", False),
+        (UserWarning, Path(np.__file__), False),
+    ],
+)
+def test_warning_line_shows_rotors_user_warnings_only(capsys, category, where, shown):
+    warning_line("it\nhappened", category, str(where), 12)
+    err = capsys.readouterr().err
+    assert (err == "rotor: warning: it happened\n") if shown else err == ""
