@@ -53,6 +53,12 @@ def test_python_round_trip_counts_from_one(tmp_path):
     d = rotor.diagnose(engine, log, wheel="36-1")
     assert d.misfires() == [(3, 2)]
     assert d.to_pandas().query("misfire")[["cycle", "cylinder"]].values.tolist() == [[3, 2]]
+    # both spreads, each named: the estimate's noise and the cycle-to-cycle spread
+    text = d.summary()
+    assert "±1σ estimate" in text and "cycle-to-cycle σ" in text
+    spread = d.to_json_dict()  # the diagnosis's JSON is per cycle; the identification's carries the spread
+    assert "cycles" in spread
+    assert np.all(np.isfinite(d.imep_cycle_std_pa)) and d.imep_cycle_std_pa.shape == (4,)
 
 
 def test_record_refuses_what_it_cannot_write(tmp_path, capsys):

@@ -772,7 +772,10 @@ def _torque_section(
     page.text(
         "The total torque over the cycle against its mean: the work of the difference, ∫(M<sub>Σ</sub> − "
         "M<sub>mean</sub>)dθ, swings by the excess work L<sub>excess</sub> (the area above the mean, "
-        f"L<sub>изб</sub> of the guide): {excess:.1f} J on this diagram. The flywheel follows Shishkov 2014, "
+        f"L<sub>изб</sub> of the guide): {excess:.1f} J on this diagram ({kinematics} kinematics, trapezoid rule "
+        f"on its {float(np.median(np.diff(a))):g}° grid); the flywheel below, like <code>rotor steady</code> and <code>rotor "
+        f"flywheel</code>, sums it on the crank-train tables: {float(fly.excess_work_J):.1f} J. The flywheel "
+        "follows Shishkov 2014, "
         "§3.2.12: J<sub>0</sub> = L<sub>excess</sub>/(δ·ω²), J<sub>flywheel</sub> = 0.85·J<sub>0</sub>, "
         "m = 4·J<sub>flywheel</sub>/D² at a mean diameter D = 2.5·S."
     )

@@ -1121,7 +1121,7 @@ def diagnose(
     phase_warning = phase_note = ""
     if isinstance(log, (str, os.PathLike)):
         if tdc_deg is None and calibration is None:  # a log that states its phase (rotor simulate --record)
-            from .record import stated_phase
+            from .stated import stated_phase
 
             stated = stated_phase(log)
             if stated is not None:

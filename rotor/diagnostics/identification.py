@@ -132,7 +132,8 @@ class Identification(Result):
 
     **Per cycle and cylinder** (cycles, cylinders): ``scale`` [-] (the firing's combustion
     scale: 1 = the engine file's cycle, 0 = none), ``scale_std`` [-], ``imep_pa`` and
-    ``imep_std_pa`` [Pa], ``identified`` (False: a firing cut by the record's end, tied to
+    ``imep_std_pa`` [Pa] (the estimate's uncertainty: the speed's noise only; the
+    cycle-to-cycle spread is :attr:`imep_cycle_std_pa`), ``identified`` (False: a firing cut by the record's end, tied to
     its neighbour), ``contribution`` (index, 1 = a normal firing) [-], ``misfire`` (bool).
     Row k − 1 holds cycle k (cycles and cylinders count from 1 in every output; the
     arrays' rows and columns are 0-based positions): the firing of cylinder c in cycle k
@@ -202,6 +203,18 @@ class Identification(Result):
         """Cylinders of the engine identified."""
         return int(self.scale.shape[1])
 
+    @property
+    def imep_cycle_std_pa(self) -> np.ndarray:
+        """Each cylinder's cycle-to-cycle spread of the identified IMEP [Pa], (cylinders,):
+        the standard deviation over its normal identified firings (NaN with fewer than
+        two); not the estimate's uncertainty (``imep_std_pa``), which counts the noise only."""
+        out = np.full(self.cylinders, np.nan)
+        for c in range(self.cylinders):
+            ok = self.identified[:, c] & ~self.misfire[:, c]
+            if ok.sum() >= 2:
+                out[c] = float(np.std(self.imep_pa[ok, c], ddof=1))
+        return out
+
     def misfires(self) -> list:
         """The misfires as (cycle, cylinder) pairs, both counted from 1 (cycle 1 the record's
         first; row ``cycle − 1`` of the per-cycle arrays)."""
@@ -245,16 +258,22 @@ class Identification(Result):
             f"{self.engine_name}: {_count(self.cycles, 'cycle')} identified, rms residual {self.rms_residual:.3g} "
             f"rad/s ({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})",
             *(f"  warning: {w}" for w in self.warnings),
-            "  cylinder  IMEP mean [bar]  ± std   scale mean   misfires   (mean over the normal firings)",
+            "  cylinder  IMEP mean [bar]  ±1σ estimate  cycle-to-cycle σ   scale mean   misfires",
         ]
+        spread = self.imep_cycle_std_pa
         for c in range(self.cylinders):
             ok = self.identified[:, c] & ~self.misfire[:, c]
             imep = f"{np.mean(self.imep_pa[ok, c]) / PA_PER_BAR:15.3f}" if ok.any() else f"{'—':>15}"
             scale = f"{np.mean(self.scale[ok, c]):10.4f}" if ok.any() else f"{'—':>10}"
+            cyc = f"{spread[c] / PA_PER_BAR:16.3f}" if np.isfinite(spread[c]) else f"{'—':>16}"
             lines.append(
-                f"  {c + 1:8d}  {imep}  {np.median(self.imep_std_pa[:, c]) / PA_PER_BAR:6.3f}   {scale}   "
+                f"  {c + 1:8d}  {imep}  {np.median(self.imep_std_pa[:, c]) / PA_PER_BAR:12.3f}  {cyc}   {scale}   "
                 f"{int(np.sum(self.misfire[:, c]))}"
             )
+        lines.append(
+            "  (over the normal firings; ±1σ estimate: the median uncertainty of one firing's IMEP from the speed's "
+            "noise; cycle-to-cycle σ: the spread of the identified IMEP over the cycles) [bar]"
+        )
         lines.append(
             f"  load torque {np.mean(self.load_torque_Nm):.2f} N·m (cycles {np.min(self.load_torque_Nm):.2f} … "
             f"{np.max(self.load_torque_Nm):.2f})"
@@ -325,6 +344,7 @@ class Identification(Result):
                 "scale_std": self.scale_std,
                 "imep_pa": self.imep_pa,
                 "imep_std_pa": self.imep_std_pa,
+                "imep_cycle_std_pa": self.imep_cycle_std_pa,
                 "identified": self.identified,
                 "contribution": self.contribution,
                 "misfire": self.misfire,

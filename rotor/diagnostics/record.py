@@ -38,11 +38,9 @@ import numpy as np
 
 from ..errors import EngineError
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
+from .stated import stated_phase
 
 __all__ = ["SIGNALS", "record_run", "stated_phase", "truth_path"]
-
-PHASE_KEYS = ("tdc_after_gap_deg", "firing_parity")
-"""The keys of the comment lines ``# key: value`` by which a log states its phase."""
 
 SIGNALS = ("teeth",)
 """The kinds of signal a run can be recorded as: ``"teeth"``, tooth edge times."""
@@ -165,33 +163,6 @@ def record_run(
     truth_file = truth_path(path)
     save_json(truth_file, truth, what="the truth of the recorded run", error=EngineError)
     return path, truth_file
-
-
-def stated_phase(path: str | os.PathLike, max_lines: int = 20) -> tuple[float, int] | None:
-    """The phase a log states in its leading comment lines, ``# tdc_after_gap_deg: DEG``
-    (cylinder 1's TDC after the gap [deg]) and ``# firing_parity: 0|1`` (which revolutions
-    from the first gap hold its firing TDC, as :func:`rotor.analyze_log` counts them), as
-    ``(tdc_deg, firing)``; None where the file states neither (or cannot be read as text).
-    Written by :func:`record_run`, so that a recorded run is read back at its own phase."""
-    found: dict[str, str] = {}
-    try:
-        with open(path, encoding="utf-8", errors="replace") as f:
-            for _, line in zip(range(max_lines), f):
-                text = line.strip()
-                if not text.startswith("#"):
-                    break
-                key, sep, value = text[1:].partition(":")
-                if sep and key.strip() in PHASE_KEYS:
-                    found[key.strip()] = value.strip()
-    except (OSError, UnicodeError):
-        return None
-    if set(found) != set(PHASE_KEYS):
-        return None
-    try:
-        tdc, parity = float(found["tdc_after_gap_deg"]), int(found["firing_parity"])
-    except ValueError:
-        return None
-    return (tdc, parity) if np.isfinite(tdc) and parity in (0, 1) else None
 
 
 def _low_firings(imep: np.ndarray) -> list[tuple[int, int]]:
