@@ -68,3 +68,25 @@ def test_warning_line_shows_rotors_user_warnings_only(capsys, category, where, s
     warning_line("it\nhappened", category, str(where), 12)
     err = capsys.readouterr().err
     assert (err == "rotor: warning: it happened\n") if shown else err == ""
+
+
+def test_modes_without_a_torsion_table_speaks_the_command_lines_words(capsys):
+    code = cli.main(["modes", "4chn15"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "[torsion] table" in err
+    assert "torsional_chain(" not in err and "docs/" not in err
+
+
+def test_analyze_plot_names_no_tdc_it_does_not_know():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    omega = 1200.0 / 60 * 2 * np.pi  # rad/s
+    pitch = 2 * np.pi / 60
+    angles = np.concatenate([r * 2 * np.pi + pitch * np.arange(58) for r in range(20)])
+    log = rotor.Log.from_arrays(tooth_time_s=angles / omega)
+    a = rotor.analyze_log(log, "60-2", cylinders=4)
+    assert str(a.tdc_method).startswith("unknown")
+    axes = np.asarray(a.plot()).ravel()
+    assert "TDC unknown" in axes[0].get_xlabel() and "firing TDC" not in axes[0].get_xlabel()
+    assert axes[1].get_lines()[0].get_xdata()[0] == 1  # cycles count from 1

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import Any
 
 from .args import add_engine, add_json, add_plot
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
-__all__ = ["add_parsers", "cmd_campbell", "cmd_modes", "cmd_torsion", "rpm_range"]
+__all__ = ["add_parsers", "cmd_campbell", "cmd_modes", "cmd_torsion", "rpm_range", "torsion_engine"]
 
 
 def rpm_range(text: str) -> tuple[float, float]:
@@ -66,12 +67,27 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_torsion)
 
 
+def torsion_engine(name: str) -> Any:
+    """The engine ``name`` (a file or preset), refused in the command line's words where it
+    has no ``[torsion]`` table."""
+    from ..engine.file import load_engine
+    from ..errors import EngineError
+
+    engine = load_engine(name)
+    if getattr(engine, "torsion", None) is None:
+        raise EngineError(
+            f"{name}: engine {engine.name!r} has no [torsion] table, which this command needs: add one to its engine "
+            "file (the chain's inertias [kg·m²], shaft stiffnesses [N·m/rad] and the mass of each crank throw); the "
+            "presets mwm6 and tue-single have one (`rotor presets`)"
+        )
+    return engine
+
+
 def cmd_modes(args: argparse.Namespace) -> None:
     """The torsional modes of the engine's chain."""
-    from ..engine.file import load_engine
     from ..torsion.modes import torsional_modes
 
-    modes = torsional_modes(load_engine(args.engine), rpm=args.rpm)
+    modes = torsional_modes(torsion_engine(args.engine), rpm=args.rpm)
     written = [save_plot(modes.plot(), plot_folder(args.plot), "modes.png")] if args.plot else []
     if args.json:
         print_json({**modes.to_json_dict(), "plots": written})
@@ -82,10 +98,9 @@ def cmd_modes(args: argparse.Namespace) -> None:
 
 def cmd_campbell(args: argparse.Namespace) -> None:
     """The Campbell diagram of the engine's chain over ``--rpm-range``."""
-    from ..engine.file import load_engine
     from ..torsion.campbell import campbell
 
-    diagram = campbell(load_engine(args.engine), rpm=args.rpm_range)
+    diagram = campbell(torsion_engine(args.engine), rpm=args.rpm_range)
     written = [save_plot(diagram.plot(), plot_folder(args.plot), "campbell.png")] if args.plot else []
     if args.json:
         print_json({**diagram.to_json_dict(), "plots": written})
@@ -96,10 +111,9 @@ def cmd_campbell(args: argparse.Namespace) -> None:
 
 def cmd_torsion(args: argparse.Namespace) -> None:
     """The forced response of the engine's chain at ``--rpm``."""
-    from ..engine.file import load_engine
     from ..torsion.response import torsional_response
 
-    response = torsional_response(load_engine(args.engine), args.rpm)
+    response = torsional_response(torsion_engine(args.engine), args.rpm)
     written = [save_plot(response.plot(), plot_folder(args.plot), "torsion.png")] if args.plot else []
     if args.json:
         print_json({**response.to_json_dict(), "plots": written})

@@ -51,14 +51,17 @@ def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
     ax_w.plot(
         ang, rpm.mean(axis=0), lw=1.8, color="C0", label=f"mean of {a.cycles} cycles" if a.cycles != 1 else "1 cycle"
     )
-    ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
+    if str(a.tdc_method).startswith("unknown"):  # the cycles start at the gap: no TDC to name
+        ax_w.set_xlabel("cycle angle from the gap [deg] (TDC unknown)")
+    else:
+        ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
     ax_w.set_ylabel("speed [rpm]")
     ax_w.legend(fontsize=8)
     angle_axis(ax_w, cycle_deg)
     ax_w.set_title(f"{plain(a.source)}: speed over the cycle")
-    k = np.arange(a.cycles)
+    k = np.arange(1, a.cycles + 1)  # cycles count from 1
     ax_c.plot(k, a.mean_rpm, "o-", color="C0", ms=4)
-    ax_c.set_xlabel("cycle")
+    ax_c.set_xlabel("cycle (from 1)")
     ax_c.set_ylabel("mean speed [rpm]", color="C0")
     twin = ax_c.twinx()
     twin.plot(k, a.delta, "s--", color="C3", ms=4)
