@@ -90,3 +90,12 @@ def test_analyze_plot_names_no_tdc_it_does_not_know():
     axes = np.asarray(a.plot()).ravel()
     assert "TDC unknown" in axes[0].get_xlabel() and "firing TDC" not in axes[0].get_xlabel()
     assert axes[1].get_lines()[0].get_xdata()[0] == 1  # cycles count from 1
+
+
+def test_a_near_tie_for_the_oil_hole_is_reported_with_both_rays():
+    loads = rotor.bearing_loads(rotor.load_engine("4chn15"))
+    assert loads.journal_oil_hole_candidates_deg(2) == [270.0, 90.0]  # wear 3161.0 against 3189.7 N
+    assert loads.journal_oil_hole_candidates_deg(3) == [240.0]
+    assert "oil hole at 270° (near tie: 90° (+0.9%)" in loads.summary()
+    journal = loads.to_json_dict()["journals"][1]
+    assert journal["oil_hole_deg"] == 270.0 and journal["oil_hole_candidates_deg"] == [270.0, 90.0]

@@ -84,6 +84,10 @@ from ..units import RAD_S_PER_RPM
 
 __all__ = ["BearingLoads", "bearing_loads", "wear_indices", "rod_pin_forces", "load_direction_rad"]
 
+OIL_HOLE_TIE = 0.02
+"""Another ray that is a least loaded one of its own neighbourhood, with a wear index within
+this fraction of the least [-], is a near tie for the oil hole: the choice between them
+follows the angle step, and both are reported."""
 BEARING_ROW_BYTES = 4096
 """Memory one crank angle of the calculation takes per cylinder [bytes] (its arrays and
 intermediates), to refuse a step too small for memory before anything is allocated."""
@@ -290,6 +294,36 @@ class BearingLoads(Result):
         j = self._journal(journal)
         return float(self.ray_angles_deg[int(np.argmin(self.journal_wear_N[j]))])
 
+    def pin_oil_hole_candidates_deg(self, throw: int = 1) -> list[float]:
+        """The oil hole's candidate rays of throw ``throw``'s crank pin [deg]: the least loaded
+        first, then every other ray least loaded in its neighbourhood within
+        :data:`OIL_HOLE_TIE` of it (a near tie, which the angle step may decide)."""
+        return self._candidates(self.pin_wear_N[self._throw(throw)])
+
+    def journal_oil_hole_candidates_deg(self, journal: int = 1) -> list[float]:
+        """The oil hole's candidate rays of main journal ``journal`` [deg], as
+        :meth:`pin_oil_hole_candidates_deg`."""
+        return self._candidates(self.journal_wear_N[self._journal(journal)])
+
+    def _candidates(self, wear: np.ndarray) -> list[float]:
+        w = np.asarray(wear, dtype=np.float64)
+        best = int(np.argmin(w))
+        local = (w <= np.roll(w, 1)) & (w <= np.roll(w, -1))
+        near = local & (w <= w[best] + OIL_HOLE_TIE * abs(w[best]))
+        others = [int(i) for i in np.argsort(w) if near[i] and i != best]
+        return [float(self.ray_angles_deg[i]) for i in [best, *others]]
+
+    def _oil_hole_text(self, candidates: list[float], wear: np.ndarray) -> str:
+        text = f"oil hole at {candidates[0]:g}°"
+        if len(candidates) > 1:
+            w = np.asarray(wear, dtype=np.float64)
+            least = float(np.min(w))
+            ties = ", ".join(
+                f"{a:g}° ({(w[list(self.ray_angles_deg).index(a)] - least) / abs(least):+.1%})" for a in candidates[1:]
+            )
+            text += f" (near tie: {ties}; the angle step may choose either)"
+        return text
+
     def _throw(self, throw: Any) -> int:
         t = require_whole(throw, "BearingLoads(throw)")
         if not 1 <= t <= self.throws:
@@ -344,7 +378,8 @@ class BearingLoads(Result):
             cyl = ",".join(map(str, self.throw_cylinders[k]))
             lines.append(
                 f"    throw {k + 1} (cyl {cyl}): Q max {s['max_N'] / 1e3:9.2f} kN at {s['max_angle_deg']:5.1f}°, "
-                f"mean {s['mean_N'] / 1e3:8.2f}, min {s['min_N'] / 1e3:8.2f} kN; oil hole at {self.pin_oil_hole_deg(k + 1):g}°"
+                f"mean {s['mean_N'] / 1e3:8.2f}, min {s['min_N'] / 1e3:8.2f} kN; "
+                f"{self._oil_hole_text(self.pin_oil_hole_candidates_deg(k + 1), self.pin_wear_N[k])}"
             )
         lines.append("  big-end bearings (rod frame):")
         rows = _capped(range(len(self.big_end_cylinders)), np.max(qb, axis=0))
@@ -368,7 +403,7 @@ class BearingLoads(Result):
             lines.append(
                 f"    journal {j + 1}: max {s['max_N'] / 1e3:8.2f} kN at {s['max_angle_deg']:5.1f}°, mean "
                 f"{s['mean_N'] / 1e3:7.2f} kN; torque {tq[:, j].min():9.1f} … {tq[:, j].max():9.1f} N·m; "
-                f"oil hole at {self.journal_oil_hole_deg(j + 1):g}°"
+                f"{self._oil_hole_text(self.journal_oil_hole_candidates_deg(j + 1), self.journal_wear_N[j])}"
             )
         wj, wt = self.worst_journal, self.worst_torque_journal
         lines.append(
@@ -454,6 +489,7 @@ class BearingLoads(Result):
                         **self._stats(q[:, k]),
                         "wear_N": np.round(self.pin_wear_N[k], 3),
                         "oil_hole_deg": self.pin_oil_hole_deg(k + 1),
+                        "oil_hole_candidates_deg": self.pin_oil_hole_candidates_deg(k + 1),
                     }
                     for k in range(self.throws)
                 ],
@@ -469,6 +505,7 @@ class BearingLoads(Result):
                         "running_torque_range_Nm": float(np.ptp(tq[:, j])),
                         "wear_N": np.round(self.journal_wear_N[j], 3),
                         "oil_hole_deg": self.journal_oil_hole_deg(j + 1),
+                        "oil_hole_candidates_deg": self.journal_oil_hole_candidates_deg(j + 1),
                     }
                     for j in range(self.journals)
                 ],
