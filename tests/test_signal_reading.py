@@ -136,3 +136,50 @@ def test_wrong_wheels_on_the_4b11_capture_exit_2(wheel, edge, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "36-2-1" in err  # names the wheel that fits
+
+
+# ------------------------------------------------------------------ a simulated matrix of analog signals
+PROFILES = {
+    "steady": dict(rpm=2000.0, revolutions=14, ripple=0.04),
+    "ignition_cut": dict(rpm=2000.0, revolutions=16, ripple=0.04),  # the speed drops 30 % in 3 revolutions
+    "coast_down": dict(rpm=1500.0, revolutions=16, ripple=0.02),  # to a twentieth of its speed
+}
+
+
+def _matrix():
+    """Every standard wheel with a covering rotation of sensor (VR: amplitude ∝ speed; Hall), the tooth after the
+    gap (regular, weak, early, late) and the speed (steady, ignition cut, coast-down): 88 readings with the
+    inverted ones."""
+    from rotor.logs.identify import STANDARD_WHEELS
+
+    combos = [
+        (spec, sensor, gap, prof)
+        for spec in STANDARD_WHEELS
+        for sensor in ("vr", "hall")
+        for gap in (None, "weak", "early", "late")
+        for prof in PROFILES
+    ]
+    return combos[::5]
+
+
+@pytest.mark.parametrize("spec,sensor,gap,profile", _matrix())
+def test_simulated_signals_read_without_options(spec, sensor, gap, profile):
+    """Each signal and its negation are read with wheel="auto" and no edge: the documented wheel, and within 1 %
+    the δ read with that wheel and the documented edge given. The documented edge is the signal's own (a Hall
+    tooth's leading edge, a variable-reluctance tooth's centre crossing), except where a Hall sensor's weak tooth
+    is a narrow pulse, both of whose edges move (its leading edge late, its trailing edge early): there either
+    edge is a documented reading, and the δ of the one rotor takes is compared."""
+    from rotor.logs.synthetic import speed_profile, wheel_signal
+
+    p = speed_profile(profile, **PROFILES[profile])
+    deltas = []
+    for inverted in (False, True):
+        s = wheel_signal(p, spec, sensor=sensor, gap_tooth=gap, inverted=inverted, noise_v=0.02, tooth_error_deg=0.05)
+        log = rotor.Log.from_arrays(time=s.t_s, encoder_v=s.v)
+        a = rotor.analyze_log(log, "auto", firing=0, tdc_deg=0.0)
+        assert a.reading.wheel.spec == spec
+        documented = s.edge if not (sensor == "hall" and gap == "weak") else a.reading.edge
+        given = rotor.analyze_log(log, spec, edge=documented, firing=0, tdc_deg=0.0)
+        assert np.mean(a.delta) == pytest.approx(np.mean(given.delta), rel=0.01)
+        deltas.append(np.mean(a.delta))
+    assert deltas[1] == pytest.approx(deltas[0], rel=0.01)  # the same read inverted

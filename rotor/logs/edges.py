@@ -28,7 +28,13 @@ from jaxtyping import ArrayLike
 
 from ..errors import LogError
 
-__all__ = ["Edges", "find_edges", "find_weak_edges", "noise_rms", "signal_levels", "two_level_locally"]
+VR_BAND = (0.4, 0.6)
+"""A variable-reluctance signal's Schmitt trigger (off, on) as fractions from its local low to
+its local high [-]: a tooth arms it where its lobe reaches a fifth of the local peak (a weak
+tooth next to the gap, a third of its neighbours, still counts), as an adaptive-threshold VR
+interface arms at a fraction of the recent peaks."""
+
+__all__ = ["VR_BAND", "Edges", "find_edges", "find_weak_edges", "noise_rms", "signal_levels", "two_level_locally"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -143,8 +149,8 @@ def find_edges(
       each tooth period and two on either side, so an amplitude that grows with speed or an offset that
       drifts is followed; a stretch whose swing is under 5 % of the largest is no tooth),
       or ``"vr"``: a variable-reluctance sensor's signal, whose amplitude grows with speed
-      and changes sign on every tooth: adaptive levels, a Schmitt trigger at 35 % / 65 %
-      and the edge at the mid-level, the zero crossing of a signal centred on zero (give
+      and changes sign on every tooth: adaptive levels, a Schmitt trigger at :data:`VR_BAND`
+      (40 % / 60 %) and the edge at the mid-level, the zero crossing of a signal centred on zero (give
       ``edge="falling"`` for the positive-to-negative crossing most VR conditioners use).
 
     **Returns:** :class:`Edges`.
@@ -179,7 +185,7 @@ def find_edges(
         lev = low + level * amp
     else:
         if levels == "vr":
-            band, level = (0.35, 0.65), 0.5
+            band, level = VR_BAND, 0.5
         lo_env, hi_env = _envelope(v, name)
         amp_env = hi_env - lo_env
         off, on = lo_env + band[0] * amp_env, lo_env + band[1] * amp_env

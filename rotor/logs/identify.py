@@ -36,8 +36,8 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..errors import LogError
-from .pattern import locate_teeth, pitches, remove_extra_edges
-from .wheel import ToothTrack, Wheel, parse_wheel
+from .pattern import END_REVS, locate_teeth, pitches, place, remove_extra_edges
+from .wheel import Repair, ToothTrack, Wheel, parse_wheel
 
 __all__ = [
     "FitStatus",
@@ -84,7 +84,8 @@ class WheelFit:
     **Attributes:** ``spec``: the wheel; ``edge``: ``"rising"``/``"falling"`` (``None``
     for tooth times); ``status``: :class:`FitStatus`; ``revolutions``: complete
     revolutions placed; ``inferred``: edges inferred from the pattern; ``removed``: extra
-    edges removed; ``found``: weak edges found in the signal where the pattern has a
+    edges removed; ``interior``: of those, the ones away from the first and last revolution (an
+    engine starting or stopping makes edges no pattern proves); ``found``: weak edges found in the signal where the pattern has a
     tooth; ``budget``: inferred edges allowed; ``gap_misfit`` [-]: rms relative misfit of
     the gap windows; ``jitter`` [-]: rms relative change of the tooth period from one
     regular tooth to the next; ``reason``: in words, why it does not fit (empty if it
@@ -104,6 +105,7 @@ class WheelFit:
     reason: str = ""
     track: ToothTrack | None = None
     standard: bool = False
+    interior: int = 0
 
     @property
     def repairs(self) -> int:
@@ -221,12 +223,18 @@ def fit_wheel(
             track = locate_teeth(times, w, index_times=index_times, repair=True, probe=probe)
         except LogError as e2:
             return WheelFit(w.spec, edge, FitStatus.NO_FIT, reason=str(e2), standard=std)
+    track = _ends_dropped(np.asarray(times, dtype=np.float64), track, w, index_times, probe)
     kinds = Counter(r.kind for r in track.repairs)
     inferred = kinds.get("missed edge inferred", 0)
     removed = kinds.get("extra edge removed", 0)
     found = kinds.get("missed edge found", 0)
     revs = max(track.revolutions, 0)
     budget = inferred_budget(revs)
+    first, last = int(np.min(track.rev)), int(np.max(track.rev))
+    interior = sum(
+        r.kind in ("missed edge inferred", "extra edge removed") and first < (r.revolution or 0) < last
+        for r in track.repairs
+    )
     status = FitStatus.FITS if not track.repairs else FitStatus.REPAIRED
     reason = ""
     if inferred > budget:
@@ -249,7 +257,42 @@ def fit_wheel(
         reason,
         track if status.ok else None,
         std,
+        interior,
     )
+
+
+def _ends_dropped(t: np.ndarray, track: ToothTrack, w: Wheel, index_times, probe) -> ToothTrack:
+    """``track`` with the edges of its first and last :data:`rotor.logs.pattern.END_REVS`
+    revolutions dropped from the first (last) edge that had to be inferred there: a starter
+    engaging, an engine coming to a stop (its speed changing by half within a tooth) make periods
+    no pattern proves, and an edge guessed there is no measurement. Unchanged where none is."""
+    inferred = np.array([r.time_s for r in track.repairs if r.kind == "missed edge inferred"])
+    E = w.edges_per_rev
+    if inferred.size == 0 or t.size < 2 * END_REVS * E + E + 3:
+        return track
+    head = t[END_REVS * E]
+    tail = t[t.size - 1 - END_REVS * E]
+    lo = inferred[inferred <= head].max() if np.any(inferred <= head) else -np.inf
+    hi = inferred[inferred >= tail].min() if np.any(inferred >= tail) else np.inf
+    if not (np.isfinite(lo) or np.isfinite(hi)):
+        return track
+    keep = (t > lo) & (t < hi)
+    try:
+        cut = locate_teeth(t[keep], w, index_times=index_times, repair=True, probe=probe)
+    except LogError:
+        return track
+    dropped = [
+        Repair(
+            "edge dropped",
+            float(x),
+            None,
+            1.0,
+            f"one of {int((~keep).sum())} edges at the {'start' if x <= lo else 'end'} of the log where the pattern "
+            f"needed an edge guessed (a starter engaging, the engine stopping?)",
+        )
+        for x in t[~keep]
+    ]
+    return dataclasses.replace(cut, repairs=tuple(place(list(cut.repairs) + dropped, cut.t, cut.rev)))
 
 
 # ---------------------------------------------------------------------- counting

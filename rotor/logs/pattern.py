@@ -109,8 +109,9 @@ def remove_extra_edges(t: np.ndarray, repair: bool, what: str):
         big = np.inf
         left = np.where(short > 0, p0[np.maximum(short - 1, 0)] + p0[short], big)
         right = np.where(short + 1 < dt.size, p0[short] + p0[np.minimum(short + 1, dt.size - 1)], big)
-        el = np.abs(left - np.round(left))
-        er = np.abs(right - np.round(right))
+        with np.errstate(invalid="ignore"):  # inf where there is no neighbour: never the nearer
+            el = np.abs(left - np.round(left))
+            er = np.abs(right - np.round(right))
         el[short == 0] = 0.0  # the first edge of the log: drop it
         er[short + 1 == dt.size] = 0.0
         use_left = el <= er

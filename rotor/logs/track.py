@@ -304,8 +304,8 @@ def read_track(
                 f"edge={other!r} (--edge {other}), or leave the edge out (--edge auto)"
             )
     usual = _tooth_edge(log, ok[0][0].track, ok[0][3]) if len(ok) > 1 else None
-    ok.sort(key=lambda p: (p[0].repairs, (not p[0].standard) if auto else False, p[0].edge != usual))
-    if len(ok) > 1 and ok[1][0].repairs == ok[0][0].repairs and ok[1][0].standard == ok[0][0].standard:
+    ok.sort(key=lambda p: (p[0].interior, (not p[0].standard) if auto else False, p[0].edge != usual))
+    if len(ok) > 1 and ok[1][0].interior == ok[0][0].interior and ok[1][0].standard == ok[0][0].standard:
         # alike but for the jitter: the other edge only where it is clearly steadier
         if ok[1][0].jitter < JITTER_MARGIN * ok[0][0].jitter:
             ok = [ok[1], ok[0], *ok[2:]]
@@ -327,8 +327,8 @@ def read_track(
     if best.edge is not None:
         if edge == "auto" and len(ok) > 1:
             other = ok[1][0]
-            if best.repairs != other.repairs:
-                rule = "fewer repairs"
+            if best.interior != other.interior:
+                rule = "fewer repairs away from the record's first and last revolution"
             elif auto and best.standard != other.standard:
                 rule = f"{best.spec} is a standard pattern, {other.spec} is not"
             elif best.jitter < JITTER_MARGIN * other.jitter:
