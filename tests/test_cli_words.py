@@ -35,6 +35,7 @@ def test_a_warning_is_one_line_of_rotors_words(capsys):
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("rotor: warning: ") and "will accelerate" in lines[0]
     assert ".py" not in err and "UserWarning" not in err and "warnings.warn" not in err
+    assert "rotor.ConstantLoad" not in err and "leave out --load" in err  # the command line's words
 
 
 def test_numpy_and_library_warnings_do_not_reach_the_terminal(capsys, monkeypatch):

@@ -303,9 +303,8 @@ def cmd_simulate(args: argparse.Namespace) -> None:
     pattern = None
     if pairs or fuel != 1.0:
         pattern = combustion_pattern(args.cycles, engine.cylinders, imep_scale=fuel, misfires=pairs)
-    with warnings.catch_warnings():
-        if solved is not None or args.rpm == 0:  # the output says what the load is
-            warnings.simplefilter("ignore", UserWarning)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         res = simulate(
             engine,
             rpm=args.rpm,
@@ -320,6 +319,18 @@ def cmd_simulate(args: argparse.Namespace) -> None:
             progress=False if (args.json or args.quiet) else None,
             keep_cycles=None if args.record else args.keep_cycles,
         )
+    for w in caught:  # the library's warnings in the command line's words
+        if not issubclass(w.category, UserWarning) or solved is not None or args.rpm == 0:
+            continue  # numpy's are not the user's business; a solved or no load the output states
+        text = str(w.message)
+        if "will accelerate" in text:
+            text = (
+                text.split("; give a load")[0]
+                .removeprefix("simulate: ")
+                .replace("no load and no governor", "--load none")
+                + "; leave out --load for the constant load that balances it at the start speed, or give a --governor"
+            )
+        warnings.warn(text, w.category, stacklevel=1)
     constant = isinstance(load, ConstantLoad)
     res = dataclasses.replace(
         res,
