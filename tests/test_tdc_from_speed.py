@@ -13,7 +13,7 @@ import pytest
 
 import rotor
 from rotor.cli import main
-from rotor.diagnostics.phase import TdcNotDetermined, check_tdc, tdc_from_speed
+from rotor.diagnostics.phase import TdcNotDetermined, TdcVerdict, check_tdc, tdc_from_speed
 from rotor.diagnostics.synthetic import (
     DEFAULT_GAP_DEG,
     simulated_tooth_errors,
@@ -116,14 +116,14 @@ def test_a_calibration_off_by_offset_is_corrected_and_diagnosed(files, off):
     paths, runs, _ = files
     d = rotor.diagnose(ENGINE, paths["steady", off], _calibration(), wheel="60-2")
     chk = d.tdc_check
-    assert chk is not None and chk.verdict == "corrected"
+    assert chk is not None and chk.verdict is TdcVerdict.DISAGREES and chk.corrected
     assert abs(_err(chk.used_deg, TDC + off)) < TDC_TOL_DEG
     assert any("TDC corrected" in w for w in d.warnings)
     assert not d.misfire.any()
     sim = np.asarray(runs["steady"].imep_pa)[1 : 1 + d.cycles, 0]  # the record starts 200° into cycle 0
     np.testing.assert_allclose(d.imep_pa[:, 0], sim, rtol=IMEP_REL)
     js = d.to_json_dict()
-    assert js["tdc_check"]["verdict"] == "corrected" and js["tdc_check"]["std_deg"] > 0
+    assert js["tdc_check"]["verdict"] == "disagrees" and js["tdc_check"]["corrected"] and js["tdc_check"]["std_deg"] > 0
     assert abs(_err(js["tdc_after_gap_deg"], TDC + off)) < TDC_TOL_DEG
 
 
@@ -134,7 +134,7 @@ def test_an_ignition_cut_is_corrected_and_only_the_cut_misfires(files, off):
     the ends are reported."""
     paths, runs, _ = files
     d = rotor.diagnose(ENGINE, paths["cut", off], _calibration(), wheel="60-2")
-    assert d.tdc_check is not None and d.tdc_check.verdict == "corrected"
+    assert d.tdc_check is not None and d.tdc_check.verdict is TdcVerdict.DISAGREES
     assert abs(_err(d.tdc_check.used_deg, TDC + off)) < TDC_TOL_DEG
     # the analysed cycles are the simulated cycles 1 … (the record starts 200° into cycle 0)
     assert d.partial_deg[0] > 0 and d.cycles >= 5
@@ -151,7 +151,7 @@ def test_the_right_calibration_is_kept(files):
     """A calibration whose TDC is right is kept, with a note of how well the speed agrees."""
     paths, _, _ = files
     d = rotor.diagnose(ENGINE, paths["steady", 0.0], _calibration(), wheel="60-2")
-    assert d.tdc_check.verdict == "agrees" and d.tdc_check.used_deg == pytest.approx(TDC)
+    assert d.tdc_check.verdict is TdcVerdict.AGREES and d.tdc_check.used_deg == pytest.approx(TDC)
     assert not any("corrected" in w for w in d.warnings)
     assert any("agrees with the recording's speed" in n for n in d.notes)
     assert "agrees with the recording's speed" in d.summary()
@@ -262,7 +262,7 @@ def test_a_cam_channel_keeps_its_phase_after_the_correction(files):
     right = _digital_with_cam(folder / "cam.csv", runs["cut"], gap, 270.0)
     d = rotor.diagnose(ENGINE, right, _calibration(), wheel="60-2")
     assert d.cycles == 6
-    assert d.tdc_check.verdict == "corrected" and abs(_err(d.tdc_check.used_deg, TDC + off)) < TDC_TOL_DEG
+    assert d.tdc_check.verdict is TdcVerdict.DISAGREES and abs(_err(d.tdc_check.used_deg, TDC + off)) < TDC_TOL_DEG
     assert d.analysis.firing_method.startswith("cam")
     assert not d.phase_warning and any("where the speed's fit puts it too" in n for n in d.notes)
     sim = np.asarray(runs["cut"].imep_pa)[1 : 1 + d.cycles, 0]
