@@ -59,6 +59,17 @@ def test_python_round_trip_counts_from_one(tmp_path):
     spread = d.to_json_dict()  # the diagnosis's JSON is per cycle; the identification's carries the spread
     assert "cycles" in spread
     assert np.all(np.isfinite(d.imep_cycle_std_pa)) and d.imep_cycle_std_pa.shape == (4,)
+    # one Axes, one panel (kind=); the three together still
+    import matplotlib
+
+    matplotlib.use("Agg")
+    ax = d.plot(kind="imep")
+    assert "misfire" in ax.get_title() and ax.get_xlabel().startswith("cycle (from 1")
+    marked = [line for line in ax.get_lines() if line.get_label() == "misfire"]
+    assert marked and list(marked[0].get_xdata()) == [3]  # cycle 3
+    assert len(d.plot()) == 3
+    with pytest.raises(ValueError, match="kind"):
+        d.plot(kind="everything")
 
 
 def test_record_refuses_what_it_cannot_write(tmp_path, capsys):

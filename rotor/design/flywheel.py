@@ -594,7 +594,10 @@ class PointResult:
     the ``[crankshaft]`` inertia that meets the target here exactly [kg·m²] (0 where none
     is needed), ``delta``: δ with the designed inertia [-], ``peak_rpm``: the highest speed
     within the cycle [rev/min], ``newton_steps``, ``textbook``: the textbook sizing here,
-    ``fuel_scale``: the fuelling solved for a speed-dependent load [-] (None otherwise)."""
+    ``fuel_scale``: the fuelling solved for a speed-dependent load [-] (None otherwise);
+    the operating point in the words of :class:`rotor.SpeedResult`: ``load_torque_Nm`` (the
+    load carried, its time mean [N·m]), ``fuel_scale_applied`` (the fuel scale, mean over the
+    cylinders [-]) and ``solved_for`` (``"load"`` or ``"fuel_scale"``)."""
 
     rpm: float
     imep_scale: float | list[float]
@@ -606,6 +609,9 @@ class PointResult:
     newton_steps: int
     textbook: TextbookFlywheel
     fuel_scale: float | None = None
+    load_torque_Nm: float | None = None
+    fuel_scale_applied: float | None = None
+    solved_for: str | None = None
 
     def __repr__(self) -> str:
         return f"PointResult(rpm={self.rpm:g}, delta={self.delta:.5g}, inertia_kgm2={self.inertia_kgm2:.5g})"
@@ -747,6 +753,8 @@ class FlywheelDesign(Result):
                 "peak_rpm": [p.peak_rpm for p in self.points],
                 "newton_steps": [p.newton_steps for p in self.points],
                 "fuel_scale": [np.nan if p.fuel_scale is None else p.fuel_scale for p in self.points],
+                "load_torque_Nm": [np.nan if p.load_torque_Nm is None else p.load_torque_Nm for p in self.points],
+                "solved_for": [p.solved_for for p in self.points],
                 "textbook_excess_work_J": [p.textbook.excess_work_J for p in self.points],
                 "textbook_total_inertia_kgm2": [p.textbook.total_inertia_kgm2 for p in self.points],
                 "textbook_crankshaft_inertia_kgm2": [p.textbook.crankshaft_inertia_kgm2 for p in self.points],
@@ -760,24 +768,30 @@ class FlywheelDesign(Result):
         lines = [
             f"{self.engine_name}: the smallest flywheel for δ ≤ target at {len(self.points)} operating point(s)",
             "",
-            f"  {'rpm':>7} {'fuelling':>10} {'load':>12} {'δ target':>9} {'J for target':>13} {'δ (design)':>11} "
-            f"{'J textbook':>11}",
+            f"  {'rpm':>7} {'fuel scale':>11} {'load [N·m]':>11} {'load model':>13} {'δ target':>9} "
+            f"{'J for target':>13} {'δ (design)':>11} {'J textbook':>11}",
         ]
         for i, p in enumerate(self.points):
             mark = "  ← binding" if i == self.binding_index else ""
             scale = f"{p.imep_scale:g}" if isinstance(p.imep_scale, (int, float)) else "per cyl."
-            if p.fuel_scale is not None:  # solved for a speed-dependent load
-                scale = (
-                    f"×{p.fuel_scale:.3g}"
-                    if isinstance(p.imep_scale, (int, float)) and p.imep_scale == 1
-                    else f"{scale} ×{p.fuel_scale:.3g}"
-                )
+            if p.fuel_scale_applied is not None:
+                scale = f"{p.fuel_scale_applied:.4g}"
+            if p.solved_for == "fuel_scale":
+                scale += "*"
+            load = "—" if p.load_torque_Nm is None else f"{p.load_torque_Nm:.1f}"
+            if p.solved_for == "load":
+                load += "*"
             need = f"{p.inertia_kgm2:13.4f}" if p.inertia_kgm2 > 0 else f"{'none':>13}"
             tb_j = p.textbook.crankshaft_inertia_kgm2
             tb = f"{tb_j:11.4f}" if tb_j > 0 else f"{'n/a':>11}"
             lines.append(
-                f"  {p.rpm:7g} {scale:>10} {p.load:>12} {p.delta_target:9.4g} {need} {p.delta:11.5f} {tb}{mark}"
+                f"  {p.rpm:7g} {scale:>11} {load:>11} {p.load:>13} {p.delta_target:9.4g} {need} {p.delta:11.5f} "
+                f"{tb}{mark}"
             )
+        lines.append(
+            "  (fuel scale: the combustion as a multiple of the engine file's; load: the torque carried; "
+            "* solved, the other given)"
+        )
         lines += [
             "",
             f"  designed [crankshaft] inertia_kgm2   {self.crankshaft_inertia_kgm2:10.4f} kg·m²  (binding at "
@@ -990,6 +1004,9 @@ def design_flywheel(
                 newton_steps=steps,
                 textbook=tb,
                 fuel_scale=None if fuel is None else float(np.asarray(fuel)),
+                load_torque_Nm=None if r.load_torque_Nm is None else float(np.asarray(r.load_torque_Nm)),
+                fuel_scale_applied=None if r.fuel_scale is None else float(np.asarray(r.fuel_scale)),
+                solved_for=r.solved_for,
             )
         )
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)

@@ -929,10 +929,11 @@ class Diagnosis(Identification):
             )
         return text
 
-    def plot(self, ax: Any = None) -> Any:
-        """The identification's plot (:meth:`rotor.Identification.plot`) with the IMEP the
-        pressure channel measured per cycle (``measured_imep_pa``, when there is one) over the
-        identified IMEP. Returns the three Axes."""
+    def plot(self, ax: Any = None, kind: str | None = None) -> Any:
+        """The identification's plot (:meth:`rotor.Identification.plot`, ``kind`` as there)
+        with the IMEP the pressure channel measured per cycle (``measured_imep_pa``, when
+        there is one) over the identified IMEP. Returns the three Axes, or with ``kind`` the
+        one."""
         from ..plotting.diagnostics import plot_identification
 
         title = f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}"
@@ -950,6 +951,7 @@ class Diagnosis(Identification):
             title=title,
             measured_imep_pa=self.measured_imep_pa,
             ax=ax,
+            kind=kind,
         )
 
     def to_json_dict(self, written: Sequence[str] = ()) -> dict:

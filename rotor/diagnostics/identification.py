@@ -313,11 +313,12 @@ class Identification(Result):
             }
         )
 
-    def plot(self, ax: Any = None) -> Any:
+    def plot(self, ax: Any = None, kind: str | None = None) -> Any:
         """Speed (measured and the model's), the identified gas torque of each cylinder, and
-        each cylinder's IMEP per cycle with the misfires marked, on ``ax`` (three Axes, or
-        None for a new figure); :func:`rotor.plotting.diagnostics.plot_identification`.
-        Returns the Axes."""
+        each cylinder's IMEP per cycle with the misfires marked
+        (:func:`rotor.plotting.diagnostics.plot_identification`). ``kind``: None (the three
+        panels on ``ax``, three Axes, or a new figure) or ``"speed"``, ``"torque"`` or
+        ``"imep"`` (that panel alone on the one Axes ``ax``). Returns what it drew on."""
         from ..plotting.diagnostics import plot_identification
 
         return plot_identification(
@@ -330,6 +331,7 @@ class Identification(Result):
             title=f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}"
             + (" (poor fit)" if self.warnings else ""),
             ax=ax,
+            kind=kind,
         )
 
     def to_json_dict(self) -> dict:

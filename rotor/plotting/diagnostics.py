@@ -10,9 +10,10 @@ from typing import Any
 import numpy as np
 
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
-from .common import plain
+from .common import new_axes, plain
 
 __all__ = [
+    "IDENTIFICATION_PANELS",
     "plot_calibration",
     "plot_identification",
     "plot_indicated_torque",
@@ -20,6 +21,10 @@ __all__ = [
     "plot_speed_tdc",
     "plot_torque_orders",
 ]
+
+
+IDENTIFICATION_PANELS = ("speed", "torque", "imep")
+"""The panels of :func:`plot_identification`, each drawn alone with ``kind=``."""
 
 
 def plot_identification(
@@ -33,6 +38,7 @@ def plot_identification(
     title: str,
     measured_imep_pa: Any = None,
     ax: Any = None,
+    kind: str | None = None,
 ) -> Any:
     """The plot of a :class:`rotor.Identification`, from what it hands over: the speed over
     the record, measured ``omega`` and the model's ``omega_model`` ((cycles, P) [rad/s]); the
@@ -40,71 +46,89 @@ def plot_identification(
     [N·m]); each cylinder's IMEP per cycle ``imep_pa`` ± ``imep_std_pa`` ((cycles, cylinders)
     [Pa]) with the ``misfire`` flags ((cycles, cylinders) bool) marked, and cylinder 1's IMEP
     per cycle from a pressure channel ``measured_imep_pa`` ((cycles,) [Pa], or None) over
-    it. ``title``: of the speed panel. ``ax``: three Axes, or None for a new figure.
+    it. ``title``: of the speed panel. ``kind``: None (the three panels: ``ax`` three Axes,
+    or None for a new figure) or one of :data:`IDENTIFICATION_PANELS` (that panel alone on
+    the one Axes ``ax``, or a new one).
 
-    **Returns:** the array of three Axes.
+    **Returns:** the array of three Axes, or with ``kind`` the one Axes.
     """
+    if kind is not None and kind not in IDENTIFICATION_PANELS:
+        raise ValueError(f"kind = {kind!r}: None (all panels) or one of {', '.join(IDENTIFICATION_PANELS)}")
+    omega, omega_model = np.asarray(omega), np.asarray(omega_model)
+    imep_pa, imep_std_pa, misfire = np.asarray(imep_pa), np.asarray(imep_std_pa), np.asarray(misfire)
+    C, P = omega.shape
+    cylinders = imep_pa.shape[1]
+    x = 1 + np.arange(C * P) / P  # record angle in cycles, cycle k from k to k + 1
+
+    def speed(ax_w: Any) -> None:
+        ax_w.plot(x, omega.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C0", label="measured")
+        ax_w.plot(x, omega_model.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C1", ls="--", label="model (identified)")
+        ax_w.set_ylabel("speed [rpm]")
+        ax_w.set_xlabel("cycle (from 1; cycle k spans k … k + 1)")
+        ax_w.set_xlim(1, C + 1)
+        ax_w.grid(True, alpha=0.3)
+        ax_w.legend(fontsize=8)
+        ax_w.set_title(plain(title))
+
+    def torque(ax_m: Any) -> None:
+        m = np.asarray(cylinder_torques)
+        for c in range(m.shape[2]):
+            ax_m.plot(x, m[:, :, c].reshape(-1), lw=0.8, label=f"cylinder {c + 1}")
+        ax_m.set_ylabel("gas torque [N·m]")
+        ax_m.set_title("identified gas torque per cylinder (motored + scale × combustion)")
+        if m.shape[2] <= 8:
+            ax_m.legend(fontsize=8, ncol=min(4, m.shape[2]))
+        ax_m.set_xlim(1, C + 1)
+        ax_m.set_xlabel("cycle (from 1; cycle k spans k … k + 1)")
+        ax_m.grid(True, alpha=0.3)
+
+    def imep(ax_i: Any) -> None:
+        k = np.arange(1, C + 1)  # cycles count from 1
+        for c in range(cylinders):
+            ax_i.errorbar(
+                k + 0.08 * (c - (cylinders - 1) / 2),
+                imep_pa[:, c] / PA_PER_BAR,
+                yerr=imep_std_pa[:, c] / PA_PER_BAR,
+                fmt="o-",
+                ms=3,
+                lw=0.8,
+                capsize=2,
+                label=f"cylinder {c + 1}",
+            )
+        if measured_imep_pa is not None:
+            measured = np.asarray(measured_imep_pa, dtype=np.float64).reshape(-1)
+            ax_i.plot(
+                np.arange(1, measured.size + 1),
+                measured / PA_PER_BAR,
+                "s--",
+                ms=4,
+                lw=0.8,
+                color="k",
+                mfc="none",
+                label="cylinder 1, pressure channel",
+            )
+        mk, mc = np.nonzero(misfire)
+        if mk.size:
+            ax_i.plot(mk + 1, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
+        ax_i.set_xlabel("cycle (from 1)")
+        ax_i.set_ylabel("IMEP [bar]")
+        ax_i.grid(True, alpha=0.3)
+        ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
+        ax_i.legend(fontsize=8, ncol=min(5, cylinders + 2))
+
+    draw = {"speed": speed, "torque": torque, "imep": imep}
+    if kind is not None:
+        one = new_axes(ax)
+        draw[kind](one)
+        return one
     axes = ax
     if axes is None:
         import matplotlib.pyplot as plt
 
         fig, axes = plt.subplots(3, 1, figsize=(11, 9), layout="constrained")
     axes = np.asarray(axes).ravel()
-    ax_w, ax_m, ax_i = axes[:3]
-    omega, omega_model = np.asarray(omega), np.asarray(omega_model)
-    imep_pa, imep_std_pa, misfire = np.asarray(imep_pa), np.asarray(imep_std_pa), np.asarray(misfire)
-    C, P = omega.shape
-    cylinders = imep_pa.shape[1]
-    x = np.arange(C * P) / P  # record angle in cycles
-    ax_w.plot(x, omega.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C0", label="measured")
-    ax_w.plot(x, omega_model.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C1", ls="--", label="model (identified)")
-    ax_w.set_ylabel("speed [rpm]")
-    ax_w.set_xlabel("cycle (from the record's first cycle start)")
-    ax_w.set_xlim(0, C)
-    ax_w.grid(True, alpha=0.3)
-    ax_w.legend(fontsize=8)
-    ax_w.set_title(plain(title))
-    m = np.asarray(cylinder_torques)
-    for c in range(m.shape[2]):
-        ax_m.plot(x, m[:, :, c].reshape(-1), lw=0.8, label=f"cylinder {c + 1}")
-    ax_m.set_ylabel("gas torque [N·m]")
-    ax_m.set_title("identified gas torque per cylinder (motored + scale × combustion)")
-    if m.shape[2] <= 8:
-        ax_m.legend(fontsize=8, ncol=min(4, m.shape[2]))
-    ax_m.set_xlim(0, C)
-    ax_m.grid(True, alpha=0.3)
-    k = np.arange(1, C + 1)  # cycles count from 1
-    for c in range(cylinders):
-        ax_i.errorbar(
-            k + 0.08 * (c - (cylinders - 1) / 2),
-            imep_pa[:, c] / PA_PER_BAR,
-            yerr=imep_std_pa[:, c] / PA_PER_BAR,
-            fmt="o-",
-            ms=3,
-            lw=0.8,
-            capsize=2,
-            label=f"cylinder {c + 1}",
-        )
-    if measured_imep_pa is not None:
-        measured = np.asarray(measured_imep_pa, dtype=np.float64).reshape(-1)
-        ax_i.plot(
-            np.arange(1, measured.size + 1),
-            measured / PA_PER_BAR,
-            "s--",
-            ms=4,
-            lw=0.8,
-            color="k",
-            mfc="none",
-            label="cylinder 1, pressure channel",
-        )
-    mk, mc = np.nonzero(misfire)
-    if mk.size:
-        ax_i.plot(mk + 1, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
-    ax_i.set_xlabel("cycle (from 1)")
-    ax_i.set_ylabel("IMEP [bar]")
-    ax_i.grid(True, alpha=0.3)
-    ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
-    ax_i.legend(fontsize=8, ncol=min(5, cylinders + 2))
+    for panel, axis in zip(IDENTIFICATION_PANELS, axes[:3]):
+        draw[panel](axis)
     return axes
 
 
