@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo lint docs docs-build test wheel-check notebooks bench bench-quick clean
+.PHONY: install demo lint docs docs-build test fuzz wheel-check notebooks bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "rotor needs Python >= 3.11 (set PYTHON=...)")'
@@ -34,8 +34,15 @@ docs: $(STAMP)
 docs-build: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
+# two worker processes (the CI machine has two cores), each taking whole test files, so that
+# a file's fixtures are computed once; property tests draw the same examples on every run
 test: lint docs-build
-	$(PY) -m pytest -q -n 2  # two worker processes: the CI machine has two cores
+	$(PY) -m pytest -q -n 2 --dist loadfile --durations=30
+
+# the property and fuzz tests with new random draws (tests/conftest.py); what they find
+# becomes an explicit example in the test
+fuzz: $(STAMP)
+	ROTOR_FUZZ=1 $(PY) -m pytest -q -n 2 -p no:cacheprovider tests/test_fuzz.py tests/test_properties.py
 
 # the wheel installs in a clean virtualenv (its dependencies from the package index) and
 # runs `rotor demo` there (about a minute)

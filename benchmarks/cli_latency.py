@@ -2,9 +2,12 @@
 compilation cache.
 
 The commands that need no JAX (``--help``, ``COMMAND --help``, ``presets``) and the ones
-that compile one small kernel each (``info 4chn15``, ``table 4chn15``) have a target of 1.5 s; the compiled
-ones (``steady 4chn15``, ``simulate 4chn15``) are measured for what the persistent
-compilation cache (rotor/cache.py) saves them. "cold": each run gets a new, empty cache
+that compile one small kernel each (``info 4chn15``, ``table 4chn15``) have a target of 1.5 s; every
+command that computes (``steady``, ``simulate`` with the default and the angle method,
+``loads``, ``balance``, ``flywheel``, ``plot``, ``modes``, ``campbell``, ``torsion``,
+``report``, and ``analyze``, ``diagnose``, ``calibrate`` of a tue-4gb10 recording) is
+measured for its first call and its warm call, and so for what the persistent
+compilation cache (rotor/cache.py) saves it. "cold": each run gets a new, empty cache
 folder (``ROTOR_COMPILATION_CACHE``: a user's very first run); "warm": every run shares a
 folder that one untimed run filled first (every later run); "kept": warm, and the output
 of the same call kept by an untimed run (rotor/cli/kept.py: ``table`` and ``info`` then
@@ -15,8 +18,9 @@ proportion: ``python -c pass``, ``python -c 'import jax'`` and ``python -c 'impo
 equinox'`` (JAX's and equinox's imports are the floor of every command that computes).
 Each run's CPU time (user + system) is recorded beside its wall time.
 
-    .venv/bin/python benchmarks/cli_latency.py            # 7 repeats, about 3 min
+    .venv/bin/python benchmarks/cli_latency.py            # 7 repeats, every command (about an hour)
     .venv/bin/python benchmarks/cli_latency.py --quick    # 3 repeats, light commands only
+    .venv/bin/python benchmarks/cli_latency.py --repeats 5 --no-cold --only steady --only modes
 
 Writes benchmarks/results/cli_latency.json (cli_latency_quick.json with --quick).
 """
@@ -49,10 +53,29 @@ LIGHT = {  # one small compiled kernel each
     "info 4chn15": ["info", "4chn15"],
     "table 4chn15": ["table", "4chn15"],
 }
-COMPILED = {
+TUE = ROOT.parent / "shared" / "data" / "tue-4gb10" / "full_load.txt"
+TUE_ARGS = ["--wheel", "60-2", "--columns", "time,pressure_v,encoder_v"]
+COMPILED = {  # every command that computes; {tmp}: a scratch folder of the run's own
     "steady 4chn15": ["steady", "4chn15"],
     "simulate 4chn15 --cycles 20": ["simulate", "4chn15", "--cycles", "20", "--quiet"],
+    "simulate 4chn15 --cycles 100 --method angle": [
+        *("simulate", "4chn15", "--cycles", "100", "--method", "angle", "--quiet")
+    ],
+    "loads 4chn15": ["loads", "4chn15"],
+    "balance 4chn15": ["balance", "4chn15"],
+    "flywheel 4chn15 --delta 0.01": ["flywheel", "4chn15", "--delta", "0.01"],
+    "plot 4chn15": ["plot", "4chn15", "--plot", "{tmp}/plot"],
+    "modes mwm6": ["modes", "mwm6"],
+    "campbell mwm6": ["campbell", "mwm6"],
+    "torsion mwm6": ["torsion", "mwm6"],
+    "report 4chn15": ["report", "4chn15", "--out", "{tmp}/report"],
+    "analyze tue-4gb10": ["analyze", str(TUE), *TUE_ARGS],
+    "diagnose tue-4gb10": ["diagnose", str(TUE), "--engine", "tue-single", *TUE_ARGS, "--pressure-gain", "1"],
+    "calibrate tue-4gb10": ["calibrate", str(TUE), "--engine", "tue-single", *TUE_ARGS],
 }
+"""The commands of the full run: the first call ("cold", an empty compilation cache) and the
+warm call (a fresh process, the cache filled by an earlier one) of each; the ones on the
+tue-4gb10 recording are left out where ../shared/data is missing."""
 REFERENCES = {
     "python -c pass": "pass",
     "import jax": "import jax",
@@ -168,21 +191,27 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="3 repeats, the light commands only")
     ap.add_argument("--repeats", type=int, help="repeats of each command (default 7, 3 with --quick)")
+    ap.add_argument("--only", action="append", metavar="NAME", help="only the commands whose name contains NAME")
+    ap.add_argument("--no-cold", action="store_true", help="the warm calls only (the cold ones take minutes)")
     args = ap.parse_args()
     repeats = args.repeats or (3 if args.quick else 7)
     rotor = rotor_exe()
     light = dict(LIGHT)
-    compiled = {} if args.quick else dict(COMPILED)
+    compiled = {} if args.quick else {k: v for k, v in COMPILED.items() if TUE.exists() or "tue-4gb10" not in k}
+    if args.only:
+        light = {k: v for k, v in light.items() if any(o in k for o in args.only)}
+        compiled = {k: v for k, v in compiled.items() if any(o in k for o in args.only)}
     cases: dict[str, tuple[list[str], str]] = {}  # name -> (argv, "cold" | "warm" | "off")
     for name, code in REFERENCES.items():
         cases[name] = ([sys.executable, "-c", code], "off")
     for name, argv in NO_JAX.items():
         cases[f"rotor {name}"] = ([*rotor, *argv], "warm")
-    for name, argv in {**light, **compiled}.items():
-        for kind in ("cold", "warm") + (("kept",) if name in light else ()):
-            cases[f"rotor {name} [{kind}]"] = ([*rotor, *argv], kind)
-    times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     top = Path(tempfile.mkdtemp(prefix="rotor-cli-latency-"))
+    for name, argv in {**light, **compiled}.items():
+        kinds = (() if args.no_cold else ("cold",)) + ("warm",) + (("kept",) if name in light else ())
+        for kind in kinds:
+            cases[f"rotor {name} [{kind}]"] = ([*rotor, *(a.replace("{tmp}", str(top)) for a in argv)], kind)
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     load_before = loadavg()
     try:
         warm, kept = str(top / "warm"), str(top / "outputs")

@@ -1,31 +1,31 @@
 import gc
+import json
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import matplotlib
 import pytest
+from hypothesis import settings
 
 matplotlib.use("Agg")
 
-# JAX's persistent compilation cache in a folder of this test session's own (inherited by
-# the CLI subprocesses the tests start), not the user's ~/.cache/rotor/jax: a run starts
-# from what it compiles itself, as on a fresh machine, never reads entries that other
-# processes wrote, and recompiles cheaply after _free_compiled_code below.
-_OWN_CACHE = None
+# JAX's persistent compilation cache in a folder of the checkout's own (build/, ignored by
+# git; inherited by the CLI subprocesses the tests start), not the user's ~/.cache/rotor/jax:
+# a fresh clone starts from an empty cache, as on a fresh machine, and a second run in the
+# same clone reads back what the first compiled. Delete build/test-jax-cache to start cold.
 if "ROTOR_COMPILATION_CACHE" not in os.environ:
-    _OWN_CACHE = os.environ["ROTOR_COMPILATION_CACHE"] = tempfile.mkdtemp(prefix="rotor-test-jax-cache-")
+    os.environ["ROTOR_COMPILATION_CACHE"] = str(Path(__file__).resolve().parents[1] / "build" / "test-jax-cache")
 
+# Property tests draw the same examples on every run (``derandomize``), so that `make test`
+# runs what CI runs; `make fuzz` (ROTOR_FUZZ=1) draws new ones, and what it finds becomes an
+# explicit example in the test.
+settings.register_profile("deterministic", derandomize=True, database=None)
+settings.register_profile("fuzz", derandomize=False)
+settings.load_profile("fuzz" if os.environ.get("ROTOR_FUZZ", "").strip() not in ("", "0") else "deterministic")
 
 # The kept outputs of `rotor table` and `rotor info` (rotor/cli/kept.py) are off: every CLI
 # test computes what it checks; tests/test_cli_latency.py switches them on in a folder of its own.
 os.environ.setdefault("ROTOR_OUTPUT_CACHE", "off")
-
-
-def pytest_sessionfinish(session, exitstatus):
-    if _OWN_CACHE is not None:
-        shutil.rmtree(_OWN_CACHE, ignore_errors=True)
 
 
 import jax  # noqa: E402
@@ -44,16 +44,80 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
 SHARED_DATA = ROOT.parent / "shared" / "data"
 
+# How many programs XLA was asked for in the test processes (CLI subprocesses and notebook
+# kernels apart), how many of them the persistent cache held, and the seconds spent: each
+# process writes its own count into build/test-compilations/, the summary adds them up.
+COMPILATIONS = ROOT / "build" / "test-compilations"
+_COMPILED = {"programs": 0, "from_cache": 0, "seconds": 0.0}
 
-@pytest.fixture(autouse=True, scope="module")
+
+def _count_program(event: str, duration_secs: float, **_: object) -> None:
+    if event == "/jax/core/compile/backend_compile_duration":
+        _COMPILED["programs"] += 1
+        _COMPILED["seconds"] += duration_secs
+
+
+def _count_cache_hit(event: str, **_: object) -> None:
+    if event == "/jax/compilation_cache/cache_hits":
+        _COMPILED["from_cache"] += 1
+
+
+jax.monitoring.register_event_duration_secs_listener(_count_program)
+jax.monitoring.register_event_listener(_count_cache_hit)
+
+
+def pytest_configure(config):
+    if not hasattr(config, "workerinput"):  # the main process, before any worker starts
+        for old in COMPILATIONS.glob("*.json"):
+            old.unlink(missing_ok=True)
+
+
+def pytest_sessionfinish(session):
+    worker = getattr(session.config, "workerinput", {}).get("workerid", "main")
+    COMPILATIONS.mkdir(parents=True, exist_ok=True)
+    (COMPILATIONS / f"{worker}.json").write_text(json.dumps(_COMPILED))
+
+
+def pytest_terminal_summary(terminalreporter):
+    counts = [json.loads(f.read_text()) for f in sorted(COMPILATIONS.glob("*.json"))]
+    if counts:
+        programs, cached = sum(c["programs"] for c in counts), sum(c["from_cache"] for c in counts)
+        seconds = sum(c["seconds"] for c in counts)
+        terminalreporter.write_line(
+            f"XLA programs in the test processes: {programs} ({cached} read from the persistent compilation cache, "
+            f"{programs - cached} compiled), {seconds:.0f} s"
+        )
+
+
+def _memory_maps() -> tuple[int, int]:
+    """(memory mappings of this process, the kernel's limit vm.max_map_count); (0, 1) where
+    /proc cannot tell."""
+    try:
+        with open("/proc/self/maps", "rb") as f:
+            used = f.read().count(b"\n")
+        with open("/proc/sys/vm/max_map_count") as f:
+            return used, int(f.read())
+    except (OSError, ValueError):
+        return 0, 1
+
+
+MAPS_HIGH = 0.5
+"""Share of vm.max_map_count past which the compiled executables are dropped."""
+
+
+@pytest.fixture(autouse=True)
 def _free_compiled_code():
-    """Drop JAX's compiled executables after each test module. Every loaded CPU executable
-    holds memory mappings; one process running the whole suite otherwise passes Linux's
-    vm.max_map_count (65530) about 85 % of the way through and XLA crashes in the next
-    compile (two test modules alone leave 24 000 mappings; after clear_caches, 1 100)."""
+    """Drop JAX's compiled executables when this process nears the kernel's limit on memory
+    mappings. Every loaded CPU executable holds mappings; one process running the whole
+    suite otherwise passes Linux's vm.max_map_count (65530) about 85 % of the way through
+    and XLA crashes in the next compile (two test modules alone leave 24 000 mappings; after
+    clear_caches, 1 100). Below half the limit the compiled code is kept for the tests after,
+    which reuse it instead of tracing and compiling again."""
     yield
-    jax.clear_caches()
-    gc.collect()
+    used, limit = _memory_maps()
+    if used > MAPS_HIGH * limit:
+        jax.clear_caches()
+        gc.collect()
 
 
 @pytest.fixture(scope="session")

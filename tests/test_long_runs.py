@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import os
+import pty
+import select
 import signal
 import subprocess
 import sys
@@ -178,26 +180,48 @@ def test_cli_keeps_the_last_cycles_and_refuses_in_one_line(capsys, monkeypatch):
 
 
 # ----------------------------------------------------------------------------- Ctrl-C
-@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process")
+def _read_until(fd: int, marker: bytes, timeout_s: float) -> bytes:
+    """What the pseudo-terminal ``fd`` shows until ``marker`` appears (or ``timeout_s``
+    passes, or the other side closes)."""
+    seen, end = b"", time.monotonic() + timeout_s
+    while marker not in seen and time.monotonic() < end:
+        ready, _, _ = select.select([fd], [], [], 0.2)
+        if ready:
+            try:
+                chunk = os.read(fd, 4096)
+            except OSError:  # the child closed its terminal
+                break
+            if not chunk:
+                break
+            seen += chunk
+    return seen
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process and a pseudo-terminal")
 def test_ctrl_c_stops_a_long_run_within_two_seconds():
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
-    argv = [sys.executable, "-m", "rotor.cli", "simulate", "4chn15", "--method", "grid", "--quiet", "--cycles"]
-    # a short run of two chunks first fills the compilation cache (the session's own, see
-    # conftest.py): Ctrl-C in the middle of XLA compiling is heard only when it returns
-    subprocess.run(argv + ["51"], env=env, cwd=ROOT, check=True, capture_output=True)
-    proc = subprocess.Popen(argv + ["20000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=ROOT)
+    argv = [sys.executable, "-m", "rotor.cli", "simulate", "4chn15", "--method", "grid", "--cycles", "20000"]
+    # stderr on a pseudo-terminal, so that the run draws its progress bar: the bar appears
+    # once the run is in its chunks (imports, the balancing load's steady state and the
+    # compiling are over; Ctrl-C in the middle of XLA compiling is heard only when it
+    # returns), however long that took on a loaded machine. The time counts from the signal.
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=follower, env=env, cwd=ROOT)
+    os.close(follower)
     try:
-        time.sleep(6.0)  # imports, the balancing load's steady state and the cached kernels: into the run
-        assert proc.poll() is None, proc.communicate()
+        shown = _read_until(leader, b"simulating [", timeout_s=240.0)
+        assert proc.poll() is None and b"simulating [" in shown, shown.decode(errors="replace")
         sent = time.perf_counter()
         proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=10)
+        proc.wait(timeout=10)
         took = time.perf_counter() - sent
+        text = (shown + _read_until(leader, b"\x00", timeout_s=1.0)).decode(errors="replace")
     finally:
         if proc.poll() is None:
             proc.kill()
-            proc.communicate()
-    text = err.decode(errors="replace")
+            proc.wait()
+        os.close(leader)
     assert "Traceback" not in text, text
     assert proc.returncode == 130, text
+    assert "interrupted" in text, text
     assert took < 2.0, f"exited {took:.2f} s after Ctrl-C"
