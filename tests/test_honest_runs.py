@@ -166,7 +166,7 @@ def test_stall_is_reported_within_its_cycle(diesel, capsys):
 def test_misfire_counts_cycles_and_cylinders_from_one(diesel, capsys):
     from rotor.cli.run import parse_misfires
 
-    assert parse_misfires("1:1,3:4", cycles=3, cylinders=4) == [(0, 1), (2, 4)]
+    assert parse_misfires("1:1,3:4", cycles=3, cylinders=4) == [(1, 1), (3, 4)]  # as combustion_pattern takes them
     for bad, what in (("0:1", "cycle 0"), ("4:1", "cycle 4"), ("2:5", "cylinder 5"), ("2:0", "cylinder 0")):
         with pytest.raises(rotor.EngineError, match=what):
             parse_misfires(bad, cycles=3, cylinders=4)

@@ -58,17 +58,23 @@ def check_fuel_scale(
 ) -> None:
     """Refuse a fuel scale [-] outside 0 … :data:`FUEL_SCALE_MAX` and warn
     (:class:`FuelScaleWarning`) above :data:`FUEL_SCALE_WARN`, naming the IMEP it implies
-    (``imep_*_pa``: per cylinder, see :func:`implied_imep_pa`). ``solved``: whether it was
-    solved to carry the load ``load_Nm`` [N·m] (the message says so) or given as ``name``."""
+    (``imep_*_pa``: per cylinder, see :func:`implied_imep_pa`; None where not known, e.g.
+    under ``jax.grad``). ``solved``: whether it was solved to carry the load ``load_Nm``
+    [N·m] (the message says so) or given as ``name``."""
     x = float(fuel_scale)
-    rated = implied_imep_pa(1.0, imep_motored_pa, imep_combustion_pa)
-    imep = implied_imep_pa(x, imep_motored_pa, imep_combustion_pa)
+    if 0 <= x <= FUEL_SCALE_WARN:
+        return
     what = (
         f"the load of {load_Nm:.6g} N·m needs the fuelling ×{x:.3g} the engine file's"
         if solved and load_Nm is not None
         else f"{name} {x:.6g}: the fuelling ×{x:.3g} the engine file's"
     )
-    implied = f"IMEP {imep / PA_PER_BAR:.1f} bar against its {rated / PA_PER_BAR:.2f} bar"
+    if imep_motored_pa is None or imep_combustion_pa is None:
+        implied = "an IMEP beyond the engine's rating"
+    else:
+        rated = implied_imep_pa(1.0, imep_motored_pa, imep_combustion_pa)
+        imep = implied_imep_pa(x, imep_motored_pa, imep_combustion_pa)
+        implied = f"IMEP {imep / PA_PER_BAR:.1f} bar against its {rated / PA_PER_BAR:.2f} bar"
     if not np.isfinite(x) or x < 0 or x > FUEL_SCALE_MAX:
         hint = "check the load's units (N·m) and size" if solved else f"give 0 … {FUEL_SCALE_MAX:g}"
         raise EngineError(f"{what} ({implied}): outside 0 … {FUEL_SCALE_MAX:g}, not an operating point; {hint}")

@@ -68,8 +68,8 @@ from .equation import (
     wrap_periodic,
 )
 from .invariants import check_speed_result
-from .operating import check_fuel_scale
 from .loads import Load
+from .operating import FUEL_SCALE_WARN, check_fuel_scale
 from .prepared import PreparedEngine, checked_reference
 from .result import SpeedResult
 
@@ -473,12 +473,13 @@ def steady_state(
     assert isinstance(engine, Engine)
     n = engine.cylinders
     xp = jnp if any(isinstance(v, jax.core.Tracer) for v in (rpm, imep_scale)) else np  # numpy: no dispatch
+    s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
     given = concrete(s)
-    if given is not None and load is None:  # the fuel scale given: refused or warned about here
-        imep_m, imep_c = jax.device_get((train.imep_motored_pa, train.imep_combustion_pa))
+    if given is not None and load is None and not np.all((given >= 0) & (given <= FUEL_SCALE_WARN)):
+        # the fuel scale given: refused or warned about here (the IMEP named where the tables are concrete)
+        imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
         for value in np.unique(given):
             check_fuel_scale(float(value), imep_m, imep_c, solved=False)
-    s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
     fr = friction_coefficients(engine, friction)
     omega_m = xp.asarray(rpm, dtype=xp.float64) / RPM_PER_RAD_S
     balance = "load" if load is None else "fuel"  # a given load is carried, never replaced
@@ -499,8 +500,8 @@ def steady_state(
     train = shift_inertia(train, d_inertia)
     # start from the closed form with the losses linearised about ω_m
     a_lin, c_lin = fr[0] + fr[1] * omega_m, fr[2]
-        assert load is not None  # a given load is what the fuelling is balanced against
     if balance == "fuel":
+        assert load is not None  # a given load is what the fuelling is balanced against
         m0 = load.torque(omega_m, 0.0)
         c_l = jax.grad(lambda w: load.torque(w, 0.0))(omega_m) / (2 * omega_m)
         a_lin, c_lin = a_lin + m0 - c_l * omega_m**2, c_lin + c_l
@@ -547,19 +548,19 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
     m_loss = scene.loss(omega, t)
     m_ripple = -0.5 * dinertia * omega**2  # the varying inertia's term, −½·I′(θ)·ω²
     accel = (m_eng - m_loss + m_ripple) / inertia
+    excess = textbook_excess(train, sc, omega_m)
     dwell = 1.0 / omega  # the time-mean of the load carried (friction apart), where it is a model
     carried = 0.0 if scene.load is None else jnp.sum(scene.load.torque(omega, t) * dwell) / jnp.sum(dwell)
-    excess = textbook_excess(train, sc, omega_m)
     return {
+        "theta": theta,
         "fuel_scale": jnp.mean(sc),
         "carried_load": carried,
-        "theta": theta,
         "omega": omega,
+        "torque": m_eng,
         "gas_torque": m_eng - val[:, COL_K] * omega**2,
         "reciprocating_torque": train.textbook_k * omega**2,
         "inertia_term_torque": m_ripple,
         "total_torque": m_eng + m_ripple,
-        "torque": m_eng,
         "load_torque": m_loss,
         "accel": accel,
         "imep_pa": (train.imep_motored_pa + sc * train.imep_combustion_pa)[None, :],
@@ -592,13 +593,13 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
                 f"crank angle {float(np.rad2deg(i_min * train.cycle_rad / train.points)):.1f}° of the cycle (the "
                 "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
                 "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
+            )
     load_carried = x if balance == "load" else a["carried_load"]
     if concrete(a["e_ratio"]) is not None:
         fuel, carried = np.asarray(a["fuel_scale"]), np.asarray(load_carried)
         if balance == "fuel" and fuel.ndim == 0:
-            imep_m, imep_c = jax.device_get((train.imep_motored_pa, train.imep_combustion_pa))
+            imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
             check_fuel_scale(float(fuel), imep_m, imep_c, solved=True, load_Nm=float(carried))
-            )
     result = SpeedResult(
         t=t,
         theta=a["theta"],

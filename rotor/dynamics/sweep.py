@@ -416,6 +416,8 @@ def steady_sweep(
             bar.update(min(first + size, n))
     bar.close()
     delta, lo, hi, x, tb, ok = (np.concatenate(c) for c in zip(*outs))
+    if flat and load_a is not None:  # the flat form's factor on imep_scale; the fuel scale is as SpeedResult's
+        x = x * np.mean(scale, axis=1)
     return SteadySweep(
         rpm=np.array(rpm_a),
         inertia_kgm2=np.array(inertia_a),
