@@ -190,7 +190,7 @@ def timing(name, te, repeats):
         idf = rotor.identify(e, an100)
         walls.append(time.perf_counter() - t0)
     found = idf.misfires()
-    truth = [(int(a), int(b) + 1) for a, b in np.argwhere(comb[sel] == 0)]
+    truth = [(int(a) + 1, int(b) + 1) for a, b in np.argwhere(comb[sel] == 0)]  # counted from 1, as misfires()
     return {
         "engine": name,
         "cycles": idf.cycles,
