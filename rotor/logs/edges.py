@@ -28,13 +28,26 @@ from jaxtyping import ArrayLike
 
 from ..errors import LogError
 
+LEVEL_SAMPLES = 250_000
+"""A signal's levels and noise are read from at most this many of its samples [-] (a fixed
+random draw for the levels, contiguous blocks for the noise)."""
 VR_BAND = (0.4, 0.6)
+VR_TIMING = 0.65  # a VR tooth's flank is measured below where it has risen to this fraction of the swing [-]
 """A variable-reluctance signal's Schmitt trigger (off, on) as fractions from its local low to
 its local high [-]: a tooth arms it where its lobe reaches a fifth of the local peak (a weak
 tooth next to the gap, a third of its neighbours, still counts), as an adaptive-threshold VR
 interface arms at a fraction of the recent peaks."""
 
-__all__ = ["VR_BAND", "Edges", "find_edges", "find_weak_edges", "noise_rms", "signal_levels", "two_level_locally"]
+__all__ = [
+    "LEVEL_SAMPLES",
+    "VR_BAND",
+    "Edges",
+    "find_edges",
+    "find_weak_edges",
+    "noise_rms",
+    "signal_levels",
+    "two_level_locally",
+]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -84,6 +97,8 @@ def signal_levels(v: ArrayLike, name: str = "encoder_v") -> tuple[float, float]:
     v = np.asarray(v, dtype=np.float64)
     if v.size < 3:
         raise LogError(f"column {name!r}: {v.size} samples; no pulses")
+    if v.size > LEVEL_SAMPLES:  # the levels of a long signal from a fixed random draw of its samples
+        v = v[np.sort(np.random.default_rng(0).integers(0, v.size, LEVEL_SAMPLES))]
     p1, p99 = np.percentile(v, [1.0, 99.0])
     mid = 0.5 * (p1 + p99)
     core = v[(v >= p1) & (v <= p99)]
@@ -113,6 +128,15 @@ def _samples(x: ArrayLike, what: str) -> np.ndarray:
     if a.ndim != 1:
         raise LogError(f"find_edges({what}): a 1-d array, got shape {a.shape}")
     return a
+
+
+def _all_finite(x: np.ndarray) -> bool:
+    """Whether every element is finite: a sum first (one fast pass; finite unless an element is
+    not, or the sum overflows), the elements themselves only where it is not."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if np.isfinite(np.sum(x)):
+            return True
+    return bool(np.isfinite(x).all())
 
 
 def _runs(s):
@@ -163,7 +187,7 @@ def find_edges(
     v = _samples(v, "v")
     if t.shape != v.shape:
         raise LogError(f"{name}: {v.size} samples but {t.size} sample times; give one time per sample")
-    if t.size < 3 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+    if t.size < 3 or not (_all_finite(t) and _all_finite(v)):
         raise LogError(
             f"{name}: {t.size} sample{'s' if t.size != 1 else ''}"
             + (" (not all finite)" if t.size >= 3 else "")
@@ -172,6 +196,8 @@ def find_edges(
     if levels not in ("global", "adaptive", "vr"):
         raise LogError(f"levels = {levels!r}: 'global', 'adaptive' or 'vr'")
     inverted = edge == "falling"
+    if levels == "global":
+        return _global_edges(t, v, inverted, band, level, glitch, name)
     if inverted:
         v = -v
     method = "global levels"
@@ -228,7 +254,8 @@ def find_edges(
     frac = -d[j] / (d[j + 1] - d[j])
     times = t[j] + frac * (t[j + 1] - t[j])
     if levels == "vr" and j.size:
-        times = _from_the_flank(t, v, rise[ok], times, lev, amp_env)
+        # timed on the flank above the arming level, where a full tooth has risen to VR_TIMING of its swing
+        times = _from_the_flank(t, v, _risen(v, rise[ok], lo_env + VR_TIMING * amp_env), times, lev, amp_env)
     # two rises cannot share one crossing (a glitch that survived): keep the first
     keep = np.concatenate([[True], np.diff(j) > 0]) if j.size else np.zeros(0, bool)
     if levels != "global":
@@ -240,29 +267,134 @@ def find_edges(
     return Edges(times[keep], low, high, (off, on), lev, glitches + int((~keep).sum()), inverted, (), method)
 
 
-def _last_crossing(t, v, level, rise):
+def _state_runs(above: np.ndarray, below: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(start index, state) of each run of a Schmitt trigger's state, 1 from a sample in ``above``
+    on, 0 from one in ``below`` on (before the first decisive sample: the first one's state),
+    from the places where the signal enters either band: no pass over the samples per state."""
+    ua = np.flatnonzero(above[1:] & ~above[:-1]) + 1
+    ub = np.flatnonzero(below[1:] & ~below[:-1]) + 1
+    ev = np.concatenate([[0] if above[0] else [], ua, [0] if below[0] else [], ub]).astype(np.int64)
+    typ = np.concatenate([np.ones(ua.size + int(above[0]), np.int8), np.zeros(ub.size + int(below[0]), np.int8)])
+    order = np.argsort(ev, kind="stable")
+    ev, typ = ev[order], typ[order]
+    if ev.size == 0:
+        return np.zeros(1, np.int64), np.zeros(1, np.int8)
+    change = np.concatenate([[True], typ[1:] != typ[:-1]])
+    starts, vals = ev[change], typ[change]
+    starts[0] = 0
+    return starts, vals
+
+
+def _global_edges(t, v, inverted, band, level, glitch, name) -> Edges:
+    """:func:`find_edges` with the signal's global levels, without a copy of it per polarity:
+    the Schmitt trigger's state from where the signal enters its bands, the glitches removed
+    run by run, each edge's crossing looked for on its own flank."""
+    low, high = signal_levels(v, name)
+    sign = -1.0 if inverted else 1.0
+    if inverted:
+        low, high = -high, -low
+    amp = high - low
+    off, on = low + band[0] * amp, low + band[1] * amp
+    lev = low + level * amp
+    if inverted:
+        above, below = v < -on, v > -off
+    else:
+        above, below = v > on, v < off
+    starts, vals = _state_runs(above, below)
+    del above, below
+    n = v.size
+    glitches = 0
+    medians: dict = {}  # of each state's run lengths, until the runs change
+    for frac in (glitch / 4, glitch / 2, glitch):
+        if starts.size <= 4:
+            break
+        lengths = np.diff(np.concatenate([starts, [n]]))
+        short = np.zeros(starts.size, bool)
+        inner = np.zeros(starts.size, bool)
+        inner[1:-1] = True  # the first and last runs are cut by the record
+        for state in (0, 1):
+            m = inner & (vals == state)
+            if np.any(m):
+                if state not in medians:
+                    medians[state] = np.median(lengths[m])
+                short |= m & (lengths < frac * medians[state])
+        if np.any(short):
+            medians = {}
+            glitches += int(short.sum())
+            vals = (vals ^ short).astype(np.int8)
+            keep = np.concatenate([[True], vals[1:] != vals[:-1]])
+            starts, vals = starts[keep], vals[keep]
+    rise = starts[1:][(vals[1:] == 1) & (vals[:-1] == 0)]  # first sample of each high state
+    # the last crossing of `lev` at or before each rise (v[j] < lev <= v[j + 1], j + 1 <= rise), on its flank
+    j = np.full(rise.size, -1, np.int64)
+    todo = np.arange(rise.size)
+    for W in (4, 32, 512):
+        if todo.size == 0:
+            break
+        r = rise[todo]
+        idx = r[:, None] - W + np.arange(W + 1)[None, :]
+        valid = idx >= 0
+        d = sign * np.take(v, idx, mode="clip") - lev
+        up = (d[:, :-1] < 0) & (d[:, 1:] >= 0) & valid[:, :-1]
+        has = up.any(axis=1)
+        last = W - 1 - np.argmax(up[:, ::-1], axis=1)
+        j[todo[has]] = (r - W + last)[has]
+        todo = todo[~has]
+    if todo.size:  # a slow flank: the crossing anywhere before the rise
+        d = sign * v - lev
+        upg = np.flatnonzero((d[:-1] < 0) & (d[1:] >= 0))
+        k = np.searchsorted(upg, rise[todo], side="left") - 1
+        j[todo] = np.where(k >= 0, upg[np.maximum(k, 0)] if upg.size else -1, -1)
+    j = j[j >= 0]
+    d0, d1 = sign * v[j] - lev, sign * v[j + 1] - lev
+    times = t[j] + (-d0 / (d1 - d0)) * (t[j + 1] - t[j])
+    keep = np.concatenate([[True], np.diff(j) > 0]) if j.size else np.zeros(0, bool)
+    return Edges(times[keep], low, high, (off, on), lev, glitches + int((~keep).sum()), inverted, (), "global levels")
+
+
+def _risen(v: np.ndarray, rise: np.ndarray, level: np.ndarray, reach: int = 64) -> np.ndarray:
+    """Each index of ``rise`` moved on to the first sample at or above ``level`` (one per sample)
+    within ``reach`` samples and before the next rise; left where the tooth does not rise that far
+    (a weak tooth)."""
+    step = np.arange(reach)[None, :]
+    nxt = np.concatenate([rise[1:], [v.size]])
+    idx = np.minimum(rise[:, None] + step, v.size - 1)
+    above = (v[idx] >= level[idx]) & (step < (nxt - rise)[:, None])
+    first = np.argmax(above, axis=1)
+    return np.where(above.any(axis=1), rise + first, rise)
+
+
+def _last_crossing(t, v, level, rise, after=None):
     """The time [s] of the last rising crossing of ``level`` (a number or one per sample)
-    at or before each sample index ``rise``; NaN where there is none."""
+    at or before each sample index ``rise`` (with ``after``: the first crossing at or after
+    each sample index ``after`` instead), and the sample index before it; NaN (and −1) where
+    there is none."""
     d = v - level
     up = np.flatnonzero((d[:-1] < 0) & (d[1:] >= 0))
-    k = np.searchsorted(up, rise, side="left") - 1
-    j = up[np.maximum(k, 0)] if up.size else np.zeros(rise.size, np.int64)
-    x = t[j] - d[j] / (d[j + 1] - d[j]) * (t[j + 1] - t[j])
-    return np.where((k >= 0) & (up.size > 0), x, np.nan)
+    if after is None:
+        k = np.searchsorted(up, rise, side="left") - 1
+        found = (k >= 0) & (up.size > 0)
+    else:
+        k = np.searchsorted(up, after, side="left")
+        found = (k < up.size) & (up.size > 0)
+    j = up[np.clip(k, 0, max(up.size - 1, 0))] if up.size else np.zeros(rise.size, np.int64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = t[j] - d[j] / (d[j + 1] - d[j]) * (t[j + 1] - t[j])
+    return np.where(found, x, np.nan), np.where(found, j, -1)
 
 
 def _from_the_flank(t, v, rise, times, lev, amp, lo=0.05, hi=0.12):
     """Each edge's crossing of ``lev`` extrapolated along its flank: the line through the
-    last crossings of ``lev`` + ``lo`` and + ``hi`` × the local swing ``amp`` before the
-    rise, back to ``lev``. Where the signal dwells at the crossing level before a tooth
+    last crossing of ``lev`` + ``lo`` × the local swing ``amp`` before the rise and the next
+    crossing of ``lev`` + ``hi`` × it, back to ``lev``. Where the signal dwells at the crossing level before a tooth
     (a variable-reluctance signal is flat across the gap, centred on its zero crossing),
     noise there makes the last crossing of the level itself land anywhere in the dwell;
     the flank's steep part does not. Falls back to ``times`` where the line is not
     steeper than the dwell."""
     lev_a = np.broadcast_to(lev, v.shape)
     amp_a = np.broadcast_to(amp, v.shape)
-    t1 = _last_crossing(t, v, lev_a + lo * amp_a, rise)
-    t2 = _last_crossing(t, v, lev_a + hi * amp_a, rise)
+    t1, _ = _last_crossing(t, v, lev_a + lo * amp_a, rise)
+    t2, _ = _last_crossing(t, v, lev_a + hi * amp_a, rise)
     x = t1 - (t2 - t1) * lo / (hi - lo)
     ok = np.isfinite(x) & (t2 > t1) & (x <= t1)
     return np.where(ok, x, times)
@@ -311,7 +443,13 @@ def noise_rms(v: ArrayLike) -> float:
     """The rms of a sampled signal's noise [V], from its sample-to-sample differences (a
     robust spread, so the few samples on tooth flanks do not count): 1.4826 · median
     |Δv| / √2."""
-    d = np.diff(np.asarray(v, dtype=np.float64))
+    v = np.asarray(v, dtype=np.float64)
+    if v.size > LEVEL_SAMPLES:  # 64 contiguous blocks spread over the record
+        n = LEVEL_SAMPLES // 64
+        starts = np.linspace(0, v.size - n, 64).astype(np.int64)
+        d = np.diff(v[starts[:, None] + np.arange(n)[None, :]], axis=1).ravel()
+    else:
+        d = np.diff(v)
     return float(1.4826 * np.median(np.abs(d)) / np.sqrt(2.0)) if d.size else 0.0
 
 

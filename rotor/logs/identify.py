@@ -186,9 +186,13 @@ def gap_misfit(track: ToothTrack) -> float:
 
 def period_jitter(track: ToothTrack) -> float:
     """The rms relative change [-] of the tooth period from one single-pitch period to the
-    next (a timer's or a flank's noise, and edges displaced near the gaps)."""
+    next (a timer's or a flank's noise, and edges displaced near the gaps), away from the first
+    and last revolution where there are five or more."""
     dt, k = _unit_periods(track)
     both = (k[1:] == 1) & (k[:-1] == 1)
+    r0, r1 = int(np.min(track.rev)), int(np.max(track.rev))
+    if r1 - r0 >= 4:  # away from the first and last revolution (an engine starting or stopping)
+        both &= (track.rev[1:-1] > r0) & (track.rev[1:-1] < r1)
     if not np.any(both):
         return float("nan")
     r = np.diff(dt)[both] / (0.5 * (dt[1:] + dt[:-1])[both])

@@ -335,7 +335,7 @@ def read_track(
                 rule = "lower tooth-period jitter"
             else:
                 rule = (
-                    f"the tooth's own edge ({_TOOTH_EDGE_WHY[best.edge == 'falling']}), where the two fit alike "
+                    f"the teeth's own edge ({_tooth_edge_why(edges, best.edge)}), where the two fit alike "
                     f"(jitter within {1 / JITTER_MARGIN:.2g}×)"
                 )
             ev = (
@@ -377,12 +377,13 @@ def read_track(
     return WheelReading(name, log, track, edges, best, tuple(tried), tuple(choices), tuple(notes))
 
 
-_TOOTH_EDGE_WHY = (
-    "a two-level signal's edge out of its level across the gap, or a variable-reluctance signal's zero crossing "
-    "after a negative first lobe",
-    "a two-level signal's edge out of its level across the gap, or a variable-reluctance signal's zero crossing "
-    "after a positive first lobe",
-)
+def _tooth_edge_why(edges: Edges | None, edge: str | None) -> str:
+    """Why ``edge`` is the teeth's own edge, in words."""
+    if edges is not None and edges.method.startswith("zero crossings"):
+        lobe = "positive" if edge == "falling" else "negative"
+        return f"a variable-reluctance signal's zero crossing at the tooth's centre, after its {lobe} first lobe"
+    level = "low" if edge == "rising" else "high"
+    return f"the edge out of the level the gap sits at ({level})"
 
 
 def _tooth_edge(log: Log, track: ToothTrack | None, edges: Edges | None) -> str | None:
@@ -405,7 +406,7 @@ def _tooth_edge(log: Log, track: ToothTrack | None, edges: Edges | None) -> str 
     centre = 0.5 * (lo + hi)
     mid = 0.5 * (track.t[gaps] + track.t[gaps + 1])
     if not edges.method.startswith("zero crossings"):
-        level = v[np.clip(np.searchsorted(t, mid), 0, v.size - 1)]
+        level = v[np.clip(np.searchsorted(t, mid, side="right") - 1, 0, v.size - 1)]  # the level holding then
         return "rising" if np.median(level) < centre else "falling"
     signs = []
     for g, m in zip(gaps, mid):
