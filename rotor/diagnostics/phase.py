@@ -816,11 +816,11 @@ def check_tdc(
     if fit.tdc_after_gap_deg is None:
         raise LogError("check_tdc: the fit must come from a rotor.LogAnalysis (a wheel's gap to count from)")
     src = f"{fit.source}: " if fit.source else ""
-    sure = (
-        f"± {fit.std_deg:.1f}° (1σ: {fit.std_statistical_deg:.1f}° from the cycles' scatter, "
-        f"{fit.std_model_deg:.1f}° from the engine model), R² {fit.r2:.2f}, next best {fit.separation:.0f} σ worse"
+    measured = (
+        f"{fit.tdc_after_gap_deg:.1f}° ± {fit.std_deg:.1f}° after the gap (1σ: {fit.std_statistical_deg:.1f}° "
+        f"from the cycles' scatter, {fit.std_model_deg:.1f}° from the engine model; R² {fit.r2:.2f}, next best "
+        f"{fit.separation:.0f} σ worse)"
     )
-    measured = f"{fit.tdc_after_gap_deg:.1f}° after the gap ({sure})"
     best_un = 1.0 - fit.r2
     if fit.r2 < R2_MIN:
         raise TdcNotDetermined(
@@ -875,22 +875,22 @@ def check_tdc(
             float(given_deg),
             None,
             f"{what} TDC {given_deg:.1f}° after the gap kept unchecked: the recording's speed does not determine "
-            f"TDC (best {measured}; {apart}): {fit.reason}",
+            f"TDC (best {measured}: {apart}): {fit.reason}",
         )
     if z <= AGREE_SIGMA:
         return made(
             TdcVerdict.AGREES,
             float(given_deg),
             fit.parity_for(float(given_deg)),
-            f"{what} TDC {given_deg:.1f}° after the gap agrees with the recording's speed ({measured}; {apart}, "
-            f"within {AGREE_SIGMA:g} σ)",
+            f"{what} TDC {given_deg:.1f}° after the gap agrees with the recording's speed, {measured}: {apart} "
+            f"(within {AGREE_SIGMA:g} σ)",
         )
     return made(
         TdcVerdict.DISAGREES,
         float(fit.tdc_after_gap_deg),
         fit.firing_parity,
         f"TDC corrected: {what} {given_deg:.1f}° after the gap disagrees with the recording's speed, which puts it "
-        f"at {measured} ({apart}, more than {AGREE_SIGMA:g} σ): diagnosed with {fit.tdc_after_gap_deg:.1f}°; "
+        f"at {measured}: {apart} (more than {AGREE_SIGMA:g} σ); diagnosed with {fit.tdc_after_gap_deg:.1f}°; "
         f"check whether the calibration comes from this installation (the wheel's mounting, the sensor), the "
         f"engine file (R² {fit.r2:.2f}), or measure TDC with a pressure channel",
     )
