@@ -183,3 +183,16 @@ def test_simulated_signals_read_without_options(spec, sensor, gap, profile):
         assert np.mean(a.delta) == pytest.approx(np.mean(given.delta), rel=0.01)
         deltas.append(np.mean(a.delta))
     assert deltas[1] == pytest.approx(deltas[0], rel=0.01)  # the same read inverted
+
+
+def test_plot_of_the_reading(tmp_path, capsys):
+    """--plot draws the signal as read beside the analysis: its levels, the edges taken and the repairs."""
+    log = rotor.simulated_recording(tmp_path / "sim.txt", cycles=3, seed=4)
+    assert main(["analyze", str(log), "--wheel", "auto", "--columns", TUE_COLUMNS, "--plot", str(tmp_path / "p")]) == 0
+    out = capsys.readouterr().out
+    assert (tmp_path / "p" / "sim_reading.png").stat().st_size > 10_000 and "sim_reading.png" in out
+    a = rotor.analyze_log(log, "auto", columns=TUE_COLUMNS)
+    ax = a.reading.plot()
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(x.startswith("edges taken") for x in labels) and any(x.startswith("timed at") for x in labels)
+    assert "--wheel 60-2" in ax.get_title()

@@ -208,6 +208,8 @@ def analyze_file(args: argparse.Namespace, log: str) -> FileOutput:
     if args.plot:
         with PLOT_LOCK:
             written.append(log_plot(res.plot(), args.plot, log, "analysis"))
+            if res.reading is not None:  # the signal as read: levels, edges and repairs
+                written.append(log_plot(res.reading.plot(), args.plot, log, "reading"))
     return FileOutput(res.to_json_dict(), "", written) if args.json else FileOutput({}, res.summary(), written)
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+from typing import Any
 
 import numpy as np
 
@@ -180,6 +181,36 @@ class WheelReading:
         if self.edge is not None:
             out += f" --edge {self.edge}"
         return out
+
+    def plot(self, ax: Any = None, *, revolutions: float = 2.5) -> Any:
+        """The signal as read around its first gap (``revolutions`` of it [-]): the samples,
+        the levels and thresholds found, the edges taken and every repair. Returns the Axes."""
+        from ..plotting.logs import plot_reading
+
+        log, tr = self.log, self.track
+        if log.kind == "teeth":
+            t = tr.t
+            v = np.zeros(t.size)
+        else:
+            t = log["time"]
+            v = log["encoder_v"] if log.kind == "encoder" else np.asarray(log["encoder_d"], dtype=np.float64)
+        z = tr.t[tr.tooth == 0]
+        per_rev = float(np.median(np.diff(z))) if z.size > 1 else float(tr.t[-1] - tr.t[0])
+        start = float(z[0]) - 0.25 * per_rev if z.size else float(tr.t[0])
+        span = (max(start, float(t[0])), min(start + revolutions * per_rev, float(t[-1])))
+        levels = {}
+        e = self.edges
+        if e is not None and log.kind == "encoder":
+            sign = -1.0 if e.inverted else 1.0
+            levels = {
+                "low": sign * e.low_v,
+                "high": sign * e.high_v,
+                "off": sign * e.thresholds_v[0],
+                "on": sign * e.thresholds_v[1],
+                "timed at": sign * e.level_v,
+            }
+        title = f"{self.source}: read as {self.pins()} ({e.method if e is not None else 'tooth times'})"
+        return plot_reading(t, v, tr.t, levels, tr.repairs, title, span_s=span, steps=log.kind == "digital", ax=ax)
 
     def to_json_dict(self) -> dict:
         return {

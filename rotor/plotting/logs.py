@@ -9,7 +9,7 @@ import numpy as np
 from ..units import RPM_PER_RAD_S
 from .common import angle_axis, new_axes, plain
 
-__all__ = ["plot_log_analysis", "plot_tooth_errors"]
+__all__ = ["plot_log_analysis", "plot_reading", "plot_tooth_errors"]
 
 
 def plot_tooth_errors(errors_deg: Any, method: str, ax: Any = None) -> Any:
@@ -90,3 +90,49 @@ def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
     else:
         ax_p.set_axis_off()
     return axes
+
+
+def plot_reading(
+    t_s: Any,
+    v: Any,
+    edge_times_s: Any,
+    levels_v: dict,
+    repairs: Any,
+    title: str,
+    *,
+    span_s: tuple | None = None,
+    steps: bool = False,
+    ax: Any = None,
+) -> Any:
+    """The wheel signal as read (``steps``: a capture's levels, held from one transition to the next): the samples ``t_s`` [s], ``v`` (volts, or 0/1 levels), the
+    levels found (``levels_v``: name → value [V], drawn as horizontal lines), the edges taken
+    (``edge_times_s`` [s], markers on the signal) and every repair (each with ``time_s`` and
+    ``kind``: a vertical line, labelled by kind), within ``span_s`` (start, end) [s] (default:
+    the whole record). **Returns:** the Axes."""
+    ax = new_axes(ax)
+    t = np.asarray(t_s, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    lo, hi = (t[0], t[-1]) if span_s is None else span_s
+    a, b = np.searchsorted(t, [lo, hi])
+    step = max(1, (b - a) // 200_000)
+    ax.plot(
+        t[a:b:step], v[a:b:step], lw=0.6, color="0.4", label="signal", drawstyle="steps-post" if steps else "default"
+    )
+    for k, (name, level) in enumerate(levels_v.items()):
+        ax.axhline(level, ls="--", lw=0.8, color=f"C{k + 1}", label=plain(f"{name} {level:.3g} V"))
+    e = np.asarray(edge_times_s, dtype=np.float64)
+    e = e[(e >= lo) & (e <= hi)]
+    at = v[np.clip(np.searchsorted(t, e, side="right") - 1, 0, v.size - 1)] if steps else np.interp(e, t, v)
+    ax.plot(e, at, "o", ms=3, color="C0", label=f"edges taken ({e.size})")
+    seen = set()
+    for r in repairs:
+        if lo <= r.time_s <= hi:
+            ax.axvline(r.time_s, color="C3", lw=0.8, alpha=0.7, label=None if r.kind in seen else plain(r.kind))
+            seen.add(r.kind)
+    ax.set_xlim(lo, hi)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("signal [V]")
+    ax.set_title(plain(title))
+    ax.legend(fontsize=7, loc="upper right")
+    ax.grid(True, alpha=0.3)
+    return ax
