@@ -566,7 +566,13 @@ def _kinematics_and_forces(page: _Page, table: CrankTable, fine: CrankTable, cyc
         "The kinematic and dynamic table of cylinder 1 (Shishkov 2014, appendix 5), angle 0° at TDC at the start "
         "of intake, 360° at firing TDC."
     )
-    page.table("crank_table", "kinematics and forces of cylinder 1", _CRANK_COLUMNS, table.columns)
+    which = "the λ series, as the guide's table and rotor table" if table.kinematics == "series" else "exact"
+    page.table(
+        "crank_table",
+        f"kinematics and forces of cylinder 1 ({which} kinematics; rotor table gives the λ series unless told)",
+        _CRANK_COLUMNS,
+        table.columns,
+    )
 
 
 # ----------------------------------------------------------------------------- the page
