@@ -481,3 +481,90 @@ def test_samples_cut_out_of_a_recording_are_named_without_a_warning(tmp_path: Pa
     rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_v"])
     assert_refused(rc, err, "bench.csv: line 10002: the samples stop for 5 ms", "samples are missing")
     assert "Warning" not in err
+
+
+# ----------------------------------------------------------------------------- sizes of torsion work
+def long_chain(tmp_path: Path, n: int) -> Path:
+    """The MWM six with a ``[torsion]`` chain of ``n`` masses (its inertia spread over the
+    masses before the throws, the shafts stiffened in proportion)."""
+    import re
+
+    text = (ROOT / "rotor" / "presets" / "mwm6.toml").read_text(encoding="utf-8")
+    head, _, rest = text.partition("[torsion]")
+    after = re.split(r"(?m)^\[(?!torsion)", rest, maxsplit=1)
+    tail = [0.03123, 0.01723, 0.03123, 0.03123, 0.01723, 0.03323, 2.07262]
+    front = (0.017 + 0.009) / (n - 7)
+    table = (
+        f"[torsion]\ninertias_kgm2 = {[front] * (n - 7) + tail}\n"
+        f"stiffnesses_Nm_per_rad = {[1.106e6 * n / 9] * (n - 1)}\n"
+        f"throw_masses = {list(range(n - 6, n))}\nload_mass = {n}\n"
+        f"relative_damping_Nms_per_rad = {[30.0] * (n - 1)}\n"
+    )
+    path = tmp_path / f"chain{n}.toml"
+    path.write_text(head + table + ("\n[" + after[1] if len(after) > 1 else ""), encoding="utf-8")
+    return path
+
+
+def test_the_modes_of_a_long_chain_take_seconds_and_agree_with_the_exact_range(tmp_path: Path) -> None:
+    import time
+
+    import rotor
+    from rotor.torsion.modes import EXACT_SPREAD_MASSES, frequency_spread
+
+    engine = rotor.load_engine(long_chain(tmp_path, 200))
+    t0 = time.perf_counter()
+    modes = rotor.torsional_modes(engine)
+    assert time.perf_counter() - t0 < 30  # 360 dense eigenproblems and a 400 × 400 state space took minutes
+    assert np.all(modes.frequency_min_hz <= modes.natural_frequencies_hz * (1 + 1e-9))
+    assert np.all(modes.frequency_max_hz >= modes.natural_frequencies_hz * (1 - 1e-9))
+    assert np.all(np.isfinite(modes.damped_frequencies_hz)) and np.all(modes.damping_ratios > 0)
+    # the tridiagonal problems against the dense ones at every angle, on a chain just long enough
+    import jax
+
+    from rotor.torsion.model import mass_inertias
+    from rotor.torsion.modes import natural_frequencies_of
+
+    short = rotor.load_engine(long_chain(tmp_path, EXACT_SPREAD_MASSES + 1))
+    lo, hi = frequency_spread(short)
+    J = mass_inertias(short, np.linspace(0, TWO_PI, 360, endpoint=False))
+    exact = np.asarray(jax.vmap(natural_frequencies_of, in_axes=(0, None))(J, short.torsion.stiffnesses_Nm_per_rad))
+    np.testing.assert_allclose(lo, exact.min(axis=0), rtol=1e-9)
+    np.testing.assert_allclose(hi, exact.max(axis=0), rtol=1e-9)
+    assert np.max(hi / lo) > 1.01  # a range to get right
+
+
+@pytest.mark.parametrize("command", ["modes", "campbell"])
+def test_a_chain_of_ten_thousand_masses_is_refused_naming_the_table(command: str, tmp_path: Path, capsys) -> None:
+    rc, _, err = run(capsys, [command, str(long_chain(tmp_path, 10_000))])
+    assert_refused(rc, err, "the [torsion] table's chain has 10000 masses", "about", "at most 2000 masses")
+
+
+@pytest.mark.parametrize(
+    "n,fragment",
+    [(100, "would take about 3 minutes per speed"), (1000, "× 1000 masses of the [torsion] table needs")],
+)
+def test_a_forced_response_too_big_is_refused_before_the_work(n: int, fragment: str, tmp_path: Path, capsys) -> None:
+    rc, _, err = run(capsys, ["torsion", str(long_chain(tmp_path, n))])
+    assert_refused(rc, err, fragment)
+    assert "--cycles" not in err and "--steps-per-cycle" not in err
+
+
+def test_a_campbell_sweep_of_ten_million_speeds_is_refused_before_allocating() -> None:
+    import rotor
+    from rotor.errors import EngineError
+
+    with pytest.raises(EngineError, match=r"^campbell\(rpm\): 10000000 speeds × 24 orders × 8 modes needs .* GB"):
+        rotor.campbell(rotor.load_engine("mwm6"), rpm=np.linspace(600, 2600, 10**7))
+
+
+def test_running_out_of_memory_names_only_the_commands_own_options(capsys, monkeypatch) -> None:
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr("rotor.cli.torsion.cmd_torsion", exhausted)
+    monkeypatch.setattr("rotor.torsion.response.torsional_response", exhausted)
+    rc, _, err = run(capsys, ["torsion", "mwm6"])
+    assert_refused(rc, err, "ran out of memory: reduce the size of the run (a smaller input)")
+    monkeypatch.setattr("rotor.engine.table.crank_table", exhausted)
+    rc, _, err = run(capsys, ["table", "4chn15"])
+    assert_refused(rc, err, "ran out of memory: reduce the size of the run (--step, or a smaller input")

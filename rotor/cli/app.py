@@ -166,7 +166,22 @@ def warning_line(
     )
 
 
-def report_error(e: BaseException, debug: bool = False) -> int:
+SIZE_OPTIONS = (
+    ("--cycles", "cycles"),
+    ("--steps-per-cycle", "steps_per_cycle"),
+    ("--step", "step"),
+    ("--points-per-cycle", "points_per_cycle"),
+)
+"""The options that set the size of a run (flag, ``args`` attribute), named where the
+machine runs out of memory, each only for the commands that have it."""
+
+
+def size_flags(args: argparse.Namespace | None) -> list[str]:
+    """The flags of :data:`SIZE_OPTIONS` that the command of ``args`` has."""
+    return [flag for flag, key in SIZE_OPTIONS if args is not None and hasattr(args, key)]
+
+
+def report_error(e: BaseException, debug: bool = False, sizes: Sequence[str] = ()) -> int:
     """Print what ``e`` (an exception that reached the command line) means, as one line on
     stderr (its traceback before it when ``debug``), and return the exit status: 0 for a
     closed pipe, 1 for a :class:`rotor.SolverError`, 2 for bad input (rotor's input errors,
@@ -183,11 +198,8 @@ def report_error(e: BaseException, debug: bool = False) -> int:
         print("rotor: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     if isinstance(e, MemoryError) or (isinstance(e, RuntimeError) and "RESOURCE_EXHAUSTED" in str(e)):
-        print(
-            "rotor: error: the machine ran out of memory: reduce the size of the run (--cycles, --steps-per-cycle, "
-            "--step, --points-per-cycle, or a shorter log)",
-            file=sys.stderr,
-        )
+        way = ", ".join([*sizes, "or a smaller input (a shorter log, fewer masses)"] if sizes else ["a smaller input"])
+        print(f"rotor: error: the machine ran out of memory: reduce the size of the run ({way})", file=sys.stderr)
         return EXIT_USAGE
     if isinstance(e, SolverError):  # valid input, no answer: not a usage error
         print(f"rotor: {_one_line(e)}", file=sys.stderr)
@@ -295,7 +307,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         except BaseException as e:  # noqa: BLE001 - every exception is reported, none as a raw traceback
             remove_made_folders()
-            return report_error(e, debug=args.debug)
+            return report_error(e, debug=args.debug, sizes=size_flags(args))
         return 0
     finally:
         if previous is not None:

@@ -44,12 +44,13 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
 
+from ..checks import check_size
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE, check_speed_rpm, what_it_is
 from ..errors import EngineError
 from ..results import Result, json_safe
 from .model import TorsionalChain, cylinder_masses
-from .modes import chain_of, frequency_spread
+from .modes import chain_of, check_mode_size, frequency_spread
 
 __all__ = ["Campbell", "campbell", "campbell_arrays", "engine_orders", "MAX_ORDER", "RANGE_POINTS"]
 
@@ -58,6 +59,10 @@ MAX_ORDER = 12.0
 
 RANGE_POINTS = 1000
 """Speeds in a sweep given as a range ``(lo, hi)``."""
+
+BYTES_PER_GAP = 3
+"""Arrays of (modes × orders × speeds) numbers that a Campbell sweep holds at once (the
+gaps to each order's line, their flattened copy, a margin), for its memory check."""
 
 _MAJOR_TOL = 1e-6  # |mean of exp(i·q·ψ)| ≥ 1 − this: every cylinder in phase
 
@@ -322,6 +327,8 @@ def campbell(
         strokes = engine.strokes
     elif strokes not in (2, 4) or isinstance(strokes, bool):
         raise EngineError(f"campbell(strokes = {strokes!r}): 4 (four-stroke) or 2 (two-stroke)")
+    n = int(np.size(chain.inertias_kgm2))
+    check_mode_size(n, "campbell(engine_or_chain)")
     speeds = _speeds(rpm, engine)
     if orders is None:
         q = engine_orders(strokes)
@@ -348,6 +355,11 @@ def campbell(
         phases = np.zeros(1)
         cyl_mass = np.zeros(1, dtype=np.int32)
     known = engine is not None or firing_angles_deg is not None
+    check_size(
+        8.0 * (n - 1) * q.size * speeds.size * BYTES_PER_GAP + 8.0 * 3 * n * n,
+        f"campbell(rpm): {speeds.size} speeds × {q.size} orders × {n - 1} modes",
+        "give fewer speeds (rpm=; a range (lo, hi) takes 1000) or fewer orders (orders=)",
+    )
     out = {
         key: np.asarray(v)
         for key, v in campbell_arrays(

@@ -64,6 +64,10 @@ __all__ = [
     "natural_frequencies",
     "natural_frequencies_of",
     "frequency_spread",
+    "check_mode_size",
+    "spread_points",
+    "EXACT_SPREAD_MASSES",
+    "MAX_MODE_MASSES",
     "mode_shapes",
     "modal_damping_matrix",
     "holzer_residual",
@@ -157,6 +161,27 @@ def modal_damping_matrix(chain: TorsionalChain) -> Float[Array, "n n"]:
     c = jnp.concatenate([jnp.zeros(1), 2 * zeta * omega])
     MPhi = chain.inertias_kgm2[:, None] * phi
     return (MPhi * c[None, :]) @ MPhi.T
+
+
+def _damped_modal(chain: TorsionalChain, undamped_hz: np.ndarray, shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Damped natural frequencies [Hz] and damping ratios [-] of each elastic mode (NaN where
+    a mode is aperiodic) in modal coordinates: the damping's diagonal φᵀCφ on each mode's
+    mass-normalised shape φ (``shapes``, (modes, n)), its coupling of the modes left out
+    (exact for proportional damping). Costs (masses × modes): for long chains, whose
+    state-space eigenproblem of 2n × 2n would take minutes."""
+    n = chain.size
+    wn = 2 * np.pi * np.asarray(undamped_hz, dtype=np.float64)
+    c = np.zeros(wn.size)
+    if chain.absolute_damping_Nms_per_rad is not None:
+        c += (shapes**2) @ np.broadcast_to(np.asarray(chain.absolute_damping_Nms_per_rad, dtype=np.float64), (n,))
+    if chain.relative_damping_Nms_per_rad is not None:
+        rel = np.broadcast_to(np.asarray(chain.relative_damping_Nms_per_rad, dtype=np.float64), (n - 1,))
+        c += (np.diff(shapes, axis=1) ** 2) @ rel
+    zeta = c / (2 * wn)
+    if chain.modal_damping_ratio is not None:
+        zeta = zeta + np.broadcast_to(np.asarray(chain.modal_damping_ratio, dtype=np.float64), wn.shape)
+    fd = np.where(zeta < 1, undamped_hz * np.sqrt(np.clip(1 - zeta**2, 0.0, None)), np.nan)
+    return fd, np.where(zeta < 1, zeta, np.nan)
 
 
 def _damped(chain: TorsionalChain, undamped_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -518,6 +543,56 @@ def chain_of(chain_or_engine: Any, call: str) -> tuple[TorsionalChain, Engine | 
 
 _spread = jax.jit(jax.vmap(_natural_frequencies_hz, in_axes=(0, None)))
 
+EXACT_SPREAD_MASSES = 32
+"""Chains of up to this many masses have their frequencies' range over the crank angle from
+dense eigenproblems, compiled; longer ones from tridiagonal ones (see :func:`frequency_spread`)."""
+MAX_MODE_MASSES = 2000
+"""The most masses whose modes are computed: one dense eigenproblem of n × n takes about
+4 s for 1000 masses on a 2-core machine and grows as n³ (an hour for 10⁴)."""
+SECONDS_PER_EIGH_1000 = 4.0
+"""Seconds of one dense symmetric eigenproblem of 1000 × 1000 with its vectors (2-core CPU),
+for the time a refused chain would have taken."""
+
+
+def check_mode_size(n: int, call: str) -> None:
+    """Refuse, before any work, a chain of more than :data:`MAX_MODE_MASSES` masses, in one
+    line naming the ``[torsion]`` table, with the time it would take and the memory."""
+    if n <= MAX_MODE_MASSES:
+        return
+    seconds = SECONDS_PER_EIGH_1000 * (n / 1000) ** 3
+    took = f"{seconds / 60:.0f} minutes" if seconds < 5400 else f"{seconds / 3600:.1f} hours"
+    raise EngineError(
+        f"{call}: the [torsion] table's chain has {n} masses: its modes are a dense eigenproblem of "
+        f"{n} × {n} ({8 * n * n / 1e9:.2g} GB, about {took}); at most {MAX_MODE_MASSES} masses: lump the "
+        "chain into fewer masses (a few per crank throw are enough for its lower modes)"
+    )
+
+
+def spread_points(n: int, points: int = 360) -> int:
+    """The crank angles at which a chain of ``n`` masses is solved for its frequencies' range:
+    ``points`` up to 100 masses, fewer above (36 at least), so that the work, angles × n²,
+    stays about that of 100 masses at 360 angles."""
+    return points if n <= 100 else max(36, min(points, int(points * 100 / n)))
+
+
+def _tridiagonal_spread(engine: Engine, points: int) -> tuple[np.ndarray, np.ndarray]:
+    """(f_min, f_max) [Hz] of each mode over ``points`` crank angles, each angle's
+    eigenproblem taken as what it is, tridiagonal (J^(-1/2)·K·J^(-1/2)): all its eigenvalues
+    in n² operations (LAPACK's ``sterf``), not a dense n³ one."""
+    from scipy.linalg import eigvalsh_tridiagonal
+
+    theta = jnp.linspace(0.0, 2 * jnp.pi, points, endpoint=False)
+    J = np.asarray(mass_inertias(engine, theta), dtype=np.float64)  # (points, n)
+    k = np.asarray(engine.torsion.stiffnesses_Nm_per_rad, dtype=np.float64)  # type: ignore[union-attr]
+    diag = np.zeros(J.shape[1])
+    diag[:-1] += k
+    diag[1:] += k
+    f = np.empty((points, J.shape[1] - 1))
+    for i, j in enumerate(J):
+        lam = eigvalsh_tridiagonal(diag / j, -k / np.sqrt(j[:-1] * j[1:]), lapack_driver="sterf")
+        f[i] = np.sqrt(np.clip(lam[1:], 0.0, None)) / (2 * np.pi)
+    return f.min(axis=0), f.max(axis=0)
+
 
 def frequency_spread(engine: Engine, points: int = 360) -> tuple[np.ndarray, np.ndarray]:
     """Each elastic mode's lowest and highest natural frequency [Hz] over one revolution of
@@ -525,9 +600,18 @@ def frequency_spread(engine: Engine, points: int = 360) -> tuple[np.ndarray, np.
     crank angles, :func:`rotor.torsion.model.mass_inertias`). Sorted by frequency at every
     angle, so the n-th lowest is compared with the n-th lowest.
 
+    A chain of up to :data:`EXACT_SPREAD_MASSES` masses solves its eigenproblems at all
+    angles at once (compiled); a longer one solves each angle's as the tridiagonal problem it
+    is, at :func:`spread_points` angles (36 at least: the range is then short of the
+    true one by a fraction of a percent of its width), so that 1000 masses take seconds.
+
     **Returns:** ``(f_min, f_max)``, each (n − 1,) [Hz].
     """
     points = require_whole(points, "frequency_spread(points)", lo=4)
+    n = int(np.size(engine.torsion.inertias_kgm2)) if engine.torsion is not None else 0
+    if n > EXACT_SPREAD_MASSES:
+        check_mode_size(n, "frequency_spread(engine)")
+        return _tridiagonal_spread(engine, spread_points(n, points))
     theta = jnp.linspace(0.0, 2 * jnp.pi, points, endpoint=False)
     J = mass_inertias(engine, theta)
     f = np.asarray(_spread(J, engine.torsion.stiffnesses_Nm_per_rad))  # type: ignore[union-attr]
@@ -569,9 +653,12 @@ def torsional_modes(
         rpm = float(engine.operating.rpm)
     J = np.asarray(chain.inertias_kgm2, dtype=np.float64)
     k = np.asarray(chain.stiffnesses_Nm_per_rad, dtype=np.float64)
+    check_mode_size(J.size, "torsional_modes(chain_or_engine)")
+    phi_raw = None
     if method == "eigen":
         f_j, phi_j = _modal_jit(chain.inertias_kgm2, chain.stiffnesses_Nm_per_rad)
-        f, shapes = np.asarray(f_j), _normalise_shapes(np.asarray(phi_j))
+        phi_raw = np.asarray(phi_j)
+        f, shapes = np.asarray(f_j), _normalise_shapes(phi_raw)
     else:
         f = holzer_frequencies(chain)
         shapes = holzer_shapes(chain, f)
@@ -583,7 +670,9 @@ def torsional_modes(
     strain = k[None, :] * np.diff(shapes, axis=1) ** 2
     strain_share = strain / strain.sum(axis=1, keepdims=True)
     fd = zeta = None
-    if chain.has_damping:
+    if chain.has_damping and phi_raw is not None and J.size > EXACT_SPREAD_MASSES:
+        fd, zeta = _damped_modal(chain, f, phi_raw)  # a long chain: in modal coordinates
+    elif chain.has_damping:
         fd, zeta = _damped(chain, f)
     fmin = fmax = None
     if engine is not None:

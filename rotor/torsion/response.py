@@ -79,6 +79,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from typing import Any
 
@@ -126,6 +127,10 @@ RESIDUAL_TOL = 1e-9
 #: bytes per unknown (mass × node) while a response is solved: the GMRES basis (restart
 #: vectors), the linearisation and the tables
 BYTES_PER_UNKNOWN = 8 * 260
+#: seconds of one response of a 40-mass chain on 2880 nodes, after compiling (2-core CPU)
+RESPONSE_SECONDS_40 = 15.0
+#: the longest a single response may take unless ROTOR_TIME_LIMIT_S says otherwise [s]
+MAX_RESPONSE_SECONDS = 120.0
 
 
 # ----------------------------------------------------------------------------- the chain with its engine
@@ -607,6 +612,29 @@ def _balance_for(dc: DrivenChain, load: Load | None, omega_m: Any, call: str) ->
     return _Balance(load, jnp.asarray(1.0))
 
 
+def response_seconds(n_masses: int, nodes: int) -> float:
+    """The time one response of a chain of ``n_masses`` masses on ``nodes`` nodes a cycle
+    takes after compiling [s], about: :data:`RESPONSE_SECONDS_40` for 40 masses on 2880
+    nodes, growing as masses^2.6 (the GMRES steps' n × n products per harmonic, and their
+    number) and linearly with the nodes."""
+    return RESPONSE_SECONDS_40 * (n_masses / 40.0) ** 2.6 * (nodes / 2880.0)
+
+
+def time_limit_s() -> float:
+    """The longest a single torsional response may take [s]: ``ROTOR_TIME_LIMIT_S`` if set,
+    else :data:`MAX_RESPONSE_SECONDS`."""
+    env = os.environ.get("ROTOR_TIME_LIMIT_S")
+    if not env:
+        return MAX_RESPONSE_SECONDS
+    try:
+        limit = float(env)
+    except ValueError:
+        raise EngineError(f"ROTOR_TIME_LIMIT_S = {env!r}: must be a number of seconds, e.g. 600") from None
+    if not (math.isfinite(limit) and limit > 0):
+        raise EngineError(f"ROTOR_TIME_LIMIT_S = {env!r}: must be a positive number of seconds")
+    return limit
+
+
 def _check_grid(grid_deg: Any, engine: Engine, call: str, n_masses: int, speeds: int = 1) -> int:
     grid_deg = require_number(grid_deg, f"{call}(grid_deg)", "deg")
     P = grid_points(engine.strokes, grid_deg, engine.cylinders)
@@ -615,11 +643,20 @@ def _check_grid(grid_deg: Any, engine: Engine, call: str, n_masses: int, speeds:
             f"grid_deg = {grid_deg!r}: the harmonic balance needs an even number of nodes per cycle, this gives {P}"
         )
     check_size(
-        float(P) * n_masses * speeds * BYTES_PER_UNKNOWN,
-        f"{call} with grid_deg = {grid_deg:g}° ({P} nodes) × {n_masses} masses"
+        float(P) * n_masses * speeds * BYTES_PER_UNKNOWN + 16.0 * (P // 2 + 1) * n_masses**2 * speeds,
+        f"{call} with grid_deg = {grid_deg:g}° ({P} nodes) × {n_masses} masses of the [torsion] table"
         + (f" × {speeds} speeds at once" if speeds > 1 else ""),
-        "use a larger grid_deg" + (" or a smaller batch" if speeds > 1 else ""),
+        "give the [torsion] table fewer masses, or use a larger grid_deg"
+        + (" or a smaller batch" if speeds > 1 else ""),
     )
+    seconds, limit = response_seconds(n_masses, P), time_limit_s()
+    if seconds > limit:
+        most = int(40 * (limit / (RESPONSE_SECONDS_40 * P / 2880.0)) ** (1 / 2.6))
+        raise EngineError(
+            f"{call}: the [torsion] table's chain of {n_masses} masses on {P} nodes (grid_deg = {grid_deg:g}°) "
+            f"would take about {seconds / 60:.0f} minutes per speed, over the {limit:g} s allowed "
+            f"(ROTOR_TIME_LIMIT_S); lump the chain into at most {most} masses, or use a larger grid_deg"
+        )
     return P
 
 
@@ -1134,6 +1171,7 @@ def torsional_response(
     load = _check_load(load, call)
     engine.check()
     ch = _chain_for(engine, chain, f"{call}(chain)")
+    _check_grid(grid_deg, engine, call, ch.size)  # before the tables are built
     dc = driven_chain(engine, ch, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
     P = _check_grid(grid_deg, engine, call, dc.size)
     omega_m = rpm / RPM_PER_RAD_S
@@ -1260,6 +1298,8 @@ def torsional_sweep(
     if not (math.isfinite(max_order) and max_order > 0):
         raise EngineError(f"{call}(max_order) = {max_order!r}: must be a positive order")
     load = _check_load(load, call)
+    size = _chain_for(engine, chain, f"{call}(chain)").size
+    _check_grid(grid_deg, engine, call, size, speeds=min(batch, speeds.size))  # before the tables are built
     dc = driven_chain(engine, chain, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
     P = _check_grid(grid_deg, engine, call, dc.size, speeds=min(batch, speeds.size))
     balance = _balance_for(dc, load, speeds[0] / RPM_PER_RAD_S, call)
