@@ -220,25 +220,34 @@ class WheelReading:
         }
 
 
+RANKING_EDGES = 20_000
+"""Of a long record, the candidate wheels are ranked on its first this many edges [-]; the
+wheel chosen is then placed on all of them."""
+
+
 def _fit_edges(log, name, edges, times, wheel, edge, index_times, auto):
-    """The fits of the candidate wheels on one set of edges."""
+    """The fits of the candidate wheels on one set of edges, the best, the runner-up and why
+    (:func:`rotor.logs.identify.rank`; the best ``None`` where ambiguous or none fits). A long
+    record's candidates are ranked on its first :data:`RANKING_EDGES` edges and the best placed
+    on all of them."""
     probe = weak_edge_probe(log, edges) if log.kind == "encoder" and edges is not None else None
-    if auto:
-        try:
-            wheels = candidates(times)
-        except LogError as e:
-            return [WheelFit("auto", edge, FitStatus.NO_FIT, reason=str(e))]
-    else:
-        wheels = [wheel]
-    return [fit_wheel(times, w, edge=edge, index_times=index_times, probe=probe) for w in wheels]
-
-
-def _best_of(fits, auto):
-    """(best fit, runner-up, why) of one edge's fits; best ``None`` where ambiguous or none fits."""
     if not auto:
-        f = fits[0]
-        return (f if f.status.ok else None), None, "given"
-    return rank(fits)
+        f = fit_wheel(times, wheel, edge=edge, index_times=index_times, probe=probe)
+        return [f], (f if f.status.ok else None), None, "given"
+    times = np.asarray(times, dtype=np.float64)
+    head = times[:RANKING_EDGES] if times.size > 2 * RANKING_EDGES else times
+    try:
+        wheels = candidates(head)
+    except LogError as e:
+        return [WheelFit("auto", edge, FitStatus.NO_FIT, reason=str(e))], None, None, "no wheel found"
+    fits = [fit_wheel(head, w, edge=edge, index_times=index_times, probe=probe) for w in wheels]
+    best, second, why = rank(fits)
+    if best is not None and head.size < times.size:
+        assert best.track is not None
+        whole = fit_wheel(times, best.track.wheel, edge=edge, index_times=index_times, probe=probe)
+        fits = [whole if f is best else f for f in fits]
+        best = whole if whole.status.ok else None
+    return fits, best, second, why
 
 
 def read_track(
@@ -286,8 +295,7 @@ def read_track(
                 tried.append(WheelFit(w.spec if w else "auto", pol, FitStatus.NO_EDGES, reason=str(e)))
                 continue
             times = edges.times
-        fits = _fit_edges(log, name, edges, times, w, pol, index_times, auto)
-        best, second, why = _best_of(fits, auto)
+        fits, best, second, why = _fit_edges(log, name, edges, times, w, pol, index_times, auto)
         # an analog signal: levels that follow it, where the global ones guess edges or leave the record uncovered
         if (
             log.kind == "encoder"
@@ -300,8 +308,9 @@ def read_track(
             except LogError:
                 adaptive = None
             if adaptive is not None:
-                fits_a = _fit_edges(log, name, adaptive, adaptive.times, w, pol, index_times, auto)
-                best_a, second_a, why_a = _best_of(fits_a, auto)
+                fits_a, best_a, second_a, why_a = _fit_edges(
+                    log, name, adaptive, adaptive.times, w, pol, index_times, auto
+                )
                 if best_a is not None and (
                     best is None
                     or best_a.repairs < best.repairs
@@ -505,7 +514,7 @@ def _what_fits(log, per_edge) -> str:
         if times is None:
             continue
         pol = None if edges is None else ("falling" if edges.inverted else "rising")
-        best, _, _ = rank(_fit_edges(log, "", edges, times, None, pol, None, True))
+        _, best, _, _ = _fit_edges(log, "", edges, times, None, pol, None, True)
         if best is not None:
             found.append(best)
     if not found:
