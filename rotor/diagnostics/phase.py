@@ -144,7 +144,10 @@ class SpeedTdc(Result):
     at the start of intake [deg], in [0, cycle); ``tdc_after_gap_deg``: from the wheel's gap
     to cylinder 1's TDC [deg] in [0, 360) and ``firing_parity`` (0 or 1, as
     :func:`rotor.analyze_log`'s ``firing``), for a :class:`rotor.LogAnalysis` (None for a
-    plain array); ``std_deg``: one standard deviation [deg]; ``separation``: the best
+    plain array); ``std_deg``: one standard deviation [deg], the root sum of squares of
+    ``std_statistical_deg`` (the cycles' scatter) and ``std_model_deg`` (the engine model's
+    own error; see the module doc); ``charge_scale``: the charge at which a Wiebe engine's
+    signature fits best (1 = the file's; 1 for other pressure sources) [-]; ``separation``: the best
     alternative's distance [σ]; ``alternative_deg``: that alternative's ``offset_deg``;
     ``r2``: fraction of the fluctuation the signature explains [-]; ``determined`` and
     ``reason``; ``period_deg``: the shift under which the signature repeats (alike
@@ -195,7 +198,8 @@ class SpeedTdc(Result):
             else f"TDC {self.offset_deg:.1f}° after the grid's start"
         )
         lines = [
-            f"TDC from the speed{' of ' + self.source if self.source else ''}: {where}, ± {self.std_deg:.2f}° (1σ); "
+            f"TDC from the speed{' of ' + self.source if self.source else ''}: {where}, ± {self.std_deg:.2f}° (1σ: "
+            f"{self.std_statistical_deg:.2f}° the cycles' scatter, {self.std_model_deg:.2f}° the engine model); "
             f"R² {self.r2:.3f}, next best offset {self.separation:.1f} σ worse ({self.cycles} cycles, "
             f"{self.mean_rpm:.0f} rpm)",
         ]
