@@ -28,6 +28,9 @@ from jaxtyping import ArrayLike
 
 from ..errors import LogError
 
+GLOBAL_LEVELS = "global levels"  # Edges.method of each way of finding the levels
+ADAPTIVE_LEVELS = "adaptive levels"
+VR_CROSSINGS = "zero crossings (VR)"
 LEVEL_SAMPLES = 250_000
 """A signal's levels and noise are read from at most this many of its samples [-] (a fixed
 random draw for the levels, contiguous blocks for the noise)."""
@@ -72,7 +75,7 @@ class Edges:
     glitches: int
     inverted: bool
     repairs: tuple = ()
-    method: str = "global levels"
+    method: str = GLOBAL_LEVELS
 
     def to_json_dict(self) -> dict:
         """Plain JSON: the edge count, the levels and thresholds [V], glitches removed, the
@@ -200,7 +203,7 @@ def find_edges(
         return _global_edges(t, v, inverted, band, level, glitch, name)
     if inverted:
         v = -v
-    method = "global levels"
+    method = GLOBAL_LEVELS
     off: Any
     on: Any
     lev: Any
@@ -220,7 +223,7 @@ def find_edges(
         on = np.where(quiet, np.inf, on)
         off = np.where(quiet, -np.inf, off)
         low, high = float(np.median(lo_env)), float(np.median(hi_env))
-        method = "zero crossings (VR)" if levels == "vr" else "adaptive levels"
+        method = VR_CROSSINGS if levels == "vr" else ADAPTIVE_LEVELS
     # Schmitt trigger: 1 above `on`, 0 below `off`, else the last decisive state
     decisive = (v > on) | (v < off)
     idx = np.where(decisive, np.arange(v.size), -1)
@@ -349,7 +352,7 @@ def _global_edges(t, v, inverted, band, level, glitch, name) -> Edges:
     d0, d1 = sign * v[j] - lev, sign * v[j + 1] - lev
     times = t[j] + (-d0 / (d1 - d0)) * (t[j + 1] - t[j])
     keep = np.concatenate([[True], np.diff(j) > 0]) if j.size else np.zeros(0, bool)
-    return Edges(times[keep], low, high, (off, on), lev, glitches + int((~keep).sum()), inverted, (), "global levels")
+    return Edges(times[keep], low, high, (off, on), lev, glitches + int((~keep).sum()), inverted, (), GLOBAL_LEVELS)
 
 
 def _risen(v: np.ndarray, rise: np.ndarray, level: np.ndarray, reach: int = 64) -> np.ndarray:

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import LogError
 from .digital import digital_edges
-from .edges import Edges, find_edges, find_weak_edges, noise_rms, two_level_locally
+from .edges import GLOBAL_LEVELS, VR_CROSSINGS, Edges, find_edges, find_weak_edges, noise_rms, two_level_locally
 from .identify import FitStatus, WheelFit, candidates, evidence, fit_wheel, rank
 from .pattern import place
 from .plausibility import check_time_base, check_time_resolution
@@ -300,7 +300,8 @@ def read_track(
         if (
             log.kind == "encoder"
             and edges is not None
-            and edges.method == "global levels"
+            and edges.method == GLOBAL_LEVELS
+            and pol is not None
             and (best is None or best.repairs or (best.track is not None and _uncovered(log, best.track)))
         ):
             try:
@@ -419,7 +420,7 @@ def read_track(
 
 def _tooth_edge_why(edges: Edges | None, edge: str | None) -> str:
     """Why ``edge`` is the teeth's own edge, in words."""
-    if edges is not None and edges.method.startswith("zero crossings"):
+    if edges is not None and edges.method == VR_CROSSINGS:
         lobe = "positive" if edge == "falling" else "negative"
         return f"a variable-reluctance signal's zero crossing at the tooth's centre, after its {lobe} first lobe"
     level = "low" if edge == "rising" else "high"
@@ -445,7 +446,7 @@ def _tooth_edge(log: Log, track: ToothTrack | None, edges: Edges | None) -> str 
     lo, hi = np.percentile(sub, [1.0, 99.0])
     centre = 0.5 * (lo + hi)
     mid = 0.5 * (track.t[gaps] + track.t[gaps + 1])
-    if not edges.method.startswith("zero crossings"):
+    if edges.method != VR_CROSSINGS:
         level = v[np.clip(np.searchsorted(t, mid, side="right") - 1, 0, v.size - 1)]  # the level holding then
         return "rising" if np.median(level) < centre else "falling"
     signs = []
