@@ -76,8 +76,8 @@ def torsion_engine(name: str) -> Any:
     engine = load_engine(name)
     if getattr(engine, "torsion", None) is None:
         raise EngineError(
-            f"{name}: engine {engine.name!r} has no [torsion] table, which this command needs: add one to its engine "
-            "file (the chain's inertias [kg·m²], shaft stiffnesses [N·m/rad] and the mass of each crank throw); the "
+            f"{name}: engine {engine.name!r} has no [torsion] table; add one to its file (the chain's inertias "
+            "[kg·m²], shaft stiffnesses [N·m/rad] and the mass of each crank throw: this command needs them); the "
             "presets mwm6 and tue-single have one (`rotor presets`)"
         )
     return engine
