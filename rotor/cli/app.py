@@ -310,5 +310,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             return report_error(e, debug=args.debug, sizes=size_flags(args))
         return 0
     finally:
+        INTERRUPT.clear()  # reported: a later call in this process starts afresh
         if previous is not None:
             signal.signal(signal.SIGINT, previous)  # type: ignore[arg-type]
