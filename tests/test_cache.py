@@ -68,3 +68,38 @@ def test_a_compiled_kernel_is_reused_by_the_next_process(tmp_path):
     # small eager operation may join the cache when a loaded machine makes its compile
     # cross the 0.1 s threshold: new names are allowed, rewritten ones are not)
     assert {name: again[name] for name in written} == written
+
+
+COUNT_PROGRAMS = """
+import json, sys
+import jax.monitoring
+counts = {"requests": 0, "hits": 0}
+def seen(event, **_):
+    if event == "/jax/compilation_cache/compile_requests_use_cache":
+        counts["requests"] += 1
+    elif event == "/jax/compilation_cache/cache_hits":
+        counts["hits"] += 1
+jax.monitoring.register_event_listener(seen)
+from rotor.cli.app import main
+sys.argv[0] = "rotor"
+code = main()  # as the command runs: every program written to the cache, however quick to compile
+print(json.dumps(counts), file=sys.stderr)
+sys.exit(code)
+"""
+
+
+def test_a_second_process_finds_every_program_of_a_command_in_the_cache(tmp_path):
+    """The adaptive angle-domain run holds no host callback (diffrax's checks of its save
+    points are made when it traces), so the persistent cache stores every program it
+    compiles: a second process compiles nothing."""
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"))
+    argv = [sys.executable, "-c", COUNT_PROGRAMS, "simulate", "4chn15", "--cycles", "3", "--method", "angle", "--quiet"]
+    counts = []
+    for _ in range(2):
+        run = subprocess.run(argv, env=env, capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        counts.append(json.loads(run.stderr.strip().splitlines()[-1]))
+    first, second = counts
+    assert first["requests"] > 0 and first["hits"] < first["requests"]
+    assert second["requests"] == first["requests"]
+    assert second["hits"] == second["requests"], f"programs compiled again in the second process: {second}"

@@ -29,6 +29,7 @@ Fidelity (``fidelity=``):
 from __future__ import annotations
 
 import hashlib
+import weakref
 from collections import OrderedDict
 from typing import TYPE_CHECKING, Any
 
@@ -53,6 +54,7 @@ __all__ = [
     "crank_train",
     "check_engine",
     "check_tables",
+    "checked_train",
     "clear_table_cache",
     "remember_tables",
     "shift_inertia",
@@ -79,10 +81,10 @@ def check_engine(engine: Any, call: str = "crank_train(engine)") -> None:
     require_engine(engine, call).check()
 
 
-def check_fidelity(fidelity: str, engine: Engine | None = None) -> None:
+def check_fidelity(fidelity: str, engine: Engine | None = None, *, recheck: bool = True) -> None:
     """Refuse an unknown ``fidelity``, or one ``engine`` cannot use; checks ``engine``
-    again (:func:`check_engine`) when it is given."""
-    if engine is not None:
+    again (:func:`check_engine`) when it is given, unless ``recheck`` is False."""
+    if engine is not None and recheck:
         check_engine(engine, "engine")
     if fidelity not in FIDELITIES:
         raise EngineError(f"fidelity = {fidelity!r}: must be one of {', '.join(map(repr, FIDELITIES))}")
@@ -352,8 +354,15 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     field they depend on) and reused by the next call with the same values; the crankshaft
     inertia ``[crankshaft] inertia_kgm2`` is a constant added to I(θ), so a new value of it
     (a flywheel sweep) reuses them too. Traced fields (inside ``jit``, ``vmap``, ``grad``)
-    build the tables in the trace."""
+    build the tables in the trace.
+
+    An engine object is immutable: one that was checked and found here before (at this
+    fidelity and node count) is neither checked nor digested again."""
+    known = _known_object(engine, fidelity, points)
+    if known is not None:
+        return known
     check_engine(engine, "train_from_engine(engine)")
+    given = engine
     engine = arrays_only(engine)
     key = table_key(engine, fidelity, points)
     hit = _TABLES.get(key) if key is not None else None
@@ -379,20 +388,60 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
         )
         if key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None:  # never keep a tracer
             remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values[:, COL_I])))))
+            remember_object(_TABLES[key], given, 0.0)
         return train
     assert key is not None
     _TABLES.move_to_end(key)
-    train, inertia_ref, low = hit
-    d_inertia = engine.crankshaft.inertia_kgm2 - inertia_ref
+    kept = hit
+    d_inertia = engine.crankshaft.inertia_kgm2 - kept.inertia_ref
     d = concrete(d_inertia)
     if d is not None and d == 0:
-        return train
-    if d is not None and not low + d > 0:
+        remember_object(kept, given, 0.0)
+        return kept.train
+    if d is not None and not kept.low + d > 0:
         raise EngineError(
-            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {low + d:g} kg·m²: it must stay positive; "
-            "check [crankshaft] inertia_kgm2"
+            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {kept.low + d:g} kg·m²: it must stay "
+            "positive; check [crankshaft] inertia_kgm2"
         )
-    return shift_inertia(train, d_inertia)
+    if d is not None and d.ndim == 0:
+        remember_object(kept, given, float(d))
+    return shift_inertia(kept.train, d_inertia)
+
+
+OBJECTS_PER_TABLE = 16
+"""How many engine objects an entry of the table cache remembers as checked (the most recent)."""
+
+
+def remember_object(kept: KeptTables, engine: Any, d_inertia: float) -> None:
+    """Remember that the engine object ``engine`` was checked and has ``kept``'s tables
+    with ``d_inertia`` [kg·m²] added to I(θ)."""
+    kept.objects = [(ref, d) for ref, d in kept.objects if ref() is not None][-(OBJECTS_PER_TABLE - 1) :]
+    kept.objects.append((weakref.ref(engine), d_inertia))
+
+
+def _known_object(engine: Any, fidelity: str, points: int) -> CrankTrain | None:
+    """The tables of ``engine`` if this very object was checked and its tables found
+    before, at ``fidelity`` and ``points`` nodes, and they are still kept; else None."""
+    for key, kept in reversed(_TABLES.items()):
+        if kept.train.fidelity != fidelity or kept.train.points != points:
+            continue
+        for ref, d in kept.objects:
+            if ref() is engine:
+                _TABLES.move_to_end(key)
+                return kept.train if d == 0 else shift_inertia(kept.train, d)
+    return None
+
+
+def checked_train(engine: Any, fidelity: str, points: int, call: str = "engine") -> CrankTrain:
+    """``engine``'s tables at ``fidelity`` on ``points`` nodes, ``engine`` and ``fidelity``
+    checked first (:func:`check_fidelity`, :func:`train_from_engine`), as
+    :func:`rotor.prepare` does: once per engine object, which is immutable. ``call``
+    names the argument in a :class:`TypeError` for what is not an engine."""
+    known = _known_object(engine, fidelity, points)
+    if known is not None:
+        return known
+    check_fidelity(fidelity, require_engine(engine, call), recheck=False)
+    return train_from_engine(engine, fidelity, points)
 
 
 @jax.jit
@@ -407,7 +456,22 @@ def shift_inertia(train: CrankTrain, d_inertia: ArrayLike) -> CrankTrain:
 TABLE_CACHE_SIZE = 16
 """How many engines' tables :func:`train_from_engine` keeps (least recently used go first)."""
 
-_TABLES: OrderedDict[str, tuple[CrankTrain, Any, float]] = OrderedDict()
+
+class KeptTables:
+    """One entry of the table cache: ``train``, the crankshaft inertia it was built with
+    (``inertia_ref`` [kg·m²]), its smallest I(θ) (``low`` [kg·m²]) and ``objects``: the
+    engine objects already checked and found to have these tables, each with its
+    crankshaft inertia minus ``inertia_ref`` [kg·m²] (weak references: an engine that is
+    dropped is not kept alive)."""
+
+    __slots__ = ("train", "inertia_ref", "low", "objects")
+
+    def __init__(self, train: CrankTrain, inertia_ref: Any, low: float):
+        self.train, self.inertia_ref, self.low = train, inertia_ref, low
+        self.objects: list[tuple[weakref.ref, float]] = []
+
+
+_TABLES: OrderedDict[str, KeptTables] = OrderedDict()
 
 
 def table_inputs(engine: Engine) -> tuple:
@@ -444,7 +508,11 @@ def remember_tables(key: str, entry: tuple) -> None:
     """Keep ``entry`` = (train, its crankshaft inertia [kg·m²], its smallest I(θ) [kg·m²])
     under ``key`` (:func:`table_key`), dropping the least recently used beyond
     :data:`TABLE_CACHE_SIZE`."""
-    _TABLES[key] = entry
+    train, inertia_ref, low = entry
+    old = _TABLES.get(key)
+    _TABLES[key] = KeptTables(train, inertia_ref, low)
+    if old is not None and old.train is train:
+        _TABLES[key].objects = old.objects
     while len(_TABLES) > TABLE_CACHE_SIZE:
         _TABLES.popitem(last=False)
 

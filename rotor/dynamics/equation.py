@@ -31,6 +31,8 @@ change; the hand-over starts at the beginning of that cycle.
 
 from __future__ import annotations
 
+import contextlib
+import sys
 from typing import Any
 
 import diffrax as dfx
@@ -276,6 +278,26 @@ def _solver():
     return dfx.Dopri8()
 
 
+@contextlib.contextmanager
+def save_points_checked_on_the_host():
+    """While tracing a solve whose save points the caller has built itself (increasing,
+    within the solve's span): diffrax's run-time check of them becomes a status (NaN save
+    points, an unsuccessful solve) instead of a host callback, which the persistent
+    compilation cache cannot store. Equinox reads its error mode (``EQX_ON_ERROR``) when a
+    check is traced; a mode the user chose other than the default ``raise`` (such as
+    ``breakpoint``, to debug) is left as it is."""
+    errors = sys.modules.get("equinox._errors")
+    mode = getattr(errors, "EQX_ON_ERROR", None)
+    if errors is None or mode != "raise":
+        yield
+        return
+    errors.EQX_ON_ERROR = "nan"
+    try:
+        yield
+    finally:
+        errors.EQX_ON_ERROR = mode
+
+
 @eqx.filter_jit
 def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: int, progress: bool = False):
     """Adaptive solve in the angle domain from θ0 with y0 = (E, t, z), saving at ``theta_out``.
@@ -289,21 +311,22 @@ def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: in
     w_ref = jnp.sqrt(2 * E0 / scene.train.mean_inertia)
     y = (jnp.ones_like(E0), t0 * w_ref, z0)
     event = dfx.Event(lambda t, y, args, **kw: y[0] - e_switch / e_ref, optx.Newton(1e-12, 1e-12), direction=False)
-    sol = dfx.diffeqsolve(
-        dfx.ODETerm(_angle_field),
-        _solver(),
-        theta0,
-        theta_out[-1],
-        None,
-        y,
-        args=(scene, e_ref, w_ref),
-        saveat=dfx.SaveAt(ts=theta_out, t1=True),
-        stepsize_controller=_controller(rtol, MAX_ANGLE_STEP),
-        event=event,
-        max_steps=max_steps,
-        throw=False,
-        progress_meter=BarMeter() if progress else dfx.NoProgressMeter(),
-    )
+    with save_points_checked_on_the_host():  # theta_out: increasing from past θ0, built by the caller
+        sol = dfx.diffeqsolve(
+            dfx.ODETerm(_angle_field),
+            _solver(),
+            theta0,
+            theta_out[-1],
+            None,
+            y,
+            args=(scene, e_ref, w_ref),
+            saveat=dfx.SaveAt(ts=theta_out, t1=True),
+            stepsize_controller=_controller(rtol, MAX_ANGLE_STEP),
+            event=event,
+            max_steps=max_steps,
+            throw=False,
+            progress_meter=BarMeter() if progress else dfx.NoProgressMeter(),
+        )
     e, tau, z = sol.ys
     n = theta_out.shape[0]
     out = (e[:n] * e_ref, tau[:n] / w_ref, z[:n])

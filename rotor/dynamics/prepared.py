@@ -41,11 +41,11 @@ from ..errors import EngineError
 from .crank_train import (
     CrankTrain,
     check_fidelity,
+    checked_train,
     grid_points,
     remember_tables,
     table_inputs,
     table_key,
-    train_from_engine,
 )
 
 __all__ = ["PreparedEngine", "prepare", "resolve_engine"]
@@ -98,14 +98,14 @@ def prepare(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.25) 
     :func:`rotor.steady_state`, :func:`rotor.steady_sweep`, :func:`rotor.simulate`,
     :func:`rotor.identify` and :func:`rotor.design_flywheel`.
     """
-    check_fidelity(fidelity, require_engine(engine, "prepare(engine)"))
+    check_fidelity(fidelity, require_engine(engine, "prepare(engine)"), recheck=False)
     points = grid_points(engine.strokes, grid_deg, engine.cylinders)
-    if table_key(engine, fidelity, points) is None:
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(table_inputs(engine))):
         raise EngineError(
             "prepare(engine) needs an engine with known values (not traced inside jit/vmap/grad): prepare it "
             "outside, or pass the Engine itself to build its tables in the trace"
         )
-    train = train_from_engine(engine, fidelity, points)
+    train = checked_train(engine, fidelity, points, "prepare(engine)")
     return PreparedEngine(
         engine=engine,
         train=train,

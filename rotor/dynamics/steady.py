@@ -49,10 +49,9 @@ from .crank_train import (
     COL_I,
     COL_K,
     COL_MOTORED,
-    check_fidelity,
+    checked_train,
     grid_points,
     shift_inertia,
-    train_from_engine,
 )
 from .equation import (
     Scene,
@@ -415,7 +414,8 @@ def steady_state(
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`, or a :class:`rotor.PreparedEngine`
       (:func:`rotor.prepare`: its tables are reused; so are an engine's from an earlier
-      call with the same values, :func:`rotor.dynamics.crank_train.train_from_engine`).
+      call with the same values, :func:`rotor.dynamics.crank_train.train_from_engine`; an
+      engine object is checked and its tables found once, :func:`rotor.dynamics.crank_train.checked_train`).
     - ``rpm``: time-mean crank speed (angle travelled / time taken) [rpm]; default the
       engine file's ``[operating] rpm``.
     - ``load``: None (the load torque becomes the engine's mean torque minus friction:
@@ -466,8 +466,7 @@ def steady_state(
         train = prepared.train
         d_inertia = prepared.engine.crankshaft.inertia_kgm2 - checked_reference(prepared)
     else:
-        check_fidelity(fidelity, engine)
-        train = train_from_engine(engine, fidelity, points)  # kept for the next call (table_key)
+        train = checked_train(engine, fidelity, points)  # checked and kept once per engine object
         d_inertia = np.float64(0.0)
     engine, load = arrays_only(engine), arrays_only(load)
     assert isinstance(engine, Engine)
