@@ -75,6 +75,11 @@ def test_diagnose_refuses_an_absurd_angle_too(teeth_log: str, capsys: pytest.Cap
     assert_refused(rc, err, "--tdc-deg", "or 'speed'")
 
 
+def test_an_absurd_cylinder_count_is_refused_in_one_line(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
+    rc, _, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--cylinders", "100000000000000000000000"])
+    assert_refused(rc, err, "--cylinders", "at most 64 cylinders")
+
+
 def test_a_plausible_angle_still_runs(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
     rc, out, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", "-710"])
     assert rc == 0, err

@@ -13,7 +13,16 @@ from typing import Any
 from .args import add_edge, add_json, add_plot, add_quiet, angle_deg, error_text, positive_float, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
-__all__ = ["PLOT_LOCK", "FileOutput", "add_bulk", "add_parsers", "cmd_analyze", "for_each_log", "log_plot"]
+__all__ = [
+    "PLOT_LOCK",
+    "FileOutput",
+    "add_bulk",
+    "add_parsers",
+    "cmd_analyze",
+    "cylinder_count",
+    "for_each_log",
+    "log_plot",
+]
 
 PLOT_LOCK = threading.Lock()
 """Held while a file's plot is drawn and saved: matplotlib's pyplot is not thread-safe, and
@@ -27,6 +36,17 @@ BULK_HELP = (
     "status is 0 when every file was done, else the highest of the failed files' (1 a solver without an "
     "answer, 2 a bad file, 70 a bug), and a pattern that matches no file is an error (2)"
 )
+
+
+def cylinder_count(text: str) -> int:
+    """``--cylinders``: a whole number from 1 to the most cylinders of any engine
+    (:data:`rotor.engine.model.MAX_CYLINDERS`, read when the option is given)."""
+    n = whole(text)
+    from ..engine.model import MAX_CYLINDERS
+
+    if n > MAX_CYLINDERS:
+        raise argparse.ArgumentTypeError(f"{text!r}: at most {MAX_CYLINDERS} cylinders (more than any engine built)")
+    return n
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -58,7 +78,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--cylinders",
-        type=whole,
+        type=cylinder_count,
         default=1,
         metavar="N",
         help="cylinders of the (evenly firing) engine, default 1: a tooth-error estimate from the log "
