@@ -21,7 +21,7 @@ def plot_tooth_errors(errors_deg: Any, method: str, ax: Any = None) -> Any:
     ax.set_xlabel("tooth (0 = first after the gap)")
     ax.set_ylabel("tooth error [deg]")
     ax.grid(True, alpha=0.3, axis="y")
-    ax.set_title(f"tooth errors applied ({method})")
+    ax.set_title(f"tooth errors applied ({plain(method)})")
     return ax
 
 
