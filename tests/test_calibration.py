@@ -22,7 +22,7 @@ import pytest
 from conftest import SHARED_DATA
 
 import rotor
-from rotor.logs.analysis import LogAnalysis
+from rotor.logs.analysis import LogAnalysis, PhaseSource
 from rotor.units import RPM_PER_RAD_S
 
 TUE = SHARED_DATA / "tue-4gb10"
@@ -67,6 +67,8 @@ def simulated():
         tdc_method="given",
         firing_parity=0,
         firing_method="given",
+        tdc_source=PhaseSource.GIVEN,
+        firing_source=PhaseSource.GIVEN,
         max_order=12.0,
         pressure=(np.tile(phi, C), np.tile(sig, C), np.repeat(np.arange(C), phi.size)),
     )

@@ -196,3 +196,27 @@ def test_plot_of_the_reading(tmp_path, capsys):
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any(x.startswith("edges taken") for x in labels) and any(x.startswith("timed at") for x in labels)
     assert "--wheel 60-2" in ax.get_title()
+
+
+def test_calibrate_reads_the_file_once(tmp_path, monkeypatch):
+    log = rotor.simulated_recording(tmp_path / "sim.txt", cycles=3, seed=6)
+    texts = _count(monkeypatch, rotor.logs.reader, "_read_text")
+    cal = rotor.calibrate(rotor.load_engine("tue-single"), log, wheel="60-2", columns=TUE_COLUMNS)
+    assert cal is not None and len(texts) == 1
+
+
+@needs_ecu
+def test_another_engine_on_a_capture_is_no_misfire_verdict(tmp_path):
+    """The 4B11 capture (the first 25 cycles) diagnosed with the 4ChN15 diesel's file: the model does not fit it,
+    and that is the verdict — not "the engine does not fire", not a list of misfires."""
+    rows = (ECU / "4b11-running.csv").read_text().splitlines()
+    part = tmp_path / "4b11-part.csv"
+    part.write_text("\n".join(rows[:3500]) + "\n")
+    d = rotor.diagnose(rotor.load_engine("4chn15"), part, None, wheel="36-2-1", columns=ECU_COLUMNS, tdc_deg=90.0)
+    from rotor.diagnostics.calibration import DiagnosisVerdict
+
+    assert d.verdict is DiagnosisVerdict.MODEL_DOES_NOT_FIT
+    assert not d.no_firing and not d.misfire.any() and d.misfires() == []
+    text = d.summary()
+    assert "does not fit this recording" in text and "does not fire" not in text
+    assert d.to_json_dict()["verdict"] == "model_does_not_fit"

@@ -105,14 +105,14 @@ import numpy as np
 
 from ..errors import EngineError, LogError
 from ..fileio import load_json, save_json
-from ..logs.analysis import LogAnalysis
+from ..logs.analysis import LogAnalysis, PhaseSource
 from ..logs.reader import read_log
 from ..logs.track import read_track
 from ..logs.wheel import ToothErrors
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
 from .identification import NO_FIRING_NOTE, POOR_FIT_R2, Identification
-from .phase import TOOTH_MISMATCH, TdcCheck
+from .phase import TOOTH_MISMATCH, TdcCheck, TdcVerdict
 
 if TYPE_CHECKING:
     from ..dynamics.result import SpeedResult
@@ -723,7 +723,7 @@ def calibrate(
             f"{a.source}: no pressure channel (a column pressure_v): a speed-only recording cannot be "
             f"calibrated; diagnose it with a saved calibration"
         )
-    if not str(a.tdc_method).startswith(("pressure", "given")):
+    if a.tdc_source not in (PhaseSource.PRESSURE, PhaseSource.GIVEN):
         raise EngineError(f"{a.source}: TDC is not known ({a.tdc_method})")
     vh = float(engine.geometry.displacement_m3)
     from ..engine.forces import imep_pa as _imep
@@ -1062,10 +1062,10 @@ def diagnose(
     calibration): the engine's speed signature is fitted at every offset
     (:func:`rotor.diagnostics.phase.check_tdc`), on the recording's own tooth-error estimate
     where the calibration's tooth errors are another wheel's. A TDC that the speed
-    determines and contradicts (more than :data:`rotor.diagnostics.phase.AGREE_DEG` off,
-    leaving more than :data:`rotor.diagnostics.phase.CONTRADICT_RATIO` times the best
-    fit's unexplained fluctuation) is **corrected** and a warning says so, with its ± and
-    separation; one the speed contradicts but cannot replace, or a speed with no engine
+    determines and that lies more than 3 of its stated σ from the speed's
+    (:class:`rotor.diagnostics.phase.TdcVerdict` ``DISAGREES``; the σ holds the engine
+    model's own error) is **corrected** and a warning says so, with both TDCs and how many σ
+    apart; one the speed contradicts but cannot replace, or a speed with no engine
     signature at all, is refused (:class:`rotor.diagnostics.phase.TdcNotDetermined`, the
     measured offset in the message); otherwise the calibration's TDC is kept (the firing
     revolution taken from the fit) and a note says how well it agrees. ``tdc_check`` of
@@ -1165,7 +1165,7 @@ def diagnose(
             )
 
         analysis = read(0.0 if from_speed else tdc_deg, firing, te)
-        if str(analysis.tdc_method).startswith("unknown"):
+        if analysis.tdc_source is PhaseSource.UNKNOWN:
             raise EngineError(
                 f"{analysis.source}: TDC is not known: give a calibration (--calibration), tdc_deg "
                 f"(--tdc-deg DEG, or --tdc-deg speed: from the speed alone) or a pressure channel"
@@ -1173,10 +1173,10 @@ def diagnose(
         if analysis.kind != "speed" and (from_speed or (from_calibration and check_tdc)):
             check = _speed_check(eng, analysis, None if from_speed else float(tdc_deg), te, read)  # type: ignore[arg-type]
             # a firing revolution from a cam or pressure channel, or given, stands: re-read at the TDC used with it
-            own_phase = firing not in ("auto", "speed") or str(analysis.firing_method).startswith(("cam", "pressure"))
-            if own_phase and check.verdict in ("corrected", "found"):
+            own_phase = firing not in ("auto", "speed") or analysis.firing_source in CHANNELS
+            if own_phase and check.verdict in (TdcVerdict.DISAGREES, TdcVerdict.FOUND):
                 analysis = read(check.used_deg, firing, te)
-                if firing == "auto" and not str(analysis.firing_method).startswith(("cam", "pressure")):
+                if firing == "auto" and analysis.firing_source not in CHANNELS:
                     own_phase = False  # the channel no longer decides at this TDC: the fit's revolution
             if own_phase:
                 phase_warning = _phase_agreement(check, analysis)
@@ -1184,7 +1184,7 @@ def diagnose(
                     phase_note = (
                         f"firing revolution from the log ({analysis.firing_method}), where the speed's fit puts it too"
                     )
-            elif check.verdict in ("corrected", "found") or (
+            elif check.verdict in (TdcVerdict.DISAGREES, TdcVerdict.FOUND) or (
                 check.firing_parity is not None and check.firing_parity != analysis.firing_parity
             ):
                 analysis = read(check.used_deg, firing if check.firing_parity is None else check.firing_parity, te)
@@ -1296,6 +1296,7 @@ def diagnose(
     )
 
 
+CHANNELS = (PhaseSource.CAM, PhaseSource.PRESSURE)  # a firing revolution from a recorded channel
 RESIDUAL_STRUCTURE_MAX = 2.0
 """A fit's residual whose power per harmonic at the engine's low orders (0.5 … 4) is more than
 this many times that at the higher ones is the model's misfit, not the wheel's noise (whose
@@ -1345,12 +1346,12 @@ def _phase_agreement(check, analysis):
     if fit_parity is None or analysis.firing_parity is None or fit_parity == analysis.firing_parity:
         return ""
     return (
-        f"firing revolution: the {analysis.firing_method.split(':')[0]} channel's kept"
-        if analysis.firing_method.startswith(("cam", "pressure"))
+        f"firing revolution: the {analysis.firing_source.value} channel's kept"
+        if analysis.firing_source in CHANNELS
         else "firing revolution: the one given kept"
     ) + (
         f"; the speed's fit puts firing TDC one revolution away ({check.fit.separation:.0f} σ separation): "
-        f"check the {'cam' if analysis.firing_method.startswith('cam') else 'firing'} channel's phase"
+        f"check the {'cam' if analysis.firing_source is PhaseSource.CAM else 'firing'} channel's phase"
     )
 
 

@@ -27,6 +27,7 @@ The pipeline of :func:`analyze_log`:
 from __future__ import annotations
 
 import dataclasses
+import enum
 import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -52,6 +53,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "LogAnalysis",
+    "PhaseSource",
     "analyze_log",
     "tdc_from_pressure",
     "NoCompressionPeak",
@@ -73,6 +75,18 @@ ANALYSIS_ARRAYS = 8
 
 class NoCompressionPeak(LogError):
     """A pressure channel without a clear compression peak: not used for TDC."""
+
+
+class PhaseSource(enum.Enum):
+    """Where a recording's TDC or firing revolution came from (a typed state: decisions test
+    this, never the words of ``tdc_method`` or ``firing_method``)."""
+
+    GIVEN = "given"
+    PRESSURE = "pressure"
+    CAM = "cam"
+    SPEED = "speed"
+    UNKNOWN = "unknown"
+    EVERY_REVOLUTION = "every revolution (two-stroke)"
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -97,7 +111,9 @@ class LogAnalysis(Result):
     the weight of each order in the speed whose max − min is δ (1: taken whole; see
     ``denoise`` of :func:`analyze_log`). ``reading``: the wheel signal as read
     (:class:`rotor.logs.track.WheelReading`: the edge, levels and wheel chosen, with their
-    evidence, every wheel tried; ``None`` for a speed log).
+    evidence, every wheel tried; ``None`` for a speed log). ``tdc_source``, ``firing_source``:
+    where TDC and the firing revolution came from (:class:`PhaseSource`), beside
+    ``tdc_method`` and ``firing_method`` in words.
     """
 
     source: str
@@ -125,6 +141,8 @@ class LogAnalysis(Result):
     cylinders: int = 1
     delta_weight: np.ndarray | None = None
     reading: WheelReading | None = None
+    tdc_source: PhaseSource = PhaseSource.UNKNOWN
+    firing_source: PhaseSource = PhaseSource.EVERY_REVOLUTION
 
     # ------------------------------------------------------------------ numbers
     @property
@@ -678,7 +696,7 @@ def analyze_log(
         raise TypeError(f"points_per_cycle = {points_per_cycle!r}: a whole number of grid points per cycle, or None")
     if points_per_cycle is not None and points_per_cycle < 1:
         raise LogError(f"points_per_cycle = {points_per_cycle!r} (--points-per-cycle): 1 or more")
-    reading = source if isinstance(source, WheelReading) else None
+    reading: WheelReading | None = source if isinstance(source, WheelReading) else None
     if reading is not None:
         log, name = reading.log, reading.source
     else:
@@ -708,14 +726,15 @@ def analyze_log(
             )
         tooth_errors = None
     else:
-        if wheel is None and reading is None:
-            raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2', --wheel 60-2)")
         if reading is None:
+            if wheel is None:
+                raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2', --wheel 60-2)")
             reading = read_track(log, wheel, edge=edge, name=name)
         track, edges = reading.track, reading.edges
         notes += list(reading.notes)
-        if reading.choice("wheel").source is ChoiceSource.FOUND:
-            notes.append(reading.choice("wheel").evidence)
+        wheel_choice = reading.choice("wheel")
+        if wheel_choice is not None and wheel_choice.source is ChoiceSource.FOUND:
+            notes.append(wheel_choice.evidence)
         edge_choice = reading.choice("edge")
         if edge_choice is not None and edge_choice.source is ChoiceSource.FOUND:
             notes.append(f"edge: {edge_choice.value} ({edge_choice.evidence})")
@@ -797,17 +816,19 @@ def analyze_log(
         inside = (t_s >= t_of(phi_lo)) & (t_s <= t_of(phi_hi))
         pressure = (phi_of(t_s[inside]), p_s[inside])
     parity_method = "two-stroke: every revolution"
+    tdc_source, firing_source = PhaseSource.UNKNOWN, PhaseSource.EVERY_REVOLUTION
     parity = None
     pressure_ok = pressure is not None
     no_peak = ""
     if tdc_deg is not None:
         tdc = float(np.deg2rad(tdc_deg))
-        tdc_method = "given"
+        tdc_method, tdc_source = "given", PhaseSource.GIVEN
     elif pressure is not None:
         try:
             tdc, p_parity, tdc_method = tdc_from_pressure(
                 *pressure, compression_ratio=compression_ratio, rod_ratio=rod_ratio
             )
+            tdc_source = PhaseSource.PRESSURE
         except NoCompressionPeak as e:
             no_peak = str(e)
             tdc, pressure_ok = 0.0, False
@@ -836,13 +857,14 @@ def analyze_log(
             notes.append(f"{no_peak}: the firing revolution comes from elsewhere")
     if strokes == 4:
         if firing in (0, 1):
-            parity, parity_method = int(firing), "given"
+            parity, parity_method, firing_source = int(firing), "given", PhaseSource.GIVEN
         elif firing == "pressure" and pressure is not None and not pressure_ok:
             raise LogError(f"{name}: firing='pressure': {no_peak}; give firing=0 or 1 (--firing), or a cam channel")
         elif firing in ("auto", "pressure") and pressure_ok and pressure is not None:
             # p_parity: the revolutions holding the TDC found from the pressure (a given TDC lies in the same
             # compression)
             parity, parity_method = p_parity, "pressure: revolutions with the compression peak"
+            firing_source = PhaseSource.PRESSURE
         elif (
             firing in ("auto", "cam")
             and ("cam_v" in log or "cam_d" in log)
@@ -850,9 +872,11 @@ def analyze_log(
             is not None
         ):
             parity, parity_method = cam_parity, "cam: the first TDC after each cam edge"
+            firing_source = PhaseSource.CAM
         elif firing in ("auto", "speed"):
             parity, sep = _speed_parity(omega_of, phi_lo, phi_hi, tdc)
             parity_method = f"speed: the revolution that speeds up more after TDC (separation {sep:.1f} σ)"
+            firing_source = PhaseSource.SPEED
             if sep < 1.0:
                 notes.append(
                     "the firing revolution is uncertain from the speed alone: the half orders' phases may be off by π"
@@ -925,6 +949,8 @@ def analyze_log(
         cycle_start_rad=starts,
         tdc_rad=float(tdc),
         tdc_method=tdc_method,
+        tdc_source=tdc_source,
+        firing_source=firing_source,
         firing_parity=parity,
         firing_method=parity_method,
         max_order=float(max_order),
