@@ -116,7 +116,7 @@ def test_round_trip_delta_and_orders_within_1_percent(engine_run, calibration):
     np.testing.assert_allclose(an.delta, sim_delta, rtol=0.01)
     np.testing.assert_allclose(an.mean_omega, np.asarray(res.cycle_mean_omega)[k], rtol=1e-5)
     for i, kk in enumerate(k):
-        o = res.orders(cycle=int(kk), max_order=6)
+        o = res.orders(cycle=int(kk) + 1, max_order=6)  # row kk is cycle kk + 1
         amp = np.asarray(o.speed_amplitude_rad_s)
         for order in (2.0, 4.0):  # the inline four's main orders
             j = int(np.flatnonzero(np.isclose(o.order, order))[0])
@@ -139,7 +139,7 @@ def _sim_orders(res, k, orders):
     """(amplitude, phase) of the simulator's speed at ``orders``, cycles k."""
     out = np.zeros((len(k), len(orders), 2))
     for i, kk in enumerate(k):
-        o = res.orders(cycle=int(kk), max_order=6)
+        o = res.orders(cycle=int(kk) + 1, max_order=6)  # row kk is cycle kk + 1
         for j, q in enumerate(orders):
             m = int(np.flatnonzero(np.isclose(o.order, q))[0])
             out[i, j] = np.asarray(o.speed_amplitude_rad_s)[m], np.asarray(o.speed_phase_rad)[m]

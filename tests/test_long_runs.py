@@ -82,15 +82,15 @@ def test_keeping_the_last_cycles_gives_the_numbers_of_every_sample(diesel, metho
     kw = dict(rpm=1200.0, cycles=cycles, load=load, method=method)
     every = rotor.simulate(diesel, **kw)
     last = rotor.simulate(diesel, **kw, keep_cycles=keep)
-    assert every.first_kept_cycle == 0 and every.cycle_summary is None
-    assert last.first_kept_cycle == every.uniform_cycles - keep and last.kept_cycles == keep
+    assert every.first_kept_cycle_index == 0 and every.cycle_summary is None
+    assert last.first_kept_cycle_index == every.uniform_cycles - keep and last.kept_cycles == keep
     a, b = every.to_json_dict(), last.to_json_dict()
     assert _numbers_equal(a, b) == []
     assert b["kept_cycles"] == keep and a["kept_cycles"] == every.uniform_cycles
     assert "delta_max" in b and "delta_max_cycle" in b
     np.testing.assert_allclose(last.delta_per_cycle, every.delta_per_cycle, rtol=1e-12)
     np.testing.assert_allclose(last.cycle_mean_omega, every.cycle_mean_omega, rtol=1e-12)
-    for cycle in (-1, every.uniform_cycles - keep):
+    for cycle in (-1, every.uniform_cycles - keep + 1):  # the last, the first kept (counted from 1)
         o1, o2 = every.orders(cycle), last.orders(cycle)
         np.testing.assert_allclose(o2.speed_amplitude_rad_s, o1.speed_amplitude_rad_s, rtol=1e-9, atol=1e-12)
     assert f"the last {keep} cycles of {every.uniform_cycles}" in last.summary()
@@ -101,7 +101,7 @@ def test_keeping_the_last_cycles_gives_the_numbers_of_every_sample(diesel, metho
 def test_start_from_rest_keeps_its_samples_the_same_way(diesel):
     kw = dict(rpm=0.0, cycles=2, load=rotor.ConstantLoad(-2000.0))
     every, last = rotor.simulate(diesel, **kw), rotor.simulate(diesel, **kw, keep_cycles=1)
-    assert last.method == "time" and last.first_kept_cycle == 1
+    assert last.method == "time" and last.first_kept_cycle_index == 1
     assert _numbers_equal(every.to_json_dict(), last.to_json_dict()) == []
 
 
@@ -123,13 +123,13 @@ def test_a_long_run_holds_only_the_kept_samples(diesel):
     load = rotor.PropellerLoad(1100.0, 1250.0)
     res = rotor.simulate(diesel, rpm=1200.0, cycles=2000, load=load, method="closed", keep_cycles=5)
     P = res.points_per_cycle
-    assert res.uniform_cycles == 2000 and res.first_kept_cycle == 1995
+    assert res.uniform_cycles == 2000 and res.first_kept_cycle_index == 1995
     assert res.omega.shape == (5 * P + 1,) and res.t.shape == (5 * P + 1,)  # and the end sample
     assert res.delta_per_cycle.shape == (2000,) and res.cycle_mean_omega.shape == (2000,)
     assert res.cycle_summary is not None and res.cycle_summary.max_omega.shape == (2000,)
     frame = res.to_pandas()
     assert frame["cycle"].min() == 1996 and frame["cycle"].iloc[-2] == 2000  # counted from 1
-    assert res.orders(1997).order.size > 0 and res.orders("mean").order.size > 0
+    assert res.orders(1997).order.size > 0 and res.orders("mean").order.size > 0  # cycles 1996 … 2000 kept
     with pytest.raises(ValueError, match="only the samples of the last 5 cycles"):
         res.orders(3)
     import matplotlib

@@ -128,3 +128,17 @@ def test_steady_torque_plot_shows_the_total_against_the_load(diesel):
     ax = rotor.steady_state(diesel).plot(kind="torque")
     labels = [line.get_label() for line in ax.get_lines()]
     assert any(label.startswith("total torque") for label in labels) and "load + friction" in labels
+
+
+def test_orders_of_a_run_count_cycles_from_one(diesel):
+    load = rotor.ConstantLoad(float(rotor.steady_state(diesel).load_torque_Nm))
+    run = rotor.simulate(diesel, cycles=3, load=load, progress=False)
+    first = np.asarray(run.orders(1).speed_amplitude_rad_s)
+    np.testing.assert_allclose(first, np.asarray(run.orders(-3).speed_amplitude_rad_s))
+    np.testing.assert_allclose(
+        np.asarray(run.orders(3).torque_amplitude_Nm), np.asarray(run.orders().torque_amplitude_Nm)
+    )
+    for bad in (0, 4, -4):
+        with pytest.raises(ValueError, match="count from 1"):
+            run.orders(bad)
+    assert run.to_pandas()["cycle"].tolist()[:1] == [1]

@@ -90,7 +90,7 @@ def record_run(
         raise EngineError(f"signal = {signal!r}: one of {', '.join(map(repr, SIGNALS))}")
     if run.kind != "transient" or run.uniform_cycles < 1:
         raise EngineError("run: a transient run (rotor.simulate) with at least one complete cycle")
-    if run.first_kept_cycle > 0:
+    if run.first_kept_cycle_index > 0:
         raise EngineError("run: its early cycles' samples were dropped (keep_cycles); record a run that keeps them")
     if run.stalled:
         raise EngineError("run: it stalled; a wheel log of a stopping crankshaft is not written")

@@ -326,7 +326,7 @@ class SpeedResult(Result):
     fuel: jnp.ndarray | None = None
     incomplete: str | None = None
     # a long run that kept only its last cycles' samples (simulate(..., keep_cycles=N))
-    first_kept_cycle: int = 0
+    first_kept_cycle_index: int = 0
     cycle_summary: CycleSummary | None = None
 
     # ------------------------------------------------------------------ cycles
@@ -334,13 +334,13 @@ class SpeedResult(Result):
     def _streamed(self) -> bool:
         """True where the early cycles' samples were dropped: the per-cycle figures come from
         :attr:`cycle_summary`."""
-        return self.first_kept_cycle > 0 and self.cycle_summary is not None
+        return self.first_kept_cycle_index > 0 and self.cycle_summary is not None
 
     @property
     def kept_cycles(self) -> int:
         """Number of complete cycles whose samples the result holds (the last ones of the
-        run, from cycle :attr:`first_kept_cycle`, counted from 0)."""
-        return self.uniform_cycles - self.first_kept_cycle
+        run: cycles ``first_kept_cycle_index + 1`` … ``uniform_cycles``, counted from 1)."""
+        return self.uniform_cycles - self.first_kept_cycle_index
 
     def _cycle_matrix(self, x: jnp.ndarray) -> jnp.ndarray:
         n = self.kept_cycles * self.points_per_cycle
@@ -445,27 +445,29 @@ class SpeedResult(Result):
     def orders(self, cycle: int | str = -1, max_order: float = 12.0) -> Orders:
         """Amplitude and phase of the speed and engine-torque harmonics by engine order.
 
-        **Arguments:** ``cycle``: which complete cycle (default the last), or ``"mean"``
-        for the average of the complex harmonics over all complete cycles whose samples the
-        result holds; ``max_order``: the highest order returned [per revolution]. Cycles
-        count over the whole run; a run that kept only its last cycles' samples
-        (``keep_cycles``) has the orders of those only (from :attr:`first_kept_cycle`).
+        **Arguments:** ``cycle``: which complete cycle, counted from 1 over the whole run
+        (default −1, the last; a negative number counts from the end), or ``"mean"`` for the
+        average of the complex harmonics over all complete cycles whose samples the result
+        holds; ``max_order``: the highest order returned [per revolution]. A run that kept
+        only its last cycles' samples (``keep_cycles``) has the orders of those only (from
+        cycle ``first_kept_cycle_index + 1``).
         """
         self._need_cycles()
         P = self.points_per_cycle
         revs = self.strokes / 2  # revolutions per cycle
-        C, first = self.uniform_cycles, self.first_kept_cycle
+        C, first = self.uniform_cycles, self.first_kept_cycle_index
         if isinstance(cycle, str) and cycle != "mean":
-            raise ValueError(f"cycle = {cycle!r}: a cycle number (from 0; −1 the last) or 'mean'")
-        if not isinstance(cycle, str) and not -C <= cycle < C:
+            raise ValueError(f"cycle = {cycle!r}: a cycle number (from 1; −1 the last) or 'mean'")
+        if not isinstance(cycle, str) and (cycle == 0 or not -C <= cycle <= C):
             raise ValueError(
                 f"cycle = {cycle!r}: the run has {_plural(C, 'complete cycle')}; "
-                f"give 0 … {C - 1}, a negative index from the end, or 'mean'"
+                f"give 1 … {C} (cycles count from 1), a negative number from the end, or 'mean'"
             )
-        if not isinstance(cycle, str) and (cycle % C) < first:
+        index = None if isinstance(cycle, str) else (cycle - 1 if cycle > 0 else C + cycle)  # the row, from 0
+        if index is not None and index < first:
             raise ValueError(
                 f"cycle = {cycle!r}: only the samples of the last {_plural(self.kept_cycles, 'cycle')} were kept "
-                f"(cycles {first} … {C - 1}); give one of those, or run with a larger keep_cycles"
+                f"(cycles {first + 1} … {C}); give one of those, or run with a larger keep_cycles"
             )
         # each cycle detrended as in rotor.analyze_log (rotor.cycles): a run-up leaks into no order
         m = self._cycle_matrix(self.torque)
@@ -482,7 +484,7 @@ class SpeedResult(Result):
         k_max = min(int(np.floor(max_order * revs + 1e-9)), P // 2 - 1)
 
         def pick(spectra):
-            one = jnp.mean(spectra, axis=0) if isinstance(cycle, str) else spectra[cycle % C - first]
+            one = jnp.mean(spectra, axis=0) if index is None else spectra[index - first]
             return one[1 : k_max + 1]
 
         W, M = pick(Ws), pick(Ms)
@@ -630,7 +632,9 @@ class SpeedResult(Result):
             lines.append(f"  load torque     {float(np.asarray(load)):10.2f} N·m ({how})")
         if fuel is not None and np.ndim(fuel) == 0:
             how = "solved: the fuelling that carries the load" if solved == "fuel_scale" else "given"
-            lines.append(f"  fuel scale      {float(np.asarray(fuel)):10.4f}      ({how}; 1 = the engine file's pressure)")
+            lines.append(
+                f"  fuel scale      {float(np.asarray(fuel)):10.4f}      ({how}; 1 = the engine file's pressure)"
+            )
         return lines
 
     def to_pandas(self) -> Any:

@@ -900,7 +900,7 @@ def _assemble(engine, train, scene, sink, time_domain, method, fidelity, P, stal
         engine_name=engine.name,
         wall_s=time.perf_counter() - wall,
         fuel=None if scene.governor is None else fuel,
-        first_kept_cycle=first_kept,
+        first_kept_cycle_index=first_kept,
         cycle_summary=summary,
         **extras,
     )
