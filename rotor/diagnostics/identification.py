@@ -549,7 +549,7 @@ def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, na: int, 
 # ----------------------------------------------------------------------------- inputs
 def _speed(engine, speed, cycle_rad):
     from ..dynamics.result import SpeedResult
-    from ..logs.analysis import LogAnalysis
+    from ..logs.analysis import LogAnalysis, PhaseSource
 
     t_start = None
     phase = None
@@ -574,14 +574,14 @@ def _speed(engine, speed, cycle_rad):
         starts = np.asarray(speed.cycle_start_rad)
         if starts.size > 1 and not np.allclose(np.diff(starts), speed.cycle_rad, rtol=0, atol=1e-9):
             raise EngineError("speed (a LogAnalysis): its cycles are not consecutive")
-        if str(speed.tdc_method).startswith("unknown"):
+        if speed.tdc_source is PhaseSource.UNKNOWN:
             raise EngineError(
                 "speed (a LogAnalysis): its cycles do not start at TDC (TDC unknown); give tdc_deg or a "
                 "pressure channel to analyze_log"
             )
         omega = np.asarray(speed.omega, dtype=np.float64)
         t_start = np.asarray(speed.t_start_s)
-        phase = not str(speed.firing_method).startswith("speed")
+        phase = speed.firing_source is not PhaseSource.SPEED
     else:
         if isinstance(speed, jax.core.Tracer):
             raise EngineError("speed: identify works on concrete arrays (it is not traceable)")
