@@ -220,3 +220,12 @@ def test_another_engine_on_a_capture_is_no_misfire_verdict(tmp_path):
     text = d.summary()
     assert "does not fit this recording" in text and "does not fire" not in text
     assert d.to_json_dict()["verdict"] == "model_does_not_fit"
+
+
+def test_a_wheel_in_another_column_is_named(tmp_path, capsys):
+    """The columns given in the wrong order: the refusal says which column reads as the wheel."""
+    log = rotor.simulated_recording(tmp_path / "sim.txt", cycles=3, seed=7)
+    for wheel in ("60-2", "auto"):
+        assert main(["analyze", str(log), "--wheel", wheel, "--columns", "time,encoder_v,pressure_v"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "'pressure_v' reads as the 60-2 wheel" in err and "--columns" in err

@@ -464,8 +464,36 @@ def _tooth_edge(log: Log, track: ToothTrack | None, edges: Edges | None) -> str 
     return "falling" if np.mean(signs) > 0 else "rising"
 
 
+def _swapped_column(log: Log, w: Wheel | None) -> str:
+    """Where another sampled column of ``log`` reads as a wheel (``w``, or any), the words that
+    say so; empty otherwise (a column given in the wrong place of ``columns``)."""
+    if log.kind != "encoder":
+        return ""
+    for other in ("pressure_v", "cam_v", "index_v"):
+        if other not in log:
+            continue
+        try:
+            probe = Log.from_arrays(time=log["time"], encoder_v=log[other])
+            r = read_track(probe, "auto" if w is None else w, name=log.source)
+        except LogError:
+            continue
+        return (
+            f"; the column read as {other!r} reads as the {r.wheel.spec} wheel ({r.track.revolutions} revolutions): "
+            f"check which column is which (--columns)"
+        )
+    return ""
+
+
 def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
     """The one-line error where no edge fits: what was expected, and what to try."""
+    swapped = _swapped_column(log, w)
+    if swapped:
+        why = (
+            "no wheel fits the 'encoder_v' column"
+            if w is None
+            else f"the {w.spec} wheel does not fit the 'encoder_v' column"
+        )
+        return LogError(f"{name}: {why}{swapped}")
     if w is None:
         ambiguous = [p for p in per_edge if p[1] is not None and p[0] is None]
         if ambiguous:
