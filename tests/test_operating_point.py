@@ -142,3 +142,12 @@ def test_orders_of_a_run_count_cycles_from_one(diesel):
         with pytest.raises(ValueError, match="count from 1"):
             run.orders(bad)
     assert run.to_pandas()["cycle"].tolist()[:1] == [1]
+
+
+def test_python_simulate_states_what_it_was_given(diesel):
+    run = rotor.simulate(diesel, cycles=2, load=rotor.ConstantLoad(1000.0), progress=False)
+    assert float(run.load_torque_Nm) == 1000.0 and run.fuel_scale == 1.0 and run.solved_for is None
+    assert "1000.00 N·m (given)" in run.summary()
+    pattern = rotor.combustion_pattern(2, 4, imep_scale=0.8)
+    run = rotor.simulate(diesel, cycles=2, load=rotor.PropellerLoad(900.0, 1250.0), combustion=pattern, progress=False)
+    assert run.load_torque_Nm is None and run.fuel_scale == 0.8  # a speed-dependent load is no one number

@@ -32,6 +32,9 @@ def test_simulate_record_then_diagnose_gives_the_misfire_back(tmp_path, capsys):
     assert truth["misfires"] == [[5, 3]] and truth["tdc_after_gap_deg"] == pytest.approx(29.4)
     imep = np.asarray(truth["imep_pa"])
     assert imep.shape == (12, 4) and imep[4, 2] < 0.05 * np.median(imep)  # cycle 5, cylinder 3
+    code, out, _ = run_cli(capsys, "analyze", str(log), "--wheel", "60-2", "--json")
+    a = json.loads(out)
+    assert code == 0 and len(a["cycles"]) == 12 and a["tdc_after_gap_deg"] == pytest.approx(29.4)
     code, out, err = run_cli(capsys, "diagnose", str(log), "--engine", "4chn15", "--wheel", "60-2", "--json")
     d = json.loads(out)
     assert code == 0 and err == ""

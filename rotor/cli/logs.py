@@ -88,7 +88,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--tdc-deg",
         type=angle_deg,
         metavar="DEG",
-        help="angle from the gap to TDC of cylinder 1 [deg] (default: from the pressure channel, else 0)",
+        help="angle from the gap to TDC of cylinder 1 [deg] (default: as the log's header states it, "
+        "# tdc_after_gap_deg, else from the pressure channel, else 0)",
     )
     p.add_argument(
         "--firing",
@@ -201,14 +202,21 @@ def analyze_file(args: argparse.Namespace, log: str) -> FileOutput:
     from ..errors import LogError
     from ..logs.analysis import analyze_log
 
+    tdc_deg, firing = args.tdc_deg, int(args.firing) if args.firing in ("0", "1") else args.firing
+    if tdc_deg is None:  # a log that states its phase (rotor simulate --record) is read at it
+        from ..diagnostics.stated import stated_phase
+
+        stated = stated_phase(log)
+        if stated is not None:
+            tdc_deg, firing = stated[0], stated[1] if firing == "auto" else firing
     res = analyze_log(
         log,
         args.wheel,
         columns=args.columns,
         strokes=args.strokes,
         cylinders=args.cylinders,
-        tdc_deg=args.tdc_deg,
-        firing=int(args.firing) if args.firing in ("0", "1") else args.firing,
+        tdc_deg=tdc_deg,
+        firing=firing,
         tooth_errors={"estimate": "estimate", "none": None}.get(args.tooth_errors, args.tooth_errors),
         engine_orders=_engine_orders(args.engine_orders),
         max_order=args.max_order,

@@ -27,7 +27,14 @@ import numpy as np
 from ..errors import EngineError
 from ..units import PA_PER_BAR
 
-__all__ = ["FUEL_SCALE_MAX", "FUEL_SCALE_WARN", "FuelScaleWarning", "check_fuel_scale", "implied_imep_pa"]
+__all__ = [
+    "FUEL_SCALE_MAX",
+    "FUEL_SCALE_WARN",
+    "FuelScaleWarning",
+    "check_fuel_scale",
+    "given_operating_point",
+    "implied_imep_pa",
+]
 
 FUEL_SCALE_WARN = 1.2
 """The fuel scale [-] above which a warning names the IMEP it implies."""
@@ -84,3 +91,22 @@ def check_fuel_scale(
             FuelScaleWarning,
             stacklevel=3,
         )
+
+
+def given_operating_point(load: object, scales: object, governed: bool) -> tuple[object, float | None]:
+    """The load torque [N·m] and the fuel scale [-] of a run given them both (a transient:
+    nothing solved): the torque of a constant ``load`` (None for another load, 0 for none),
+    and the one combustion scale of every firing ``scales`` (cycles, cylinders) where they
+    are all the same and no governor (``governed``) changes them (else None: a pattern, or
+    values under ``jax`` tracing)."""
+    from .loads import ConstantLoad
+
+    torque = 0.0 if load is None else (load.torque_Nm if isinstance(load, ConstantLoad) else None)
+    fuel = None
+    if not governed:
+        try:
+            values = np.unique(np.asarray(scales, dtype=np.float64))
+        except Exception:  # noqa: BLE001 - a traced value has no number to state
+            values = np.array([])
+        fuel = float(values[0]) if values.size == 1 else None
+    return torque, fuel

@@ -44,6 +44,7 @@ from .equation import (
 )
 from .invariants import check_speed_result
 from .loads import Governor, Load
+from .operating import given_operating_point
 from .prepared import PreparedEngine, resolve_engine
 from .result import CycleSummary, SpeedResult, cycle_extremes
 
@@ -879,6 +880,7 @@ def _assemble(engine, train, scene, sink, time_domain, method, fidelity, P, stal
                 sink.add_extra(th[n:], t[n:], None, w[n:], z[n:])
     (theta, t, omega, m_eng, m_loss, accel, fuel), uniform, first_kept, summary = sink.finish()
     imep = _imep(train, scene.scales)
+    given_load, given_fuel = given_operating_point(scene.load, scene.scales, scene.governor is not None)
     return SpeedResult(
         t=t,
         theta=theta,
@@ -902,6 +904,8 @@ def _assemble(engine, train, scene, sink, time_domain, method, fidelity, P, stal
         fuel=None if scene.governor is None else fuel,
         first_kept_cycle_index=first_kept,
         cycle_summary=summary,
+        load_torque_Nm=given_load,
+        fuel_scale=given_fuel,
         **extras,
     )
 
