@@ -100,3 +100,11 @@ def test_a_near_tie_for_the_oil_hole_is_reported_with_both_rays():
     assert "oil hole at 270° (near tie: 90° (+0.9%)" in loads.summary()
     journal = loads.to_json_dict()["journals"][1]
     assert journal["oil_hole_deg"] == 270.0 and journal["oil_hole_candidates_deg"] == [270.0, 90.0]
+
+
+def test_campbell_says_why_its_margin_is_zero(capsys):
+    assert cli.main(["campbell", "mwm6"]) == 0
+    out = capsys.readouterr().out
+    assert "0 at each of the 15 critical speeds in the range" in out and "smallest separation margin 0.00" not in out
+    assert cli.main(["campbell", "mwm6", "--rpm-range", "600:700"]) == 0
+    assert "smallest separation margin 35.36 %" in capsys.readouterr().out  # no critical speed: a real margin

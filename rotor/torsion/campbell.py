@@ -203,10 +203,18 @@ class Campbell(Result):
             if n > 30:
                 lines.append(f"  … {n - 30} more with smaller amplitudes (critical_speeds lists them all)")
         worst = int(np.argmin(self.separation_margin))
-        lines.append(
-            f"  smallest separation margin {100 * self.separation_margin[worst]:.2f} % at {self.rpm[worst]:.0f} rpm "
+        sampled = (
+            f"{100 * self.separation_margin[worst]:.2f} % at {self.rpm[worst]:.0f} rpm "
             f"(mode {self.nearest_mode[worst]}, order {self.nearest_order[worst]:g})"
         )
+        n_crit = len(self.critical_rpm)
+        if n_crit:  # the margin is zero at every critical speed inside the range, wherever the samples fall
+            lines.append(
+                f"  separation margin: 0 at each of the {n_crit} critical speeds in the range (a margin needs a "
+                f"range free of them); the sampled speeds come closest at {sampled}"
+            )
+        else:
+            lines.append(f"  smallest separation margin {sampled}")
         return "\n".join(lines)
 
     def to_pandas(self) -> Any:
