@@ -100,6 +100,12 @@ def test_a_near_tie_for_the_oil_hole_is_reported_with_both_rays():
     assert "oil hole at 270° (near tie: 90° (+0.9%)" in loads.summary()
     journal = loads.to_json_dict()["journals"][1]
     assert journal["oil_hole_deg"] == 270.0 and journal["oil_hole_candidates_deg"] == [270.0, 90.0]
+    # polar diagram: angles whose points nearly coincide share one label instead of overprinting
+    import matplotlib
+
+    matplotlib.use("Agg")
+    texts = [t.get_text() for t in loads.plot_crank_pin().texts]
+    assert "180, 540" in texts and "180" not in texts and "540" not in texts
 
 
 def test_campbell_says_why_its_margin_is_zero(capsys):

@@ -57,10 +57,21 @@ def plot_polar_load(
     if len(a) > 1:
         step = a[1] - a[0]
         cycle = a[-1] + step
+        # angles whose points lie within 3 % of the diagram's size of each other share one label
+        # ("180, 540"): written apart they overprint each other
+        near = 0.03 * max(float(np.ptp(t)), float(np.ptp(z)), 1e-12)
+        marks: list[tuple[float, float, list[str]]] = []
         for target in np.arange(0.0, cycle, label_every_deg):
             i = int(np.argmin(np.abs(np.mod(a - target + cycle / 2, cycle) - cycle / 2)))
             ax.plot([t[i]], [z[i]], ".", color="C0", ms=5)
-            ax.annotate(f"{target:g}", (t[i], z[i]), textcoords="offset points", xytext=(3, 3), fontsize=7)
+            for mt, mz, names in marks:
+                if np.hypot(t[i] - mt, z[i] - mz) < near:
+                    names.append(f"{target:g}")
+                    break
+            else:
+                marks.append((float(t[i]), float(z[i]), [f"{target:g}"]))
+        for mt, mz, names in marks:
+            ax.annotate(", ".join(names), (mt, mz), textcoords="offset points", xytext=(3, 3), fontsize=7)
     q = np.hypot(t, z)
     i = int(np.argmax(q))
     ax.plot([0, t[i]], [0, z[i]], color="C3", lw=1.0)
