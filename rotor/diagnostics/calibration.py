@@ -352,7 +352,7 @@ class Calibration(Result):
         import pandas as pd
 
         imep, loss = self._cycle_figures()
-        return pd.DataFrame({"cycle": np.arange(imep.size), "imep_measured_pa": imep, "loss_torque_Nm": loss})
+        return pd.DataFrame({"cycle": np.arange(1, imep.size + 1), "imep_measured_pa": imep, "loss_torque_Nm": loss})
 
     def plot(self, ax: Any = None) -> Any:
         """The calibration recording's IMEP per cycle from the pressure channel (with the

@@ -186,7 +186,7 @@ class IndicatedTorque(eqx.Module, Result):
         C, P = self.torque.shape
         return pd.DataFrame(
             {
-                "cycle": np.repeat(np.arange(C), P),
+                "cycle": np.repeat(np.arange(1, C + 1), P),  # counted from 1
                 "theta_deg": np.tile(np.rad2deg(np.asarray(self.theta)), C),
                 "t_s": np.asarray(self.t).reshape(-1),
                 "omega_rad_s": np.asarray(self.omega).reshape(-1),
@@ -282,7 +282,7 @@ class HarmonicTorque(eqx.Module, Result):
         cyc = np.repeat(np.arange(C), K)
         return pd.DataFrame(
             {
-                "cycle": cyc,
+                "cycle": cyc + 1,  # counted from 1
                 "order": np.tile(np.asarray(self.torque.order, dtype=np.float64), C),
                 "amplitude_Nm": amp.reshape(-1),
                 "phase_rad": np.atleast_2d(self.torque.phase_rad).reshape(-1),

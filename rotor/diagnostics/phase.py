@@ -219,7 +219,7 @@ class SpeedTdc(Result):
 
         return pd.DataFrame(
             {
-                "cycle": np.arange(self.cycles),
+                "cycle": np.arange(1, self.cycles + 1),  # counted from 1
                 "offset_deg": self.cycle_offset_deg,
                 "combustion": self.cycle_combustion,
             }

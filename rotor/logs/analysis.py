@@ -292,7 +292,7 @@ class LogAnalysis(Result):
         return "\n".join(lines) + "\n"
 
     def to_pandas(self) -> Any:
-        """Tidy: one row per cycle and order: ``cycle``, ``t_start_s``, ``mean_rpm``,
+        """Tidy: one row per cycle and order: ``cycle`` (from 1), ``t_start_s``, ``mean_rpm``,
         ``delta`` [-], ``order`` [per revolution], ``amplitude_rad_s``, ``phase_rad``."""
         import pandas as pd
 
@@ -300,7 +300,7 @@ class LogAnalysis(Result):
         cyc = np.repeat(np.arange(C), K)
         return pd.DataFrame(
             {
-                "cycle": cyc,
+                "cycle": cyc + 1,  # counted from 1
                 "t_start_s": np.asarray(self.t_start_s, dtype=np.float64)[cyc],
                 "mean_rpm": np.asarray(self.mean_rpm, dtype=np.float64)[cyc],
                 "delta": np.asarray(self.delta, dtype=np.float64)[cyc],
