@@ -113,7 +113,7 @@ def test_cli_analyze_json_and_plot(tmp_path, capsys):
     d = json.loads(capsys.readouterr().out)
     assert d["wheel"]["teeth_per_rev"] == 60 and d["wheel"]["edges_per_rev"] == 58
     c = d["cycles"][0]
-    assert set(c) == {"t_start_s", "mean_rpm", "delta", "orders"}
+    assert set(c) == {"cycle", "t_start_s", "mean_rpm", "delta", "orders"} and c["cycle"] == 1
     assert set(c["orders"][0]) == {"order", "amplitude_rad_s", "phase_rad"} and c["orders"][0]["order"] == 0.5
     assert len(d["tooth_error_correction"]["errors_rad"]) == 58
     assert (tmp_path / "full_load_analysis.png").stat().st_size > 10000

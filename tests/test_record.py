@@ -35,6 +35,7 @@ def test_simulate_record_then_diagnose_gives_the_misfire_back(tmp_path, capsys):
     code, out, _ = run_cli(capsys, "analyze", str(log), "--wheel", "60-2", "--json")
     a = json.loads(out)
     assert code == 0 and len(a["cycles"]) == 12 and a["tdc_after_gap_deg"] == pytest.approx(29.4)
+    assert [c["cycle"] for c in a["cycles"]] == list(range(1, 13))
     code, out, err = run_cli(capsys, "diagnose", str(log), "--engine", "4chn15", "--wheel", "60-2", "--json")
     d = json.loads(out)
     assert code == 0 and err == ""

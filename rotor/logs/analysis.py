@@ -205,12 +205,14 @@ class LogAnalysis(Result):
 
     # ------------------------------------------------------------------ people
     def to_json_dict(self, max_order: float | None = None) -> dict:
-        """Plain numbers for JSON (what ``rotor analyze --json`` prints): the cycles, the wheel
+        """Plain numbers for JSON (what ``rotor analyze --json`` prints): the cycles (each
+        with its number ``cycle``, from 1), the wheel
         as found, the correction applied; orders up to ``max_order`` (default the analysis's)
         [per revolution]. ``None`` where a number is undefined."""
         keep = self.order <= (self.max_order if max_order is None else max_order) + 1e-9
         cycles = [
             {
+                "cycle": k,
                 "t_start_s": float(t0),
                 "mean_rpm": float(w * RPM_PER_RAD_S),
                 "delta": float(d),
@@ -219,9 +221,9 @@ class LogAnalysis(Result):
                     for o, a, p in zip(self.order[keep], amp[keep], ph[keep])
                 ],
             }
-            for t0, w, d, amp, ph in zip(
-                self.t_start_s, self.mean_omega, self.delta, self.amplitude_rad_s, self.phase_rad
-            )
+            for k, (t0, w, d, amp, ph) in enumerate(
+                zip(self.t_start_s, self.mean_omega, self.delta, self.amplitude_rad_s, self.phase_rad), start=1
+            )  # cycles counted from 1
         ]
         wheel = self.track.to_json_dict() if self.track is not None else None
         if wheel is not None and self.edges is not None:
