@@ -46,6 +46,7 @@ def test_every_command_is_there():
         "analyze",
         "diagnose",
         "calibrate",
+        "monitor",
         "flywheel",
         "loads",
         "balance",

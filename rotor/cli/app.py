@@ -29,12 +29,12 @@ from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
 from ..fileio import INTERRUPT
-from . import demo, design, diagnostics, engine, logs, report, run, torsion  # light: see test_cli_latency.py
+from . import demo, design, diagnostics, engine, logs, monitor, report, run, torsion  # light: see test_cli_latency.py
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
 
 __all__ = ["COMMAND_GROUPS", "build_parser", "check_outputs", "main", "report_error", "warning_line"]
 
-COMMAND_GROUPS = (engine, run, logs, diagnostics, design, torsion, report, demo)
+COMMAND_GROUPS = (engine, run, logs, diagnostics, monitor, design, torsion, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
 
 EPILOG = """\

@@ -17,6 +17,7 @@ from ..fileio import csv_text, find_nonfinite, key_path_text
 __all__ = [
     "MADE_FOLDERS",
     "csv_text",
+    "json_line",
     "json_text",
     "plot_folder",
     "print_json",
@@ -48,6 +49,13 @@ def json_text(data: Any, indent: int = 2, what: str = "the result") -> str:
         return json.dumps(data, indent=indent, allow_nan=False) + "\n"
     except TypeError as e:  # a value that is not plain JSON data: a result that forgot json_safe
         raise InternalError(f"{what} is not plain JSON data ({e})") from None
+
+
+def json_line(data: Any, what: str = "the result") -> str:
+    """``data`` as one line of JSON ending in a newline (a JSON-lines stream), checked as
+    :func:`json_text` checks it."""
+    json_text(data, indent=0, what=what)  # the checks
+    return json.dumps(data, allow_nan=False) + "\n"
 
 
 def print_json(data: Any, indent: int = 2) -> None:
