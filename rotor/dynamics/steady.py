@@ -16,7 +16,10 @@ Balance: with no load, the load torque is set to the engine's cycle-mean torque 
 friction (``result.load_torque_Nm``, and the summary says so); with a load given (a
 constant one or one that depends on speed) the load is carried as given: the fuelling is
 scaled until the engine's mean torque meets it (``result.fuel_scale``, 1 = the engine
-file's pressure). A given load is never replaced.
+file's pressure). A given load is never replaced. The result states both, the load
+carried (``load_torque_Nm``) and the fuel scale (``fuel_scale``), and which was solved
+(``solved_for``); a fuel scale above 1.2 warns naming the IMEP it implies, one above 10 or
+below 0 is refused (:mod:`rotor.dynamics.operating`).
 
 A periodic solution with a given mean speed always exists in theory, but when the
 kinetic energy at its minimum is below 10⁻⁴ of its mean (ω_min < 1 % of ω_mean) the
@@ -434,7 +437,9 @@ def steady_state(
       prepared engine's own).
 
     **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``) with
-    ``load_torque_Nm`` [N·m] or ``fuel_scale`` [-], ``period_s`` [s], ``excess_work_J``
+    ``load_torque_Nm`` [N·m] and ``fuel_scale`` [-] (``solved_for`` says which was
+    solved), the torque's parts (``gas_torque``, ``reciprocating_torque``,
+    ``inertia_term_torque``, ``total_torque``) [N·m], ``period_s`` [s], ``excess_work_J``
     [J], ``textbook_delta`` [-], ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting)
     and ``converged``.
 
