@@ -91,6 +91,11 @@ def test_analyze_plot_names_no_tdc_it_does_not_know():
     axes = np.asarray(a.plot()).ravel()
     assert "TDC unknown" in axes[0].get_xlabel() and "firing TDC" not in axes[0].get_xlabel()
     assert axes[1].get_lines()[0].get_xdata()[0] == 1  # cycles count from 1
+    one = a.plot(kind="cycles")  # one Axes, one panel
+    assert one.get_xlabel() == "cycle (from 1)" and one.get_lines()[0].get_xdata()[0] == 1
+    assert "TDC unknown" in a.plot(kind="speed").get_xlabel()
+    with pytest.raises(ValueError, match="kind"):
+        a.plot(kind="all of them")
 
 
 def test_a_near_tie_for_the_oil_hole_is_reported_with_both_rays():

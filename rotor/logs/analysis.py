@@ -312,13 +312,15 @@ class LogAnalysis(Result):
             }
         )
 
-    def plot(self, ax: Any = None) -> Any:
+    def plot(self, ax: Any = None, kind: str | None = None) -> Any:
         """The combined plot (speed over the cycle, per-cycle mean speed and δ, order
         spectrum, pressure if logged) on ``ax`` (a 2×2 array of Axes, or None for a new
-        figure); see :func:`rotor.plotting.plot_log_analysis`. Returns the Axes."""
+        figure), or with ``kind`` (``"speed"``, ``"cycles"``, ``"orders"``, ``"signal"``)
+        that panel alone on the one Axes ``ax``; see
+        :func:`rotor.plotting.logs.plot_log_analysis`. Returns what it drew on."""
         from ..plotting.logs import plot_log_analysis
 
-        return plot_log_analysis(self, ax=ax)
+        return plot_log_analysis(self, ax=ax, kind=kind)
 
 
 # ---------------------------------------------------------------------- alignment

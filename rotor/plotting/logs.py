@@ -9,7 +9,7 @@ import numpy as np
 from ..units import RPM_PER_RAD_S
 from .common import angle_axis, new_axes, plain
 
-__all__ = ["plot_log_analysis", "plot_reading", "plot_tooth_errors"]
+__all__ = ["LOG_ANALYSIS_PANELS", "plot_log_analysis", "plot_reading", "plot_tooth_errors"]
 
 
 def plot_tooth_errors(errors_deg: Any, method: str, ax: Any = None) -> Any:
@@ -25,70 +25,92 @@ def plot_tooth_errors(errors_deg: Any, method: str, ax: Any = None) -> Any:
     return ax
 
 
-def plot_log_analysis(analysis: Any, ax: Any = None) -> Any:
+LOG_ANALYSIS_PANELS = ("speed", "cycles", "orders", "signal")
+"""The panels of :func:`plot_log_analysis`, each drawn alone with ``kind=``."""
+
+
+def plot_log_analysis(analysis: Any, ax: Any = None, kind: str | None = None) -> Any:
     """The combined plot of a :class:`rotor.LogAnalysis`: speed over the cycle (every
     cycle and their mean), each cycle's mean speed and δ, the order spectrum (mean and
     cycle-to-cycle spread), and the pressure signal over the cycle (or, without one,
     the tooth errors applied).
 
-    ``ax``: a 2×2 array of Axes (or four Axes), or None for a new figure.
+    ``ax``: with ``kind`` None, a 2×2 array of Axes (or four Axes), or None for a new
+    figure; with ``kind`` one of :data:`LOG_ANALYSIS_PANELS` (``"speed"``, ``"cycles"``,
+    ``"orders"``, ``"signal"``), that panel alone on the one Axes ``ax`` (or a new one).
 
-    **Returns:** the 2×2 array of Axes.
+    **Returns:** the 2×2 array of Axes, or with ``kind`` the one Axes.
     """
+    if kind is not None and kind not in LOG_ANALYSIS_PANELS:
+        raise ValueError(f"kind = {kind!r}: None (all panels) or one of {', '.join(LOG_ANALYSIS_PANELS)}")
+    a = analysis
+    cycle_deg = np.rad2deg(a.cycle_rad)
+
+    def speed(ax_w: Any) -> None:
+        ang = np.rad2deg(a.cycle_angle_rad)
+        rpm = a.omega * RPM_PER_RAD_S
+        for row in rpm:
+            ax_w.plot(ang, row, lw=0.6, color="0.6", alpha=0.6)
+        label = f"mean of {a.cycles} cycles" if a.cycles != 1 else "1 cycle"
+        ax_w.plot(ang, rpm.mean(axis=0), lw=1.8, color="C0", label=label)
+        if str(a.tdc_method).startswith("unknown"):  # the cycles start at the gap: no TDC to name
+            ax_w.set_xlabel("cycle angle from the gap [deg] (TDC unknown)")
+        else:
+            ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
+        ax_w.set_ylabel("speed [rpm]")
+        ax_w.legend(fontsize=8)
+        angle_axis(ax_w, cycle_deg)
+        ax_w.set_title(f"{plain(a.source)}: speed over the cycle")
+
+    def cycles(ax_c: Any) -> None:
+        k = np.arange(1, a.cycles + 1)  # cycles count from 1
+        ax_c.plot(k, a.mean_rpm, "o-", color="C0", ms=4)
+        ax_c.set_xlabel("cycle (from 1)")
+        ax_c.set_ylabel("mean speed [rpm]", color="C0")
+        twin = ax_c.twinx()
+        twin.plot(k, a.delta, "s--", color="C3", ms=4)
+        twin.set_ylabel("δ per cycle, trend removed [-]", color="C3")
+        ax_c.grid(True, alpha=0.3)
+        ax_c.set_title("cycle to cycle")
+
+    def orders(ax_o: Any) -> None:
+        m, s = (
+            a.amplitude_rad_s.mean(axis=0),
+            (a.amplitude_rad_s.std(axis=0, ddof=1) if a.cycles > 1 else np.zeros(a.order.size)),
+        )
+        ax_o.bar(a.order, m, width=0.3, yerr=s, capsize=2, color="C0")
+        ax_o.set_xlabel("engine order [per revolution]")
+        ax_o.set_ylabel("speed amplitude [rad/s]")
+        ax_o.grid(True, alpha=0.3, axis="y")
+        ax_o.set_title("order spectrum (mean ± cycle-to-cycle std)")
+
+    def signal(ax_p: Any) -> None:
+        if a.pressure is not None:
+            ph, pv, cyc = a.pressure
+            order = np.argsort(cyc * 10 + ph / a.cycle_rad, kind="stable")
+            ax_p.plot(np.rad2deg(ph[order]), pv[order], ",", color="C2", alpha=0.5)
+            ax_p.set_xlabel("cycle angle [deg]")
+            ax_p.set_ylabel("pressure signal [V]")
+            angle_axis(ax_p, cycle_deg)
+            ax_p.set_title(f"pressure; TDC {np.rad2deg(a.tdc_rad):.1f}° after the gap")
+        elif a.tooth_errors is not None:
+            plot_tooth_errors(a.tooth_errors.errors_deg, a.tooth_errors.method, ax=ax_p)
+        else:
+            ax_p.set_axis_off()
+
+    draw = {"speed": speed, "cycles": cycles, "orders": orders, "signal": signal}
+    if kind is not None:
+        one = new_axes(ax)
+        draw[kind](one)
+        return one
     axes = ax
     if axes is None:
         import matplotlib.pyplot as plt
 
         fig, axes = plt.subplots(2, 2, figsize=(12, 8), layout="constrained")
     axes = np.asarray(axes)
-    a = analysis
-    ax_w, ax_c, ax_o, ax_p = axes.ravel()[:4]
-    cycle_deg = np.rad2deg(a.cycle_rad)
-    ang = np.rad2deg(a.cycle_angle_rad)
-    rpm = a.omega * RPM_PER_RAD_S
-    for row in rpm:
-        ax_w.plot(ang, row, lw=0.6, color="0.6", alpha=0.6)
-    ax_w.plot(
-        ang, rpm.mean(axis=0), lw=1.8, color="C0", label=f"mean of {a.cycles} cycles" if a.cycles != 1 else "1 cycle"
-    )
-    if str(a.tdc_method).startswith("unknown"):  # the cycles start at the gap: no TDC to name
-        ax_w.set_xlabel("cycle angle from the gap [deg] (TDC unknown)")
-    else:
-        ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
-    ax_w.set_ylabel("speed [rpm]")
-    ax_w.legend(fontsize=8)
-    angle_axis(ax_w, cycle_deg)
-    ax_w.set_title(f"{plain(a.source)}: speed over the cycle")
-    k = np.arange(1, a.cycles + 1)  # cycles count from 1
-    ax_c.plot(k, a.mean_rpm, "o-", color="C0", ms=4)
-    ax_c.set_xlabel("cycle (from 1)")
-    ax_c.set_ylabel("mean speed [rpm]", color="C0")
-    twin = ax_c.twinx()
-    twin.plot(k, a.delta, "s--", color="C3", ms=4)
-    twin.set_ylabel("δ per cycle, trend removed [-]", color="C3")
-    ax_c.grid(True, alpha=0.3)
-    ax_c.set_title("cycle to cycle")
-    m, s = (
-        a.amplitude_rad_s.mean(axis=0),
-        (a.amplitude_rad_s.std(axis=0, ddof=1) if a.cycles > 1 else np.zeros(a.order.size)),
-    )
-    ax_o.bar(a.order, m, width=0.3, yerr=s, capsize=2, color="C0")
-    ax_o.set_xlabel("engine order [per revolution]")
-    ax_o.set_ylabel("speed amplitude [rad/s]")
-    ax_o.grid(True, alpha=0.3, axis="y")
-    ax_o.set_title("order spectrum (mean ± cycle-to-cycle std)")
-    if a.pressure is not None:
-        ph, pv, cyc = a.pressure
-        order = np.argsort(cyc * 10 + ph / a.cycle_rad, kind="stable")
-        ax_p.plot(np.rad2deg(ph[order]), pv[order], ",", color="C2", alpha=0.5)
-        ax_p.set_xlabel("cycle angle [deg]")
-        ax_p.set_ylabel("pressure signal [V]")
-        angle_axis(ax_p, cycle_deg)
-        ax_p.set_title(f"pressure; TDC {np.rad2deg(a.tdc_rad):.1f}° after the gap")
-    elif a.tooth_errors is not None:
-        plot_tooth_errors(a.tooth_errors.errors_deg, a.tooth_errors.method, ax=ax_p)
-    else:
-        ax_p.set_axis_off()
+    for panel, axis in zip(LOG_ANALYSIS_PANELS, axes.ravel()[:4]):
+        draw[panel](axis)
     return axes
 
 
