@@ -34,8 +34,8 @@ the change of kinetic energy relative to the mean,
 
 the work the firing did over its segment less what the load took, per unit of kinetic
 energy: a misfire loses the firing's work and e drops. The index is e against a running
-robust baseline of the last :data:`HISTORY` firings (median m, spread s = 1.4826·MAD,
-never below ``min_spread``),
+robust baseline of the last :data:`HISTORY` firings (median m, spread s = the
+interquartile range / 1.349, never below ``min_spread``),
 
     index = (e − m) / s,
 
@@ -62,6 +62,7 @@ Hand-written, not borrowed: no library follows a trigger wheel edge by edge.
 
 from __future__ import annotations
 
+import bisect
 import collections
 import dataclasses
 import enum
@@ -89,7 +90,7 @@ __all__ = [
 ]
 
 HISTORY = 32
-"""Firings in the running baseline (median and MAD of the index's raw value e)."""
+"""Firings in the running baseline (median and interquartile range of the raw value e)."""
 MIN_HISTORY = 4
 """Firings the baseline needs before a verdict is given (earlier firings wait for it)."""
 DEFAULT_THRESHOLD = 8.0
@@ -373,7 +374,7 @@ class MisfireMonitor:
         self._ever_locked = False
         self._next: tuple[int, int] | None = None  # (cycle index k, firing slot j) to judge next
         self._run_start = math.nan
-        self._history: collections.deque = collections.deque(maxlen=HISTORY)
+        self._history = _Baseline(HISTORY)
         self._waiting: list = []  # firings measured, not yet judged: [k, j, e, t_dec, cycle end, predicted, in the baseline]
         self._notes: collections.deque = collections.deque(maxlen=MAX_NOTES)
         self._new_notes: list[Note] = []
@@ -662,27 +663,23 @@ class MisfireMonitor:
         e = (wb**2 - wa**2) / wm**2
         last = np.minimum(np.searchsorted(self._th, b + half, side="left"), self._th.size - 1)
         t_dec = self._t[last]
+        # everything about a firing comes from the edges up to the last one it uses, so that
+        # the verdicts do not depend on how the stream was cut into chunks; its cycle's end is
+        # measured where those edges reach it, else predicted at the last revolution's speed
         ce = (K + 1) * self.cycle_rad
+        th_dec = self._th[last]
+        back = np.minimum(np.searchsorted(self._th, th_dec - TWO_PI), last - 1)
+        omega = (th_dec - self._th[back]) / (t_dec - self._t[back])
+        predicted = ce > th_dec
+        end_s = np.where(predicted, t_dec + (ce - th_dec) / omega, np.interp(ce, self._th, self._t))
         out: list[Verdict] = []
         for i in range(K.size):
-            # everything about a firing is computed from the edges up to the last one it uses,
-            # so that the verdicts do not depend on how the stream was cut into chunks
-            end_s, predicted = self._cycle_end(float(ce[i]), int(last[i]))
-            self._waiting.append([int(K[i]), int(J[i]), float(e[i]), float(t_dec[i]), end_s, predicted, False])
+            self._waiting.append(
+                [int(K[i]), int(J[i]), float(e[i]), float(t_dec[i]), float(end_s[i]), bool(predicted[i]), False]
+            )
             out.extend(self._release_waiting(force=False))
         self._trim()
         return out
-
-    def _cycle_end(self, theta_ce: float, last: int) -> tuple[float, bool]:
-        """The log time of the angle ``theta_ce`` from the edges up to ``last``: measured, or
-        predicted at the speed of the revolution before that edge."""
-        th, t = self._th[: last + 1], self._t[: last + 1]
-        if th[0] <= theta_ce <= th[-1]:
-            return float(np.interp(theta_ce, th, t)), False
-        j = int(np.searchsorted(th, th[-1] - TWO_PI))
-        j = min(j, th.size - 2)
-        omega = (th[-1] - th[j]) / (t[-1] - t[j])
-        return float(t[-1] + (theta_ce - th[-1]) / omega), True
 
     def _release_waiting(self, force: bool) -> list[Verdict]:
         out: list[Verdict] = []
@@ -696,11 +693,10 @@ class MisfireMonitor:
                     item[6] = True
         while self._waiting:
             k, j, e, t_dec, end_s, predicted, fed = self._waiting.pop(0)
-            h = np.fromiter(hist, dtype=np.float64, count=len(hist)) if hist else np.asarray([e])
-            m = float(np.median(h))
-            s = max(1.4826 * float(np.median(np.abs(h - m))), self.min_spread)
+            m, s = hist.median_spread() if len(hist) else (e, 0.0)
+            s = max(s, self.min_spread)
             index = (e - m) / s
-            index_std = math.sqrt(1.0 + math.pi / (2 * h.size))
+            index_std = math.sqrt(1.0 + math.pi / (2 * max(len(hist), 1)))
             if not fed:
                 hist.append(e)
             if k < 1:
@@ -726,6 +722,33 @@ class MisfireMonitor:
         if i > 0:
             self._t = self._t[i:]
             self._th = self._th[i:]
+
+
+class _Baseline:
+    """The last ``size`` values, kept in arrival order and sorted: the median and the spread
+    (interquartile range / 1.349, the standard deviation of a normal distribution) read
+    off the sorted list without sorting it again."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self._order: collections.deque = collections.deque()
+        self._sorted: list[float] = []
+
+    def __len__(self) -> int:
+        return len(self._order)
+
+    def append(self, x: float) -> None:
+        if len(self._order) == self.size:
+            old = self._order.popleft()
+            del self._sorted[bisect.bisect_left(self._sorted, old)]
+        self._order.append(x)
+        bisect.insort(self._sorted, x)
+
+    def median_spread(self) -> tuple[float, float]:
+        y = self._sorted
+        n = len(y)
+        m = y[n // 2] if n % 2 else 0.5 * (y[n // 2 - 1] + y[n // 2])
+        return m, (y[(3 * n) // 4] - y[n // 4]) / 1.349
 
 
 def _slots(k0: int, j0: int, k1: int, j1: int, nf: int):
