@@ -119,3 +119,17 @@ def test_campbell_says_why_its_margin_is_zero(capsys):
     assert "0 at each of the 15 critical speeds in the range" in out and "smallest separation margin 0.00" not in out
     assert cli.main(["campbell", "mwm6", "--rpm-range", "600:700"]) == 0
     assert "smallest separation margin 35.36 %" in capsys.readouterr().out  # no critical speed: a real margin
+
+
+def test_calibration_plot_takes_one_axes_with_kind():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from rotor.plotting.diagnostics import plot_calibration
+
+    figures = dict(imep_measured_pa=[9e5, 9.2e5, 9.1e5], loss_torque_Nm=[40.0, 41.0, 39.5], imep_file_pa=9e5)
+    both = plot_calibration(**figures, title="bench")
+    assert len(both) == 2
+    one = plot_calibration(**figures, title="bench", kind="loss")
+    assert one.get_xlabel() == "cycle (from 1)" and list(one.get_lines()[0].get_xdata()) == [1, 2, 3]
+    assert plot_calibration(**figures, title="bench", kind="imep").get_ylabel() == "IMEP [bar]"

@@ -354,11 +354,12 @@ class Calibration(Result):
         imep, loss = self._cycle_figures()
         return pd.DataFrame({"cycle": np.arange(1, imep.size + 1), "imep_measured_pa": imep, "loss_torque_Nm": loss})
 
-    def plot(self, ax: Any = None) -> Any:
+    def plot(self, ax: Any = None, kind: str | None = None) -> Any:
         """The calibration recording's IMEP per cycle from the pressure channel (with the
         engine file's, for charge scaling) and the fitted friction + load per cycle, on
-        ``ax`` (two Axes, or None for a new figure)
-        (:func:`rotor.plotting.diagnostics.plot_calibration`). Returns the Axes."""
+        ``ax`` (two Axes, or None for a new figure), or with ``kind`` (``"imep"``,
+        ``"loss"``) that panel alone on the one Axes ``ax``
+        (:func:`rotor.plotting.diagnostics.plot_calibration`). Returns what it drew on."""
         from ..plotting.diagnostics import plot_calibration
 
         imep, loss = self._cycle_figures()
@@ -370,6 +371,7 @@ class Calibration(Result):
             imep_file_pa=file_imep,
             title=f"calibration of {self.engine}" + (f" from {self.source}" if self.source else ""),
             ax=ax,
+            kind=kind,
         )
 
     def _cycle_figures(self) -> tuple[np.ndarray, np.ndarray]:

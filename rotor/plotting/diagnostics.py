@@ -13,6 +13,7 @@ from ..units import PA_PER_BAR, RPM_PER_RAD_S
 from .common import new_axes, plain
 
 __all__ = [
+    "CALIBRATION_PANELS",
     "IDENTIFICATION_PANELS",
     "plot_calibration",
     "plot_identification",
@@ -132,6 +133,10 @@ def plot_identification(
     return axes
 
 
+CALIBRATION_PANELS = ("imep", "loss")
+"""The panels of :func:`plot_calibration`, each drawn alone with ``kind=``."""
+
+
 def plot_calibration(
     *,
     imep_measured_pa: Any,
@@ -139,35 +144,51 @@ def plot_calibration(
     imep_file_pa: float | None,
     title: str,
     ax: Any = None,
+    kind: str | None = None,
 ) -> Any:
     """The plot of a :class:`rotor.Calibration`: the calibration recording's IMEP of each
     cycle from its pressure channel ``imep_measured_pa`` ((cycles,) [Pa], with the engine
     file's ``imep_file_pa`` [Pa] as a line when known), and the loss torque (friction plus
-    load) fitted per cycle ``loss_torque_Nm`` ((cycles,) [N·m]). ``ax``: two Axes, or None
-    for a new figure.
+    load) fitted per cycle ``loss_torque_Nm`` ((cycles,) [N·m]). ``ax``: with ``kind`` None,
+    two Axes, or None for a new figure; with ``kind`` ``"imep"`` or ``"loss"``, that panel
+    alone on the one Axes ``ax`` (or a new one).
 
-    **Returns:** the array of two Axes.
+    **Returns:** the array of two Axes, or with ``kind`` the one Axes.
     """
+    if kind is not None and kind not in CALIBRATION_PANELS:
+        raise ValueError(f"kind = {kind!r}: None (both panels) or one of {', '.join(CALIBRATION_PANELS)}")
+    imep = np.asarray(imep_measured_pa, dtype=np.float64)
+    loss = np.asarray(loss_torque_Nm, dtype=np.float64)
+
+    def imep_panel(ax_p: Any) -> None:
+        ax_p.plot(np.arange(1, imep.size + 1), imep / PA_PER_BAR, "o-", ms=4, color="C0", label="pressure channel")
+        if imep_file_pa is not None:
+            ax_p.axhline(imep_file_pa / PA_PER_BAR, color="0.4", ls="--", lw=1, label="engine file")
+        ax_p.set_ylabel("IMEP [bar]")
+        ax_p.grid(True, alpha=0.3)
+        ax_p.legend(fontsize=8)
+        ax_p.set_title(plain(title))
+
+    def loss_panel(ax_l: Any) -> None:
+        ax_l.plot(np.arange(1, loss.size + 1), loss, "s-", ms=4, color="C3")
+        ax_l.set_xlabel("cycle (from 1)")
+        ax_l.set_ylabel("friction + load [N·m]")
+        ax_l.grid(True, alpha=0.3)
+
+    if kind is not None:
+        one = new_axes(ax)
+        (imep_panel if kind == "imep" else loss_panel)(one)
+        if kind == "imep":
+            one.set_xlabel("cycle (from 1)")
+        return one
     axes = ax
     if axes is None:
         import matplotlib.pyplot as plt
 
         fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True, layout="constrained")
     axes = np.asarray(axes).ravel()
-    ax_p, ax_l = axes[:2]
-    imep = np.asarray(imep_measured_pa, dtype=np.float64)
-    loss = np.asarray(loss_torque_Nm, dtype=np.float64)
-    ax_p.plot(np.arange(1, imep.size + 1), imep / PA_PER_BAR, "o-", ms=4, color="C0", label="pressure channel")
-    if imep_file_pa is not None:
-        ax_p.axhline(imep_file_pa / PA_PER_BAR, color="0.4", ls="--", lw=1, label="engine file")
-    ax_p.set_ylabel("IMEP [bar]")
-    ax_p.grid(True, alpha=0.3)
-    ax_p.legend(fontsize=8)
-    ax_p.set_title(plain(title))
-    ax_l.plot(np.arange(1, loss.size + 1), loss, "s-", ms=4, color="C3")
-    ax_l.set_xlabel("cycle (from 1)")
-    ax_l.set_ylabel("friction + load [N·m]")
-    ax_l.grid(True, alpha=0.3)
+    imep_panel(axes[0])
+    loss_panel(axes[1])
     return axes
 
 
