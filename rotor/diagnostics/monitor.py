@@ -33,19 +33,23 @@ the change of kinetic energy relative to the mean,
     e = (ω_end² − ω_start²) / ω_mean²,
 
 the work the firing did over its segment less what the load took, per unit of kinetic
-energy: a misfire loses the firing's work and e drops. The index is e against a running
-robust baseline of the last :data:`HISTORY` firings (median m, spread s = the
-interquartile range / 1.349, never below ``min_spread``),
+energy: a misfire loses the firing's work and e drops. The index is e against running
+robust baselines: the median m_c of the cylinder's own last :data:`OWN_HISTORY` firings
+(a cylinder's e carries its own offset: the wheel's tooth errors, its place in the
+firing order) and the spread s of all cylinders' last :data:`HISTORY` deviations
+e − m_c (interquartile range / 1.349, never below ``min_spread``),
 
-    index = (e − m) / s,
+    index = (e − m_c) / s,
 
 0 for a typical firing, negative for a loss; a firing is a **misfire** where
 index < −``threshold``. Its uncertainty ``index_std`` is the spread of a normal firing's
-index, 1 by construction, with the baseline's own uncertainty (√(1 + π/(2n)) for a median
-of n). This is the crankshaft speed-fluctuation approach of the on-board monitors (Plapp,
+index, 1 by construction, with the cylinder's median's own uncertainty (√(1 + π/(2n))
+for a median of n). The first firings wait until every cylinder has :data:`MIN_OWN`
+firings (about three cycles), then are judged together: their ``decided_at_s`` says so.
+This is the crankshaft speed-fluctuation approach of the on-board monitors (Plapp,
 Klenk, Moser: "Methods of on-board misfire detection", SAE 900232; Klenk, Moser, Müller,
 Wimmer: "Misfire detection by evaluating crankshaft speed — a means to comply with
-OBDII", SAE 930399), with a robust running baseline in place of a calibrated map.
+OBDII", SAE 930399), with robust running baselines in place of a calibrated map.
 
 **With an engine** (``engine=``): the engine file gives the cylinders, the strokes and
 each cylinder's firing angle (an uneven firing order included); the index is the same
@@ -54,7 +58,7 @@ Without one: ``cylinders``, ``firing_order`` and ``strokes``, evenly spaced firi
 
 **Memory.** The edges are kept for the current firing segment and one revolution before
 it (a chunk longer than :data:`SLICE_REVOLUTIONS` revolutions is taken in slices), the
-baseline holds :data:`HISTORY` numbers, the notes at most :data:`MAX_NOTES`: nothing grows
+baselines hold :data:`HISTORY` + :data:`OWN_HISTORY` per cylinder numbers, the notes at most :data:`MAX_NOTES`: nothing grows
 with the length of the stream.
 
 Hand-written, not borrowed: no library follows a trigger wheel edge by edge.
@@ -90,9 +94,11 @@ __all__ = [
 ]
 
 HISTORY = 32
-"""Firings in the running baseline (median and interquartile range of the raw value e)."""
-MIN_HISTORY = 4
-"""Firings the baseline needs before a verdict is given (earlier firings wait for it)."""
+"""Firings in the running spread (of e − its cylinder's median, all cylinders)."""
+OWN_HISTORY = 8
+"""Firings of each cylinder in its own baseline (the median of its e)."""
+MIN_OWN = 3
+"""Firings of every cylinder before verdicts are given (the earlier firings wait for them)."""
 DEFAULT_THRESHOLD = 8.0
 """A misfire: index below minus this many baseline spreads."""
 DEFAULT_MIN_SPREAD = 2e-4
@@ -374,7 +380,9 @@ class MisfireMonitor:
         self._ever_locked = False
         self._next: tuple[int, int] | None = None  # (cycle index k, firing slot j) to judge next
         self._run_start = math.nan
-        self._history = _Baseline(HISTORY)
+        self._history = _Baseline(HISTORY)  # the firings' deviations from their cylinders' medians
+        self._own = [_Baseline(OWN_HISTORY) for _ in range(n)]  # each cylinder's last values of e
+        self._warm = False
         self._waiting: list = []  # firings measured, not yet judged: [k, j, e, t_dec, cycle end, predicted, in the baseline]
         self._notes: collections.deque = collections.deque(maxlen=MAX_NOTES)
         self._new_notes: list[Note] = []
@@ -683,22 +691,38 @@ class MisfireMonitor:
 
     def _release_waiting(self, force: bool) -> list[Verdict]:
         out: list[Verdict] = []
-        hist = self._history
-        if len(hist) < MIN_HISTORY and self._waiting:
-            if len(hist) + len(self._waiting) < MIN_HISTORY and not force:
-                return out  # the firings before the baseline is ready wait for it
-            for item in self._waiting:  # the first baseline: the waiting firings themselves
-                if not item[6]:
-                    hist.append(item[2])
-                    item[6] = True
+        own, pool = self._own, self._history
+        if not self._warm:
+            # the first firings wait until every cylinder has a baseline of its own; each
+            # goes into its cylinder's baseline as it is measured
+            item = self._waiting[-1] if self._waiting and not self._waiting[-1][6] else None
+            if item is not None:
+                own[int(self._fire_cyl[item[1]]) - 1].append(item[2])
+                item[6] = True
+            if not force and min(len(b) for b in own) < MIN_OWN:
+                return out
+            self._warm = True
+            for item in self._waiting:
+                c = int(self._fire_cyl[item[1]]) - 1
+                m, _ = own[c].median_spread()
+                item.append(item[2] - m)
+                pool.append(item[2] - m)
         while self._waiting:
-            k, j, e, t_dec, end_s, predicted, fed = self._waiting.pop(0)
-            m, s = hist.median_spread() if len(hist) else (e, 0.0)
+            item = self._waiting.pop(0)
+            k, j, e, t_dec, end_s, predicted, fed = item[:7]
+            c0 = int(self._fire_cyl[j]) - 1
+            if fed:
+                r = item[7]
+            else:
+                m, _ = own[c0].median_spread() if len(own[c0]) else (e, 0.0)
+                r = e - m
+            _, s = pool.median_spread() if len(pool) else (0.0, 0.0)
             s = max(s, self.min_spread)
-            index = (e - m) / s
-            index_std = math.sqrt(1.0 + math.pi / (2 * max(len(hist), 1)))
+            index = r / s
+            index_std = math.sqrt(1.0 + math.pi / (2 * max(len(own[c0]), 1)))
             if not fed:
-                hist.append(e)
+                own[c0].append(e)
+                pool.append(r)
             if k < 1:
                 continue  # before cycle 1: it feeds the baseline only
             misfire = index < -self.threshold
