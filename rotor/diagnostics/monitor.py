@@ -26,8 +26,9 @@ intake) after the first edge placed; the firing of cylinder c in cycle k is the 
 name the (cycle, cylinder) pairs of ``rotor simulate --misfire``.
 
 **The index** (model-free; the same with and without an engine file). Over each firing's
-segment, from its TDC to ``segment_deg`` later (default: the firing interval, at most
-180°), the crank speed at the two ends (each averaged over a quarter of the segment) gives
+segment (``segment_deg``, default the firing interval, at most 180°, centred on the
+expansion stroke: from TDC + (180° − segment)/2, so that a firing's work falls mostly in
+its own segment where firings are closer than 180°), the crank speed at the two ends (each averaged over a quarter of the segment) gives
 the change of kinetic energy relative to the mean,
 
     e = (ω_end² − ω_start²) / ω_mean²,
@@ -42,7 +43,9 @@ e − m_c (interquartile range / 1.349, never below ``min_spread``),
     index = (e − m_c) / s,
 
 0 for a typical firing, negative for a loss; a firing is a **misfire** where
-index < −``threshold``. Its uncertainty ``index_std`` is the spread of a normal firing's
+index < −``threshold``, unless a neighbouring firing lost more than twice as much (then the
+loss is that firing's, spilt into this segment: each verdict waits for the next firing's
+segment, well within a cycle). Its uncertainty ``index_std`` is the spread of a normal firing's
 index, 1 by construction, with the cylinder's median's own uncertainty (√(1 + π/(2n))
 for a median of n). The first firings wait until every cylinder has :data:`MIN_OWN`
 firings (about three cycles), then are judged together: their ``decided_at_s`` says so.
@@ -356,6 +359,7 @@ class MisfireMonitor:
         if not (0 < seg <= cycle):
             raise EngineError(f"segment_deg = {segment_deg!r}: a positive angle up to one cycle")
         self.segment_rad = seg
+        self.offset_rad = max(0.0, (math.pi - seg) / 2)  # the segment centred on the expansion stroke
         self.window_rad = seg / 4
         self.tdc_rad = math.radians(float(tdc_deg))
         self.parity = firing_parity
@@ -383,6 +387,8 @@ class MisfireMonitor:
         self._history = _Baseline(HISTORY)  # the firings' deviations from their cylinders' medians
         self._own = [_Baseline(OWN_HISTORY) for _ in range(n)]  # each cylinder's last values of e
         self._warm = False
+        self._held: tuple | None = None  # the last firing judged, until the next one is measured
+        self._prev_index = math.nan
         self._waiting: list = []  # firings measured, not yet judged: [k, j, e, t_dec, cycle end, predicted, in the baseline]
         self._notes: collections.deque = collections.deque(maxlen=MAX_NOTES)
         self._new_notes: list[Note] = []
@@ -622,7 +628,7 @@ class MisfireMonitor:
         nf = self._fire.size
         k = math.floor(self._run_start / self.cycle_rad) - 1
         j = 0
-        while self._firing_theta(k, j) - half < self._run_start:
+        while self._firing_theta(k, j) + self.offset_rad - half < self._run_start:
             j += 1
             if j == nf:
                 k, j = k + 1, 0
@@ -649,7 +655,7 @@ class MisfireMonitor:
         th_last = float(self._th[-1])
         k, j = self._next
         slots_k, slots_j = [], []
-        while self._firing_theta(k, j) + seg + half <= th_last:
+        while self._firing_theta(k, j) + self.offset_rad + seg + half <= th_last:
             slots_k.append(k)
             slots_j.append(j)
             j += 1
@@ -660,7 +666,7 @@ class MisfireMonitor:
         self._next = (k, j)
         K = np.asarray(slots_k, dtype=np.int64)
         J = np.asarray(slots_j, dtype=np.int64)
-        a = K * self.cycle_rad + self._fire[J]
+        a = K * self.cycle_rad + self._fire[J] + self.offset_rad
         b = a + seg
         pts = np.stack([a - half, a + half, b - half, b + half])
         tp = np.interp(pts, self._th, self._t)
@@ -723,25 +729,40 @@ class MisfireMonitor:
             if not fed:
                 own[c0].append(e)
                 pool.append(r)
+            held, self._held = self._held, None
+            if held is not None:
+                out.append(self._verdict(held, index, t_dec))
+            prev, self._prev_index = self._prev_index, float(index)
             if k < 1:
                 continue  # before cycle 1: it feeds the baseline only
-            misfire = index < -self.threshold
-            c = int(self._fire_cyl[j])
-            out.append(Verdict(k, c, bool(misfire), float(index), index_std, e, end_s, t_dec, predicted))
-            self._judged[c - 1] += 1
-            self._index_sketch[c - 1].append(float(index))
-            self._min_index[c - 1] = min(self._min_index[c - 1], float(index))
-            if misfire:
-                self._misfires[c - 1] += 1
-                self._misfire_list.append((k, c))
+            # held until the next firing is measured: a loss that is mostly a neighbour's
+            # (the tail of its expansion stroke in this segment) is not this firing's misfire
+            self._held = (k, int(self._fire_cyl[j]), float(index), index_std, e, end_s, predicted, prev, t_dec)
+        if force and self._held is not None:
+            out.append(self._verdict(self._held, math.nan, self._held[8]))
+            self._held = None
         return out
+
+    def _verdict(self, held: tuple, next_index: float, t_dec: float) -> Verdict:
+        k, c, index, index_std, e, end_s, predicted, prev, _ = held
+        neighbours = [x for x in (prev, next_index) if math.isfinite(x)]
+        spill = bool(neighbours) and index > 0.5 * min(neighbours)
+        misfire = index < -self.threshold and not spill
+        v = Verdict(k, c, misfire, index, index_std, e, end_s, t_dec, predicted)
+        self._judged[c - 1] += 1
+        self._index_sketch[c - 1].append(index)
+        self._min_index[c - 1] = min(self._min_index[c - 1], index)
+        if misfire:
+            self._misfires[c - 1] += 1
+            self._misfire_list.append((k, c))
+        return v
 
     def _trim(self) -> None:
         """Drop the edges no firing to come needs (keep a revolution before the next one)."""
         if self._next is None or self._th.size == 0:
             return
         k, j = self._next
-        keep_from = self._firing_theta(k, j) - self.window_rad - TWO_PI
+        keep_from = self._firing_theta(k, j) + self.offset_rad - self.window_rad - TWO_PI
         i = int(np.searchsorted(self._th, keep_from)) - 1
         if i > 0:
             self._t = self._t[i:]
