@@ -82,3 +82,9 @@ def test_record_refuses_what_it_cannot_write(tmp_path, capsys):
     )
     assert code == 2 and err.startswith("rotor") and err.count("\n") == 1
     assert stated_phase(tmp_path / "missing.csv") is None
+    for argv, needle in (
+        (["--record", str(tmp_path / "no" / "x.csv")], "no folder"),  # refused before the run
+        (["--record", str(tmp_path / "x.csv"), "--cycles", "1"], "--cycles 2 or more"),
+    ):
+        code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "3", *argv)
+        assert code == 2 and needle in err and err.count("\n") == 1

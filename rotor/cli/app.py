@@ -223,7 +223,7 @@ def report_error(e: BaseException, debug: bool = False, sizes: Sequence[str] = (
     return EXIT_INTERNAL
 
 
-OUTPUT_FILES = ("output", "save_calibration", "save_tooth_errors")
+OUTPUT_FILES = ("output", "save_calibration", "save_tooth_errors", "record")
 """The options (``args`` attributes) that name a file a command writes."""
 OUTPUT_FOLDERS = {"plot": "the plots", "out": "the report"}
 """The options that name a folder a command writes into, and what it writes there."""

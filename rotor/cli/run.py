@@ -297,6 +297,10 @@ def cmd_simulate(args: argparse.Namespace) -> None:
     from ..dynamics.transient import simulate
     from ..engine.file import load_engine
 
+    if args.record and args.cycles < 2:
+        from ..errors import EngineError
+
+        raise EngineError(f"--record needs --cycles 2 or more (a whole cycle and a revolution), not {args.cycles}")
     engine = load_engine(args.engine)
     pairs = parse_misfires(args.misfire, args.cycles, engine.cylinders)
     load, fuel, solved, note = _operating_point(engine, args)
