@@ -191,6 +191,24 @@ CASES = [
         2,
         "{file}/c.json: {file} is a file, not a folder",
     ),
+    # monitor
+    (["monitor", "{log}", "--engine", "4chn15", "--wheel", "60-2"], 2, "--tdc-deg: where cylinder 1's TDC lies"),
+    (["monitor", "{missing}/x.csv", "--engine", "4chn15", "--wheel", "60-2"], 2, "{missing}/x.csv: No such file"),
+    (["monitor", "{dir}", "--engine", "4chn15", "--wheel", "60-2"], 2, "{dir}: Is a directory"),
+    (["monitor", "{log}", "--wheel", "60-2"], 2, "--engine ENGINE or --cylinders N"),
+    (["monitor", "{log}", "--wheel", "60", "--cylinders", "4", "--tdc-deg", "0"], 2, "a wheel with a gap"),
+    (["monitor", "{log}", "--wheel", "60-2", "--cylinders", "0"], 2, "cylinders from 1 to 64"),
+    (["monitor", "{file}", "--wheel", "60-2", "--cylinders", "4", "--tdc-deg", "0"], 2, "no tooth time in the input"),
+    (
+        ["monitor", "{log}", "--wheel", "60-2", "--cylinders", "4", "--firing-order", "1,2,2,4", "--tdc-deg", "0"],
+        2,
+        "each cylinder 1 … 4 once",
+    ),
+    (
+        ["monitor", "{log}", "--engine", "4chn15", "--wheel", "60-2", "--threshold", "-1"],
+        2,
+        "must be a positive number",
+    ),
     # flywheel
     (["flywheel", "4chn15", "--delta", "0"], 2, "must be a positive number"),
     (["flywheel", "4chn15", "--delta", "nan"], 2, "must be a positive number"),

@@ -139,6 +139,8 @@ def cmd_monitor(args: argparse.Namespace) -> None:
         from ..engine.file import load_engine
 
         engine = load_engine(args.engine)
+    if args.log != "-" and os.path.isdir(args.log):
+        raise IsADirectoryError(21, "Is a directory", args.log)
     if args.log != "-" and not os.path.isfile(args.log):
         raise FileNotFoundError(2, "No such file", args.log)
     source = _Source(args.log, args.follow)
