@@ -198,3 +198,37 @@ def test_the_result_speaks_the_protocol(recorded):
     assert d["misfire_count"] == 3 and len(d["cylinders"]) == 4
     assert list(r.to_pandas()["misfires"]) == [0, 1, 0, 2]
     assert "misfire monitor" in r.summary() and repr(r).startswith("<MonitorResult")
+
+
+def test_follow_reads_a_growing_file_and_ctrl_c_exits_130(recorded, tmp_path):
+    import signal
+    import time
+
+    log = recorded[0]
+    text = log.read_text()
+    cut = len(text) // 2
+    cut = text.index("\n", cut) + 1
+    grow = tmp_path / "grow.csv"
+    grow.write_text(text[:cut])
+    p = subprocess.Popen(
+        [sys.executable, "-m", "rotor.cli", "monitor", str(grow), "--engine", "4chn15", "--wheel", "60-2", "--follow"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        first = p.stdout.readline()  # a verdict from the first half, while the file waits for more
+        assert first.startswith("cycle")
+        with grow.open("a") as f:
+            f.write(text[cut:])
+        seen = [first]
+        while not seen[-1].startswith("cycle    40") and seen[-1]:  # '' where the process ended
+            seen.append(p.stdout.readline())
+        assert sum("MISFIRE" in line for line in seen) == 3
+        time.sleep(0.3)
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130 and "rotor: interrupted" in err
