@@ -354,7 +354,7 @@ class MisfireMonitor:
         self.threshold, self.min_spread = float(threshold), float(min_spread)
         by_angle = np.argsort(fire, kind="stable")
         self._fire = fire[by_angle]  # firing angles within a cycle, sorted
-        self._fire_cyl = by_angle + 1  # their cylinders, from 1
+        self._fire_cyl = [int(c) + 1 for c in by_angle]  # their cylinders, from 1
         seg = min(cycle / n, math.pi) if segment_deg is None else math.radians(float(segment_deg))
         if not (0 < seg <= cycle):
             raise EngineError(f"segment_deg = {segment_deg!r}: a positive angle up to one cycle")
@@ -666,32 +666,36 @@ class MisfireMonitor:
         self._next = (k, j)
         K = np.asarray(slots_k, dtype=np.int64)
         J = np.asarray(slots_j, dtype=np.int64)
+        th, tt = self._th, self._t
         a = K * self.cycle_rad + self._fire[J] + self.offset_rad
         b = a + seg
-        pts = np.stack([a - half, a + half, b - half, b + half])
-        tp = np.interp(pts, self._th, self._t)
+        ce = (K + 1) * self.cycle_rad
+        n = K.size
+        tp = np.interp(np.concatenate([a - half, a + half, b - half, b + half, a, b, ce]), th, tt).reshape(7, n)
         w = self.window_rad
         wa = w / (tp[1] - tp[0])
         wb = w / (tp[3] - tp[2])
-        wm = (b - a) / (np.interp(b, self._th, self._t) - np.interp(a, self._th, self._t))
+        wm = seg / (tp[5] - tp[4])
         e = (wb**2 - wa**2) / wm**2
-        last = np.minimum(np.searchsorted(self._th, b + half, side="left"), self._th.size - 1)
-        t_dec = self._t[last]
+        last = np.minimum(np.searchsorted(th, b + half, side="left"), th.size - 1)
+        t_dec = tt[last]
         # everything about a firing comes from the edges up to the last one it uses, so that
         # the verdicts do not depend on how the stream was cut into chunks; its cycle's end is
         # measured where those edges reach it, else predicted at the last revolution's speed
-        ce = (K + 1) * self.cycle_rad
-        th_dec = self._th[last]
-        back = np.minimum(np.searchsorted(self._th, th_dec - TWO_PI), last - 1)
-        omega = (th_dec - self._th[back]) / (t_dec - self._t[back])
+        th_dec = th[last]
+        back = np.minimum(np.searchsorted(th, th_dec - TWO_PI), last - 1)
+        omega = (th_dec - th[back]) / (t_dec - tt[back])
         predicted = ce > th_dec
-        end_s = np.where(predicted, t_dec + (ce - th_dec) / omega, np.interp(ce, self._th, self._t))
+        end_s = np.where(predicted, t_dec + (ce - th_dec) / omega, tp[6])
         out: list[Verdict] = []
-        for i in range(K.size):
-            self._waiting.append(
-                [int(K[i]), int(J[i]), float(e[i]), float(t_dec[i]), float(end_s[i]), bool(predicted[i]), False]
-            )
-            out.extend(self._release_waiting(force=False))
+        items = zip(slots_k, slots_j, e.tolist(), t_dec.tolist(), end_s.tolist(), predicted.tolist())
+        if self._warm:
+            for kk, jj, ee, td, es, pr in items:
+                self._decide(kk, jj, ee, td, es, pr, False, 0.0, out)
+        else:
+            for item in items:
+                self._waiting.append([*item, False])
+                out.extend(self._release_waiting(force=False))
         self._trim()
         return out
 
@@ -715,33 +719,38 @@ class MisfireMonitor:
                 pool.append(item[2] - m)
         while self._waiting:
             item = self._waiting.pop(0)
-            k, j, e, t_dec, end_s, predicted, fed = item[:7]
-            c0 = int(self._fire_cyl[j]) - 1
-            if fed:
-                r = item[7]
-            else:
-                m, _ = own[c0].median_spread() if len(own[c0]) else (e, 0.0)
-                r = e - m
-            _, s = pool.median_spread() if len(pool) else (0.0, 0.0)
-            s = max(s, self.min_spread)
-            index = r / s
-            index_std = math.sqrt(1.0 + math.pi / (2 * max(len(own[c0]), 1)))
-            if not fed:
-                own[c0].append(e)
-                pool.append(r)
-            held, self._held = self._held, None
-            if held is not None:
-                out.append(self._verdict(held, index, t_dec))
-            prev, self._prev_index = self._prev_index, float(index)
-            if k < 1:
-                continue  # before cycle 1: it feeds the baseline only
-            # held until the next firing is measured: a loss that is mostly a neighbour's
-            # (the tail of its expansion stroke in this segment) is not this firing's misfire
-            self._held = (k, int(self._fire_cyl[j]), float(index), index_std, e, end_s, predicted, prev, t_dec)
+            k, j, e, td, es, pr, fed = item[:7]
+            self._decide(k, j, e, td, es, pr, fed, item[7] if fed else 0.0, out)
         if force and self._held is not None:
             out.append(self._verdict(self._held, math.nan, self._held[8]))
             self._held = None
         return out
+
+    def _decide(
+        self, k: int, j: int, e: float, t_dec: float, end_s: float, predicted: bool, fed: bool, r: float, out: list
+    ) -> None:
+        """Judge one firing against the baselines (``fed``: its values are in them already,
+        its deviation ``r``); the verdict on the firing before it goes to ``out``."""
+        c0 = self._fire_cyl[j] - 1
+        own = self._own[c0]
+        pool = self._history
+        if not fed:
+            m = own.median_spread()[0] if len(own) else e
+            r = e - m
+        s = max(pool.median_spread()[1] if len(pool) else 0.0, self.min_spread)
+        index = r / s
+        index_std = math.sqrt(1.0 + math.pi / (2 * max(len(own), 1)))
+        if not fed:
+            own.append(e)
+            pool.append(r)
+        held = self._held
+        if held is not None:
+            out.append(self._verdict(held, index, t_dec))
+        prev, self._prev_index = self._prev_index, index
+        # held until the next firing is measured: a loss that is mostly a neighbour's (the
+        # tail of its expansion stroke in this segment) is not this firing's misfire; a
+        # firing before cycle 1 only feeds the baselines
+        self._held = (k, c0 + 1, index, index_std, e, end_s, predicted, prev, t_dec) if k >= 1 else None
 
     def _verdict(self, held: tuple, next_index: float, t_dec: float) -> Verdict:
         k, c, index, index_std, e, end_s, predicted, prev, _ = held
