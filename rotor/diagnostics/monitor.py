@@ -550,11 +550,19 @@ class MisfireMonitor:
             shift = TWO_PI * round((pred - theta[0]) / TWO_PI)
             phase0 += shift
             theta = theta + shift
+            hole = t0 - self._last_t_locked
+            revs = self._last_omega * hole / TWO_PI
+            doubt = (
+                "; over so long a loss the speed may have changed (the engine stopped?): the cycle count "
+                "from here may be off by a revolution, and cylinders with it"
+                if revs > 2
+                else ""
+            )
             self._note(
                 NoteKind.FOUND,
                 t0,
-                f"the wheel found again at {t0:.6f} s; the revolutions counted on from the last speed "
-                f"({(t0 - self._last_t_locked):.4f} s without the wheel)",
+                f"the wheel found again at {t0:.6f} s, {hole:.4f} s ({revs:.1f} revolutions at the last speed) "
+                f"after it was lost; the revolutions counted on at the last speed{doubt}",
             )
         else:
             self._note(NoteKind.FOUND, t0, f"the {w.spec} wheel found: edges placed from {t0:.6f} s")
