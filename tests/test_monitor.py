@@ -232,3 +232,16 @@ def test_follow_reads_a_growing_file_and_ctrl_c_exits_130(recorded, tmp_path):
         if p.poll() is None:
             p.kill()
     assert p.returncode == 130 and "rotor: interrupted" in err
+
+
+def test_a_hole_in_the_data_is_named_and_the_cycles_count_on_by_the_clock(recorded):
+    t = times_of(recorded[0])
+    t = np.concatenate([t[:2000], t[2000:] + 5.0])  # 5 s without edges after cycle 15 or so
+    m = MisfireMonitor("60-2", tdc_deg=29.4, engine="4chn15")
+    out = m.feed(t) + m.close()
+    notes = m.pop_notes()
+    again = [n.text for n in notes if n.kind is NoteKind.FOUND][1]
+    assert "5.0008 s" in again and "may be off" in again
+    assert any(n.kind is NoteKind.NOT_JUDGED for n in notes)
+    flagged = {(v.cycle, v.cylinder) for v in out if v.misfire}
+    assert (7, 2) in flagged and len(flagged) == 3  # the later two, shifted by the hole's cycles
