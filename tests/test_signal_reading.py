@@ -229,3 +229,16 @@ def test_a_wheel_in_another_column_is_named(tmp_path, capsys):
         assert main(["analyze", str(log), "--wheel", wheel, "--columns", "time,encoder_v,pressure_v"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "'pressure_v' reads as the 60-2 wheel" in err and "--columns" in err
+
+
+def test_a_calibration_of_another_wheel_is_named_by_its_origin(tmp_path, capsys):
+    """tue-single's preset calibration holds a 60-2 wheel's tooth errors: a 36-2-1 log diagnosed with it is refused
+    in one line that says the errors are the preset's own calibration's, and how to go without it."""
+    from rotor.logs.synthetic import speed_profile, wheel_signal, write_log
+
+    s = wheel_signal(speed_profile("steady", rpm=3000.0, revolutions=30, ripple=0.05), "36-2-1", sensor="hall")
+    write_log(tmp_path / "w.txt", s)
+    assert main(["diagnose", str(tmp_path / "w.txt"), "--engine", "tue-single", "--wheel", "36-2-1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the preset's own calibration" in err and "60-2" in err
+    assert "--no-calibration" in err

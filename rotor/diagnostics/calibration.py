@@ -108,7 +108,7 @@ from ..fileio import load_json, save_json
 from ..logs.analysis import LogAnalysis, PhaseSource
 from ..logs.reader import read_log
 from ..logs.track import read_track
-from ..logs.wheel import ToothErrors
+from ..logs.wheel import ToothErrors, parse_wheel
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
 from .identification import NO_FIRING_NOTE, POOR_FIT_R2, Identification
@@ -1150,6 +1150,17 @@ def diagnose(
             if source_log.kind != "speed" and w is not None
             else None
         )
+        if reading is not None and isinstance(te, ToothErrors) and parse_wheel(te.wheel) != reading.wheel:
+            origin = (
+                f"the preset's own calibration, {cal_source[len('preset ') :]}"
+                if cal_source is not None and cal_source.startswith("preset ")
+                else f"the calibration{f' ({cal_source})' if cal_source else ''}"
+            )
+            raise LogError(
+                f"{reading.source}: {origin} holds the tooth errors of a {te.wheel} wheel, and this log's wheel is "
+                f"{reading.wheel.spec}: give a calibration made on this wheel (calibration=, --calibration FILE) or "
+                f"none (calibration=None, --no-calibration)"
+            )
 
         def read(tdc, fire, teeth):
             return analyze_log(
