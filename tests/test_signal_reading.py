@@ -242,3 +242,11 @@ def test_a_calibration_of_another_wheel_is_named_by_its_origin(tmp_path, capsys)
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the preset's own calibration" in err and "60-2" in err
     assert "--no-calibration" in err
+
+
+@needs_ecu
+def test_a_capture_whose_channels_are_swapped_names_the_crank(capsys):
+    argv = ["analyze", str(ECU / "4b11-running.csv"), "--wheel", "36-2-1", "--columns", "time,cam_d,encoder_d"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'cam_d' reads as the 36-2-1 wheel" in err and "--columns" in err

@@ -467,13 +467,17 @@ def _tooth_edge(log: Log, track: ToothTrack | None, edges: Edges | None) -> str 
 def _swapped_column(log: Log, w: Wheel | None) -> str:
     """Where another sampled column of ``log`` reads as a wheel (``w``, or any), the words that
     say so; empty otherwise (a column given in the wrong place of ``columns``)."""
-    if log.kind != "encoder":
+    if log.kind not in ("encoder", "digital"):
         return ""
-    for other in ("pressure_v", "cam_v", "index_v"):
+    others = ("pressure_v", "cam_v", "index_v") if log.kind == "encoder" else ("cam_d",)
+    for other in others:
         if other not in log:
             continue
         try:
-            probe = Log.from_arrays(time=log["time"], encoder_v=log[other])
+            if log.kind == "encoder":
+                probe = Log.from_arrays(time=log["time"], encoder_v=log[other])
+            else:
+                probe = Log.from_arrays(time=log["time"], encoder_d=log[other])
             r = read_track(probe, "auto" if w is None else w, name=log.source)
         except LogError:
             continue
@@ -488,10 +492,9 @@ def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
     """The one-line error where no edge fits: what was expected, and what to try."""
     swapped = _swapped_column(log, w)
     if swapped:
+        col = "encoder_v" if log.kind == "encoder" else "encoder_d"
         why = (
-            "no wheel fits the 'encoder_v' column"
-            if w is None
-            else f"the {w.spec} wheel does not fit the 'encoder_v' column"
+            f"no wheel fits the {col!r} column" if w is None else f"the {w.spec} wheel does not fit the {col!r} column"
         )
         return LogError(f"{name}: {why}{swapped}")
     if w is None:
