@@ -109,6 +109,32 @@ def test_a_geometry_change_never_reuses_stale_tables(diesel):
         jax.block_until_ready(solve(stale))
 
 
+def test_an_engine_object_is_checked_and_its_tables_found_once(diesel, monkeypatch):
+    """The same engine object (immutable) is checked and looked up once; a new object with
+    the same values is checked again, and one with a bad value put in by tree_at is refused
+    although its tables' inputs are those of the engine before."""
+    ct.clear_table_cache()
+    checks = []
+    real = rotor.Engine.check
+    monkeypatch.setattr(rotor.Engine, "check", lambda self: checks.append(self) or real(self))
+    first = rotor.steady_state(diesel, rpm=1250.0, grid_deg=GRID)
+    assert len(checks) == 1
+    again = [rotor.steady_state(diesel, rpm=rpm, grid_deg=GRID) for rpm in (1250.0, 1500.0)]
+    assert len(checks) == 1, "the same object is not checked again"
+    np.testing.assert_array_equal(np.asarray(again[0].omega), np.asarray(first.omega))
+    twin = eqx.tree_at(lambda e: e.operating.rpm, diesel, diesel.operating.rpm)  # a new object
+    rotor.steady_state(twin, rpm=1250.0, grid_deg=GRID)
+    assert len(checks) == 2 and checks[-1] is twin
+    flywheel = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, diesel.crankshaft.inertia_kgm2 * 2)
+    heavy = [rotor.steady_state(flywheel, rpm=1250.0, grid_deg=GRID) for _ in range(2)]
+    assert len(checks) == 3
+    np.testing.assert_array_equal(np.asarray(heavy[0].omega), np.asarray(heavy[1].omega))
+    assert float(heavy[0].delta) < float(first.delta)
+    broken = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, jnp.asarray(0.0))
+    with pytest.raises(rotor.EngineError, match="inertia_kgm2"):
+        rotor.steady_state(broken, rpm=1250.0, grid_deg=GRID)
+
+
 def test_prepared_steady_state_is_the_engines(diesel, prepared):
     """The prepared engine gives the same steady state as the engine, bit for bit, and
     another crankshaft inertia the same as an engine built with it (1e-12)."""
