@@ -74,7 +74,24 @@ def harmonic():
     return rotor.harmonic_torque(_engine(), _speed(), load=50.0)
 
 
+@functools.cache
+def monitor_result():
+    """The streaming monitor's result on 30 cycles of a four-cylinder engine's 60-2 tooth times at 1500 rpm with
+    a firing ripple at order 2 (no engine file)."""
+    from rotor.diagnostics.monitor import MisfireMonitor
+
+    pitch = 2 * np.pi / 60
+    ang = np.concatenate([r * 2 * np.pi + pitch * np.arange(58) for r in range(60)])
+    omega = 157.0 * (1 + 0.01 * np.sin(2 * ang))
+    t = np.concatenate([[0.0], np.cumsum(np.diff(ang) / omega[1:])])
+    m = MisfireMonitor("60-2", tdc_deg=0.0, cylinders=4, firing_order=[1, 3, 4, 2])
+    m.feed(t)
+    m.close()
+    return m.result()
+
+
 FACTORIES = {
+    "MonitorResult": monitor_result,
     "Identification": identification,
     "Calibration": calibration,
     "Diagnosis": diagnosis,

@@ -271,17 +271,17 @@ class MonitorResult(Result):
         )
 
     def plot(self, ax: Any = None) -> Any:
-        import matplotlib.pyplot as plt
+        """The misfires of each cylinder as bars. Returns the Axes."""
+        from ..plotting.common import new_axes
 
-        if ax is None:
-            _, ax = plt.subplots()
+        ax = new_axes(ax)
         x = np.arange(1, self.cylinders + 1)
-        bars = ax.bar(x, self.misfires, color="tab:red")
+        ax.bar(x, self.misfires, color="tab:red")
         ax.set_xlabel("cylinder")
         ax.set_ylabel("misfires")
         ax.set_xticks(x)
         ax.set_title(f"misfires per cylinder ({int(self.judged.sum())} firings judged)")
-        return bars
+        return ax
 
 
 class MisfireMonitor:
