@@ -481,6 +481,8 @@ def _swapped_column(log: Log, w: Wheel | None) -> str:
             r = read_track(probe, "auto" if w is None else w, name=log.source)
         except LogError:
             continue
+        if r.track.revolutions < 2 or r.fit.inferred:
+            continue
         return (
             f"; the column read as {other!r} reads as the {r.wheel.spec} wheel ({r.track.revolutions} revolutions): "
             f"check which column is which (--columns)"
@@ -490,7 +492,8 @@ def _swapped_column(log: Log, w: Wheel | None) -> str:
 
 def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
     """The one-line error where no edge fits: what was expected, and what to try."""
-    swapped = _swapped_column(log, w)
+    better = _what_fits(log, per_edge)
+    swapped = "" if better else _swapped_column(log, w)  # only where the column read fits no wheel at all
     if swapped:
         col = "encoder_v" if log.kind == "encoder" else "encoder_d"
         why = (
@@ -510,7 +513,6 @@ def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
         return LogError(f"{name}: no wheel found that fits the signal: {reasons}; give the wheel (--wheel N-g1-g2…)")
     mine = [f for f in tried if f.spec == w.spec]
     over = [f for f in mine if f.status == FitStatus.OVER_BUDGET]
-    better = _what_fits(log, per_edge)
     hint = f"; {better}" if better else "; check the wheel (--wheel auto finds it) and which column is the wheel"
     if edge != "auto" and log.kind in ("encoder", "digital"):
         other = "falling" if edge == "rising" else "rising"
