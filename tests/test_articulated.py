@@ -42,7 +42,7 @@ def test_zero_knuckle_radius_is_an_ordinary_cylinder():
 
 
 def test_slave_stroke_and_tdc_differ_from_the_master():
-    """Seed 000: with r1 > 0 the slave's kinematics differ (stroke, TDC), which is why
+    """The textbook's articulated rod: with r1 > 0 the slave's kinematics differ (stroke, TDC), which is why
     designers aim for r1 -> 0 and L = L1 + r1."""
     g = SlaveGeometry(R, L, 0.0, 0.04, np.deg2rad(60), L1, np.deg2rad(60))
     s = slave_piston_motion(jnp.linspace(0, 2 * np.pi, 20001), g).s

@@ -1,5 +1,5 @@
 """The simulator at the edges of its range: a result within its accuracy or a clear error,
-never a silent NaN, never a hang (issue 4, item 5)."""
+never a silent NaN, never a hang."""
 
 import tomllib
 

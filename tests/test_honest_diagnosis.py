@@ -1,5 +1,5 @@
 """A diagnosis says when its fit is poor, and its plot shows the IMEP the pressure channel
-measured (issue 14)."""
+measured."""
 
 from __future__ import annotations
 

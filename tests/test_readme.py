@@ -6,7 +6,7 @@
   only with a reason written next to it). A failure names the README's own line.
 - A few figures the README's comments quote are checked against what the blocks computed.
 - No text in README.md, the package or benchmarks/README.md cites the project's internal
-  "seed 00N" documents: users do not have them; the README's "Sources" section names the
+  internal working-copy documents: users do not have them; the README's "Sources" section names the
   published works.
 """
 
@@ -121,13 +121,13 @@ def _texts():
 
 
 def test_no_internal_seed_references():
-    """Users do not have the project's "seed 00N" documents: cite the published sources."""
+    """Users do not have the project's internal working-copy documents: cite the published sources."""
     found = []
     for path in _texts():
         for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
             if SEED.search(line):
                 found.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()[:100]}")
-    assert not found, "internal 'seed 00N' references:\n" + "\n".join(found)
+    assert not found, "internal working-copy references:\n" + "\n".join(found)
 
 
 def test_a_block_marked_no_test_is_left_out():

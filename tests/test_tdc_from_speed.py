@@ -1,5 +1,4 @@
-"""TDC from the crank speed alone, and a calibration checked against the recording (issue 16,
-items 4 and 5): a simulated engine whose wheel is mounted 30°, 90° and 180° away from the
+"""TDC from the crank speed alone, and a calibration checked against the recording: a simulated engine whose wheel is mounted 30°, 90° and 180° away from the
 calibration's TDC, firing steadily and with an ignition cut, is corrected from the speed and
 diagnosed within the synthetic recordings' usual IMEP error (1 %, tests/test_synthetic.py),
 never as misfires; a speed without the engine's signature is refused with the reason."""

@@ -657,7 +657,7 @@ def analyze_log(
       whose amplitude grows with speed) is read at its zero crossings
       (:func:`rotor.logs.edges.find_edges` with ``levels="vr"``).
     - ``wheel``: also ``"N-g1-g2…"`` (``"36-2-1"``), a wheel file (``*.toml``) or
-      ``"auto"`` (found from the log, :func:`rotor.logs.pattern.find_wheel`; a note says
+      ``"auto"`` (found from the log, :func:`rotor.logs.identify.find_wheel`; a note says
       what). Edges that do not fit are repaired where the pattern proves how
       (:mod:`rotor.logs.pattern`; each repair in ``track.repairs`` and the JSON).
     - ``compression_ratio``, ``rod_ratio`` (crank radius / rod length): the engine's,

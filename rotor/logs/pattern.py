@@ -48,7 +48,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from ..errors import LogError
 from .wheel import Repair, ToothTrack, Wheel, parse_wheel, period_ratios, repairs_json, repairs_summary
 
-__all__ = ["Repair", "locate_teeth", "follow_pattern", "find_wheel", "repairs_json", "repairs_summary", "pitches"]
+__all__ = ["Repair", "locate_teeth", "follow_pattern", "repairs_json", "repairs_summary", "pitches"]
 
 SHORT = 0.5  # a period shorter than this many local tooth periods holds an extra edge
 END_REVS = 2  # at most this many revolutions' edges dropped at either end of the log
@@ -393,58 +393,6 @@ def place(repairs, t: np.ndarray, rev: np.ndarray) -> list:
         k = int(np.clip(np.searchsorted(t, rp.time_s, side="right") - 1, 0, t.size - 1))
         out.append(dataclasses.replace(rp, revolution=int(rev[k])))
     return sorted(out, key=lambda r: r.time_s)
-
-
-def find_wheel(times, *, what: str = "the tooth edges") -> tuple[Wheel, str]:
-    """The wheel of a log, found from its edge times [s] (``--wheel auto``): the pattern of
-    long periods that repeats, its positions per revolution and its gaps, gap 1 the
-    longest (of equal ones, the one followed by the most teeth).
-
-    **Returns:** (the :class:`rotor.logs.wheel.Wheel` with its layout, what was found in
-    words). A wheel whose pattern repeats within a revolution (equal gaps evenly spaced)
-    is found as its repeating part (36-2-2-2 with three equal stretches reads as 12-2): a
-    note says so. Raises :class:`LogError` where no gap repeats.
-    """
-    t = np.asarray(times, dtype=np.float64)
-    if t.size < 12:
-        raise LogError(f"--wheel auto: {t.size} tooth edges; too few to find the wheel")
-    t, _, p = remove_extra_edges(t, True, what)
-    if p is None:
-        p, _ = pitches(np.diff(t))
-    n = np.maximum(np.round(p).astype(np.int64), 1)
-    L = np.flatnonzero(n >= 2)
-    if L.size < 3:
-        raise LogError(
-            f"--wheel auto: {L.size} gap(s) in {t.size} tooth edges: no repeating gap found (a wheel without a "
-            f"gap needs its tooth count and an index column, e.g. --wheel 60 with index_v)"
-        )
-    s = n[L] - 1
-    run = np.diff(L)
-    s = s[:-1]
-    C = np.concatenate([[0], np.cumsum(n)])
-    for G in range(1, min(8, s.size - 1) + 1):
-        same = (s[G:] == s[:-G]) & (run[G:] == run[:-G])
-        if same.size and np.mean(same) >= 0.8:
-            break
-    else:
-        raise LogError(
-            f"--wheel auto: the gaps in the log (missing {', '.join(map(str, s[:8]))} …) do not repeat; "
-            f"give the wheel (--wheel N-g1-g2…)"
-        )
-    span = C[L[G:]] - C[L[:-G]]
-    N = int(Counter(span.tolist()).most_common(1)[0][0])
-    windows = Counter(
-        (tuple(int(x) for x in s[j : j + G]), tuple(int(x) for x in run[j : j + G]))
-        for j in range(min(s.size - G + 1, 400))
-        if C[L[j + G]] - C[L[j]] == N
-    )
-    (gaps, lay), _ = windows.most_common(1)[0]
-    # gap 1: the longest gap; of equal ones, the one followed by the most teeth
-    r = max(range(G), key=lambda k: (gaps[k], lay[k:] + lay[:k]))
-    gaps, lay = gaps[r:] + gaps[:r], lay[r:] + lay[:r]
-    wheel = Wheel(N, sum(gaps), gaps, lay)
-    said = f"wheel found from the log: {wheel.spec} ({wheel.describe()})"
-    return wheel, said
 
 
 def locate_teeth(
