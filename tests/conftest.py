@@ -1,6 +1,7 @@
 import gc
 import json
 import os
+import time
 from pathlib import Path
 
 import matplotlib
@@ -49,6 +50,8 @@ SHARED_DATA = ROOT.parent / "shared" / "data"
 # process writes its own count into build/test-compilations/, the summary adds them up.
 COMPILATIONS = ROOT / "build" / "test-compilations"
 _COMPILED = {"programs": 0, "from_cache": 0, "seconds": 0.0}
+_PER_TEST: dict[str, list[float]] = {}
+"""Per test file: [XLA programs compiled, seconds compiling, seconds in its tests]."""
 
 
 def _count_program(event: str, duration_secs: float, **_: object) -> None:
@@ -72,10 +75,22 @@ def pytest_configure(config):
             old.unlink(missing_ok=True)
 
 
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """Adds up, per test file, the programs compiled and the time spent (setup, call and
+    teardown), for the summary's table of where the suite's time goes."""
+    programs, seconds, start = _COMPILED["programs"] - _COMPILED["from_cache"], _COMPILED["seconds"], time.perf_counter()
+    yield
+    row = _PER_TEST.setdefault(item.nodeid.split("::")[0], [0, 0.0, 0.0])
+    row[0] += _COMPILED["programs"] - _COMPILED["from_cache"] - programs
+    row[1] += _COMPILED["seconds"] - seconds
+    row[2] += time.perf_counter() - start
+
+
 def pytest_sessionfinish(session):
     worker = getattr(session.config, "workerinput", {}).get("workerid", "main")
     COMPILATIONS.mkdir(parents=True, exist_ok=True)
-    (COMPILATIONS / f"{worker}.json").write_text(json.dumps(_COMPILED))
+    (COMPILATIONS / f"{worker}.json").write_text(json.dumps({**_COMPILED, "files": _PER_TEST}))
 
 
 def pytest_terminal_summary(terminalreporter):
@@ -87,6 +102,14 @@ def pytest_terminal_summary(terminalreporter):
             f"XLA programs in the test processes: {programs} ({cached} read from the persistent compilation cache, "
             f"{programs - cached} compiled), {seconds:.0f} s"
         )
+        files: dict[str, list[float]] = {}
+        for c in counts:
+            files.update(c.get("files", {}))
+        slowest = sorted(files.items(), key=lambda kv: -kv[1][2])[:15]
+        if slowest:
+            terminalreporter.write_line("slowest test files: seconds (of them compiling), programs compiled")
+            for name, (n, compiling, total) in slowest:
+                terminalreporter.write_line(f"{total:8.1f} s ({compiling:6.1f} s) {int(n):6d}  {name}")
 
 
 def _memory_maps() -> tuple[int, int]:
