@@ -79,7 +79,11 @@ def pytest_configure(config):
 def pytest_runtest_protocol(item, nextitem):
     """Adds up, per test file, the programs compiled and the time spent (setup, call and
     teardown), for the summary's table of where the suite's time goes."""
-    programs, seconds, start = _COMPILED["programs"] - _COMPILED["from_cache"], _COMPILED["seconds"], time.perf_counter()
+    programs, seconds, start = (
+        _COMPILED["programs"] - _COMPILED["from_cache"],
+        _COMPILED["seconds"],
+        time.perf_counter(),
+    )
     yield
     row = _PER_TEST.setdefault(item.nodeid.split("::")[0], [0, 0.0, 0.0])
     row[0] += _COMPILED["programs"] - _COMPILED["from_cache"] - programs
