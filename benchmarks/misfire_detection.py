@@ -211,23 +211,43 @@ def condition_rows(n, rpm, load_name, clean_cycles, faulty_cycles, seed):
     return rows
 
 
-def throughput(cycles=2000, repeats=3):
-    """A V8 at 8000 rpm on 60-2, fed one revolution at a time: wall and CPU time, margin."""
+def _feed_all(m, t, size=58):
+    verdicts = 0
+    for i in range(0, t.size, size):
+        verdicts += len(m.feed(t[i : i + size]))
+    return verdicts + len(m.close())
+
+
+def throughput(cycles=2000, repeats=5):
+    """A V8 at 8000 rpm on 60-2, fed one revolution at a time: wall and CPU time, the margin
+    over real time; and the memory the monitor's allocations hold at their peak, after the
+    first tenth of the stream and over the rest (tracemalloc, in a separate pass)."""
+    import tracemalloc
+
     t = simulate(8, 8000.0, 0.5, cycles, 0.0, seed=7)[0]
     walls, cpus = [], []
+    verdicts = 0
+    _feed_all(MisfireMonitor("60-2", tdc_deg=TDC_DEG, cylinders=8), t[: t.size // 10])  # warm the code paths
     for _ in range(repeats):
         m = MisfireMonitor("60-2", tdc_deg=TDC_DEG, cylinders=8)
         w0, c0 = time.perf_counter(), time.process_time()
-        verdicts = 0
-        for i in range(0, t.size, 58):
-            verdicts += len(m.feed(t[i : i + 58]))
-        verdicts += len(m.close())
+        verdicts = _feed_all(m, t)
         walls.append(time.perf_counter() - w0)
         cpus.append(time.process_time() - c0)
     real = float(t[-1] - t[0])
     wall, cpu = float(np.median(walls)), float(np.median(cpus))
+    # memory: the stream's first tenth, then the peak over the rest against it
+    m = MisfireMonitor("60-2", tdc_deg=TDC_DEG, cylinders=8)
+    cut = (t.size // 10) // 58 * 58
+    tracemalloc.start()
+    _feed_all_open(m, t[:cut])
+    first_current, first_peak = tracemalloc.get_traced_memory()
+    tracemalloc.reset_peak()
+    _feed_all_open(m, t[cut:])
+    rest_current, rest_peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
     return {
-        "case": "V8, 8000 rpm, 60-2 wheel, chunks of one revolution (58 edges)",
+        "case": "V8, 8000 rpm, 60-2 wheel, chunks of one revolution (58 edges), one process on one core",
         "edges": int(t.size),
         "verdicts": verdicts,
         "log_seconds": real,
@@ -235,9 +255,29 @@ def throughput(cycles=2000, repeats=3):
         "cpu_s": cpu,
         "margin_over_real_time_wall": real / wall,
         "margin_over_real_time_cpu": real / cpu,
-        "edges_per_s_wall": t.size / wall,
+        "edges_per_s_cpu": t.size / cpu,
+        "cpu_us_per_revolution": 1e6 * cpu / (t.size / 58),
         "wall_s_runs": walls,
+        "cpu_s_runs": cpus,
+        "memory": {
+            "method": "tracemalloc: the monitor's allocations after the first tenth of the stream "
+            "(cycles), and their peak over the other nine tenths",
+            "first_tenth_cycles": int(cut / 58 / 2),
+            "rest_cycles": int((t.size - cut) / 58 / 2),
+            "after_first_tenth_bytes": int(first_current),
+            "peak_first_tenth_bytes": int(first_peak),
+            "peak_rest_bytes": int(rest_peak),
+            "end_bytes": int(rest_current),
+            "peak_growth_bytes": int(rest_peak - first_peak),
+            "buffer_edges_max": int(m.buffer_length),
+        },
     }
+
+
+def _feed_all_open(m, t, size=58):
+    """Feed without keeping the verdicts (the monitor's memory alone)."""
+    for i in range(0, t.size, size):
+        m.feed(t[i : i + size])
 
 
 def main():
@@ -268,6 +308,12 @@ def main():
         f"throughput: {tp['edges']} edges ({tp['log_seconds']:.1f} s of log) in {tp['wall_s']:.2f} s wall, "
         f"{tp['cpu_s']:.2f} s CPU: {tp['margin_over_real_time_wall']:.0f}x real time (wall), "
         f"{tp['margin_over_real_time_cpu']:.0f}x (CPU)"
+    )
+    mem = tp["memory"]
+    print(
+        f"memory: {mem['after_first_tenth_bytes'] / 1024:.1f} KiB held after {mem['first_tenth_cycles']} cycles, "
+        f"peak {mem['peak_rest_bytes'] / 1024:.1f} KiB over the next {mem['rest_cycles']} cycles "
+        f"(growth of the peak {mem['peak_growth_bytes'] / 1024:+.1f} KiB)"
     )
     out = {
         "rows": rows,
