@@ -19,7 +19,7 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/rotor demo --plot out
 
-# the house rules first (seconds), then the suite
+# the static checks first (seconds), then the suite
 lint: $(STAMP)
 	$(VENV)/bin/ruff check rotor tests benchmarks
 	$(VENV)/bin/ruff format --check rotor tests benchmarks

@@ -6,11 +6,11 @@ tracers and were already checked when the object was first built from numbers.
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .errors import EngineError
+from .jaxconfig import jax
 
 
 def as_f64(x):

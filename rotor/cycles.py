@@ -14,18 +14,19 @@ One definition, one code path, for :class:`rotor.SpeedResult` (a simulated run) 
   order, the half orders of a four-stroke first.
 
 Pure array code (numpy for numpy input, jax.numpy for JAX arrays and tracers, so that
-``jax.grad`` flows through); ground floor: imports nothing from rotor but
-:mod:`rotor.units`.
+``jax.grad`` flows through); base layer: imports nothing from rotor but
+:mod:`rotor.jaxconfig` (JAX with float64 on).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
+
+from .jaxconfig import jax
 
 __all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "cycle_delta"]
 

@@ -1,6 +1,7 @@
-"""The house rules that import-linter cannot see: no private name crosses a module
-boundary (in the package, its tests, benchmarks and notebooks), and every room says in its
-``__init__`` docstring what lives there and what it may import.
+"""The structure that import-linter cannot see: no private name crosses a module boundary
+(in the package, its tests, benchmarks and notebooks), every subpackage says in its
+``__init__`` docstring what lives there and what it may import, and every module that
+imports JAX imports :mod:`rotor.jaxconfig` (float64 on) with it.
 
 The layer contracts themselves are in ``pyproject.toml`` (``[tool.importlinter]``) and run
 by ``make test`` as ``lint-imports``; ``test_layer_contracts_hold`` runs them here too."""
@@ -13,7 +14,7 @@ import subprocess
 import pytest
 from conftest import ROOT
 
-ROOMS = ["engine", "dynamics", "logs", "diagnostics", "design", "torsion", "plotting", "cli"]
+SUBPACKAGES = ["engine", "dynamics", "logs", "diagnostics", "design", "torsion", "plotting", "cli"]
 
 
 def _private(name: str) -> bool:
@@ -99,23 +100,37 @@ def test_the_checker_sees_a_private_import():
     assert not _violations("from .crank_train import COL_I\nself._x = 1", "rotor.dynamics.equation")
 
 
-@pytest.mark.parametrize("room", ROOMS)
-def test_every_room_says_what_lives_there_and_what_it_may_import(room):
-    doc = ast.get_docstring(ast.parse((ROOT / "rotor" / room / "__init__.py").read_text(encoding="utf-8")))
-    assert doc and len(doc.splitlines()) >= 3, f"rotor/{room}/__init__.py needs a docstring"
-    assert "import" in doc, f"rotor/{room}/__init__.py must say what it may import"
+@pytest.mark.parametrize("subpackage", SUBPACKAGES)
+def test_every_subpackage_says_what_lives_there_and_what_it_may_import(subpackage):
+    doc = ast.get_docstring(ast.parse((ROOT / "rotor" / subpackage / "__init__.py").read_text(encoding="utf-8")))
+    assert doc and len(doc.splitlines()) >= 3, f"rotor/{subpackage}/__init__.py needs a docstring"
+    assert "import" in doc, f"rotor/{subpackage}/__init__.py must say what it may import"
 
 
-def test_ground_floor_imports_nothing_from_rotor():
-    for name in ("units", "errors", "checks", "fileio", "cache", "results", "cycles"):
+BASE = ("units", "errors", "checks", "fileio", "cache", "results", "cycles", "jaxconfig")
+
+
+def test_the_base_layer_imports_only_its_own_modules():
+    for name in BASE:
         here = f"rotor.{name}"
         tree = ast.parse((ROOT / "rotor" / f"{name}.py").read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom):
                 mod = _absolute(node, here, False)
-                assert not mod.startswith("rotor") or mod in {f"rotor.{g}" for g in ("errors", "units")}, (
-                    f"{name}: imports {mod}"
-                )
+                assert not mod.startswith("rotor") or mod in {f"rotor.{g}" for g in BASE}, f"{name}: imports {mod}"
+
+
+def test_every_module_that_imports_jax_imports_jaxconfig():
+    """float64 is on before rotor computes: each module that imports JAX also imports
+    :mod:`rotor.jaxconfig`, directly or through the modules it imports."""
+    grimp = pytest.importorskip("grimp")
+    graph = grimp.build_graph("rotor", include_external_packages=True)
+    users = graph.find_modules_that_directly_import("jax")
+    assert "rotor.dynamics.steady" in users
+    missing = sorted(
+        m for m in users if m != "rotor.jaxconfig" and not graph.chain_exists(importer=m, imported="rotor.jaxconfig")
+    )
+    assert not missing, f"these modules import jax but not rotor.jaxconfig: {missing}"
 
 
 @pytest.mark.skipif(
@@ -137,15 +152,15 @@ def test_top_level_all_is_one_sorted_list():
         assert hasattr(rotor, name), name
 
 
-def test_every_module_is_reachable_as_an_attribute_of_its_room():
+def test_every_module_is_reachable_as_an_attribute_of_its_subpackage():
     """``import rotor`` is lazy, yet ``rotor.diagnostics.calibration.preset_calibration``
     works in a fresh process, as it did when every module was imported eagerly."""
     import sys
 
     code = (
         "import pkgutil, rotor\n"
-        f"for room in {ROOMS!r}:\n"
-        "    package = getattr(rotor, room)\n"
+        f"for name in {SUBPACKAGES!r}:\n"
+        "    package = getattr(rotor, name)\n"
         "    for m in pkgutil.iter_modules(package.__path__):\n"
         "        if not m.name.startswith('_'):\n"
         "            getattr(package, m.name)\n"

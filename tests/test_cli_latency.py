@@ -6,7 +6,6 @@ measures the speed."""
 
 from __future__ import annotations
 
-import ast
 import json
 import os
 import re
@@ -79,62 +78,35 @@ def test_presets_lists_the_engines_load_engine_builds():
     assert preset_listing() == {name: rotor.load_engine(name).name for name in rotor.preset_names()}
 
 
-def _lazy_tables():
-    """The top level's TYPE_CHECKING imports {name: module} and its _PUBLIC mapping."""
-    tree = ast.parse((ROOT / "rotor" / "__init__.py").read_text(encoding="utf-8"))
-    imported, public = {}, {}
-    for node in tree.body:
-        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
-            for imp in node.body:
-                assert isinstance(imp, ast.ImportFrom) and imp.level == 1, ast.dump(imp)
-                imported.update({a.name: imp.module for a in imp.names})
-        if isinstance(node, ast.AnnAssign) and getattr(node.target, "id", None) == "_PUBLIC":
-            for key, names in zip(node.value.keys, node.value.values):
-                public.update({n.value: key.value for n in names.elts})
-    return imported, public
-
-
-def test_the_lazy_top_level_has_one_list_of_names():
-    """``__all__``, the imports type checkers and the documentation see, and the mapping
-    that imports each name on first use agree."""
-    imported, public = _lazy_tables()
-    assert imported == public
-    assert sorted(public) == sorted(rotor.__all__)
-    assert set(rotor.__all__) <= set(dir(rotor))
-
-
-def test_every_public_name_comes_from_its_module():
-    _, public = _lazy_tables()
-    for name, module in public.items():
-        value = getattr(rotor, name)
-        assert value is getattr(sys.modules[f"rotor.{module}"], name), name
-    assert isinstance(rotor.engine, type(rotor))  # a room, as a submodule
-    with pytest.raises(AttributeError):
-        rotor.no_such_name  # noqa: B018
-
-
-def test_float64_is_on_however_jax_is_imported():
+def test_float64_is_on_once_rotor_computes_however_jax_is_imported():
+    """A module of rotor that computes switches float64 on, whether JAX was imported before
+    rotor, after it, or through it."""
     for code in (
-        "import rotor, jax.numpy as jnp; print(jnp.zeros(1).dtype)",
-        "import jax.numpy as jnp, rotor; print(jnp.zeros(1).dtype)",
-        "import rotor; from jax import numpy as jnp; print(jnp.zeros(1).dtype)",
+        "import rotor, jax.numpy as jnp; rotor.Engine; print(jnp.zeros(1).dtype)",
+        "import jax.numpy as jnp, rotor; rotor.steady_state; print(jnp.zeros(1).dtype)",
+        "import rotor.engine.model; from jax import numpy as jnp; print(jnp.zeros(1).dtype)",
+        "import rotor.cycles, jax.numpy as jnp; print(jnp.zeros(1).dtype)",
     ):
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
         assert out.stdout.strip() == "float64", code
 
 
 def test_the_cache_waits_for_jax(tmp_path):
-    """``enable_compilation_cache`` before JAX is imported does not import it, and sets the
-    cache once JAX is imported."""
-    code = (
-        "import json, sys, rotor; used = rotor.enable_compilation_cache(); before = 'jax' in sys.modules; "
-        "import jax; print(json.dumps([used, before, jax.config.jax_compilation_cache_dir, "
+    """``enable_compilation_cache`` before JAX is imported does not import it, and the cache
+    is set once rotor imports JAX; with JAX imported already it is set at once."""
+    env = {"ROTOR_COMPILATION_CACHE": str(tmp_path / "c"), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+    report = (
+        "print(json.dumps([used, before, jax.config.jax_compilation_cache_dir, "
         "jax.config.jax_persistent_cache_min_compile_time_secs]))"
     )
-    env = {"ROTOR_COMPILATION_CACHE": str(tmp_path / "c"), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
-    used, before, folder, threshold = json.loads(out.stdout)
-    assert used == folder == str(tmp_path / "c") and not before and threshold == 0.1
+    for code in (
+        "import json, sys, rotor; used = rotor.enable_compilation_cache(); before = 'jax' in sys.modules; "
+        "rotor.Engine; import jax; " + report,
+        "import json, sys, jax, rotor; before = False; used = rotor.enable_compilation_cache(); " + report,
+    ):
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+        used, before, folder, threshold = json.loads(out.stdout)
+        assert used == folder == str(tmp_path / "c") and not before and threshold == 0.1, code
 
 
 def _run_kept(tmp_path, *argv):

@@ -14,9 +14,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
-
+from ..jaxconfig import jax, jnp
 from .kinematics import PistonMotion
 
 __all__ = ["SlaveGeometry", "slave_piston_motion", "knuckle_velocity_sq"]

@@ -22,8 +22,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
+
+from ..jaxconfig import jnp
 
 __all__ = [
     "PistonMotion",
