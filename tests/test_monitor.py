@@ -245,3 +245,64 @@ def test_a_hole_in_the_data_is_named_and_the_cycles_count_on_by_the_clock(record
     assert any(n.kind is NoteKind.NOT_JUDGED for n in notes)
     flagged = {(v.cycle, v.cylinder) for v in out if v.misfire}
     assert (7, 2) in flagged and len(flagged) == 3  # the later two, shifted by the hole's cycles
+
+
+def model_imep(log, **kw):
+    """The monitor's per-firing IMEP [bar] and its standard error, against the recording's
+    truth, as (cycles, cylinders) arrays (NaN where not judged)."""
+    truth = json.loads(log.with_name(log.stem + ".truth.json").read_text())
+    true = np.asarray(truth["imep_pa"]) / 1e5
+    m = MisfireMonitor("60-2", tdc_deg=truth["tdc_after_gap_deg"], engine="4chn15", **kw)
+    out = m.feed(times_of(log)) + m.close()
+    est, std = np.full(true.shape, np.nan), np.full(true.shape, np.nan)
+    for v in out:
+        if v.cycle <= true.shape[0]:
+            est[v.cycle - 1, v.cylinder - 1] = v.imep_pa / 1e5
+            std[v.cycle - 1, v.cylinder - 1] = v.imep_std_pa / 1e5
+    return est, std, true, m
+
+
+@pytest.fixture(scope="module")
+def half_fuel(tmp_path_factory):
+    log = tmp_path_factory.mktemp("monitor_half") / "half.csv"
+    code = cli.main(
+        ["simulate", "4chn15", "--cycles", "12", "--fuel-scale", "0.5", "--record", str(log), "--wheel", "60-2"]
+    )
+    assert code == 0
+    return log
+
+
+def test_the_model_imep_of_a_misfire_is_far_below_the_fired_cylinders(recorded):
+    est, std, true, m = model_imep(recorded[0])
+    mis = np.zeros(true.shape, dtype=bool)
+    for k, c in MISFIRES:
+        mis[k - 1, c - 1] = True
+    fired = est[~mis]
+    assert np.all(np.isfinite(est)) and np.all(std > 0)
+    assert np.max(est[mis]) < 0.05 * np.min(fired)  # a misfire: the motored IMEP, about 0
+    assert np.max(np.abs(est - true)) < 0.02 * np.median(true[~mis])  # every firing, the misfires too
+    summary = m.result()
+    assert np.allclose(summary.median_imep_pa / 1e5, np.median(true[~mis]), rtol=0.02)
+
+
+def test_the_model_imep_follows_the_fuelling_and_its_uncertainty_covers_the_error(recorded, half_fuel):
+    full = model_imep(recorded[0])
+    half = model_imep(half_fuel)
+    mis = np.zeros(full[2].shape, dtype=bool)
+    for k, c in MISFIRES:
+        mis[k - 1, c - 1] = True
+    ratio_true = np.median(half[2]) / np.median(full[2][~mis])
+    ratio_est = np.median(half[0]) / np.median(full[0][~mis])
+    assert 0.45 < ratio_true < 0.55 and ratio_est == pytest.approx(ratio_true, abs=0.01)
+    for est, std, true, _ in (full, half):
+        z = (est - true) / std
+        assert np.max(np.abs(est - true)) < 0.15  # bar
+        assert np.mean(np.abs(z) < 3) > 0.9  # the stated standard error is the size of the error
+
+
+def test_without_an_engine_there_is_no_imep(recorded):
+    t = times_of(recorded[0])
+    m = MisfireMonitor("60-2", tdc_deg=29.4, cylinders=4, firing_order=[1, 3, 4, 2])
+    out = m.feed(t) + m.close()
+    assert all(np.isnan(v.imep_pa) for v in out) and out[0].to_json_dict()["imep_bar"] is None
+    assert m.result().median_imep_pa is None and "IMEP" not in out[0].line()
