@@ -3,7 +3,9 @@
 rotor writes plain docstrings: ``**Arguments:**`` followed directly by a ``- name: …
 [unit]`` list, and Sphinx roles (``:class:`Engine```) here and there. Markdown needs a
 blank line before a list and knows no roles: this adds the one and turns the other into
-code.
+code. It also says "base layer" and "subpackage" where a docstring uses the project's
+shorthand for them, and "the fixed frame" for the mechanical ground a damper acts
+against, so that the site speaks one vocabulary.
 """
 
 from __future__ import annotations
@@ -14,11 +16,22 @@ from typing import Any
 import griffe
 
 _ROLE = re.compile(r":(?:class|func|meth|mod|attr|data|obj|exc):`~?([^`]+)`")
+_WORDS = (
+    (re.compile(r"\bGround(\s+)floor\b"), r"Base\1layer"),
+    (re.compile(r"\bground(\s+)floor\b"), r"base\1layer"),
+    (re.compile(r"\bthe(\s+)ground\b"), r"the\1fixed frame"),
+    (re.compile(r"\brooms\b"), "subpackages"),
+    (re.compile(r"\broom\b"), "subpackage"),
+    (re.compile(r"\bRoom\b"), "Subpackage"),
+    (re.compile(r"\bhouse\b"), "package"),
+)
 
 
 def markdown(text: str) -> str:
     """``text`` with Sphinx roles as code and a blank line before every list."""
     text = _ROLE.sub(r"`\1`", text)
+    for pattern, word in _WORDS:
+        text = pattern.sub(word, text)
     out: list[str] = []
     for line in text.split("\n"):
         stripped = line.lstrip()

@@ -1,8 +1,11 @@
 """mkdocs hooks: the notebooks live in notebooks/ (beside the package, where `make
 notebooks` and the tests run them); they become pages under notebooks/ here, before
-mkdocs-jupyter turns them into HTML; CHANGELOG.md becomes changelog.md; and
+mkdocs-jupyter turns them into HTML; CHANGELOG.md becomes changelog.md (without the
+project's work-item numbers); the figures of benchmarks/figures/ become files of the site;
 ``<!-- rotor COMMAND --help -->`` in a page becomes what that command prints, so that
-the command-line page never falls behind the parser."""
+the command-line page never falls behind the parser; and ``<!-- rotor commands -->``,
+``<!-- engine-file keys -->`` and ``<!-- standard wheels -->`` become the reference tables
+generated from the parser, the engine-file loader and the wheel reader."""
 
 from __future__ import annotations
 
@@ -10,6 +13,7 @@ import contextlib
 import io
 import os
 import re
+import sys
 from pathlib import Path
 
 from mkdocs.plugins import event_priority
@@ -32,6 +36,16 @@ def on_files(files: Files, config) -> Files:
             )
         )
     files.append(File.generated(config, "changelog.md", abs_src_path=str(ROOT / "CHANGELOG.md")))
+    # the figures the benchmark scripts draw, shown on the explanation pages as they are
+    for png in sorted((ROOT / "benchmarks" / "figures").glob("*.png")):
+        files.append(
+            File(
+                f"benchmarks/figures/{png.name}",
+                src_dir=str(ROOT),
+                dest_dir=config["site_dir"],
+                use_directory_urls=config["use_directory_urls"],
+            )
+        )
     return files
 
 
@@ -57,6 +71,245 @@ def rotor_help(command: str) -> str:
     return out.getvalue().rstrip()
 
 
+# --- reference pages generated from the code they describe ---------------------------
+
+COMMANDS = re.compile(r"^<!-- rotor commands -->$", re.MULTILINE)
+ENGINE_KEYS = re.compile(r"^<!-- engine-file keys -->$", re.MULTILINE)
+WHEELS = re.compile(r"^<!-- standard wheels -->$", re.MULTILINE)
+
+
+def _parser_commands() -> list[tuple[str, str, set[str]]]:
+    """(name, help, option strings) of every ``rotor`` command, in the parser's order."""
+    from rotor.cli.app import build_parser
+
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if a.dest == "command"]
+    helps = {a.dest: a.help or "" for a in sub._choices_actions}
+    out = []
+    for name, p in sub.choices.items():
+        options = {s for a in p._actions for s in a.option_strings}
+        out.append((name, helps.get(name, ""), options))
+    return out
+
+
+def command_table() -> str:
+    """The table of commands: each command's one-line help and which of the common flags it takes."""
+    rows = [
+        "| command | what it does | `--json` | `--plot DIR` | `--quiet` |",
+        "|---|---|---|---|---|",
+    ]
+    for name, text, options in _parser_commands():
+        text = text.replace("|", "\\|")
+        flags = ["✓" if f in options else "" for f in ("--json", "--plot", "--quiet")]
+        rows.append(f"| `rotor {name}` | {text} | " + " | ".join(flags) + " |")
+    return "\n".join(rows)
+
+
+_SUFFIX_UNITS = (
+    ("_Nms_per_rad", "N·m·s/rad"),
+    ("_Nm_per_rad", "N·m/rad"),
+    ("_pa_s2_per_m2", "Pa·s²/m²"),
+    ("_pa_s_per_m", "Pa·s/m"),
+    ("_kgm2", "kg·m²"),
+    ("_kg", "kg"),
+    ("_deg", "deg"),
+    ("_pa", "Pa"),
+    ("_m", "m"),
+    ("rpm", "rev/min"),
+)
+
+
+def _unit(key: str) -> str:
+    for suffix, unit in _SUFFIX_UNITS:
+        if key.endswith(suffix):
+            return unit
+    return "–"
+
+
+def _kind(annotation) -> str:
+    text = str(annotation)
+    if "tuple" in text:
+        return "list of whole numbers"
+    if text.startswith("int"):
+        return "whole number"
+    if text == "str":
+        return "string"
+    return "number(s)"
+
+
+def _default(field) -> str | None:
+    """The default of a dataclass field as text, or None where the key is required."""
+    import dataclasses
+
+    if field.default is not dataclasses.MISSING:
+        value = field.default
+        if value is None:
+            return "absent"
+        if value == ():
+            return "none"
+        return f"`{float(value):g}`" if isinstance(value, (int, float)) else f"`{value}`"
+    if field.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
+        return "(built)"
+    return None
+
+
+def _doc(cls) -> str:
+    import inspect
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from griffe_rotor import markdown
+
+    return markdown(inspect.cleandoc(cls.__doc__ or ""))
+
+
+def _key_rows(table: str, cls, rename: dict[str, str] | None = None) -> list[str]:
+    import dataclasses
+
+    from rotor.engine.plausible import PLAUSIBLE
+
+    rows = ["| key | required / default | unit | plausible range | value |", "|---|---|---|---|---|"]
+    for f in dataclasses.fields(cls):
+        if f.name in ("kind",) or not f.init:
+            continue
+        key = (rename or {}).get(f.name, f.name)
+        default = _default(f)
+        needed = "**required**" if default is None else default
+        if (table, key) in PLAUSIBLE:
+            lo, hi, unit, _hint = PLAUSIBLE[(table, key)]
+            span = f"{lo:g} … {hi:g}"
+            unit = unit or "–"
+        else:
+            span, unit = "", _unit(key)
+        rows.append(f"| `{key}` | {needed} | {unit} | {span} | {_kind(f.type)} |")
+    return rows
+
+
+def _required_tables() -> dict[str, bool]:
+    """Which tables an engine file must have: each table of the 4chn15 preset left out in
+    turn and the file read by the loader itself."""
+    import tomllib
+
+    import rotor
+    from rotor.engine.file import preset_path
+
+    data = tomllib.loads(Path(preset_path("4chn15")).read_text(encoding="utf-8"))
+    out = {}
+    for name in ("geometry", "masses", "crankshaft", "layout", "operating", "pressure"):
+        trimmed = {k: v for k, v in data.items() if k != name}
+        try:
+            rotor.engine_from_dict(trimmed)
+            out[name] = False
+        except rotor.EngineError as e:
+            out[name] = "is missing" in str(e)
+    return out
+
+
+def engine_file_reference() -> str:
+    """Every key of an engine file, table by table, from the classes the loader builds,
+    the plausible ranges it checks (``rotor.engine.plausible.PLAUSIBLE``) and which tables it
+    requires."""
+    import dataclasses
+
+    from rotor.engine.friction import Friction
+    from rotor.engine.model import (
+        Articulated,
+        Counterweights,
+        Crankshaft,
+        Engine,
+        Geometry,
+        Layout,
+        Masses,
+        Operating,
+        Torsion,
+    )
+    from rotor.engine.pressure import PRESSURE_KINDS
+
+    required = _required_tables()
+    out = ["### Top-level keys", "", "| key | required / default | value |", "|---|---|---|"]
+    for f in dataclasses.fields(Engine):
+        if str(f.type) in ("str", "int"):
+            out.append(f"| `{f.name}` | **required** | {_kind(f.type)} |")
+    out.append("")
+    tables = [
+        ("geometry", Geometry),
+        ("masses", Masses),
+        ("crankshaft", Crankshaft),
+        ("layout", Layout),
+        ("operating", Operating),
+    ]
+    for name, cls in tables:
+        need = "required" if required.get(name, False) else "optional"
+        out += [f"### `[{name}]` ({need})", "", *_key_rows(name, cls), "", _doc(cls), ""]
+    need = "required" if required.get("pressure", False) else "optional: without it, no gas pressure"
+    out += [
+        f"### `[pressure]` ({need})",
+        "",
+        "`kind` (**required**) picks the pressure source: "
+        + ", ".join(f"`{k}`" for k in PRESSURE_KINDS)
+        + ". The other keys depend on it.",
+        "",
+    ]
+    for kind, cls in PRESSURE_KINDS.items():
+        out += [f'#### `kind = "{kind}"`', "", *_key_rows("pressure", cls), "", _doc(cls), ""]
+    for name, cls in (("friction", Friction), ("articulated", Articulated), ("torsion", Torsion)):
+        out += [f"### `[{name}]` (optional)", "", *_key_rows(name, cls), "", _doc(cls), ""]
+    out += [
+        "### `[[counterweights]]` (optional, one table per counterweight)",
+        "",
+        *_key_rows("counterweights", Counterweights, {"webs": "web"}),
+        "",
+        "In the file each counterweight is a table of its own with one `web` (1 … 2 × throws; "
+        "webs 2k−1 and 2k flank throw k) and its own `mass_kg`, `radius_m` and `angle_deg` "
+        "(default 180: opposite its throw).",
+        "",
+        _doc(Counterweights),
+    ]
+    return "\n".join(out)
+
+
+def wheel_reference() -> str:
+    """The standard wheel patterns that ``--wheel auto`` tries, and the keys of a wheel file."""
+    from rotor.logs.identify import STANDARD_WHEELS
+    from rotor.logs.wheel import MAX_POSITIONS, WHEEL_FILE_KEYS
+
+    return (
+        "The standard patterns `--wheel auto` tries: "
+        + ", ".join(f"`{w}`" for w in STANDARD_WHEELS)
+        + f". A wheel has 3 to {MAX_POSITIONS:,} tooth positions. The keys of a wheel file: "
+        + ", ".join(f"`{k}`" for k in WHEEL_FILE_KEYS)
+        + "; any other key is refused by name."
+    )
+
+
+_ISSUE = (
+    (re.compile(r"\(issue \d+(?:, part \d+)?: "), "("),
+    (re.compile(r" ?\(issue \d+(?:, part \d+)?\)"), ""),
+    (re.compile(r"\bOne house with rooms\b"), "Domain subpackages"),
+)
+
+
+def changelog_for_users(markdown: str) -> str:
+    """CHANGELOG.md as the site shows it: without the project's work-item numbers, and in
+    the site's words for the package's parts (see ``griffe_rotor.markdown``)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from griffe_rotor import markdown as docstring_markdown
+
+    for pattern, text in _ISSUE:
+        markdown = pattern.sub(text, markdown)
+    return docstring_markdown(markdown)
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    """``<!-- rotor COMMAND --help -->`` on a line of its own becomes that help text."""
-    return HELP.sub(lambda m: f"```text\n$ {m.group(1)}\n{rotor_help(m.group(1))}\n```", markdown)
+    """``<!-- rotor COMMAND --help -->`` on a line of its own becomes that help text;
+    ``<!-- rotor commands -->``, ``<!-- engine-file keys -->`` and ``<!-- standard wheels -->``
+    become the tables generated from the parser, the engine-file loader and the wheel reader."""
+    markdown = HELP.sub(lambda m: f"```text\n$ {m.group(1)}\n{rotor_help(m.group(1))}\n```", markdown)
+    if page is not None and page.file.src_uri == "changelog.md":
+        markdown = changelog_for_users(markdown)
+    if COMMANDS.search(markdown):
+        markdown = COMMANDS.sub(lambda m: command_table(), markdown)
+    if ENGINE_KEYS.search(markdown):
+        markdown = ENGINE_KEYS.sub(lambda m: engine_file_reference(), markdown)
+    if WHEELS.search(markdown):
+        markdown = WHEELS.sub(lambda m: wheel_reference(), markdown)
+    return markdown

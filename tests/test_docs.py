@@ -1,5 +1,7 @@
-"""The documentation site: every public name has its API entry, on its room's page; every
-command its help block; every page and notebook is in the navigation. `make test` builds
+"""The documentation site: every public name has its API entry, on its subpackage's page;
+every command its help block; every page and notebook is in the navigation, under one of
+the four sections of the Diátaxis layout; the generated reference pages (the table of
+commands, the engine-file keys, the wheel patterns) come from the code. `make test` builds
 the site with `mkdocs build --strict` (a broken reference or a docstring that does not
 render fails it); these tests say what the build alone cannot: that nothing is missing."""
 
@@ -19,37 +21,37 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 API = DOCS / "api"
 MKDOCS = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
-ROOMS = ("engine", "dynamics", "logs", "diagnostics", "design", "torsion")
+SUBPACKAGES = ("engine", "dynamics", "logs", "diagnostics", "design", "torsion")
 ENTRY = re.compile(r"^::: rotor\.(\w+)\s*$", re.MULTILINE)
 
 
 def api_entries() -> dict[str, list[str]]:
-    """Each ``::: rotor.NAME`` of the API pages (not the room and module directives) and the pages it is on."""
+    """Each ``::: rotor.NAME`` of the API pages (not the subpackage and module directives) and the pages it is on."""
     found: dict[str, list[str]] = {}
     for page in sorted(API.glob("*.md")):
         for name in ENTRY.findall(page.read_text(encoding="utf-8")):
             if isinstance(getattr(rotor, name, None), types.ModuleType):
-                continue  # `::: rotor.engine`, `::: rotor.errors`: a room's or module's own docstring
+                continue  # `::: rotor.engine`, `::: rotor.errors`: a subpackage's or module's own docstring
             found.setdefault(name, []).append(page.stem)
     return found
 
 
-def room_of(name: str) -> str:
-    """The room a public name lives in (``ground`` for the ground floor)."""
+def subpackage_of(name: str) -> str:
+    """The subpackage a public name lives in (``base`` for the base layer)."""
     parts = getattr(rotor, name).__module__.split(".")
-    return parts[1] if len(parts) > 2 and parts[1] in ROOMS else "ground"
+    return parts[1] if len(parts) > 2 and parts[1] in SUBPACKAGES else "base"
 
 
-def test_every_public_name_has_one_api_entry_on_its_rooms_page():
+def test_every_public_name_has_one_api_entry_on_its_subpackages_page():
     entries = api_entries()
     missing = sorted(set(rotor.__all__) - set(entries))
-    assert not missing, f"public names without an entry in docs/api/<room>.md: {missing}"
+    assert not missing, f"public names without an entry in docs/api/<subpackage>.md: {missing}"
     stale = sorted(set(entries) - set(rotor.__all__))
     assert not stale, f"docs/api entries for names that are not in rotor.__all__: {stale}"
     twice = {n: p for n, p in entries.items() if len(p) > 1}
     assert not twice, f"documented more than once: {twice}"
-    misplaced = {n: (p[0], room_of(n)) for n, p in entries.items() if p[0] != room_of(n)}
-    assert not misplaced, f"(page, room) of names on another room's page: {misplaced}"
+    misplaced = {n: (p[0], subpackage_of(n)) for n, p in entries.items() if p[0] != subpackage_of(n)}
+    assert not misplaced, f"(page, subpackage) of names on another subpackage's page: {misplaced}"
 
 
 def test_every_api_page_is_in_the_navigation():
@@ -74,12 +76,92 @@ def commands() -> list[str]:
 
 
 def test_every_command_has_its_help_on_the_cli_page():
+    pytest.importorskip("mkdocs")
     cli = (DOCS / "cli.md").read_text(encoding="utf-8")
     names = commands()
     assert "simulate" in names and "demo" in names
+    assert "<!-- rotor commands -->" in cli
+    table = load_docs_module("hooks").command_table()
     for name in names:
         assert f"<!-- rotor {name} --help -->" in cli, name
-        assert f"| `rotor {name}` |" in cli, f"rotor {name} is missing from the table of commands"
+        assert f"| `rotor {name}` |" in table, f"rotor {name} is missing from the table of commands"
+
+
+def test_the_table_of_commands_says_which_common_flags_each_takes():
+    pytest.importorskip("mkdocs")
+    rows = {
+        line.split("|")[1].strip(): [c.strip() for c in line.split("|")[3:6]]
+        for line in load_docs_module("hooks").command_table().splitlines()[2:]
+    }
+    assert rows["`rotor simulate`"] == ["✓", "✓", "✓"]
+    assert rows["`rotor presets`"][1:] == ["", ""]
+
+
+def test_the_engine_file_reference_comes_from_the_loader():
+    """Every key with a plausible range is in the generated reference, under its table, and
+    the tables the loader requires are marked so."""
+    pytest.importorskip("mkdocs")
+    from rotor.engine.plausible import PLAUSIBLE
+
+    text = load_docs_module("hooks").engine_file_reference()
+    sections = re.split(r"^#{3,4} ", text, flags=re.MULTILINE)
+    for table, key in PLAUSIBLE:
+        assert any(
+            s.startswith(f"`[{table}]`")
+            or s.startswith(f"`[[{table}]]`")
+            or (table == "pressure" and s.startswith("`kind ="))
+            for s in sections
+            if f"| `{key}` |" in s
+        ), (table, key)
+    for table in ("geometry", "masses", "crankshaft", "layout", "operating"):
+        assert f"### `[{table}]` (required)" in text, table
+    assert "### `[pressure]` (optional" in text and "### `[torsion]` (optional)" in text
+    assert "| `bore_m` | **required** | m | 0.001 … 2 |" in text
+    assert "| `web` |" in text and "| `webs` |" not in text
+
+
+def test_the_wheel_reference_names_the_standard_wheels():
+    pytest.importorskip("mkdocs")
+    from rotor.logs.identify import STANDARD_WHEELS
+
+    text = load_docs_module("hooks").wheel_reference()
+    for spec in STANDARD_WHEELS:
+        assert f"`{spec}`" in text
+    assert "`positions`, `missing`, `angles_deg`" in text
+
+
+SECTIONS = ("Tutorials", "How-to guides", "Reference", "Explanation")
+
+
+def test_the_navigation_has_the_four_kinds_of_documentation():
+    nav = MKDOCS.split("\nnav:\n")[1]
+    tops = re.findall(r"^  - ([^:]+):", nav, re.MULTILINE)
+    assert tops == ["Home", *SECTIONS]
+    section = dict(
+        zip(
+            SECTIONS, re.split(r"^  - (?:Tutorials|How-to guides|Reference|Explanation):$", nav, flags=re.MULTILINE)[1:]
+        )
+    )
+    assert "notebooks/" in section["Tutorials"]
+    assert all(f"how-to/{p.name}" in section["How-to guides"] for p in (DOCS / "how-to").glob("*.md"))
+    assert all(f"api/{p.name}" in section["Reference"] for p in API.glob("*.md"))
+    assert "cli.md" in section["Reference"] and "physics.md" in section["Explanation"]
+
+
+def test_every_figure_names_the_script_that_draws_it():
+    """Every image shown in the site is a file of the repository, and its page names a
+    script (``*.py``) within a few lines of it."""
+    for page in DOCS.rglob("*.md"):
+        lines = page.read_text(encoding="utf-8").splitlines()
+        for i, line in enumerate(lines):
+            for target in re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", line):
+                path = (page.parent / target).resolve()
+                on_disk = path if path.is_file() else ROOT / path.relative_to(DOCS.resolve())
+                assert on_disk.is_file(), f"{page.relative_to(ROOT)}:{i + 1}: {target} does not exist"
+                near = " ".join(lines[max(0, i - 5) : i + 6])
+                assert re.search(r"`[\w/.-]+\.py", near), (
+                    f"{page.relative_to(ROOT)}:{i + 1}: no script named for {target}"
+                )
 
 
 def load_docs_module(name: str):
@@ -114,3 +196,16 @@ def test_the_site_fetches_nothing():
     assert "font: false" in MKDOCS
     assert not re.search(r"^\s+(import|inventories):", MKDOCS, re.MULTILINE)  # objects.inv from the web
     assert "strict: true" in MKDOCS
+
+
+def test_the_changelog_page_speaks_to_users():
+    """The site shows CHANGELOG.md without the project's work-item numbers or its shorthand
+    for the package's parts."""
+    pytest.importorskip("mkdocs")
+    text = load_docs_module("hooks").changelog_for_users((ROOT / "CHANGELOG.md").read_text(encoding="utf-8"))
+    found = re.findall(r"(?i).{0,30}(?:\bissue \d|\bhouse\b|\brooms?\b|ground floor).{0,30}", text)
+    assert not found, found
+    sample = "### Added (issue 18, part 2: torsion)\n- **One house with rooms** (issue 13): the ground floor"
+    assert load_docs_module("hooks").changelog_for_users(sample) == (
+        "### Added (torsion)\n\n- **Domain subpackages**: the base layer"
+    )
