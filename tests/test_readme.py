@@ -1,8 +1,9 @@
 """The code of README.md and of the how-to guides runs as written, and their text speaks to users.
 
-- Every ```python block of README.md and of each page of docs/how-to/ runs, in order, in
-  one namespace per page (a later block may use names from an earlier one), in a
-  temporary working directory of its own, with matplotlib's Agg backend. A ```toml block
+- Every ```python block of README.md, of the getting-started tutorial and of each page of
+  docs/how-to/ runs, in order, in one namespace per page (a later block may use names
+  from an earlier one), in a temporary working directory of its own, with matplotlib's
+  Agg backend. A ```toml block
   right after ``<!-- file: NAME -->`` is written to NAME there first, so that a page can
   show a whole engine file and then load it. A block right after ``<!-- no-test -->`` is
   skipped (use it only with a reason written next to it). A failure names the page's own
@@ -69,7 +70,7 @@ def python_blocks(text: str) -> list[tuple[int, str]]:
     return [(line, src) for line, src, file in blocks(text) if file is None]
 
 
-PAGES = [README, *sorted(p for p in HOW_TO.glob("*.md") if p.name != "index.md")]
+PAGES = [README, DOCS / "getting-started.md", *sorted(p for p in HOW_TO.glob("*.md") if p.name != "index.md")]
 
 
 def _id(path: Path) -> str:
