@@ -126,6 +126,12 @@ def _unit(key: str) -> str:
     return "–"
 
 
+def _number(x: float) -> str:
+    """A range's end as people write it: ``1e9``, ``0.001``, ``−3600``."""
+    text = f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+    return text.replace("-", "−")
+
+
 def _kind(annotation) -> str:
     text = str(annotation)
     if "tuple" in text:
@@ -176,7 +182,7 @@ def _key_rows(table: str, cls, rename: dict[str, str] | None = None) -> list[str
         needed = "**required**" if default is None else default
         if (table, key) in PLAUSIBLE:
             lo, hi, unit, _hint = PLAUSIBLE[(table, key)]
-            span = f"{lo:g} … {hi:g}"
+            span = f"{_number(lo)} … {_number(hi)}"
             unit = unit or "–"
         else:
             span, unit = "", _unit(key)
