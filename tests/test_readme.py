@@ -222,6 +222,9 @@ def test_readme_is_a_landing_page():
         assert (ROOT / target).exists(), f"README.md links to {target}, which does not exist"
     for image in re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", text):
         assert (ROOT / image).is_file(), f"README.md shows {image}, which does not exist"
+    for guide in HOW_TO.glob("*.md"):
+        if guide.name != "index.md":
+            assert f"](docs/how-to/{guide.name})" in text, f"README.md does not link the how-to guide {guide.name}"
 
 
 # --- words the documentation does not use ------------------------------------------------
