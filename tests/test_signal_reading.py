@@ -6,7 +6,7 @@ import pytest
 from conftest import SHARED_DATA
 
 import rotor
-import rotor.diagnostics.calibration
+import rotor.diagnostics.diagnosis
 import rotor.logs.analysis
 import rotor.logs.reader
 from rotor.cli import main
@@ -40,7 +40,7 @@ def test_diagnose_reads_and_places_the_file_once(tmp_path, monkeypatch):
     edges found and placed on the wheel once."""
     log = rotor.simulated_recording(tmp_path / "sim.txt", cycles=4, seed=2)
     texts = _count(monkeypatch, rotor.logs.reader, "_read_text")
-    tracks = _count(monkeypatch, rotor.diagnostics.calibration, "read_track")
+    tracks = _count(monkeypatch, rotor.diagnostics.diagnosis, "read_track")
     inner = _count(monkeypatch, rotor.logs.analysis, "read_track")
     d = rotor.diagnose(rotor.load_engine("tue-single"), log, None, wheel="60-2", columns=TUE_COLUMNS, tdc_deg="speed")
     assert d.analysis is not None and d.analysis.cycles >= 3
@@ -213,7 +213,7 @@ def test_another_engine_on_a_capture_is_no_misfire_verdict(tmp_path):
     part = tmp_path / "4b11-part.csv"
     part.write_text("\n".join(rows[:3500]) + "\n")
     d = rotor.diagnose(rotor.load_engine("4chn15"), part, None, wheel="36-2-1", columns=ECU_COLUMNS, tdc_deg=90.0)
-    from rotor.diagnostics.calibration import DiagnosisVerdict
+    from rotor.diagnostics.diagnosis import DiagnosisVerdict
 
     assert d.verdict is DiagnosisVerdict.MODEL_DOES_NOT_FIT
     assert not d.no_firing and not d.misfire.any() and d.misfires() == []

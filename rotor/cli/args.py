@@ -87,14 +87,51 @@ class Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
 
 
+ARGUMENT_FLAGS = {
+    "calibration": "--calibration",
+    "columns": "--columns",
+    "compression_ratio": "--compression-ratio",
+    "cylinders": "--cylinders",
+    "edge": "--edge",
+    "firing": "--firing",
+    "intake_pa": "--intake-pa",
+    "max_order": "--max-order",
+    "points_per_cycle": "--points-per-cycle",
+    "pressure_gain": "--pressure-gain",
+    "rod_ratio": "--rod-ratio",
+    "scaling": "--scaling",
+    "tdc_deg": "--tdc-deg",
+    "tooth_errors": "--tooth-errors",
+    "wheel": "--wheel",
+}
+"""The library's argument names that its messages recommend (``give wheel='60-2'``), and the
+command line's flag for each; ``calibration=None`` is ``--no-calibration``."""
+_ARGUMENT_SETTING = re.compile(r"(?<![\w.'\"])(" + "|".join(ARGUMENT_FLAGS) + r")=('[^']*'|\"[^\"]*\"|[^\s,;:)]+)?")
+
+
+def _flag(m: re.Match) -> str:
+    name, value = m.group(1), m.group(2)
+    if name == "calibration" and value == "None":
+        return "--no-calibration"
+    if value is None:
+        return ARGUMENT_FLAGS[name]
+    if value[0] in "'\"":
+        value = value[1:-1]
+    return f"{ARGUMENT_FLAGS[name]} {value}"
+
+
 def error_text(e: BaseException) -> str:
     """``e``'s message as one line, in the command line's words: where a library error
     names its argument (``RotorError.argument``, the message starting ``wheel=…``), the
-    option's flag in its place (``--wheel …``)."""
+    option's flag in its place (``--wheel …``); a setting the message recommends
+    (``give wheel='60-2'``, ``calibration=None``) as the flag (``give --wheel 60-2``,
+    ``--no-calibration``, :data:`ARGUMENT_FLAGS`)."""
     text = " ".join(str(e).split("\n")).strip()
     argument = getattr(e, "argument", None)
     if isinstance(argument, str) and text.startswith(f"{argument}="):
         text = f"--{argument.replace('_', '-')} {text[len(argument) + 1 :]}"
+    if hasattr(e, "argument"):  # a library error (rotor.RotorError)
+        text = _ARGUMENT_SETTING.sub(_flag, text)
     return text
 
 

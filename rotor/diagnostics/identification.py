@@ -73,6 +73,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
@@ -118,8 +119,8 @@ NO_FIRING_NOTE = "no firing found: the engine does not fire in this record (a co
 POOR_FIT_R2 = 0.7
 """Below this R² of the whole fit (the share of the speed fluctuation the model explains) a
 result warns that the fit is poor and its IMEP uncertain beyond the ± it reports (which
-counts the noise only, as if the model were right). Measured: the real tue-4gb10
-recordings diagnosed with their full-load calibration give R² 0.89 (full load, IMEP within
+counts the noise only, as if the model were right). Measured: the real single-cylinder
+bench recordings (``tue-single``) diagnosed with their full-load calibration give R² 0.89 (full load, IMEP within
 0.1 % of the pressure channel's), 0.83 (half load, −1.9 %) and 0.44 (no load, −17 %); simulated
 recordings with their own calibration 0.99 and more. 0.7 sits between the recordings read to
 2 % and the one read 17 % low."""
@@ -252,13 +253,14 @@ class Identification(Result):
             f"the engine file, the calibration and the wheel",
         )
 
-    def summary(self) -> str:
+    def summary(self, warnings: Sequence[str] | None = None) -> str:
         """A few lines for a terminal: the fit (and a warning when it is poor, see
-        :attr:`warnings`), each cylinder's IMEP, the load, the misfires."""
+        :attr:`warnings`), each cylinder's IMEP, the load, the misfires. ``warnings``: the
+        lines to warn with in place of :attr:`warnings` (a :class:`rotor.Diagnosis` gives its own)."""
         lines = [
             f"{self.engine_name}: {_count(self.cycles, 'cycle')} identified, rms residual {self.rms_residual:.3g} "
             f"rad/s ({self.relative_residual:.2%} of the speed fluctuation, R² {self.fit_r2:.5f})",
-            *(f"  warning: {w}" for w in self.warnings),
+            *(f"  warning: {w}" for w in (self.warnings if warnings is None else warnings)),
             "  cylinder  IMEP mean [bar]  ±1σ estimate  cycle-to-cycle σ   scale mean   misfires",
         ]
         spread = self.imep_cycle_std_pa
@@ -663,6 +665,103 @@ def symmetric_pairs(engine):
     return tuple(sorted({tuple(sorted((c + 1, p + 1))) for c, p in enumerate(partner)}))
 
 
+def _check_arguments(
+    engine, parameters, fidelity, block_cycles, overlap, max_steps, threshold, misfire_floor, load_per, rtol
+):
+    """TypeError or :class:`rotor.EngineError` naming the argument of :func:`identify` that cannot be used."""
+    from ..engine.model import Engine as EngineType
+
+    if not isinstance(engine, EngineType):
+        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, str) else ""
+        raise TypeError(f"identify(engine): expected a rotor.Engine{hint}, got {type(engine).__name__} {engine!r:.60}")
+    if parameters not in PARAMETERS:
+        raise EngineError(
+            f"parameters = {parameters!r}: only 'imep_scale' (one combustion scale per firing) is "
+            f"implemented; Wiebe start, Wiebe duration and a pressure scale are not"
+        )
+    check_fidelity(fidelity, engine)
+    for name, v, lo in (("block_cycles", block_cycles, 1), ("overlap", overlap, 0), ("max_steps", max_steps, 1)):
+        if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= lo):
+            raise EngineError(f"{name} = {v!r}: must be a whole number, {lo} or more")
+    if not (isinstance(threshold, (int, float, np.floating)) and 0 < threshold < 1):
+        raise EngineError(f"threshold = {threshold!r}: must lie between 0 and 1 (a fraction of a normal firing)")
+    if not (isinstance(misfire_floor, (int, float, np.floating)) and 0 < misfire_floor < 1):
+        raise EngineError(f"misfire_floor = {misfire_floor!r}: must lie between 0 and 1 (a combustion scale)")
+    if load_per not in ("cycle", "block"):
+        raise EngineError(f"load_per = {load_per!r}: 'cycle' (an unknown load torque in every cycle) or 'block'")
+    if not (np.isfinite(rtol) and 0 < rtol < 1e-2):
+        raise EngineError(f"rtol = {rtol!r}: must lie between 0 and 1e-2")
+
+
+def _blocks(C: int, block_cycles: int, overlap: int) -> tuple[int, np.ndarray, list[tuple[int, int]]]:
+    """The blocks of a record of ``C`` cycles: cores of ``block_cycles``, ``overlap`` on each
+    side, clamped to the record: the cycles per block, each block's first cycle and each
+    core's (first, end) cycles."""
+    L = min(C, block_cycles + 2 * overlap)
+    nb = int(math.ceil(C / block_cycles)) if C > L else 1
+    if nb == 1:
+        return L, np.array([0]), [(0, C)]
+    cores = [(b * block_cycles, min((b + 1) * block_cycles, C)) for b in range(nb)]
+    return L, np.array([int(np.clip(c0 - overlap, 0, C - L)) for c0, _ in cores]), cores
+
+
+def _per_cycle(fitted, cores, starts, pos, own, na, a_ref, shape):
+    """Each cycle's figures from its block's fit (the block whose core holds it): scale,
+    its σ, the load torque and its σ, the covariance, which firings are identified, the residual."""
+    p, cov, res = fitted
+    C, P, n = shape
+    scale = np.zeros((C, n))
+    scale_std = np.zeros((C, n))
+    load_a = np.zeros(C)
+    load_sd = np.zeros(C)
+    covs = np.zeros((C, n + 1, n + 1))
+    ident = np.zeros((C, n), bool)
+    resid = np.zeros((C, P))
+    for b, ((c0, c1), s0) in enumerate(zip(cores, starts)):
+        for k in range(c0, c1):
+            j = k - s0
+            ja = 1 + min(j, na - 1)
+            idx = np.concatenate([1 + na + pos[j + 1], [ja]])
+            sub = cov[b][np.ix_(idx, idx)]
+            unit = np.concatenate([np.ones(n), [a_ref]])
+            covs[k] = sub * np.outer(unit, unit)
+            scale[k] = p[b][1 + na + pos[j + 1]]
+            scale_std[k] = np.sqrt(np.diag(covs[k])[:n])
+            load_a[k] = p[b][ja] * a_ref
+            load_sd[k] = math.sqrt(covs[k][n, n])
+            ident[k] = own[j]
+            resid[k] = res[b][j]
+    return scale, scale_std, load_a, load_sd, covs, ident, resid
+
+
+def _notes(ident, ok, pairs, misfire) -> list[str]:
+    """What the fit says of itself: firings cut by the record's end, blocks that did not
+    converge, cylinders the crank speed cannot tell apart, no firing at all."""
+    notes = []
+    if not ident.all():
+        cut = [(int(k) + 1, int(c) + 1) for k, c in np.argwhere(~ident)]
+        notes.append(
+            f"firings {cut} (cycle, cylinder) lie mostly outside the record: each shares the scale of the "
+            f"nearest firing of its cylinder (not identified on its own)"
+        )
+    if not np.all(ok):
+        notes.append(
+            "the Levenberg–Marquardt iteration did not converge in every block (max_steps); the linear "
+            "start stands there"
+        )
+    if pairs:
+        names = ", ".join(f"{a} and {b}" for a, b in pairs)
+        notes.append(
+            f"the firing revolution is not known from a phase reference (pressure, cam or given), and this "
+            f"engine is symmetric under 360°: cylinders {names} cannot be told apart from the crank speed "
+            f"alone; a result for one of a pair may belong to the other (give a cam or pressure channel, "
+            f"firing=0/1 to analyze_log, or phase_reference=True)"
+        )
+    if np.all(misfire[ident]) and ident.any():
+        notes.append(NO_FIRING_NOTE)
+    return notes
+
+
 # ----------------------------------------------------------------------------- entry point
 def identify(
     engine: Engine | PreparedEngine,
@@ -718,29 +817,10 @@ def identify(
     cannot be identified.
     """
     engine = resolve_engine(engine)  # a prepared engine: its tables are reused
-    from ..engine.model import Engine as EngineType
-
     wall = time.perf_counter()
-    if not isinstance(engine, EngineType):
-        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, str) else ""
-        raise TypeError(f"identify(engine): expected a rotor.Engine{hint}, got {type(engine).__name__} {engine!r:.60}")
-    if parameters not in PARAMETERS:
-        raise EngineError(
-            f"parameters = {parameters!r}: only 'imep_scale' (one combustion scale per firing) is "
-            f"implemented; Wiebe start, Wiebe duration and a pressure scale are not"
-        )
-    check_fidelity(fidelity, engine)
-    for name, v, lo in (("block_cycles", block_cycles, 1), ("overlap", overlap, 0), ("max_steps", max_steps, 1)):
-        if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= lo):
-            raise EngineError(f"{name} = {v!r}: must be a whole number, {lo} or more")
-    if not (isinstance(threshold, (int, float, np.floating)) and 0 < threshold < 1):
-        raise EngineError(f"threshold = {threshold!r}: must lie between 0 and 1 (a fraction of a normal firing)")
-    if not (isinstance(misfire_floor, (int, float, np.floating)) and 0 < misfire_floor < 1):
-        raise EngineError(f"misfire_floor = {misfire_floor!r}: must lie between 0 and 1 (a combustion scale)")
-    if load_per not in ("cycle", "block"):
-        raise EngineError(f"load_per = {load_per!r}: 'cycle' (an unknown load torque in every cycle) or 'block'")
-    if not (np.isfinite(rtol) and 0 < rtol < 1e-2):
-        raise EngineError(f"rtol = {rtol!r}: must lie between 0 and 1e-2")
+    _check_arguments(
+        engine, parameters, fidelity, block_cycles, overlap, max_steps, threshold, misfire_floor, load_per, rtol
+    )
     omega, t_start, phase_known = _speed(engine, speed, cycle_rad)
     C, P = omega.shape
     fa, fc, c_load = _losses(engine, friction, load)
@@ -757,15 +837,8 @@ def identify(
     bases = _make_bases(train, jnp.asarray(fc + c_load), N // P)
     work_L, work_R, offset_L = (np.asarray(x) for x in (bases.work_L, bases.work_R, bases.offset_L))
 
-    # blocks: cores of block_cycles, overlap on each side, clamped to the record
-    L = min(C, block_cycles + 2 * overlap)
-    nb = int(math.ceil(C / block_cycles)) if C > L else 1
-    if nb == 1:
-        starts = np.array([0])
-        cores = [(0, C)]
-    else:
-        cores = [(b * block_cycles, min((b + 1) * block_cycles, C)) for b in range(nb)]
-        starts = np.array([int(np.clip(c0 - overlap, 0, C - L)) for c0, _ in cores])
+    L, starts, cores = _blocks(C, block_cycles, overlap)
+    nb = len(cores)
     pos, own, nscale = block_layout(work_L, work_R, offset_L, L)
     na = L if load_per == "cycle" else 1
     blocks = np.stack([omega[s0 : s0 + L] for s0 in starts])
@@ -785,27 +858,9 @@ def identify(
         )
     )  # a_ref traced: a new combustion does not recompile
 
-    scale = np.zeros((C, n))
-    scale_std = np.zeros((C, n))
-    load_a = np.zeros(C)
-    load_sd = np.zeros(C)
-    covs = np.zeros((C, n + 1, n + 1))
-    ident = np.zeros((C, n), bool)
-    resid = np.zeros((C, P))
-    for b, ((c0, c1), s0) in enumerate(zip(cores, starts)):
-        for k in range(c0, c1):
-            j = k - s0
-            ja = 1 + min(j, na - 1)
-            idx = np.concatenate([1 + na + pos[j + 1], [ja]])
-            sub = cov[b][np.ix_(idx, idx)]
-            unit = np.concatenate([np.ones(n), [a_ref]])
-            covs[k] = sub * np.outer(unit, unit)
-            scale[k] = p[b][1 + na + pos[j + 1]]
-            scale_std[k] = np.sqrt(np.diag(covs[k])[:n])
-            load_a[k] = p[b][ja] * a_ref
-            load_sd[k] = math.sqrt(covs[k][n, n])
-            ident[k] = own[j]
-            resid[k] = res[b][j]
+    scale, scale_std, load_a, load_sd, covs, ident, resid = _per_cycle(
+        (p, cov, res), cores, starts, pos, own, na, a_ref, (C, P, n)
+    )
     imep_m = np.asarray(train.imep_motored_pa)
     imep = imep_m[None, :] + scale * comb[None, :]
     model = omega + resid
@@ -815,31 +870,10 @@ def identify(
     fluct = omega - omega.mean(axis=1, keepdims=True)
     ss_res, ss_tot = np.sum(resid**2, axis=1), np.sum(fluct**2, axis=1)
     index, misfire, ref = contribution_index(scale, scale_std, threshold=threshold, floor=misfire_floor, valid=ident)
-    notes = []
-    if not ident.all():
-        cut = [(int(k) + 1, int(c) + 1) for k, c in np.argwhere(~ident)]
-        notes.append(
-            f"firings {cut} (cycle, cylinder) lie mostly outside the record: each shares the scale of the "
-            f"nearest firing of its cylinder (not identified on its own)"
-        )
-    if not np.all(ok):
-        notes.append(
-            "the Levenberg–Marquardt iteration did not converge in every block (max_steps); the linear "
-            "start stands there"
-        )
     if phase_reference is None:
         phase_reference = True if phase_known is None else phase_known
     pairs = () if phase_reference else symmetric_pairs(engine)
-    if pairs:
-        names = ", ".join(f"{a} and {b}" for a, b in pairs)
-        notes.append(
-            f"the firing revolution is not known from a phase reference (pressure, cam or given), and this "
-            f"engine is symmetric under 360°: cylinders {names} cannot be told apart from the crank speed "
-            f"alone; a result for one of a pair may belong to the other (give a cam or pressure channel, "
-            f"firing=0/1 to analyze_log, or phase_reference=True)"
-        )
-    if np.all(misfire[ident]) and ident.any():
-        notes.append(NO_FIRING_NOTE)
+    notes = _notes(ident, ok, pairs, misfire)
     return Identification(
         scale=scale,
         scale_std=scale_std,

@@ -223,7 +223,7 @@ def pressure_gain_from_motored(
         intake_pa = getattr(engine.pressure, "intake_pa", None)
         if intake_pa is None:
             raise EngineError(
-                f"engine {engine.name!r}: no intake pressure in its file: give intake_pa (--intake-pa) for the pegging"
+                f"engine {engine.name!r}: no intake pressure in its file: give intake_pa= for the pegging"
             )
     intake_pa = float(intake_pa)
     if not (np.isfinite(intake_pa) and intake_pa > 0):
@@ -238,7 +238,7 @@ def pressure_gain_from_motored(
         if sel.size == 0:
             raise EngineError(
                 f"{analysis.source}: no motored cycle (every one of the {analysis.cycles} complete cycles fires): "
-                f"the pressure gain cannot be found from a motored stretch; give it (--pressure-gain PA_PER_UNIT)"
+                f"the pressure gain cannot be found from a motored stretch; give it (pressure_gain=PA_PER_UNIT)"
             )
     else:
         sel = np.unique(np.asarray(cycles, dtype=int).reshape(-1))

@@ -62,7 +62,7 @@ cut of two cycles (the cut's transient is not the steady signature).
 presets, 0.45–1.3 times their speed, loads 0.25–1, cycle-to-cycle variation, 20 ns–1 µs
 of timer jitter, tooth errors 0–0.3°, the wheels 60-2, 60-1, 36-1 and 36-2-1;
 ``tests/test_tdc_coverage.py`` holds a smaller matrix to a binomial bound): see the table
-in ``benchmarks/README.md``. The real tue-4gb10 recordings (speed only, against the
+in ``benchmarks/README.md``. The real single-cylinder bench recordings (speed only, against the
 pressure channel's polytropic-fit TDC of 29.4°, 30.7°, 28.9°): the speed puts TDC 7°
 later at full load, 11° at half load and 19° at no load (R² 0.97 / 0.94 / 0.80): the
 engine file's Wiebe cycle is not the engine's at part load, and the harmonics say so —
@@ -347,7 +347,7 @@ MODEL_STD_FACTOR = 0.6
 """The model term of ``std_deg`` is this many times the harmonics' jackknife spread [-]:
 calibrated so that the true TDC lies within ±1σ in about two thirds of the simulated records
 of ``benchmarks/tdc_coverage.py`` that the speed determines (1.0 covered 90 %); the real
-tue-4gb10 recordings' pressure TDC then lies 2.2–2.5σ from the speed's."""
+single-cylinder bench recordings' pressure TDC then lies 2.2–2.5σ from the speed's."""
 
 
 def _shape_fit(B: np.ndarray, Y: np.ndarray, E: np.ndarray, power: np.ndarray) -> tuple:
@@ -481,6 +481,53 @@ def _model_std(
     return MODEL_STD_FACTOR * float(np.sqrt((n - 1) / n * np.sum((dev - dev.mean()) ** 2)))
 
 
+def _speed_cycles(engine, speed, mean_omega, max_order) -> tuple[np.ndarray, np.ndarray, float, str]:
+    """The speed's cycles (cycles, points) [rad/s], their mean speeds [rad/s], the cycle
+    [rad] and the recording's name, checked."""
+    if isinstance(speed, LogAnalysis):
+        omega = np.asarray(speed.omega, dtype=np.float64)
+        mean_w = np.asarray(speed.mean_omega, dtype=np.float64)
+        cycle = float(speed.cycle_rad)
+        source = speed.source
+    else:
+        omega = np.asarray(speed, dtype=np.float64)
+        if omega.ndim == 1:
+            omega = omega[None, :]
+        cycle = TWO_PI * (engine.strokes // 2)
+        mean_w = omega.mean(axis=1) if mean_omega is None else np.asarray(mean_omega, dtype=np.float64).reshape(-1)
+        source = ""
+    if omega.ndim != 2 or omega.shape[0] < 1 or omega.shape[1] < 8:
+        raise LogError(f"tdc_from_speed: speed of shape {omega.shape}: needs (cycles, points), a whole cycle or more")
+    if not (np.all(np.isfinite(omega)) and np.all(omega > 0)):
+        raise LogError("tdc_from_speed: the speed must be finite and positive")
+    if not (isinstance(max_order, (int, float)) and max_order > 0):
+        raise LogError(f"max_order={max_order!r}: a positive order", argument="max_order")
+    return omega, mean_w, cycle, source
+
+
+def _alike_period(B, m, cycle: float, revs: int, cylinders: int) -> float:
+    """Alike cylinders: the shortest shift cycle/n under which the combustion shape (of the
+    harmonics ``m``) fits itself [rad]; the cycle where none does."""
+    shape = B[0] if np.any(B[0]) else B[1]
+    norm = max(float(np.sum(np.abs(shape) ** 2)), 1e-300)
+    for n in range(max(cylinders, 1), 1, -1):
+        if np.real(np.sum(np.abs(shape) ** 2 * np.exp(1j * m * (cycle / n) / revs))) / norm > SYMMETRY_R2:
+            return cycle / n
+    return cycle
+
+
+def _on_the_wheel(analysis: LogAnalysis, best: float) -> tuple[float, int | None, float | None]:
+    """Cylinder 1's TDC after the gap [deg] for the offset ``best`` [rad] of the analysis's
+    cycles, and (four-stroke) the firing parity and firing TDC's wheel angle [deg]: TDC
+    before intake at wheel angle start + best, firing TDC one revolution later."""
+    tdc_before_intake = float(analysis.cycle_start_rad[0]) + best
+    tdc_gap = float(np.rad2deg(np.mod(tdc_before_intake, TWO_PI)))
+    if analysis.strokes != 4:
+        return tdc_gap, None, None
+    firing_tdc = tdc_before_intake + TWO_PI
+    return tdc_gap, int(math.floor(firing_tdc / TWO_PI + 1e-9)) % 2, float(np.rad2deg(firing_tdc))
+
+
 def tdc_from_speed(
     engine: Engine,
     speed: LogAnalysis | np.ndarray,
@@ -508,24 +555,7 @@ def tdc_from_speed(
     False and ``reason`` says why). Raises :class:`rotor.LogError` for a speed without a
     whole cycle.
     """
-    if isinstance(speed, LogAnalysis):
-        omega = np.asarray(speed.omega, dtype=np.float64)
-        mean_w = np.asarray(speed.mean_omega, dtype=np.float64)
-        cycle = float(speed.cycle_rad)
-        source = speed.source
-    else:
-        omega = np.asarray(speed, dtype=np.float64)
-        if omega.ndim == 1:
-            omega = omega[None, :]
-        cycle = TWO_PI * (engine.strokes // 2)
-        mean_w = omega.mean(axis=1) if mean_omega is None else np.asarray(mean_omega, dtype=np.float64).reshape(-1)
-        source = ""
-    if omega.ndim != 2 or omega.shape[0] < 1 or omega.shape[1] < 8:
-        raise LogError(f"tdc_from_speed: speed of shape {omega.shape}: needs (cycles, points), a whole cycle or more")
-    if not (np.all(np.isfinite(omega)) and np.all(omega > 0)):
-        raise LogError("tdc_from_speed: the speed must be finite and positive")
-    if not (isinstance(max_order, (int, float)) and max_order > 0):
-        raise LogError(f"max_order = {max_order!r}: a positive order")
+    omega, mean_w, cycle, source = _speed_cycles(engine, speed, mean_omega, max_order)
     revs = round(cycle / TWO_PI)
     C, P = omega.shape
     K = int(min(math.floor(max_order * revs + 1e-9), P // 2 - 1))
@@ -551,13 +581,7 @@ def tdc_from_speed(
     dof = max(2 * C * K - B.shape[0] * C - 1, 1)
     sigma2 = max(s_best, 1e-300) / dof
     # alike cylinders: the shortest shift cycle/n under which the combustion shape fits itself
-    shape = B[0] if np.any(B[0]) else B[1]
-    norm = max(float(np.sum(np.abs(shape) ** 2)), 1e-300)
-    period = cycle
-    for n in range(max(int(engine.cylinders), 1), 1, -1):
-        if np.real(np.sum(np.abs(shape) ** 2 * np.exp(1j * m * (cycle / n) / revs))) / norm > SYMMETRY_R2:
-            period = cycle / n
-            break
+    period = _alike_period(B, m, cycle, revs, int(engine.cylinders))
     # an equivalent offset nearest the prior
     if period < cycle and prior_deg is not None:
         shifts = best + period * np.arange(round(cycle / period))
@@ -617,16 +641,7 @@ def tdc_from_speed(
             f"orders disagreeing), leaves every offset within ±{np.rad2deg(span):.0f}° inside {AGREE_SIGMA:g} σ: "
             f"the engine's signature up to order {max_order:g} holds too little of where TDC lies"
         )
-    tdc_gap = parity = firing_wheel = None
-    if isinstance(speed, LogAnalysis):
-        # cylinder 1's TDC before intake at wheel angle start + best; firing TDC one revolution later
-        start = float(speed.cycle_start_rad[0])
-        tdc_before_intake = start + best
-        tdc_gap = float(np.rad2deg(np.mod(tdc_before_intake, TWO_PI)))
-        if speed.strokes == 4:
-            firing_tdc = tdc_before_intake + TWO_PI
-            parity = int(math.floor(firing_tdc / TWO_PI + 1e-9)) % 2
-            firing_wheel = float(np.rad2deg(firing_tdc))
+    tdc_gap, parity, firing_wheel = _on_the_wheel(speed, best) if isinstance(speed, LogAnalysis) else (None,) * 3
     return SpeedTdc(
         offset_deg=float(np.rad2deg(best)),
         tdc_after_gap_deg=tdc_gap,
@@ -830,7 +845,7 @@ def check_tdc(
         raise TdcNotDetermined(
             f"{src}the speed cannot determine TDC (best {measured}): {fit.reason}; "
             + (
-                "give tdc_deg (--tdc-deg) or a pressure channel"
+                "give tdc_deg=DEG or a pressure channel"
                 if given_deg is None
                 else f"{what} TDC {given_deg:.1f}° cannot be checked"
             )

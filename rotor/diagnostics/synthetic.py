@@ -1,5 +1,5 @@
 """A simulated bench recording: rotor's own steady state written as a raw log in the format
-of the real ``tue-4gb10`` bench files, so that the reading path (:func:`rotor.read_log`,
+of the real single-cylinder bench files (``tue-single``), so that the reading path (:func:`rotor.read_log`,
 :func:`rotor.analyze_log`, :func:`rotor.calibrate`, :func:`rotor.diagnose`, ``rotor analyze``,
 ``rotor diagnose``) runs where the real files are absent.
 
@@ -41,11 +41,12 @@ as rotor counts them): 0.49–0.50 s, about 49,000 rows, for the default 12 cycl
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import pathlib
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from jaxtyping import ArrayLike
@@ -172,16 +173,72 @@ def simulated_recording(
     cannot be used; :class:`rotor.NoSteadyStateError` where the engine has no steady state
     at that speed.
     """
-    import equinox as eqx
-    from scipy.interpolate import CubicHermiteSpline, CubicSpline
+    from ..fileio import atomic_path
 
-    from ..dynamics.steady import steady_state
+    bench = _bench(
+        path,
+        engine,
+        rpm,
+        cycles,
+        imep_scale,
+        sample_rate_hz,
+        wheel,
+        gap_deg,
+        tooth_error_deg,
+        noise_v,
+        seed,
+        motored_cycles,
+    )
+    eng, comb_scale = _charged(bench.engine, bench.imep_scale)
+    rng = np.random.default_rng(bench.seed)
+    motion = _crank_motion(eng, bench, comb_scale, rng)
+    n = motion.ts.size
+    pv = pressure_volts(_pressure(eng, motion, comb_scale, bench.motored)) + rng.normal(0.0, bench.noise_v / 20, n)
+    ev = _encoder_volts(bench, motion) + rng.normal(0.0, bench.noise_v, n)
+    data = np.column_stack([motion.ts, pv, ev])
+    with atomic_path(bench.path) as tmp:
+        np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
+    return bench.path
+
+
+@dataclasses.dataclass(frozen=True)
+class _Bench:
+    """The arguments of :func:`simulated_recording`, checked: the file, the engine, what
+    is recorded and how."""
+
+    path: pathlib.Path
+    engine: Engine
+    rpm: float
+    cycles: int
+    imep_scale: float
+    fs: float
+    wheel: Wheel
+    gap_deg: float
+    tooth_error_deg: float
+    noise_v: float
+    seed: int
+    motored: frozenset[int]
+
+
+def _bench(
+    path,
+    engine,
+    rpm,
+    cycles,
+    imep_scale,
+    sample_rate_hz,
+    wheel,
+    gap_deg,
+    tooth_error_deg,
+    noise_v,
+    seed,
+    motored_cycles,
+) -> _Bench:
+    """:class:`rotor.EngineError` naming the argument of :func:`simulated_recording` that
+    cannot be used; else the arguments checked."""
     from ..engine.file import load_engine
     from ..engine.model import Engine
-    from ..fileio import atomic_path
-    from .calibration import SIGMA_RANGE
 
-    # ---------------------------------------------------------------- arguments
     path = pathlib.Path(path)
     if not path.parent.is_dir():
         raise EngineError(f"path = {os.fspath(path)!r}: the folder {os.fspath(path.parent)!r} does not exist")
@@ -232,19 +289,56 @@ def simulated_recording(
     if w.missing > w.teeth - 3:
         raise EngineError(f"wheel = {w.spec!r}: too few teeth for a simulated recording")
 
-    # ---------------------------------------------------------------- the speed
+    return _Bench(
+        path, eng, rpm, cycles, imep_scale, fs, w, gap_deg, tooth_error_deg, noise_v, int(seed), frozenset(motored_set)
+    )
+
+
+def _charged(eng, imep_scale: float):
+    """The engine at ``imep_scale`` (a Wiebe cycle's whole charge scaled), and the scale of
+    the combustion part still to apply (1 for a Wiebe cycle)."""
+    import equinox as eqx
+
+    from .charge import SIGMA_RANGE
+
     pressure = eng.pressure
-    if pressure.charge_scalable:  # a Wiebe cycle: the whole charge scaled
-        lo, hi = SIGMA_RANGE
-        if not lo <= imep_scale <= hi:
-            raise EngineError(
-                f"imep_scale = {imep_scale:g}: scales this engine's Wiebe cycle whole (intake pressure "
-                f"with the IMEP); the physical range is {lo:g} … {hi:g}"
-            )
-        eng = eqx.tree_at(lambda e: e.pressure, eng, pressure.scale_charge(imep_scale))
-        comb_scale = 1.0
-    else:
-        comb_scale = imep_scale
+    if not pressure.charge_scalable:
+        return eng, imep_scale
+    lo, hi = SIGMA_RANGE
+    if not lo <= imep_scale <= hi:
+        raise EngineError(
+            f"imep_scale = {imep_scale:g}: scales this engine's Wiebe cycle whole (intake pressure "
+            f"with the IMEP); the physical range is {lo:g} … {hi:g}"
+        )
+    return eqx.tree_at(lambda e: e.pressure, eng, pressure.scale_charge(imep_scale)), 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class _Motion:
+    """The crank's motion over the recording: t(θ) and θ(t) (splines, θ from the first
+    recorded cycle's start), the spline's angle range, the time of the first sample ``t0``
+    [s], the samples' times from it ``ts`` [s] and crank angles ``th`` [rad], the cycle
+    [rad] and the shortest tooth pitch's time [s]."""
+
+    t_of: Any
+    theta_of: Any
+    theta_lo: float
+    theta_hi: float
+    t0: float
+    ts: np.ndarray
+    th: np.ndarray
+    cycle_rad: float
+    pitch_s: float
+
+
+def _crank_motion(eng, bench: _Bench, comb_scale: float, rng) -> _Motion:
+    """The steady state (fired, and motored in the motored cycles) laid end to end over the
+    recording, and the sampling instants (the start drawn from ``rng``)."""
+    from scipy.interpolate import CubicHermiteSpline
+
+    from ..dynamics.steady import steady_state
+
+    rpm, fs, w, cycles, motored_set = bench.rpm, bench.fs, bench.wheel, bench.cycles, bench.motored
     ss = steady_state(eng, rpm, imep_scale=comb_scale)
     period = float(np.asarray(ss.period_s))
     cycle_rad = float(ss.cycle_rad)
@@ -259,9 +353,6 @@ def simulated_recording(
             f"fastest point ({w_max * RPM_PER_RAD_S:.0f} rpm) of a {w.spec} wheel; need at least "
             f"{MIN_SAMPLES_PER_PITCH} (raise the sampling rate or lower rpm)"
         )
-
-    rng = np.random.default_rng(seed)
-    revs = round(cycle_rad / (2 * np.pi))
     # the spline covers one cycle more than the recording each side; cycle k of the recording is row k + 1
     n_cyc = cycles + 3
     rows_k = np.arange(-1, n_cyc - 1)
@@ -287,16 +378,24 @@ def simulated_recording(
     t_of = CubicHermiteSpline(theta, t, 1.0 / omega)
     theta_of = CubicHermiteSpline(t, theta, omega)
     # from 36…180° (drawn) before the first cycle's start to 36…180° after the last one's end: exactly
-    # ``cycles`` complete cycles, with room for the edges around them
+    # ``cycles`` complete cycles, with space for the edges around them
     lead_in, lead_out = rng.uniform(0.1, 0.5, 2) * 2 * np.pi
     t0 = float(t_of(-lead_in))
     duration = float(t_of(cycles * cycle_rad + lead_out)) - t0
     n = int(math.floor(duration * fs)) + 1
     ts = np.arange(n) / fs  # the file's time column
     th = theta_of(t0 + ts)  # crank angle of each sample
+    return _Motion(t_of, theta_of, float(theta[0]), float(theta[-1]), t0, ts, th, cycle_rad, pitch_s)
 
-    # ---------------------------------------------------------------- pressure channel
-    # on a fine grid of one cycle (one compiled call), then a periodic cubic spline at the samples
+
+def _pressure(eng, motion: _Motion, comb_scale: float, motored_set) -> np.ndarray:
+    """Cylinder 1's pressure at the samples [Pa]: on a fine grid of one cycle (one compiled
+    call), then a periodic cubic spline; the engine file's motored cycle in the motored cycles."""
+    import equinox as eqx
+    from scipy.interpolate import CubicSpline
+
+    cycle_rad, th = motion.cycle_rad, motion.th
+    revs = round(cycle_rad / (2 * np.pi))
     grid = np.arange(PRESSURE_POINTS_PER_REV * revs) * (cycle_rad / (PRESSURE_POINTS_PER_REV * revs))
     p_grid = np.asarray(cylinder_pressure(eng, grid))[:, 0]
     if comb_scale != 1.0:  # scale the combustion part: fired − motored
@@ -312,20 +411,25 @@ def simulated_recording(
         k_of = np.floor(th / cycle_rad).astype(int)
         m = np.isin(k_of, sorted(motored_set))
         p[m] = pm_of(np.mod(th[m], cycle_rad))
-    pv = pressure_volts(p) + rng.normal(0.0, noise_v / 20, n)
+    return p
 
-    # ---------------------------------------------------------------- encoder channel
+
+def _encoder_volts(bench: _Bench, motion: _Motion) -> np.ndarray:
+    """The encoder channel at the samples [V], without noise: the wheel's teeth (with their
+    errors) passing, each edge a short ramp."""
+    w, fs, ts, th = bench.wheel, bench.fs, motion.ts, motion.th
+    pitch_s, t_of, t0 = motion.pitch_s, motion.t_of, motion.t0
     E = w.edges_per_rev
-    err = _wheel_errors(w, tooth_error_deg)
+    err = _wheel_errors(w, bench.tooth_error_deg)
     pitch = 2 * np.pi / w.teeth
-    gap = np.deg2rad(gap_deg)
+    gap = np.deg2rad(bench.gap_deg)
     # the first edge after the gap at crank angle gap (+ k·2π): relative to TDC before intake, and to firing TDC
     r0 = int(math.floor((th[0] - gap) / (2 * np.pi))) - 1
     r1 = int(math.ceil((th[-1] - gap) / (2 * np.pi))) + 1
     rev = np.arange(r0, r1 + 1)
     rise = (gap + 2 * np.pi * rev[:, None] + pitch * np.arange(E)[None, :] + err[None, :]).ravel()
     fall = rise + DUTY * pitch
-    keep = (rise > theta[0]) & (fall < theta[-1])
+    keep = (rise > motion.theta_lo) & (fall < motion.theta_hi)
     rise_t, fall_t = t_of(rise[keep]) - t0, t_of(fall[keep]) - t0
     # high(t) is a sum of boxes [rise, fall); filtered by a box of width R each edge becomes a linear ramp.
     # The sample value is the box average, (H(s + (1 − l)·R) − H(s − l·R))/R with H the high time up to s,
@@ -344,13 +448,7 @@ def simulated_recording(
         return np.where(inside, H_knots[ii] + level[ii] * (s - knots[ii]), 0.0)
 
     frac = (H(ts + (1 - EDGE_LEVEL) * R) - H(ts - EDGE_LEVEL * R)) / R
-    ev = LOW_V + (HIGH_V - LOW_V) * frac + rng.normal(0.0, noise_v, n)
-
-    # ---------------------------------------------------------------- write
-    data = np.column_stack([ts, pv, ev])
-    with atomic_path(path) as tmp:
-        np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
-    return path
+    return LOW_V + (HIGH_V - LOW_V) * frac
 
 
 def simulated_tooth_times(
