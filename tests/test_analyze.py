@@ -265,11 +265,10 @@ def test_cli_columns_value_starting_with_a_dash(tmp_path, capsys):
 @pytest.mark.parametrize(
     "extra,match",
     [
-        (["--max-order", "40"], r"max_order = 40: a 60-2 wheel resolves orders below 30"),
+        (["--max-order", "40"], r"--max-order 40: a 60-2 wheel resolves orders below 30"),
         (
             ["--max-order", "20", "--points-per-cycle", "100"],
-            r"points_per_cycle = 100: orders up to 20 need at least "
-            r"320 \(--points-per-cycle\)",
+            r"--points-per-cycle 100: orders up to 20 need at least 320, or a lower order limit \(--max-order\)",
         ),
         (["--save-tooth-errors", "/nonexistent/dir/t.json"], r"^rotor: error: /nonexistent/dir/t.json: no folder"),
     ],

@@ -464,7 +464,7 @@ def test_capture_6g75_compression_ranks_above_no_compression():
 
 @needs_ecu
 def test_capture_rising_edges_of_6g75_refused_with_the_other_edge_offered(capsys):
-    with pytest.raises(LogError, match="fits its falling ones.*--edge falling"):
+    with pytest.raises(LogError, match="fits its falling ones.*edge='falling'"):
         rotor.analyze_log(ECU / "6g75-without-spark-crank.csv", "36-2-1-1", edge="rising")
     a = rotor.analyze_log(ECU / "6g75-without-spark-crank.csv", "36-2-1-1")  # both edges read: the falling ones fit
     assert a.edges.inverted and a.track.revolutions >= 6

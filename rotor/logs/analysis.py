@@ -3,14 +3,15 @@
 The pipeline of :func:`analyze_log`:
 
 1. tooth edges: the ``tooth_time_s`` column, or found in ``encoder_v``
-   (:func:`rotor.logs.edges.find_edges`);
-2. each edge placed on the wheel (:func:`rotor.logs.pattern.locate_teeth`), its angle corrected
-   by the wheel's tooth-spacing errors (estimated from the log, given, or none);
+   (:func:`rotor.logs.edges.find_edges`), read and placed on the wheel
+   (:func:`rotor.logs.track.read_track`);
+2. the crank angle (:mod:`rotor.logs.angle`): each edge's angle corrected by the wheel's
+   tooth-spacing errors (estimated from the log, given, or none);
 3. time as a function of angle, t(φ), a cubic spline through the edges; the speed is
    ω(φ) = 1/t'(φ) [rad/s], sampled on a uniform grid of each engine cycle;
 4. the cycles: 0 = TDC of cylinder 1 at the start of intake, 360° = firing TDC (rotor's
    convention; a two-stroke cycle is one revolution from TDC). The angle from the gap
-   to TDC is given or found from a pressure channel (:func:`tdc_from_pressure`); the
+   to TDC is given or found from a pressure channel (:mod:`rotor.logs.phasing`); the
    firing revolution of a four-stroke comes from the pressure (the revolution with the
    compression peak), a cam signal, or the speed itself (the revolution in which the
    crank speeds up after TDC);
@@ -27,26 +28,31 @@ The pipeline of :func:`analyze_log`:
 from __future__ import annotations
 
 import dataclasses
-import enum
 import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from jaxtyping import ArrayLike
 
 from ..checks import check_size
 from ..cycles import cycle_delta, cycle_spectrum
 from ..errors import LogError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
-from .digital import digital_edges
-from .edges import Edges, find_edges
-from .pattern import repairs_summary
-from .plausibility import check_speed_time_base
+from .angle import CrankAngle, ToothErrorPlan, firing_run_note, speed_angle, tooth_angle
+from .edges import Edges
+from .phasing import (
+    PEAK_TO_NOISE_MIN,
+    PEAK_WIDTH_MAX_DEG,
+    NoCompressionPeak,
+    PhaseRequest,
+    PhaseSource,
+    find_phase,
+    tdc_from_pressure,
+)
 from .reader import Log, read_log
-from .track import ChoiceSource, WheelReading, named, read_track
-from .wheel import ToothErrors, ToothTrack, Wheel, estimate_tooth_errors
+from .track import ChoiceSource, WheelReading, read_track
+from .wheel import ToothErrors, ToothTrack, Wheel
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
@@ -62,31 +68,8 @@ __all__ = [
 ]
 
 TWO_PI = 2.0 * np.pi
-PEAK_TO_NOISE_MIN = 20.0
-"""A compression peak must stand this many times the signal's noise above the median of
-the averaged firing revolution [-] (see :func:`tdc_from_pressure`)."""
-PEAK_WIDTH_MAX_DEG = 120.0
-"""… and the averaged revolution may lie above half the peak's height for at most this
-much of it [deg] (a compression peak is narrow: 55–81° on the tue-4gb10 recordings, whose peaks stand
-100–480 times their noise above the median)."""
 ANALYSIS_ARRAYS = 8
 """Float64 arrays of (cycles × points per cycle) the analysis holds at once, for the size check."""
-
-
-class NoCompressionPeak(LogError):
-    """A pressure channel without a clear compression peak: not used for TDC."""
-
-
-class PhaseSource(enum.Enum):
-    """Where a recording's TDC or firing revolution came from (a typed state: decisions test
-    this, never the words of ``tdc_method`` or ``firing_method``)."""
-
-    GIVEN = "given"
-    PRESSURE = "pressure"
-    CAM = "cam"
-    SPEED = "speed"
-    UNKNOWN = "unknown"
-    EVERY_REVOLUTION = "every revolution (two-stroke)"
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -323,253 +306,6 @@ class LogAnalysis(Result):
         return plot_log_analysis(self, ax=ax, kind=kind)
 
 
-# ---------------------------------------------------------------------- alignment
-def _volume_ratio(x, compression_ratio, rod_ratio):
-    """V(x)/V_c of a central crank mechanism, x the angle from TDC [rad]."""
-    lam = rod_ratio
-    s = (1 - np.cos(x)) + (1 - np.sqrt(1 - (lam * np.sin(x)) ** 2)) / lam
-    return 1 + 0.5 * (compression_ratio - 1) * s
-
-
-def tdc_from_pressure(
-    phi: ArrayLike,
-    p: ArrayLike,
-    *,
-    compression_ratio: float | None = None,
-    rod_ratio: float | None = None,
-    window_deg: tuple[float, float] = (-90.0, -10.0),
-) -> tuple[float, int, str]:
-    """TDC of the compression from a pressure signal sampled at wheel angles.
-
-    **Arguments:** ``phi``: wheel angle of each sample [rad]; ``p``: the pressure signal
-    (any unit, gain or offset: only its shape is used); ``compression_ratio`` and
-    ``rod_ratio`` (crank radius / rod length): the engine's, for the polytropic fit;
-    ``window_deg``: the compression window of the fit, from TDC [deg].
-
-    The compression peaks once every second revolution: the revolutions (windows of one
-    revolution centred on the peak's angle) with the higher peaks are the firing ones,
-    and their traces are averaged on a 0.25° grid. With the compression ratio and rod
-    ratio, TDC comes from a polytropic fit of the compression before ignition,
-    log(p + p₀) = c − n·log V(φ − φ_TDC), with φ_TDC, n, c and the signal's offset p₀
-    free (the sensor's gain and offset need not be known). Without them, TDC is the
-    averaged trace's peak, which combustion puts some degrees late (a motored cycle's
-    peak is within a degree of TDC).
-
-    **A clear compression peak** is needed, or :class:`NoCompressionPeak` (a
-    :class:`LogError`) is raised and no TDC is given: the averaged firing revolution's peak
-    must stand :data:`PEAK_TO_NOISE_MIN` (20) times the signal's noise above its median
-    (the noise: the median absolute sample-to-sample difference of the raw signal / 0.954,
-    the standard deviation of white noise), and the revolution may lie above half the
-    peak's height for at most :data:`PEAK_WIDTH_MAX_DEG` (120°). A flat channel, pure
-    noise, or a periodic signal that is not a pressure (a wheel signal) fails.
-
-    **Returns:** (TDC wheel angle modulo 2π [rad], firing parity 0 or 1 of the
-    revolutions counted from wheel angle 0 that hold it, the method in words).
-    """
-    from scipy.optimize import least_squares
-
-    phi = np.asarray(phi, dtype=np.float64)
-    p = np.asarray(p, dtype=np.float64)
-    if phi.size < 100:
-        raise LogError("pressure channel: too few samples within the tooth edges to find TDC")
-    i_pk = int(np.argmax(p))
-    centre = float(np.mod(phi[i_pk], TWO_PI))
-    win = np.floor((phi - centre + np.pi) / TWO_PI).astype(int)  # window k: centre + 2πk ± π
-    ks = np.unique(win)
-    peaks = np.array([p[win == k].max() for k in ks])
-    full = np.array(
-        [
-            (phi[win == k].min() <= centre + TWO_PI * k - 0.9 * np.pi)
-            and (phi[win == k].max() >= centre + TWO_PI * k + 0.9 * np.pi)
-            for k in ks
-        ]
-    )
-    ks, peaks = ks[full], peaks[full]
-    even, odd = peaks[ks % 2 == 0], peaks[ks % 2 == 1]
-    if even.size == 0 or odd.size == 0:
-        raise LogError("pressure channel: need at least one whole even and one whole odd revolution")
-    parity_win = int(np.mean(odd) > np.mean(even))
-    fire = ks[ks % 2 == parity_win]
-    step = np.deg2rad(0.25)
-    grid = np.arange(-np.pi, np.pi, step)
-    sel = np.isin(win, fire)
-    x = phi[sel] - centre - TWO_PI * win[sel]
-    b = np.clip(np.floor((x + np.pi) / step).astype(int), 0, grid.size - 1)
-    sums = np.bincount(b, weights=p[sel], minlength=grid.size)
-    cnt = np.bincount(b, minlength=grid.size)
-    ok = cnt > 0
-    if ok.sum() < grid.size // 4:
-        raise LogError("pressure channel: too few samples in the firing revolutions")
-    x = grid + step / 2
-    avg = np.interp(x, x[ok], sums[ok] / cnt[ok])
-    _check_compression_peak(p, avg, step)
-    j = int(np.argmax(avg))
-    jj = int(np.clip(j, 1, avg.size - 2))
-    y0, y1, y2 = avg[jj - 1 : jj + 2]
-    curv = y0 - 2 * y1 + y2
-    peak = x[jj] + (0.5 * (y0 - y2) / curv * step if curv < 0 else 0.0)
-    if compression_ratio is None:
-        tdc_rel, method = peak, "pressure: the averaged firing cycle's peak (late by the combustion)"
-    else:
-        if not (compression_ratio > 1 and rod_ratio is not None and 0 < rod_ratio < 1):
-            raise LogError(
-                f"compression_ratio = {compression_ratio!r}, rod_ratio = {rod_ratio!r}: need a "
-                f"compression ratio > 1 and a rod ratio (crank radius / rod length) between 0 and 1"
-            )
-        lo_w, hi_w = np.deg2rad(window_deg)
-        tdc_rel = peak - np.deg2rad(10.0)
-        for _ in range(10):
-            m = (x - tdc_rel >= lo_w) & (x - tdc_rel <= hi_w)
-            floor = avg[m].min()
-            span = avg.max() - floor
-
-            def res(q):
-                t0, n, c, off = q
-                return np.log(avg[m] - floor + off * span) - (
-                    c - n * np.log(_volume_ratio(x[m] - t0, compression_ratio, rod_ratio))
-                )
-
-            q0 = [tdc_rel, 1.3, np.log(span), 0.1]
-            sol = least_squares(res, q0, bounds=([tdc_rel - 0.35, 1.0, -50, 1e-4], [tdc_rel + 0.35, 1.7, 50, 10.0]))
-            moved = abs(sol.x[0] - tdc_rel)
-            tdc_rel = float(sol.x[0])
-            if moved < np.deg2rad(0.01):
-                break
-        method = (
-            f"pressure: polytropic fit of the compression ({window_deg[0]:g}…{window_deg[1]:g}° from TDC, "
-            f"compression ratio {compression_ratio:g}, rod ratio {rod_ratio:.4g}, exponent {sol.x[1]:.3f})"
-        )
-    tdc_abs = centre + TWO_PI * int(fire[0]) + tdc_rel
-    parity = int(np.floor(tdc_abs / TWO_PI)) % 2
-    return float(np.mod(tdc_abs, TWO_PI)), parity, method
-
-
-def _check_compression_peak(p, avg, step):
-    """Raise NoCompressionPeak unless ``avg`` (the averaged firing revolution on a grid of
-    ``step`` [rad]) has a clear, narrow peak above the noise of the raw signal ``p``."""
-    noise = float(np.median(np.abs(np.diff(p)))) / 0.954  # white noise: median |Δ| = 0.954 σ
-    med = float(np.median(avg))
-    height = float(np.max(avg)) - med
-    if not height > PEAK_TO_NOISE_MIN * noise or not height > 1e-9 * max(abs(med), 1e-300):
-        raise NoCompressionPeak(
-            f"pressure channel: no clear compression peak (the averaged firing revolution peaks "
-            f"{height:.3g} above its median, the signal's noise is {noise:.3g}; {PEAK_TO_NOISE_MIN:g}× the "
-            f"noise is needed): not used for TDC"
-        )
-    width = float(np.count_nonzero(avg > med + 0.5 * height)) * np.rad2deg(step)
-    if width > PEAK_WIDTH_MAX_DEG:
-        raise NoCompressionPeak(
-            f"pressure channel: no clear compression peak (the averaged firing revolution lies above half "
-            f"its peak's height for {width:.0f}°, a compression peak for under {PEAK_WIDTH_MAX_DEG:g}°: is it "
-            f"the pressure column?): not used for TDC"
-        )
-
-
-def _speed_parity(omega_of, phi0, phi1, tdc):
-    """Firing parity from the speed: the revolution after whose TDC the crank speeds up more."""
-    r0 = int(np.ceil((phi0 - tdc) / TWO_PI))
-    r1 = int(np.floor((phi1 - tdc - np.pi) / TWO_PI))
-    if r1 - r0 < 1:
-        return 0, 0.0
-    revs = np.arange(r0, r1 + 1)
-    x = tdc + TWO_PI * revs[:, None] + np.linspace(0, np.pi, 61)[None, :]
-    w = omega_of(x)
-    rise = w.max(axis=1) - w[:, 0]
-    even, odd = rise[revs % 2 == 0], rise[revs % 2 == 1]
-    if even.size == 0 or odd.size == 0:
-        return 0, 0.0
-    parity = int(np.mean(odd) > np.mean(even))
-    sep = abs(np.mean(odd) - np.mean(even)) / (np.std(rise) + 1e-300)
-    return parity, float(sep)
-
-
-def _cam_parity(name, log, edge, t_of, phi_of, phi_lo, phi_hi, tdc, required, notes):
-    """The firing parity from the cam channel (analog ``cam_v`` or digital ``cam_d``): the
-    firing TDC is the first TDC after each rising cam edge. ``None`` (and a
-    note) where the cam edges do not fall once per cycle and the cam is not ``required``."""
-    if "cam_d" in log:
-        cam = named(name, digital_edges, log["time"], log["cam_d"], name="cam_d").times
-    else:
-        cam = find_edges(log["time"], log["cam_v"], name="cam_v").times
-    cam_phi = phi_of(cam[(cam >= t_of(phi_lo)) & (cam <= t_of(phi_hi))])
-    why = ""
-    if cam_phi.size == 0:
-        why = "no cam edge within the tooth edges"
-    else:
-        r = np.ceil((cam_phi - tdc) / TWO_PI)
-        parities = np.mod(r, 2).astype(int)
-        if np.any(parities != parities[0]) or np.any(np.diff(r) < 2):
-            why = "the cam edges do not fall once per cycle (their revolutions alternate irregularly)"
-    if why:
-        if required:
-            raise LogError(f"{name}: {why}")
-        notes.append(f"cam channel not used for the firing revolution: {why}")
-        return None
-    return int(parities[0])
-
-
-def _wiener_gain(X, revs, teeth, kmax):
-    """Weights of the harmonics 1 … kmax of the cycles' speed X (cycles × harmonics) by their
-    signal-to-noise ratio, S/(S + N). Timer jitter and edge noise are white in the time of
-    each edge, so the speed's noise grows in proportion to the order: N_m = c²·m², c² the
-    median of |X_m|²/m² over the orders teeth/6 … teeth/3 (which an engine hardly reaches);
-    S_m = max(mean |X_m|² − N_m, 0) over the cycles."""
-    m_lo, m_hi = int(np.ceil(teeth / 6 * revs)), int(np.floor(teeth / 3 * revs))
-    m_hi = min(m_hi, X.shape[1] - 1)
-    power = np.mean(np.abs(X) ** 2, axis=0)
-    m = np.arange(X.shape[1])
-    if m_hi <= m_lo:
-        return np.ones(kmax), 0.0
-    c2 = float(np.median(power[m_lo : m_hi + 1] / m[m_lo : m_hi + 1] ** 2))
-    noise = c2 * m[1 : kmax + 1] ** 2
-    signal = np.maximum(power[1 : kmax + 1] - noise, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        g = np.where(signal > 0, signal / (signal + noise), 0.0)
-    return g, c2
-
-
-def _firing_run_note(te, cylinders, strokes, max_order, teeth):
-    """What a tooth-error estimate from a firing run leaves out, and what it may cost δ."""
-    ks = [k for k in te.engine_orders]
-    if ks:
-        shown = ", ".join(map(str, ks)) if len(ks) <= 6 else f"{ks[0]}, {ks[1]}, … {ks[-1]}"
-        s = (
-            f"tooth errors estimated from this firing run: the wheel's errors at orders {shown} were left to the "
-            f"engine (a firing run cannot tell them from the engine's fluctuation) and stay in the speed"
-        )
-        if te.order_rms_rad is not None:
-            kk = np.array([k for k in ks if k <= max_order + 1e-9], dtype=float)
-            u = 2.0 * te.order_rms_rad * float(np.sqrt(np.sum(kk**2)))
-            s += (
-                f"; at the other orders the wheel's errors are {np.rad2deg(te.order_rms_rad):.3f}° rms per order, "
-                f"which at these would change δ by about ±{u:.2g}"
-            )
-    else:
-        s = "tooth errors estimated from this firing run: no order stood out as the engine's, so none was left to it"
-    s += (
-        "; a calibration saved from a coast-down or motored run (tooth_errors=FILE, --tooth-errors FILE) gives the "
-        "full wheel pattern"
-    )
-    if cylinders == 1 and not (strokes == 4 and len(ks) > 0):
-        s += (
-            "; for an engine of several cylinders give cylinders (--cylinders N), or its fluctuation at the firing "
-            "orders may be taken for the wheel's errors"
-        )
-    return s
-
-
-class _Lazy:
-    """``cls(*args)``, built on its first call."""
-
-    def __init__(self, cls, *args):
-        self._make, self._f = (lambda: cls(*args)), None
-
-    def __call__(self, x):
-        if self._f is None:
-            self._f = self._make()
-        return self._f(x)
-
-
 def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise):
     """TypeError naming the argument of :func:`analyze_log` that has the wrong type."""
     from ..engine.model import Engine
@@ -597,6 +333,7 @@ def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, to
         raise TypeError(f"denoise = {denoise!r}: True or False")
 
 
+# ---------------------------------------------------------------------- analysis
 # ---------------------------------------------------------------------- analysis
 def analyze_log(
     source: str | os.PathLike | Log,
@@ -678,28 +415,8 @@ def analyze_log(
     file, row, column or time of anything that cannot be analysed, and ``TypeError`` for an
     argument of the wrong type.
     """
-    from scipy.interpolate import CubicSpline, PchipInterpolator
-
     _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise)
-    if strokes not in (2, 4):
-        raise LogError(f"strokes = {strokes!r}: 2 or 4")
-    if not (isinstance(cylinders, (int, np.integer)) and not isinstance(cylinders, bool) and cylinders >= 1):
-        raise LogError(f"cylinders = {cylinders!r}: a whole number, 1 or more")
-    if tdc_deg is not None and not np.isfinite(float(tdc_deg)):
-        raise LogError(f"tdc_deg = {tdc_deg!r}: need a finite angle from the gap to TDC [deg]")
-    if max_order is not None and not (np.isfinite(float(max_order)) and max_order > 0):
-        raise LogError(f"max_order = {max_order!r}: need a positive order")
-    if max_order is not None and max_order < 2.0 / strokes - 1e-9:
-        raise LogError(
-            f"max_order = {max_order:g} (--max-order) keeps no order: the lowest order of a {strokes}-stroke "
-            f"cycle is {2.0 / strokes:g} (one per cycle); give {2.0 / strokes:g} or more"
-        )
-    if points_per_cycle is not None and not (
-        isinstance(points_per_cycle, (int, np.integer)) and not isinstance(points_per_cycle, bool)
-    ):
-        raise TypeError(f"points_per_cycle = {points_per_cycle!r}: a whole number of grid points per cycle, or None")
-    if points_per_cycle is not None and points_per_cycle < 1:
-        raise LogError(f"points_per_cycle = {points_per_cycle!r} (--points-per-cycle): 1 or more")
+    _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle)
     reading: WheelReading | None = source if isinstance(source, WheelReading) else None
     if reading is not None:
         log, name = reading.log, reading.source
@@ -707,263 +424,212 @@ def analyze_log(
         log = source if isinstance(source, Log) else read_log(source, columns)
         name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
     revs = strokes // 2
-    cycle = TWO_PI * revs
-    notes = list(log.notes)  # e.g. a header line that was skipped
-    track = te = edges = None
     if log.kind == "speed":
-        t = log["time"]
-        check_speed_time_base(t, log["rpm"], name)
-        omega_s = log["rpm"] / RPM_PER_RAD_S
-        phi_s = np.concatenate([[0.0], np.cumsum(0.5 * (omega_s[1:] + omega_s[:-1]) * np.diff(t))])
-        t_of = CubicSpline(phi_s, t)
-        w_spline = CubicSpline(phi_s, omega_s)
-        omega_of = w_spline
-        phi_of = PchipInterpolator(t, phi_s)
-        phi_lo, phi_hi = float(phi_s[0]), float(phi_s[-1])
-        if max_order is None:
-            max_order = 12.0
-        pitch_pts = 2 * 60  # grid default as for a 60-tooth wheel
-        if phi_hi - phi_lo < TWO_PI:
-            raise LogError(
-                f"{name}: the speed log covers {np.rad2deg(phi_hi - phi_lo) / 360:.2f} revolutions; "
-                f"a cycle needs {revs}"
-            )
-        tooth_errors = None
+        angle = speed_angle(log, name, revs)
     else:
         if reading is None:
             if wheel is None:
-                raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2', --wheel 60-2)")
+                raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2')")
             reading = read_track(log, wheel, edge=edge, name=name)
-        track, edges = reading.track, reading.edges
-        notes += list(reading.notes)
-        wheel_choice = reading.choice("wheel")
-        if wheel_choice is not None and wheel_choice.source is ChoiceSource.FOUND:
-            notes.append(wheel_choice.evidence)
-        edge_choice = reading.choice("edge")
-        if edge_choice is not None and edge_choice.source is ChoiceSource.FOUND:
-            notes.append(f"edge: {edge_choice.value} ({edge_choice.evidence})")
-        if track.repairs:
-            notes.append(f"edges repaired to follow the {track.wheel.spec} wheel: {repairs_summary(track.repairs)}")
-        w = track.wheel
-        span_rev = float((track.t.size - 1) / w.edges_per_rev)
-        if span_rev < revs:
-            raise LogError(
-                f"{name}: the {track.t.size} tooth edges span about {span_rev:.2f} revolutions; a "
-                f"{strokes}-stroke cycle needs {revs} (a longer log)"
-            )
-        if isinstance(tooth_errors, str) and tooth_errors == "estimate" and w.angles_deg is not None:
-            measured = np.deg2rad(np.asarray(w.angles_deg)) - w.tooth_angles_rad
-            te = ToothErrors(w.spec, measured, "measured (the wheel file's tooth angles)")
-            tooth_errors = te
-        if isinstance(tooth_errors, str) and tooth_errors == "estimate":
-            if engine is not None and tdc_deg is None:
-                raise LogError(
-                    "engine given to take its inertia ripple out of the tooth-error estimate: give tdc_deg "
-                    "as well (the angle from the gap to cylinder 1's TDC [deg])"
-                )
-            te = estimate_tooth_errors(
-                track,
-                engine_orders=engine_orders,
-                strokes=strokes,
-                cylinders=cylinders,
-                source=name,
-                engine=engine,
-                tdc_deg=tdc_deg,
-            )
-        elif tooth_errors is None or (isinstance(tooth_errors, str) and tooth_errors == "none"):
-            te = None
-        elif isinstance(tooth_errors, ToothErrors):
-            te = tooth_errors
-        else:
-            te = ToothErrors.load(tooth_errors)
-        phi_e = te.angles(track) if te is not None else track.nominal_angle
-        t_of = CubicSpline(phi_e, track.t)
-        dt_dphi = t_of.derivative()
+        plan = ToothErrorPlan(tooth_errors, engine_orders, strokes, cylinders, engine, tdc_deg)
+        angle = tooth_angle(reading, name, plan)
+    max_order = _max_order(angle, max_order)
+    P = _points_per_cycle(name, angle, strokes, max_order, points_per_cycle)
+    request = PhaseRequest(strokes, tdc_deg, firing, edge, compression_ratio, rod_ratio)
+    phase = find_phase(name, log, angle, request)
+    starts = _cycle_starts(name, angle, phase.base, strokes)
+    speed = _cycle_speed(angle, starts, P, max_order, revs, denoise)
+    notes = [*log.notes, *angle.notes, *phase.notes]  # log.notes: e.g. a header line that was skipped
+    te = angle.tooth_errors
+    if te is not None and isinstance(angle.tooth_errors_asked, str) and not te.method.startswith("coast-down"):
+        notes.append(firing_run_note(te, cylinders, strokes, max_order))
+    return LogAnalysis(
+        source=name,
+        kind=log.kind,
+        strokes=strokes,
+        cycle_rad=TWO_PI * revs,
+        order=speed.order,
+        t_start_s=speed.t_start,
+        mean_omega=speed.mean_omega,
+        delta=speed.delta,
+        amplitude_rad_s=speed.amplitude,
+        phase_rad=speed.phase,
+        omega=speed.omega,
+        cycle_start_rad=starts,
+        tdc_rad=float(phase.tdc),
+        tdc_method=phase.tdc_method,
+        tdc_source=phase.tdc_source,
+        firing_source=phase.firing_source,
+        firing_parity=phase.parity,
+        firing_method=phase.parity_method,
+        max_order=float(max_order),
+        track=angle.track,
+        tooth_errors=te,
+        edges=angle.edges,
+        pressure=_pressure_per_cycle(phase.pressure, starts, TWO_PI * revs),
+        notes=tuple(notes),
+        cylinders=int(cylinders),
+        delta_weight=speed.weight,
+        reading=angle.reading,
+    )
 
-        def omega_of(x):
-            return 1.0 / dt_dphi(x)
 
-        phi_of = _Lazy(PchipInterpolator, track.t, phi_e)  # built only where a pressure or cam channel needs it
-        phi_lo, phi_hi = float(phi_e[0]), float(phi_e[-1])
-        if max_order is None:
-            max_order = w.teeth / 4
-        elif max_order >= w.teeth / 2:
-            raise LogError(
-                f"max_order = {max_order:g}: a {w.spec} wheel resolves orders below {w.teeth / 2:g} "
-                f"(half its teeth per revolution)"
-            )
-        pitch_pts = 2 * w.teeth
+def _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle) -> None:
+    """LogError naming the argument of :func:`analyze_log` whose value cannot be used."""
+    if strokes not in (2, 4):
+        raise LogError(f"strokes={strokes!r}: 2 or 4", argument="strokes")
+    if not (isinstance(cylinders, (int, np.integer)) and not isinstance(cylinders, bool) and cylinders >= 1):
+        raise LogError(f"cylinders={cylinders!r}: a whole number, 1 or more", argument="cylinders")
+    if tdc_deg is not None and not np.isfinite(float(tdc_deg)):
+        raise LogError(f"tdc_deg={tdc_deg!r}: need a finite angle from the gap to TDC [deg]", argument="tdc_deg")
+    if max_order is not None and not (np.isfinite(float(max_order)) and max_order > 0):
+        raise LogError(f"max_order={max_order!r}: need a positive order", argument="max_order")
+    if max_order is not None and max_order < 2.0 / strokes - 1e-9:
+        raise LogError(
+            f"max_order={max_order:g}: keeps no order: the lowest order of a {strokes}-stroke "
+            f"cycle is {2.0 / strokes:g} (one per cycle); give {2.0 / strokes:g} or more",
+            argument="max_order",
+        )
+    if points_per_cycle is not None and not (
+        isinstance(points_per_cycle, (int, np.integer)) and not isinstance(points_per_cycle, bool)
+    ):
+        raise TypeError(f"points_per_cycle = {points_per_cycle!r}: a whole number of grid points per cycle, or None")
+    if points_per_cycle is not None and points_per_cycle < 1:
+        raise LogError(f"points_per_cycle={points_per_cycle!r}: 1 or more", argument="points_per_cycle")
+
+
+def _max_order(angle: CrankAngle, max_order: float | None) -> float:
+    """The highest order reported: the default of the wheel (or speed log), or the one
+    given, below half the wheel's teeth per revolution."""
+    if max_order is None:
+        return angle.default_max_order
+    w = None if angle.track is None else angle.track.wheel
+    if w is not None and max_order >= w.teeth / 2:
+        raise LogError(
+            f"max_order={max_order:g}: a {w.spec} wheel resolves orders below {w.teeth / 2:g} "
+            f"(half its teeth per revolution)",
+            argument="max_order",
+        )
+    return max_order
+
+
+def _points_per_cycle(name, angle: CrankAngle, strokes, max_order, points_per_cycle) -> int:
+    """The grid's points per cycle: given (enough for ``max_order``), or two per tooth pitch
+    and 8 per period of ``max_order``; checked against the memory budget."""
+    revs = strokes // 2
     need = int(np.ceil(8 * max_order * revs))
     if points_per_cycle:
         P = int(points_per_cycle)
         if P < need:
             raise LogError(
-                f"points_per_cycle = {P}: orders up to {max_order:g} need at least {need} "
-                f"(--points-per-cycle), or a lower max_order (--max-order)"
+                f"points_per_cycle={P}: orders up to {max_order:g} need at least {need}, or a lower order limit (max_order=)",
+                argument="points_per_cycle",
             )
     else:
-        P = max(pitch_pts * revs, need + need % 2)
+        P = max(angle.pitch_points * revs, need + need % 2)
     fine_est = max(16 * int(np.floor(max_order * revs + 1e-9)), P)
-    cycles_est = int(np.ceil((phi_hi - phi_lo) / cycle)) + 1
+    cycles_est = int(np.ceil((angle.phi_hi - angle.phi_lo) / (TWO_PI * revs))) + 1
     check_size(
         float(cycles_est) * float(fine_est) * 8.0 * ANALYSIS_ARRAYS,
         f"{name}: {cycles_est} cycles at {P} points per cycle" + (f" (δ on {fine_est})" if fine_est > P else ""),
-        "give fewer points per cycle (--points-per-cycle, points_per_cycle=; default 2 per tooth pitch) or a "
-        "lower max_order (--max-order)",
+        "give fewer points per cycle (points_per_cycle=; default 2 per tooth pitch) or a lower order limit (max_order=)",
         error=LogError,
     )
+    return P
 
-    # --- TDC and the firing revolution
-    pressure = None
-    if "pressure_v" in log and log.kind != "teeth":
-        t_s, p_s = log["time"], log["pressure_v"]
-        inside = (t_s >= t_of(phi_lo)) & (t_s <= t_of(phi_hi))
-        pressure = (phi_of(t_s[inside]), p_s[inside])
-    parity_method = "two-stroke: every revolution"
-    tdc_source, firing_source = PhaseSource.UNKNOWN, PhaseSource.EVERY_REVOLUTION
-    parity = None
-    pressure_ok = pressure is not None
-    no_peak = ""
-    if tdc_deg is not None:
-        tdc = float(np.deg2rad(tdc_deg))
-        tdc_method, tdc_source = "given", PhaseSource.GIVEN
-    elif pressure is not None:
-        try:
-            tdc, p_parity, tdc_method = tdc_from_pressure(
-                *pressure, compression_ratio=compression_ratio, rod_ratio=rod_ratio
-            )
-            tdc_source = PhaseSource.PRESSURE
-        except NoCompressionPeak as e:
-            no_peak = str(e)
-            tdc, pressure_ok = 0.0, False
-            tdc_method = "unknown: the pressure channel has no clear compression peak; cycles start at the gap"
-            notes.append(f"{no_peak}; TDC not known: the orders' phases are relative to the gap (give tdc_deg)")
-        if compression_ratio is None and pressure_ok:
-            notes.append(
-                "TDC is the pressure peak, which combustion puts late (13–27° on the tue-4gb10 "
-                "recordings): the orders' phases and the cycle start are late by as much; give the "
-                "compression ratio and rod ratio (--compression-ratio, --rod-ratio) for a fit of the "
-                "compression, or tdc_deg"
-            )
-    else:
-        tdc = 0.0
-        tdc_method = (
-            "unknown: cycles start at the gap" if log.kind != "speed" else "unknown: cycles start at the first sample"
-        )
-        notes.append(
-            "TDC not known: the orders' phases are relative to the gap, not to TDC (give tdc_deg or a pressure channel)"
-        )
-    if strokes == 4 and tdc_deg is not None and pressure is not None and firing in ("auto", "pressure"):
-        try:
-            _, p_parity, _ = tdc_from_pressure(*pressure)
-        except NoCompressionPeak as e:
-            no_peak, pressure_ok = str(e), False
-            notes.append(f"{no_peak}: the firing revolution comes from elsewhere")
-    if strokes == 4:
-        if firing in (0, 1):
-            parity, parity_method, firing_source = int(firing), "given", PhaseSource.GIVEN
-        elif firing == "pressure" and pressure is not None and not pressure_ok:
-            raise LogError(f"{name}: firing='pressure': {no_peak}; give firing=0 or 1 (--firing), or a cam channel")
-        elif firing in ("auto", "pressure") and pressure_ok and pressure is not None:
-            # p_parity: the revolutions holding the TDC found from the pressure (a given TDC lies in the same
-            # compression)
-            parity, parity_method = p_parity, "pressure: revolutions with the compression peak"
-            firing_source = PhaseSource.PRESSURE
-        elif (
-            firing in ("auto", "cam")
-            and ("cam_v" in log or "cam_d" in log)
-            and (cam_parity := _cam_parity(name, log, edge, t_of, phi_of, phi_lo, phi_hi, tdc, firing == "cam", notes))
-            is not None
-        ):
-            parity, parity_method = cam_parity, "cam: the first TDC after each cam edge"
-            firing_source = PhaseSource.CAM
-        elif firing in ("auto", "speed"):
-            parity, sep = _speed_parity(omega_of, phi_lo, phi_hi, tdc)
-            parity_method = f"speed: the revolution that speeds up more after TDC (separation {sep:.1f} σ)"
-            firing_source = PhaseSource.SPEED
-            if sep < 1.0:
-                notes.append(
-                    "the firing revolution is uncertain from the speed alone: the half orders' phases may be off by π"
-                )
-        else:
-            raise LogError(
-                f"firing = {firing!r}: 'auto', 'pressure', 'cam', 'speed', 0 or 1"
-                + (" (no such channel in the log)" if firing in ("pressure", "cam") else "")
-            )
-        # firing TDC at 2π·r + tdc for r of this parity; the cycle starts 2π before
-        base = tdc + TWO_PI * parity - TWO_PI
-    else:
-        base = tdc
-    k0 = int(np.ceil((phi_lo - base) / cycle - 1e-12))
-    k1 = int(np.floor((phi_hi - base) / cycle + 1e-12)) - 1
+
+def _cycle_starts(name, angle: CrankAngle, base: float, strokes: int) -> np.ndarray:
+    """The wheel angle of each complete cycle's start, the cycles ``base`` + k·cycle inside
+    the recording."""
+    revs = strokes // 2
+    cycle = TWO_PI * revs
+    k0 = int(np.ceil((angle.phi_lo - base) / cycle - 1e-12))
+    k1 = int(np.floor((angle.phi_hi - base) / cycle + 1e-12)) - 1
     if k1 < k0:
-        span = (phi_hi - phi_lo) / TWO_PI
+        span = (angle.phi_hi - angle.phi_lo) / TWO_PI
         raise LogError(
             f"{name}: no complete {strokes}-stroke cycle: the edges span {span:.2f} revolutions and a "
             f"cycle ({revs} revolution{'s' if revs > 1 else ''}) starting at TDC must lie inside"
         )
-    starts = base + cycle * np.arange(k0, k1 + 1)
-    C = starts.size
+    return base + cycle * np.arange(k0, k1 + 1)
 
-    # --- the speed on the uniform grid of each cycle
+
+@dataclasses.dataclass(frozen=True)
+class _CycleSpeed:
+    """Each cycle's speed on its grid, start time, mean speed, orders and δ (with the weight
+    of each order in δ)."""
+
+    omega: np.ndarray
+    t_start: np.ndarray
+    mean_omega: np.ndarray
+    order: np.ndarray
+    amplitude: np.ndarray
+    phase: np.ndarray
+    delta: np.ndarray
+    weight: np.ndarray
+
+
+def _cycle_speed(angle: CrankAngle, starts, P: int, max_order: float, revs: int, denoise: bool) -> _CycleSpeed:
+    """The speed on the uniform grid of each cycle, its harmonics by engine order and δ."""
+    cycle = TWO_PI * revs
+    C = starts.size
     psi = np.arange(P) * cycle / P
     grid = starts[:, None] + psi[None, :]
-    omega = np.asarray(omega_of(grid))
-    ends_t = t_of(np.concatenate([starts, [starts[-1] + cycle]]))
-    t_start = ends_t[:-1]
+    omega = np.asarray(angle.omega_of(grid))
+    ends_t = angle.t_of(np.concatenate([starts, [starts[-1] + cycle]]))
     mean_omega = cycle / np.diff(ends_t)
     # each cycle's harmonics with its linear trend (from its neighbours' mean speeds) removed: the same code as
     # a simulated run's (rotor.cycles), so that logged and simulated orders and δ compare
     X = cycle_spectrum(omega, mean_omega, cycle)
     kmax = int(np.floor(max_order * revs + 1e-9))
     k = np.arange(1, kmax + 1)
-    orders = k / revs
-    amp, phase = np.abs(X[:, 1 : kmax + 1]), np.angle(X[:, 1 : kmax + 1])
     # δ of the speed rebuilt from its orders up to max_order, each weighted by its signal-to-noise ratio, on
     # an 8× finer grid
     gain = np.ones(kmax + 1)
-    if denoise and track is not None:
-        gain[1:], _ = _wiener_gain(X, revs, track.wheel.teeth, kmax)
+    if denoise and angle.teeth is not None:
+        gain[1:], _ = _wiener_gain(X, revs, angle.teeth, kmax)
     fine = max(16 * kmax, P)
     Xf = np.zeros((C, fine // 2 + 1), complex)
     Xf[:, : kmax + 1] = X[:, : kmax + 1] * gain[None, :] * (fine / 2.0)
     Xf[:, 0] = np.real(X[:, 0]) / 2.0 * fine
     smooth = np.fft.irfft(Xf, n=fine, axis=1)  # detrended, as δ is defined (rotor.cycles)
-    delta = cycle_delta(smooth.max(axis=1), smooth.min(axis=1), mean_omega)
-    if te is not None and isinstance(tooth_errors, str) and not te.method.startswith("coast-down"):
-        notes.append(_firing_run_note(te, cylinders, strokes, max_order, w.teeth))
-    press = None
-    if pressure is not None:
-        ph, pv = pressure
-        rel = ph - starts[0]
-        inside = (rel >= 0) & (rel < cycle * C)
-        press = (np.mod(rel[inside], cycle), pv[inside], np.floor(rel[inside] / cycle).astype(int))
-    return LogAnalysis(
-        source=name,
-        kind=log.kind,
-        strokes=strokes,
-        cycle_rad=cycle,
-        order=orders,
-        t_start_s=t_start,
-        mean_omega=mean_omega,
-        delta=delta,
-        amplitude_rad_s=amp,
-        phase_rad=phase,
+    return _CycleSpeed(
         omega=omega,
-        cycle_start_rad=starts,
-        tdc_rad=float(tdc),
-        tdc_method=tdc_method,
-        tdc_source=tdc_source,
-        firing_source=firing_source,
-        firing_parity=parity,
-        firing_method=parity_method,
-        max_order=float(max_order),
-        track=track,
-        tooth_errors=te,
-        edges=edges,
-        pressure=press,
-        notes=tuple(notes),
-        cylinders=int(cylinders),
-        delta_weight=gain[1:],
-        reading=reading,
+        t_start=ends_t[:-1],
+        mean_omega=mean_omega,
+        order=k / revs,
+        amplitude=np.abs(X[:, 1 : kmax + 1]),
+        phase=np.angle(X[:, 1 : kmax + 1]),
+        delta=cycle_delta(smooth.max(axis=1), smooth.min(axis=1), mean_omega),
+        weight=gain[1:],
     )
+
+
+def _pressure_per_cycle(pressure, starts, cycle) -> tuple | None:
+    """The pressure samples of the complete cycles: (cycle angle [rad], signal, cycle index)."""
+    if pressure is None:
+        return None
+    ph, pv = pressure
+    rel = ph - starts[0]
+    inside = (rel >= 0) & (rel < cycle * starts.size)
+    return (np.mod(rel[inside], cycle), pv[inside], np.floor(rel[inside] / cycle).astype(int))
+
+
+def _wiener_gain(X, revs, teeth, kmax):
+    """Weights of the harmonics 1 … kmax of the cycles' speed X (cycles × harmonics) by their
+    signal-to-noise ratio, S/(S + N). Timer jitter and edge noise are white in the time of
+    each edge, so the speed's noise grows in proportion to the order: N_m = c²·m², c² the
+    median of |X_m|²/m² over the orders teeth/6 … teeth/3 (which an engine hardly reaches);
+    S_m = max(mean |X_m|² − N_m, 0) over the cycles."""
+    m_lo, m_hi = int(np.ceil(teeth / 6 * revs)), int(np.floor(teeth / 3 * revs))
+    m_hi = min(m_hi, X.shape[1] - 1)
+    power = np.mean(np.abs(X) ** 2, axis=0)
+    m = np.arange(X.shape[1])
+    if m_hi <= m_lo:
+        return np.ones(kmax), 0.0
+    c2 = float(np.median(power[m_lo : m_hi + 1] / m[m_lo : m_hi + 1] ** 2))
+    noise = c2 * m[1 : kmax + 1] ** 2
+    signal = np.maximum(power[1 : kmax + 1] - noise, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = np.where(signal > 0, signal / (signal + noise), 0.0)
+    return g, c2

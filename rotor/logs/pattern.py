@@ -150,7 +150,7 @@ def _find_layout(n: np.ndarray, wheel: Wheel, t: np.ndarray) -> tuple:
     if L.size < G + 1:
         raise LogError(
             f"{L.size} gap(s) found in {t.size} tooth edges (t = {t[0]:.6f} … {t[-1]:.6f} s): a {wheel.spec} "
-            f"wheel has {G} per revolution (is the wheel right? --wheel auto finds it)"
+            f"wheel has {G} per revolution (is the wheel right? wheel='auto' finds it)"
         )
     s = n[L] - 1
     C = np.concatenate([[0], np.cumsum(n)])
@@ -162,7 +162,7 @@ def _find_layout(n: np.ndarray, wheel: Wheel, t: np.ndarray) -> tuple:
         seen = ", ".join(str(int(x)) for x in s[:8])
         raise LogError(
             f"no revolution of the log shows a {wheel.spec} wheel: the gaps found miss {seen}"
-            f"{' …' if s.size > 8 else ''} teeth (t = {t[L[0]]:.6f} s on); is the wheel right? (--wheel auto finds it)"
+            f"{' …' if s.size > 8 else ''} teeth (t = {t[L[0]]:.6f} s on); is the wheel right? (wheel='auto' finds it)"
         )
     lay = np.diff(sliding_window_view(L, G + 1)[: L.size - G][ok], axis=1)
     base = int(wheel.teeth) + 1
@@ -279,45 +279,82 @@ def follow_pattern(
     link = np.ones(n.size, bool)  # period i joins edges i and i + 1
     span, _ = _missed(t, n, pos, present, N)
     link[span] = np.abs(p[span] - n[span]) <= UNSURE
-    lo, hi = 0, t.size  # the edges kept: lo … hi − 1
-    if not (good.all() and link.all()):
-        # the longest stretch of edges that fit, joined by periods that fit; the rest must lie at the ends
-        new_seg = np.ones(t.size, bool)
-        new_seg[1:] = ~(good[1:] & good[:-1] & link)
-        seg = np.cumsum(new_seg)
-        size = np.bincount(seg, weights=good.astype(np.float64))
-        k = int(np.argmax(size))
-        idx = np.flatnonzero(seg == k)
-        a, b = int(idx[0]), int(idx[-1]) + 1
-        if not good[a]:
-            a += 1
-        if not repair or a > END_REVS * E or t.size - b > END_REVS * E:
-            if not repair:
-                i = int(np.argmin(good))
-            else:
-                i = b if t.size - b > END_REVS * E else a - 1
-            i = int(np.clip(i, 0, t.size - 1))
-            j = min(i, dt.size - 1)
-            raise LogError(
-                f"at t = {t[i]:.6f} s the edges stop fitting the {wheel.spec} wheel ({wheel.describe()}): "
-                f"a tooth period of {p[j]:.2f} pitches puts an edge where the wheel has no tooth "
-                f"(edges {a} … {b - 1} of {t.size} fit; a wrong wheel, or edges too irregular to follow)"
-            )
-        for lo_i, hi_i, where in ((0, a, "start"), (b, t.size, "end")):
-            repairs += [
-                Repair(
-                    "edge dropped",
-                    float(t[i]),
-                    None,
-                    1.0,
-                    f"one of {hi_i - lo_i} edges at the {where} of the log ({t[lo_i]:.6f} … {t[hi_i - 1]:.6f} s) "
-                    f"that do not fit the wheel (a starter engaging, the engine stopping?)",
-                )
-                for i in range(lo_i, hi_i)
-            ]
-        lo, hi = a, b
+    lo, hi = _fitting_stretch(t, p, dt, good, link, wheel, repair, repairs)  # the edges kept: lo … hi − 1
     t, c, pos, p, n = t[lo:hi], c[lo:hi], pos[lo:hi], p[lo : hi - 1], n[lo : hi - 1]
     # missed edges: present positions inside a period
+    t, c = _fill_missed(t, c, p, n, pos, present, wheel, repair, probe, repairs)
+    C = c + o
+    pos = C % N
+    tooth_of = np.cumsum(present) - 1
+    tooth = tooth_of[pos]
+    zero = np.flatnonzero(tooth == 0)
+    if zero.size == 0:
+        raise LogError(f"no edge of tooth 0 of the {wheel.spec} wheel in the log")
+    rev = np.floor_divide(C - C[zero[0]], N)
+    # the gap and tooth period ratios, as for a single gap
+    d = np.diff(t)
+    r = np.full(d.size, np.nan)
+    r[1:-1] = d[1:-1] / np.sqrt(d[:-2] * d[2:])
+    step = np.diff(C)
+    regular = np.zeros(d.size, bool)
+    regular[1:-1] = (step[1:-1] == 1) & (step[:-2] == 1) & (step[2:] == 1)
+    on_gap1 = (tooth[:-1] == E - 1) & (tooth[1:] == 0)
+    on_gap1[[0, -1]] = False
+    gap_ratio = float(np.median(r[on_gap1])) if np.any(on_gap1) else float("nan")
+    tooth_max = float(np.nanmax(r[regular])) if np.any(regular) else float("nan")
+    repairs = place(repairs, t, rev)
+    return ToothTrack(t, tooth, rev, wheel, gap_ratio, tooth_max, tuple(repairs), ambiguous)
+
+
+def _fitting_stretch(t, p, dt, good, link, wheel: Wheel, repair: bool, repairs: list) -> tuple[int, int]:
+    """The edges to keep, ``lo`` … ``hi`` − 1: all where every edge and period fits, else the
+    longest stretch of edges that fit, joined by periods that fit, the rest lying at the
+    ends (each dropped edge added to ``repairs``); an error where it does not."""
+    E = wheel.edges_per_rev
+    if good.all() and link.all():
+        return 0, t.size
+    # the longest stretch of edges that fit, joined by periods that fit; the rest must lie at the ends
+    new_seg = np.ones(t.size, bool)
+    new_seg[1:] = ~(good[1:] & good[:-1] & link)
+    seg = np.cumsum(new_seg)
+    size = np.bincount(seg, weights=good.astype(np.float64))
+    k = int(np.argmax(size))
+    idx = np.flatnonzero(seg == k)
+    a, b = int(idx[0]), int(idx[-1]) + 1
+    if not good[a]:
+        a += 1
+    if not repair or a > END_REVS * E or t.size - b > END_REVS * E:
+        if not repair:
+            i = int(np.argmin(good))
+        else:
+            i = b if t.size - b > END_REVS * E else a - 1
+        i = int(np.clip(i, 0, t.size - 1))
+        j = min(i, dt.size - 1)
+        raise LogError(
+            f"at t = {t[i]:.6f} s the edges stop fitting the {wheel.spec} wheel ({wheel.describe()}): "
+            f"a tooth period of {p[j]:.2f} pitches puts an edge where the wheel has no tooth "
+            f"(edges {a} … {b - 1} of {t.size} fit; a wrong wheel, or edges too irregular to follow)"
+        )
+    for lo_i, hi_i, where in ((0, a, "start"), (b, t.size, "end")):
+        repairs += [
+            Repair(
+                "edge dropped",
+                float(t[i]),
+                None,
+                1.0,
+                f"one of {hi_i - lo_i} edges at the {where} of the log ({t[lo_i]:.6f} … {t[hi_i - 1]:.6f} s) "
+                f"that do not fit the wheel (a starter engaging, the engine stopping?)",
+            )
+            for i in range(lo_i, hi_i)
+        ]
+    return a, b
+
+
+def _fill_missed(t, c, p, n, pos, present, wheel: Wheel, repair: bool, probe, repairs: list):
+    """The edge times and counts with the missed edges put in: measured where ``probe``
+    finds them in the signal, else inferred pro rata (each added to ``repairs``); an error
+    where there are any and not ``repair``."""
+    N = wheel.teeth
     ii, mm = _missed(t, n, pos, present, N)
     if ii.size:
         if not repair:
@@ -362,27 +399,7 @@ def follow_pattern(
         c = np.concatenate([c, c[ii] + mm])
         order = np.argsort(c, kind="stable")
         t, c = t[order], c[order]
-    C = c + o
-    pos = C % N
-    tooth_of = np.cumsum(present) - 1
-    tooth = tooth_of[pos]
-    zero = np.flatnonzero(tooth == 0)
-    if zero.size == 0:
-        raise LogError(f"no edge of tooth 0 of the {wheel.spec} wheel in the log")
-    rev = np.floor_divide(C - C[zero[0]], N)
-    # the gap and tooth period ratios, as for a single gap
-    d = np.diff(t)
-    r = np.full(d.size, np.nan)
-    r[1:-1] = d[1:-1] / np.sqrt(d[:-2] * d[2:])
-    step = np.diff(C)
-    regular = np.zeros(d.size, bool)
-    regular[1:-1] = (step[1:-1] == 1) & (step[:-2] == 1) & (step[2:] == 1)
-    on_gap1 = (tooth[:-1] == E - 1) & (tooth[1:] == 0)
-    on_gap1[[0, -1]] = False
-    gap_ratio = float(np.median(r[on_gap1])) if np.any(on_gap1) else float("nan")
-    tooth_max = float(np.nanmax(r[regular])) if np.any(regular) else float("nan")
-    repairs = place(repairs, t, rev)
-    return ToothTrack(t, tooth, rev, wheel, gap_ratio, tooth_max, tuple(repairs), ambiguous)
+    return t, c
 
 
 def place(repairs, t: np.ndarray, rev: np.ndarray) -> list:

@@ -62,7 +62,7 @@ def _unit_hint(rpm: float, kind: str) -> str:
             name = name_teeth if kind == "teeth" else name_t
             return (
                 f"is it in {unit} ({rpm * factor:.4g} rpm if so)? give seconds, or name the column {name!r} "
-                f"(columns='…,{name},…', --columns …,{name},…)"
+                f"(columns='…,{name},…')"
             )
     if rpm > MAX_RPM:
         return f"is the {col!r} column in seconds, and the wheel right?"
@@ -104,7 +104,7 @@ def check_speed_time_base(t: ArrayLike, rpm: ArrayLike, source: str) -> None:
     if not (MIN_RPM <= med <= MAX_RPM):
         raise LogError(
             f"{source}: the 'rpm' column's median is {med:.4g} rpm, outside {MIN_RPM:g} … {MAX_RPM:g} rpm, where piston "
-            f"engines run: is that column the engine speed in rpm? (check which column is which, --columns)"
+            f"engines run: is that column the engine speed in rpm? (check which column is which: columns=)"
         )
     rev = np.median(0.5 * (w[1:] + w[:-1]) * np.diff(t)) / (2 * np.pi)
     if rev > 0.5:

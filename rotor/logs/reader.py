@@ -74,7 +74,7 @@ __all__ = [
 
 READ_BYTES_PER_FILE_BYTE = 12
 """Memory that reading a log takes per byte of the file [bytes]: the text, its lines, the
-parser's copy and the columns as float64 (measured on the tue-4gb10 files: about 8)."""
+parser's copy and the columns as float64 (measured on the single-cylinder bench files: about 8)."""
 
 COLUMN_NAMES = {
     "time": "sample time [s]",
@@ -454,12 +454,11 @@ def read_log(
             raise LogError(
                 f"{path}: line {first[0]} is a header whose names {', '.join(map(repr, unknown))} are not "
                 f"column names ({', '.join(COLUMN_NAMES)}); name the {ncols} columns (e.g. "
-                f"columns='time,encoder_v,pressure_v' or --columns time,encoder_v,pressure_v; '-' skips one)"
+                f"columns='time,encoder_v,pressure_v'; '-' skips one)"
             )
         else:
             raise LogError(
-                f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v' or "
-                f"--columns time,encoder_v,pressure_v; '-' skips one)"
+                f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v'; '-' skips one)"
             )
     elif header and known is None:
         spec = parse_columns(columns)

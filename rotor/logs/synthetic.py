@@ -31,7 +31,7 @@ error and any early/late or weak distortion of the tooth after a gap):
 are then the rising zero crossings (VR) or the falling edges (Hall), at the same times.
 :attr:`SimulatedSignal.edge` names the polarity of the true edges in ``v`` either way.
 
-Only rotor's ground floor and :mod:`rotor.logs.wheel` are imported here (no JAX).
+Only rotor's base layer and :mod:`rotor.logs.wheel` are imported here (no JAX).
 """
 
 from __future__ import annotations
@@ -642,6 +642,61 @@ def wheel_signal(
     theta0 = math.radians(_number("start_angle_deg", start_angle_deg))
     amp_gap = _number("gap_tooth_amplitude", gap_tooth_amplitude, low=0.0, high=1.0, high_ok=True)
     shift = _number("gap_tooth_shift", gap_tooth_shift, low=0.0, high=0.45, low_ok=True, high_ok=True)
+    kinds = _gap_kinds(gap_tooth)
+    sen = _sensor(sensor, sensitivity_v_per_rad_s, pulse_width, offset_v, low_v, high_v, duty, rise_time_s)
+    w = _wheel_with_layout(wheel, layout)
+    err_deg = _tooth_errors_deg(w, tooth_error_deg, seed)
+    N, pitch = w.teeth, w.pitch_rad
+    present, amp, on, width, after = _tooth_tables(w, sensor, kinds, amp_gap, shift, sen.duty, err_deg / (360.0 / N))
+    _check_tables(present, on, width, sensor, sen.sigma)
+    prof = _as_profile(profile, duration_s, fs)
+    grid = _sample_grid(prof, fs, sample_rate_hz)
+    if sensor == "hall" and float(np.max(grid.wn)) * sen.tau / pitch > 0.25 * sen.duty * min(
+        1.0, amp_gap if "weak" in kinds else 1.0
+    ):
+        raise LogError(
+            f"rise_time_s={rise_time_s!r}: at the top speed the ramp takes over a quarter of a tooth's high time; "
+            "give a shorter one"
+        )
+    coeffs = _hermite(grid.pn, grid.wn, grid.h)
+    tables = (present, amp, on, width)
+    v = _sampled(sen, grid, coeffs, w, tables, theta0, inverted, noise, seed)
+    edge_t, tooth, rev, ang, rev_abs, pos = _true_edges(w, on, grid, coeffs, theta0)
+    n, lo, hi, sens, offset = grid.n, sen.lo, sen.hi, sen.sens, sen.offset
+    sign = -1.0 if inverted else 1.0
+    t_s = prof.t0_s + np.arange(n) / fs
+    if sensor == "vr":
+        edge, level = ("rising" if inverted else "falling"), sign * offset
+        sensor_desc = f"VR {sens:g} V/(rad/s)"
+    else:
+        edge, level = ("falling" if inverted else "rising"), sign * 0.5 * (lo + hi)
+        sensor_desc = f"Hall {lo:g}/{hi:g} V"
+    desc = (
+        f"{w.spec} wheel, {sensor_desc}, {prof.description}; "
+        + (f"tooth after the gap {'+'.join(sorted(kinds))}, " if kinds else "")
+        + ("inverted, " if inverted else "")
+        + f"noise {noise:g} V, {fs:g} Hz, seed {seed}"
+    )
+    return SimulatedSignal(
+        t_s=t_s,
+        v=v,
+        edge_times_s=edge_t,
+        tooth_index=tooth.astype(np.int64),
+        revolution=rev.astype(np.int64),
+        edge_angles_rad=TWO_PI * rev + (ang - TWO_PI * rev_abs),
+        after_gap=after[pos][tooth],
+        wheel=w,
+        sensor=sensor,
+        edge=edge,
+        level_v=float(level),
+        sample_rate_hz=fs,
+        profile=prof,
+        description=desc,
+    )
+
+
+def _gap_kinds(gap_tooth) -> set:
+    """The distortions of the tooth after each gap asked for (``gap_tooth``), checked."""
     if gap_tooth is None:
         kinds: set = set()
     elif isinstance(gap_tooth, str):
@@ -654,22 +709,45 @@ def wheel_signal(
         raise LogError(
             f"gap_tooth={gap_tooth!r}: None, 'weak', 'early' or 'late' (or a list of them; not early and late both)"
         )
+    return kinds
+
+
+@dataclasses.dataclass(frozen=True)
+class _Sensor:
+    """The sensor's settings, checked: ``kind`` (``"vr"`` or ``"hall"``); VR: ``sens``
+    [V/(rad/s)], ``sigma`` (the pulse's half-width [pitches]), ``offset`` [V]; Hall: ``lo``,
+    ``hi`` [V], ``tau`` (the ramp [s]); ``duty`` (0.5 for VR)."""
+
+    kind: str
+    duty: float
+    sens: float = 0.0
+    sigma: float = 0.0
+    offset: float = 0.0
+    lo: float = 0.0
+    hi: float = 0.0
+    tau: float = 0.0
+
+
+def _sensor(sensor, sensitivity_v_per_rad_s, pulse_width, offset_v, low_v, high_v, duty, rise_time_s) -> _Sensor:
+    """The settings of ``sensor``, each checked (:class:`rotor.LogError` naming the argument)."""
     if sensor == "vr":
         sens = _number("sensitivity_v_per_rad_s", sensitivity_v_per_rad_s, low=0.0)
         sigma = _number("pulse_width", pulse_width, low=0.0, high=0.5, high_ok=True)
         offset = _number("offset_v", offset_v)
-        duty_ = 0.5
-    else:
-        lo = _number("low_v", low_v)
-        hi = _number("high_v", high_v)
-        if not hi > lo:
-            raise LogError(f"high_v={high_v!r}, low_v={low_v!r}: high_v must be above low_v")
-        duty_ = _number("duty", duty, low=0.0, high=1.0)
-        tau = _number("rise_time_s", rise_time_s, low=0.0)
+        return _Sensor("vr", 0.5, sens=sens, sigma=sigma, offset=offset)
+    lo = _number("low_v", low_v)
+    hi = _number("high_v", high_v)
+    if not hi > lo:
+        raise LogError(f"high_v={high_v!r}, low_v={low_v!r}: high_v must be above low_v")
+    duty_ = _number("duty", duty, low=0.0, high=1.0)
+    tau = _number("rise_time_s", rise_time_s, low=0.0)
+    return _Sensor("hall", duty_, lo=lo, hi=hi, tau=tau)
 
-    w = _wheel_with_layout(wheel, layout)
+
+def _tooth_errors_deg(w: Wheel, tooth_error_deg, seed: int) -> np.ndarray:
+    """Each tooth's angle error [deg]: drawn once per tooth from ``seed`` with the standard
+    deviation ``tooth_error_deg``, or given one per tooth."""
     E, N = w.edges_per_rev, w.teeth
-    pitch = w.pitch_rad
     rng_teeth = np.random.default_rng([int(seed), 1])
     if np.ndim(tooth_error_deg) == 0:
         sd = _number("tooth_error_deg", tooth_error_deg, low=0.0, low_ok=True)
@@ -684,22 +762,41 @@ def wheel_signal(
             raise LogError(
                 f"tooth_error_deg: {err_deg.size} values; need one finite error [deg] per tooth, {E} for {w.spec}"
             )
-    present, amp, on, width, after = _tooth_tables(w, sensor, kinds, amp_gap, shift, duty_, err_deg / (360.0 / N))
-    _check_tables(present, on, width, sensor, sigma if sensor == "vr" else 0.0)
+    return err_deg
 
-    # the profile, on a grid aligned with the samples: m samples per step
+
+def _as_profile(profile, duration_s, fs: float) -> SpeedProfile:
+    """``profile`` as a :class:`SpeedProfile` (a pair of arrays, or a function of time over ``duration_s``)."""
     if isinstance(profile, SpeedProfile):
-        prof = profile
-    elif isinstance(profile, tuple) and len(profile) == 2:
-        prof = SpeedProfile.from_samples(profile[0], profile[1])
-    elif callable(profile):
+        return profile
+    if isinstance(profile, tuple) and len(profile) == 2:
+        return SpeedProfile.from_samples(profile[0], profile[1])
+    if callable(profile):
         if duration_s is None:
             raise LogError("duration_s=None: give how long [s] to sample a profile given as a function of time")
-        prof = SpeedProfile.from_function(profile, duration_s, 4.0 / fs)
-    else:
-        raise LogError(
-            f"profile={type(profile).__name__}: a SpeedProfile, a pair (t_s, phi_rad) of arrays or a function φ(t)"
-        )
+        return SpeedProfile.from_function(profile, duration_s, 4.0 / fs)
+    raise LogError(
+        f"profile={type(profile).__name__}: a SpeedProfile, a pair (t_s, phi_rad) of arrays or a function φ(t)"
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class _Grid:
+    """The profile on a grid aligned with the samples: ``m`` samples per step of ``h`` [s],
+    ``K`` steps, ``n`` samples; the grid's times ``tn`` [s], angles ``pn`` [rad] and speeds
+    ``wn`` [rad/s]."""
+
+    m: int
+    h: float
+    K: int
+    n: int
+    tn: np.ndarray
+    pn: np.ndarray
+    wn: np.ndarray
+
+
+def _sample_grid(prof: SpeedProfile, fs: float, sample_rate_hz) -> _Grid:
+    """The profile on a grid of whole sample steps, checked against the memory budget."""
     m = max(1, int(math.floor(prof.step_s * fs)))
     h = m / fs
     K = int(math.floor(prof.duration_s / h + 1e-9))
@@ -718,14 +815,19 @@ def wheel_signal(
     tn[-1] = min(tn[-1], prof.end_s)
     pn = prof.phi(tn)
     wn = prof.omega(tn)
-    if sensor == "hall" and float(np.max(wn)) * tau / pitch > 0.25 * duty_ * min(
-        1.0, amp_gap if "weak" in kinds else 1.0
-    ):
-        raise LogError(
-            f"rise_time_s={rise_time_s!r}: at the top speed the ramp takes over a quarter of a tooth's high time; "
-            "give a shorter one"
-        )
-    a0, a1, a2, a3 = _hermite(pn, wn, h)
+    return _Grid(m, h, K, n, tn, pn, wn)
+
+
+def _sampled(
+    sen: _Sensor, grid: _Grid, coeffs, w: Wheel, tables, theta0: float, inverted: bool, noise: float, seed
+) -> np.ndarray:
+    """The signal at the samples [V]: the teeth's pulses (VR) or levels (Hall) summed per
+    chunk of rows, scaled, with the noise (drawn from ``seed``), inverted if asked."""
+    a0, a1, a2, a3 = coeffs
+    present, amp, on, width = tables
+    m, h, K, n, pn, wn = grid.m, grid.h, grid.K, grid.n, grid.pn, grid.wn
+    N, pitch = w.teeth, w.pitch_rad
+    sensor, sigma, tau, sens, offset, lo, hi = sen.kind, sen.sigma, sen.tau, sen.sens, sen.offset, sen.lo, sen.hi
     # per row (grid step) k and sample j: the wheel angle in pitches is row_base + x, x = c0 + s(c1 + s(c2 +
     # s·c3)), s = j/m; row_base, the position at the row's start within one revolution, indexes the
     # per-position tables; x, below a few pitches, is computed in single precision (rounding < 1e-6 pitch)
@@ -759,7 +861,6 @@ def wheel_signal(
     amp_x, wid_x = amp[ext].astype(f32), width[ext].astype(f32)
     on_x = np.where(present[ext], on[ext], 1e6).astype(f32)  # a missing tooth: an edge far away, never reached
 
-    sign = -1.0 if inverted else 1.0
     scale, base = (-sens / _PULSE_PEAK, offset) if sensor == "vr" else (hi - lo, lo)
     rng_noise = np.random.default_rng([int(seed), 2])
     v = np.empty(n)
@@ -802,7 +903,16 @@ def wheel_signal(
         if inverted:
             np.negative(seg, out=seg)
 
-    # the truth: every tooth edge at least half a pitch inside the record
+    return v
+
+
+def _true_edges(w: Wheel, on: np.ndarray, grid: _Grid, coeffs, theta0: float):
+    """Every tooth edge at least half a pitch inside the record: its time [s], tooth,
+    revolution (0: that of the first tooth 0 in the record), wheel angle [rad], absolute
+    revolution, and the teeth's positions."""
+    a0, a1, a2, a3 = coeffs
+    m, h, pn, wn, tn = grid.m, grid.h, grid.pn, grid.wn, grid.tn
+    E, pitch = w.edges_per_rev, w.pitch_rad
     th_first = float(pn[0]) + theta0
     th_last = float(a0[-1] + (m - 1) / m * (a1[-1] + (m - 1) / m * (a2[-1] + (m - 1) / m * a3[-1]))) + theta0
     pos = w.positions
@@ -821,35 +931,7 @@ def wheel_signal(
     else:
         rev0 = int(rev_abs[0]) + 1 if rev_abs.size else 0  # no tooth 0: every edge is before revolution 0
     rev = rev_abs - rev0
-    t_s = prof.t0_s + np.arange(n) / fs
-    if sensor == "vr":
-        edge, level = ("rising" if inverted else "falling"), sign * offset
-        sensor_desc = f"VR {sens:g} V/(rad/s)"
-    else:
-        edge, level = ("falling" if inverted else "rising"), sign * 0.5 * (lo + hi)
-        sensor_desc = f"Hall {lo:g}/{hi:g} V"
-    desc = (
-        f"{w.spec} wheel, {sensor_desc}, {prof.description}; "
-        + (f"tooth after the gap {'+'.join(sorted(kinds))}, " if kinds else "")
-        + ("inverted, " if inverted else "")
-        + f"noise {noise:g} V, {fs:g} Hz, seed {seed}"
-    )
-    return SimulatedSignal(
-        t_s=t_s,
-        v=v,
-        edge_times_s=edge_t,
-        tooth_index=tooth.astype(np.int64),
-        revolution=rev.astype(np.int64),
-        edge_angles_rad=TWO_PI * rev + (ang - TWO_PI * rev_abs),
-        after_gap=after[pos][tooth],
-        wheel=w,
-        sensor=sensor,
-        edge=edge,
-        level_v=float(level),
-        sample_rate_hz=fs,
-        profile=prof,
-        description=desc,
-    )
+    return edge_t, tooth, rev, ang, rev_abs, pos
 
 
 def _fixed_width(x: np.ndarray, int_digits: int, decimals: int, signed: bool) -> np.ndarray:

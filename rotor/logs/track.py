@@ -285,47 +285,9 @@ def read_track(
     edge_errors: dict = {}
     level_notes: dict = {}
     for pol in polarities:
-        if pol is None:
-            edges, times = None, log["tooth_time_s"]
-        else:
-            try:
-                edges = edges_of(log, pol, name=name)
-            except LogError as e:
-                edge_errors[pol] = e
-                tried.append(WheelFit(w.spec if w else "auto", pol, FitStatus.NO_EDGES, reason=str(e)))
-                continue
-            times = edges.times
-        fits, best, second, why = _fit_edges(log, name, edges, times, w, pol, index_times, auto)
-        # an analog signal: levels that follow it, where the global ones guess edges or leave the record uncovered
-        if (
-            log.kind == "encoder"
-            and edges is not None
-            and edges.method == GLOBAL_LEVELS
-            and pol is not None
-            and (best is None or best.repairs or (best.track is not None and _uncovered(log, best.track)))
-        ):
-            try:
-                adaptive = edges_of(log, pol, levels="adaptive", name=name)
-            except LogError:
-                adaptive = None
-            if adaptive is not None:
-                fits_a, best_a, second_a, why_a = _fit_edges(
-                    log, name, adaptive, adaptive.times, w, pol, index_times, auto
-                )
-                if best_a is not None and (
-                    best is None
-                    or best_a.repairs < best.repairs
-                    or (best_a.repairs == best.repairs and best_a.track.t.size > best.track.t.size)
-                ):
-                    if best is None:
-                        level_notes[pol] = "with its global levels the edges did not fit the wheel"
-                    elif best.repairs > best_a.repairs:
-                        level_notes[pol] = f"with its global levels {best.repairs} edges were guessed"
-                    else:
-                        level_notes[pol] = f"with its global levels {_uncovered(log, best.track)}"
-                    fits, best, second, why, edges, times = fits_a, best_a, second_a, why_a, adaptive, adaptive.times
-        tried += fits
-        per_edge.append((best, second, why, edges, times, fits))
+        read = _read_edge(log, name, pol, w, index_times, auto, tried, edge_errors, level_notes)
+        if read is not None:
+            per_edge.append(read)
     ok = [p for p in per_edge if p[0] is not None]
     if not ok:
         raise _refusal(name, log, w, edge, per_edge, tried, edge_errors)
@@ -342,7 +304,7 @@ def read_track(
             raise LogError(
                 f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges as they are ({f.repairs + f.found} "
                 f"repairs in {f.revolutions} revolutions) but fits its {other} ones (an inverted signal?): give "
-                f"edge={other!r} (--edge {other}), or leave the edge out (--edge auto)"
+                f"edge={other!r}, or leave the edge out (edge='auto')"
             )
     usual = _tooth_edge(log, ok[0][0].track, ok[0][3]) if len(ok) > 1 else None
     ok.sort(key=lambda p: (p[0].interior, (not p[0].standard) if auto else False, p[0].edge != usual))
@@ -353,7 +315,6 @@ def read_track(
     best, second, why, edges, times, _ = ok[0]
     track = best.track
     assert track is not None
-    wname = track.wheel.spec
     check_time_base(track.t, track.wheel.teeth, name, log.kind)
     notes: list[str] = []
     resolution = check_time_resolution(
@@ -364,6 +325,68 @@ def read_track(
     )
     if resolution is not None:
         notes.append(resolution)
+    choices = _choices(best, second, why, edges, edge, ok, auto, tried)
+    if best.edge in level_notes:
+        notes.append(
+            "edges found with adaptive levels (the running minimum and maximum of the signal over each tooth period "
+            f"and two either side): {level_notes[best.edge]}"
+        )
+    if track.placement:
+        notes.append(f"the wheel's placement: {track.placement}")
+    if edges is not None and edges.repairs:
+        track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
+    return WheelReading(name, log, track, edges, best, tuple(tried), tuple(choices), tuple(notes))
+
+
+def _read_edge(log, name, pol, w, index_times, auto, tried: list, edge_errors: dict, level_notes: dict):
+    """The edges of polarity ``pol`` (None: tooth times) fitted to the wheel: (best fit,
+    runner-up, why, edges, times, fits), or None where no edges are found (the error in
+    ``edge_errors``); every fit tried added to ``tried``, and why adaptive levels were taken
+    (where they were) to ``level_notes``."""
+    if pol is None:
+        edges, times = None, log["tooth_time_s"]
+    else:
+        try:
+            edges = edges_of(log, pol, name=name)
+        except LogError as e:
+            edge_errors[pol] = e
+            tried.append(WheelFit(w.spec if w else "auto", pol, FitStatus.NO_EDGES, reason=str(e)))
+            return None
+        times = edges.times
+    fits, best, second, why = _fit_edges(log, name, edges, times, w, pol, index_times, auto)
+    # an analog signal: levels that follow it, where the global ones guess edges or leave the record uncovered
+    if (
+        log.kind == "encoder"
+        and edges is not None
+        and edges.method == GLOBAL_LEVELS
+        and pol is not None
+        and (best is None or best.repairs or (best.track is not None and _uncovered(log, best.track)))
+    ):
+        try:
+            adaptive = edges_of(log, pol, levels="adaptive", name=name)
+        except LogError:
+            adaptive = None
+        if adaptive is not None:
+            fits_a, best_a, second_a, why_a = _fit_edges(log, name, adaptive, adaptive.times, w, pol, index_times, auto)
+            if best_a is not None and (
+                best is None
+                or best_a.repairs < best.repairs
+                or (best_a.repairs == best.repairs and best_a.track.t.size > best.track.t.size)
+            ):
+                if best is None:
+                    level_notes[pol] = "with its global levels the edges did not fit the wheel"
+                elif best.repairs > best_a.repairs:
+                    level_notes[pol] = f"with its global levels {best.repairs} edges were guessed"
+                else:
+                    level_notes[pol] = f"with its global levels {_uncovered(log, best.track)}"
+                fits, best, second, why, edges, times = fits_a, best_a, second_a, why_a, adaptive, adaptive.times
+    tried += fits
+    return (best, second, why, edges, times, fits)
+
+
+def _choices(best, second, why, edges, edge, ok, auto, tried) -> list[Choice]:
+    """The edge, levels and wheel the reading took, each with where it came from and why."""
+    wname = best.track.wheel.spec
     choices = []
     if best.edge is not None:
         if edge == "auto" and len(ok) > 1:
@@ -406,16 +429,7 @@ def read_track(
             evidence(best, second, why) if auto else best.describe(),
         )
     )
-    if best.edge in level_notes:
-        notes.append(
-            "edges found with adaptive levels (the running minimum and maximum of the signal over each tooth period "
-            f"and two either side): {level_notes[best.edge]}"
-        )
-    if track.placement:
-        notes.append(f"the wheel's placement: {track.placement}")
-    if edges is not None and edges.repairs:
-        track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
-    return WheelReading(name, log, track, edges, best, tuple(tried), tuple(choices), tuple(notes))
+    return choices
 
 
 def _tooth_edge_why(edges: Edges | None, edge: str | None) -> str:
@@ -485,7 +499,7 @@ def _swapped_column(log: Log, w: Wheel | None) -> str:
             continue
         return (
             f"; the column read as {other!r} reads as the {r.wheel.spec} wheel ({r.track.revolutions} revolutions): "
-            f"check which column is which (--columns)"
+            f"check which column is which (columns=)"
         )
     return ""
 
@@ -507,13 +521,13 @@ def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
             a, b = fits[0], ambiguous[0][1]
             return LogError(
                 f"{name}: the signal fits {a.describe()} and {b.describe()} alike; give the wheel "
-                f"(wheel='{a.spec}' or wheel='{b.spec}', --wheel)"
+                f"(wheel='{a.spec}' or wheel='{b.spec}')"
             )
         reasons = "; ".join(f.describe() for f in tried[:4])
-        return LogError(f"{name}: no wheel found that fits the signal: {reasons}; give the wheel (--wheel N-g1-g2…)")
+        return LogError(f"{name}: no wheel found that fits the signal: {reasons}; give the wheel (wheel='N-g1-g2…')")
     mine = [f for f in tried if f.spec == w.spec]
     over = [f for f in mine if f.status == FitStatus.OVER_BUDGET]
-    hint = f"; {better}" if better else "; check the wheel (--wheel auto finds it) and which column is the wheel"
+    hint = f"; {better}" if better else "; check the wheel (wheel='auto' finds it) and which column is the wheel"
     if edge != "auto" and log.kind in ("encoder", "digital"):
         other = "falling" if edge == "rising" else "rising"
         try:
@@ -524,7 +538,7 @@ def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
         if of is not None and of.status.ok and not over:
             return LogError(
                 f"{name}: the {w.spec} wheel does not fit the signal's {edge} edges but fits its {other} ones "
-                f"(an inverted signal?): give edge={other!r} (--edge {other}), or leave the edge out (--edge auto)"
+                f"(an inverted signal?): give edge={other!r}, or leave the edge out (edge='auto')"
             )
     if over:
         f = over[0]
@@ -554,5 +568,5 @@ def _what_fits(log, per_edge) -> str:
     if not found:
         return ""
     best = min(found, key=lambda f: (f.repairs, not f.standard, f.jitter))
-    e = f" --edge {best.edge}" if best.edge else ""
-    return f"the {best.spec} wheel fits ({best.describe()}): give --wheel {best.spec}{e}"
+    e = f" and edge='{best.edge}'" if best.edge else ""
+    return f"the {best.spec} wheel fits ({best.describe()}): give wheel='{best.spec}'{e}"
