@@ -10,6 +10,8 @@
   line. All pages run in one process, so that a kernel compiled for one is reused by the
   next (the pages keep to the same presets and small cycle counts for that reason).
 - A few figures the pages' comments quote are checked against what the blocks computed.
+- Every ``rotor …`` command line of their ```sh blocks is parsed by the ``rotor`` parser
+  (a real command, options it takes), not run.
 - The README stays a landing page (at most 300 lines) that keeps `make demo` and
   `make test`, and every figure it shows exists.
 - No text in README.md, docs/, the package or benchmarks/README.md cites the project's
@@ -209,6 +211,64 @@ def test_torsion_figures(page):
     ns = page("how-to/torsional-vibration.md")
     f = np.asarray(ns["rotor"].torsional_modes(ns["chain"]).natural_frequencies_hz)
     assert f == pytest.approx([176.08], abs=0.01)  # "[176.08] Hz"
+
+
+# --- the command lines the pages show --------------------------------------------------
+
+
+def command_lines(text: str) -> list[tuple[int, str]]:
+    """(line number, command) of every ``rotor …`` line of the ```sh blocks, continuation
+    lines joined, comments, a leading ``cat FILE |`` and a trailing ``> FILE`` dropped;
+    synopsis lines (with ``[`` or ``…``) are left out."""
+    out, lines, i = [], text.splitlines(), 0
+    while i < len(lines):
+        if lines[i].strip() in ("```sh", "```bash", "```console"):
+            j, buf = i + 1, ""
+            while lines[j].strip() != "```":
+                line = lines[j].strip()
+                if line.endswith("\\"):
+                    buf += line[:-1].strip() + " "
+                else:
+                    out.append((j + 1, (buf + line).split(" #")[0].strip()))
+                    buf = ""
+                j += 1
+            i = j
+        i += 1
+    found = []
+    for n, line in out:
+        if line.startswith("cat ") and "|" in line:
+            line = line.split("|", 1)[1].strip()
+        line = line.split(" > ")[0]
+        if line.startswith("rotor ") and "[" not in line and "…" not in line:
+            found.append((n, line))
+    return found
+
+
+@pytest.mark.parametrize("path", PAGES, ids=_id)
+def test_command_lines_parse(path):
+    """Every ``rotor …`` command a page shows names a real command with options it takes
+    (parsed by the ``rotor`` parser itself; not run)."""
+    import contextlib
+    import io
+    import shlex
+
+    from rotor.cli.app import build_parser
+
+    for n, line in command_lines(path.read_text(encoding="utf-8")):
+        err = io.StringIO()
+        try:
+            with contextlib.redirect_stderr(err):
+                build_parser().parse_args(shlex.split(line)[1:])
+        except SystemExit:
+            pytest.fail(f"{_id(path)}:{n}: {line}\n{err.getvalue().strip()}")
+
+
+def test_command_lines_are_found():
+    text = (
+        "```sh\nrotor steady 4chn15 \\\n    --rpm 1250   # a comment\ncat x | rotor monitor - > y\nrotor a [--b]\n```\n"
+    )
+    assert command_lines(text) == [(3, "rotor steady 4chn15 --rpm 1250"), (4, "rotor monitor -")]
+    assert sum(len(command_lines(p.read_text(encoding="utf-8"))) for p in PAGES) >= 30
 
 
 # --- the README as a landing page ------------------------------------------------------
