@@ -173,7 +173,7 @@ def test_plot_identification(tmp_path):
     assert (tmp_path / "ident.png").stat().st_size > 10_000
 
 
-# ----------------------------------------------------------------------------- review fixes
+# ----------------------------------------------------------------------------- the preset's calibration, coast-down, failures
 PRESET_CAL = str(Path(rotor.__file__).parent / "presets" / "tue-single.calibration.json")
 
 
@@ -239,6 +239,15 @@ def test_coast_down_through_diagnose(tmp_path, capsys):
     print("coast-down IMEP [bar]", np.round(imep / 1e5, 3), "simulated", round(motored / 1e5, 3))
     assert np.abs(imep - motored).max() < 0.1e5
     assert d["ambiguous_pairs"] == []
+
+
+def test_a_diagnosis_holds_its_identification(tmp_path):
+    """A Diagnosis is no Identification: it holds one (``identification``) and reads its figures through it."""
+    path, _ = _tue_coast_teeth(tmp_path)
+    d = rotor.diagnose(rotor.load_engine("tue-single"), path, PRESET_CAL, wheel="60-2")
+    assert isinstance(d.identification, rotor.Identification) and not isinstance(d, rotor.Identification)
+    assert d.imep_pa is d.identification.imep_pa and d.misfires() == d.identification.misfires()
+    assert d.cycles == d.identification.cycles and d.to_pandas().equals(d.identification.to_pandas())
 
 
 def test_arithmetic_failure_is_one_line(tmp_path, capsys, monkeypatch):
