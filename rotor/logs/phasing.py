@@ -157,7 +157,7 @@ def _tdc(log, pressure, request: PhaseRequest, notes) -> tuple[float, str, Phase
         return 0.0, method, PhaseSource.UNKNOWN, _PressurePhase(None, False, str(e))
     if compression_ratio is None:
         notes.append(
-            "TDC is the pressure peak, which combustion puts late (13–27° on ``tue-single``'s bench "
+            "TDC is the pressure peak, which combustion puts late (13–27° on the tue-single bench's "
             "recordings): the orders' phases and the cycle start are late by as much; give the "
             "compression ratio and rod ratio (--compression-ratio, --rod-ratio) for a fit of the "
             "compression, or tdc_deg"
