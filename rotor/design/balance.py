@@ -56,8 +56,8 @@ import numpy as np
 
 from ..engine.kinematics import rod_motion
 from ..engine.mechanism import engine_piston_motion
-from ..engine.model import Engine
-from ..engine.plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import check_results_finite, check_speed_rpm, require_whole
 from ..engine.shaft import journal_positions_m, throw_positions_m, web_positions_m
 from ..errors import EngineError
 from ..results import Result, json_safe

@@ -54,8 +54,8 @@ import numpy as np
 
 from ..engine.forces import crank_forces, table_angles_deg, total_torque
 from ..engine.kinematics import mean_piston_speed
-from ..engine.model import Engine
-from ..engine.plausible import check_results_finite, check_speed_rpm, require_engine, require_number, require_whole
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import check_results_finite, check_speed_rpm, require_number, require_whole
 from ..engine.table import CrankTable, crank_table
 from ..errors import EngineError
 from ..fileio import INTERRUPT, check_folder_writable, csv_text, made_folders

@@ -31,7 +31,7 @@ from __future__ import annotations
 import hashlib
 import weakref
 from collections import OrderedDict
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -43,11 +43,9 @@ from ..checks import arrays_only, check_size, concrete
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
-from ..engine.plausible import require_engine, require_number
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import require_number
 from ..errors import EngineError
-
-if TYPE_CHECKING:
-    from ..engine.model import Engine
 
 __all__ = [
     "CrankTrain",
@@ -56,7 +54,6 @@ __all__ = [
     "check_tables",
     "checked_train",
     "clear_table_cache",
-    "remember_tables",
     "shift_inertia",
     "table_inputs",
     "table_key",
@@ -387,7 +384,7 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
             fidelity,
         )
         if key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None:  # never keep a tracer
-            remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values[:, COL_I])))))
+            _remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values[:, COL_I])))))
             remember_object(_TABLES[key], given, 0.0)
         return train
     assert key is not None
@@ -504,7 +501,7 @@ def table_key(engine: Engine, fidelity: str, points: int) -> str | None:
     return digest.hexdigest()
 
 
-def remember_tables(key: str, entry: tuple) -> None:
+def _remember_tables(key: str, entry: tuple) -> None:
     """Keep ``entry`` = (train, its crankshaft inertia [kg·m²], its smallest I(θ) [kg·m²])
     under ``key`` (:func:`table_key`), dropping the least recently used beyond
     :data:`TABLE_CACHE_SIZE`."""

@@ -19,9 +19,11 @@ the values it was prepared from: a change to ``[geometry]``, ``[masses]``, ``[la
 again, or pass the :class:`rotor.Engine` itself (its tables are then built in the trace,
 which is how a sweep over the geometry runs).
 
-Without :func:`prepare`, :func:`rotor.dynamics.crank_train.train_from_engine` keeps the
-tables of the last engines it saw, keyed on their values bit for bit, so repeated calls
-with the same engine reuse them as well.
+The tables live in one place: :func:`prepare` builds them through
+:func:`rotor.dynamics.crank_train.checked_train`, which keeps the tables of the last engines
+it saw, keyed on their values bit for bit, and every solver given an :class:`rotor.Engine`
+(or a prepared engine's) finds them there: ``rotor.steady_state(engine)`` called again with
+the same engine reuses them as ``rotor.prepare`` would.
 """
 
 from __future__ import annotations
@@ -35,17 +37,14 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..checks import concrete
-from ..engine.model import Engine
-from ..engine.plausible import require_engine
+from ..engine.model import Engine, require_engine
 from ..errors import EngineError
 from .crank_train import (
     CrankTrain,
     check_fidelity,
     checked_train,
     grid_points,
-    remember_tables,
     table_inputs,
-    table_key,
 )
 
 __all__ = ["PreparedEngine", "prepare", "resolve_engine"]
@@ -153,17 +152,11 @@ def checked_reference(prepared: PreparedEngine) -> Any:
 
 def resolve_engine(engine: Engine | PreparedEngine) -> Engine:
     """The :class:`rotor.Engine` of ``engine`` (an engine, returned as it is, or a prepared
-    one). A prepared engine is checked (:func:`checked_reference`) and its tables are handed
-    to the table cache, so that a solver's own
-    :func:`rotor.dynamics.crank_train.train_from_engine` finds them (at the same fidelity and
-    grid; another fidelity or grid builds its own). Traced prepared engines are not cached:
-    the solver builds the tables in its trace."""
-    if not isinstance(engine, PreparedEngine):
-        return engine
-    checked_reference(engine)
-    key = table_key(engine.engine, engine.fidelity, engine.points)
-    train = engine.train
-    if key is not None and not isinstance(train.values, jax.core.Tracer):
-        if not isinstance(engine.inertia_ref_kgm2, jax.core.Tracer):
-            remember_tables(key, (train, engine.inertia_ref_kgm2, float(np.min(np.asarray(train.values[:, 0])))))
-    return engine.engine
+    one, checked first: :func:`checked_reference`). A solver then finds the prepared
+    engine's tables where :func:`prepare` built and keeps them, with every engine's
+    (:func:`rotor.dynamics.crank_train.checked_train`, at the same fidelity and grid;
+    another fidelity or grid builds its own)."""
+    if isinstance(engine, PreparedEngine):
+        checked_reference(engine)
+        return engine.engine
+    return engine

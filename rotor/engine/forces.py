@@ -31,7 +31,8 @@ from ..checks import check_size
 from ..errors import EngineError
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
-from .plausible import require_engine, require_number
+from .model import require_engine
+from .plausible import require_number
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -219,7 +220,7 @@ def table_angles_deg(engine: Engine, step_deg: float) -> np.ndarray:
     check_size(
         rows * TABLE_ROW_BYTES,
         f"a table at a step of {step_deg:g}° ({rows:.3g} rows)",
-        "use a larger step (--step), e.g. 1 or 10 degrees",
+        "use a larger step_deg, e.g. 1 or 10 degrees",
     )
     n = int(round(cycle / step_deg))
     if not np.isclose(n * step_deg, cycle):

@@ -39,7 +39,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .articulated import knuckle_velocity_sq, slave_piston_motion
 from .kinematics import piston_motion, rod_motion
 from .mechanism import slave_geometry
-from .plausible import require_engine
+from .model import require_engine
 
 if TYPE_CHECKING:
     from .model import Engine

@@ -39,7 +39,7 @@ from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
 from ..errors import EngineError
 from ..units import RAD_S_PER_RPM
 from .friction import Friction
-from .plausible import check_fields_plausible, finite_derived, number
+from .plausible import check_fields_plausible, finite_derived, number, what_it_is
 from .pressure import NoPressure, PressureSource
 
 __all__ = [
@@ -52,6 +52,7 @@ __all__ = [
     "Counterweights",
     "Torsion",
     "Engine",
+    "require_engine",
 ]
 
 
@@ -848,3 +849,12 @@ _TABLE_TYPES = (
     ("counterweights", Counterweights, True),
     ("torsion", Torsion, True),
 )
+
+
+def require_engine(engine: object, call: str) -> Engine:
+    """``engine`` if it is a :class:`rotor.Engine`, else a :class:`TypeError` naming ``call``
+    (the function and argument, e.g. ``"engine_summary(engine)"``)."""
+    if not isinstance(engine, Engine):
+        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, bytes)) else ""
+        raise TypeError(f"{call}: expected a rotor.Engine{hint}, got {what_it_is(engine)}")
+    return engine

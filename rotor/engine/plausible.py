@@ -5,7 +5,7 @@ or JAX scalar) or, for the lists of the file, a sequence or array of numbers; an
 else (a string, ``None``, a dict) is a :class:`TypeError` that names the key and what it
 takes (:func:`number`). The public functions of :mod:`rotor.engine` and
 :mod:`rotor.design` check their arguments the same way
-(:func:`require_engine`, :func:`require_number`, :func:`require_whole`).
+(:func:`rotor.engine.model.require_engine`, :func:`require_number`, :func:`require_whole`).
 
 **Plausible ranges** (:data:`PLAUSIBLE`). Finite and positive is not enough: a bore of
 1e300 m is finite, and its piston area overflows. Each input must lie within a range
@@ -62,7 +62,6 @@ import math
 from collections.abc import Callable
 from typing import Any, Literal, overload
 
-import equinox as eqx
 import jax
 import numpy as np
 
@@ -77,7 +76,6 @@ __all__ = [
     "check_results_finite",
     "check_speed_rpm",
     "finite_derived",
-    "require_engine",
     "require_number",
     "what_it_is",
     "require_whole",
@@ -182,23 +180,6 @@ def check_plausible(table: str, key: str, value: Any) -> None:
         raise EngineError(
             f"{where(table, key)}{shown} lies outside the plausible {lo:g} … {hi:g}{u} of any piston engine ({hint})"
         )
-
-
-def require_engine(engine: Any, call: str) -> Any:
-    """``engine`` if it is a :class:`rotor.Engine`, else a :class:`TypeError` naming ``call``
-    (the function and argument, e.g. ``"engine_summary(engine)"``).
-
-    The engine is recognised by what it is (an equinox Module of class ``Engine`` with the
-    engine's tables), so that this module need not import :mod:`rotor.engine.model`,
-    which imports it."""
-    if not (
-        isinstance(engine, eqx.Module)
-        and type(engine).__name__ == "Engine"
-        and all(hasattr(engine, k) for k in ("geometry", "masses", "crankshaft", "layout", "strokes", "cylinders"))
-    ):
-        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, bytes)) else ""
-        raise TypeError(f"{call}: expected a rotor.Engine{hint}, got {what_it_is(engine)}")
-    return engine
 
 
 @overload

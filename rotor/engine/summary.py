@@ -15,8 +15,8 @@ from ..units import RAD_S_PER_RPM
 from .forces import gas_torque, imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
 from .kinematics import mean_piston_speed
-from .model import Engine
-from .plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
+from .model import Engine, require_engine
+from .plausible import check_results_finite, check_speed_rpm, require_whole
 
 __all__ = ["EngineSummary", "engine_summary", "EngineCurves", "engine_curves"]
 

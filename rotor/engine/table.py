@@ -16,8 +16,8 @@ from ..fileio import csv_text
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
 from .forces import crank_forces, table_angles_deg
-from .model import Engine
-from .plausible import check_results_finite, check_speed_rpm, require_engine, require_whole
+from .model import Engine, require_engine
+from .plausible import check_results_finite, check_speed_rpm, require_whole
 
 __all__ = ["CrankTable", "crank_table", "TABLE_COLUMNS"]
 

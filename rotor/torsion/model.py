@@ -47,8 +47,8 @@ from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import check_finite, check_positive, concrete, fmt
 from ..engine.inertia import cylinder_inertia
-from ..engine.model import Engine
-from ..engine.plausible import number, require_engine, what_it_is
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import number, what_it_is
 from ..errors import EngineError
 
 __all__ = [
