@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from kernel_traces import kernel_traces
 
 import rotor
 from rotor.cli import main as cli_main
-from rotor.dynamics.equation import TRACES
 from rotor.dynamics.transient import chunk_cycles
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -112,9 +112,9 @@ def test_a_run_of_many_chunks_compiles_its_kernel_once(diesel):
     assert 10 <= size <= 200  # well under a second a chunk (benchmarks/long_run.py)
     counts = []
     for cycles in (3 * size + 7, 2 * size + 1):  # four chunks, the last padded; three
-        before = TRACES["count"]
+        before = kernel_traces()
         rotor.simulate(diesel, rpm=1200.0, cycles=cycles, load=load, method="grid")
-        counts.append(TRACES["count"] - before)
+        counts.append(kernel_traces() - before)
     assert counts[0] <= 2  # the kernel (unless an earlier run compiled it) and the samples
     assert counts[1] <= 1  # the same kernel for every run of many chunks; only the samples' shape is new
 

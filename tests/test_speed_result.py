@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import rotor
-from rotor.dynamics import transient
+from rotor.progress import Progress
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +59,7 @@ def test_progress_bar_changes_no_number(diesel):
 
 
 def test_progress_bar_draws_after_two_seconds(capsys):
-    bar = transient.Progress(10, True)
+    bar = Progress(10, True)
     bar.update(1)
     assert capsys.readouterr().err == ""  # a short run shows nothing
     bar.start -= 3.0

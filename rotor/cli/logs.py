@@ -343,8 +343,8 @@ def for_each_log(
     import functools
 
     from ..diagnostics.bulk import expand_logs, is_pattern, map_files
-    from ..dynamics.transient import Progress
     from ..errors import LogError
+    from ..progress import Progress
 
     logs = [args.log] if isinstance(args.log, str) else list(args.log)
     client = _dask_client(args.scheduler) if getattr(args, "scheduler", None) else None

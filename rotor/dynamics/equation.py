@@ -42,51 +42,44 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from ..progress import report
 from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain
 from .loads import Governor, Load
 
-TRACES = {"count": 0}  # incremented each time a kernel is traced (compiled): tests check it
 
-#: ``report``: the running progress bar's ``fraction(done)`` while :func:`rotor.simulate` shows one, else None
-PROGRESS: dict[str, Any] = {"report": None}
-
-
-def count_trace():
-    TRACES["count"] += 1
+def _to_bar(meter, fraction):
+    report(int(meter), float(np.max(np.asarray(fraction))))
 
 
-def _to_bar(fraction):
-    report = PROGRESS["report"]
-    if report is not None:
-        report(float(np.max(np.asarray(fraction))))
+def report_progress(meter, fraction):
+    """From inside a compiled run: tell the progress bar whose key is ``meter`` (an int32
+    argument of the kernel, :attr:`rotor.progress.Progress.key`) that ``fraction`` of its
+    running part is done. A host callback: the kernel is compiled once for every bar."""
+    jax.debug.callback(_to_bar, meter, fraction)
 
 
-def report_progress(fraction):
-    """From inside a compiled run: tell the progress bar (if one runs) that ``fraction`` of
-    the run is done. A host callback that does not change what else is compiled; kernels
-    call it only when their static ``progress`` flag is set."""
-    jax.debug.callback(_to_bar, fraction)
-
-
-def _report_every(k, cycles: int):
-    """Report cycle ``k`` (from 0) of ``cycles`` done, about a hundred times a run."""
+def _report_every(meter, k, cycles: int):
+    """Report cycle ``k`` (from 0) of ``cycles`` done to ``meter``, about a hundred times a run."""
     every = max(1, cycles // 100)
-    jax.lax.cond((k + 1) % every == 0, lambda: report_progress((k + 1) / cycles), lambda: None)
+    jax.lax.cond((k + 1) % every == 0, lambda: report_progress(meter, (k + 1) / cycles), lambda: None)
 
 
 class BarMeter(dfx.AbstractProgressMeter):
-    """diffrax's progress hook feeding :data:`PROGRESS` (about every 1 % of the solve)."""
+    """diffrax's progress hook reporting to the progress bar with key ``meter`` (about every
+    1 % of the solve)."""
+
+    meter: Any
 
     def init(self):
         return jnp.asarray(0.0)
 
     def step(self, state, progress):
         due = (progress - state >= 0.01) | (progress >= 1.0)
-        jax.lax.cond(jnp.all(due), lambda: report_progress(progress), lambda: None)
+        jax.lax.cond(jnp.all(due), lambda: report_progress(self.meter, progress), lambda: None)
         return jnp.where(due, progress, state)
 
     def close(self, state):
-        report_progress(jnp.asarray(1.0))
+        report_progress(self.meter, jnp.asarray(1.0))
 
 
 class Scene(eqx.Module):
@@ -217,13 +210,13 @@ def linear_cycle(train: CrankTrain, parts, E0, t0):
 
 
 @eqx.filter_jit
-def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int, progress: bool = False):
+def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int, meter=None):
     """``cycles`` cycles in closed form from E0, t0; the combustion scale of cycle k is
     ``scene.scales[first_cycle + k]``. Returns per cycle the node values every ``stride``
     nodes (E, ω, t) of shape (cycles, N/stride), the end state, and the first cycle in
     which E reached zero or the time quadrature cannot be trusted (:func:`untrusted_steps`;
-    or ``cycles``). ``progress``: report to the progress bar (:func:`report_progress`)."""
-    count_trace()
+    or ``cycles``). ``meter``: the key of a progress bar to report to (:func:`report_progress`),
+    or None."""
     train = scene.train
     offsets = node_offsets(train)
     n_total = scene.scales.shape[0]
@@ -241,8 +234,8 @@ def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int
         E_end = jnp.where(keep, E[-1], E0)
         t_end = jnp.where(keep, t[-1], t0)
         out = (E[:-1:stride], t[:-1:stride])
-        if progress:
-            _report_every(k, cycles)
+        if meter is not None:
+            _report_every(meter, k, cycles)
         return (E_end, t_end, stalled_at), out
 
     (E_end, t_end, stalled_at), (E, t) = jax.lax.scan(body, (E0, t0, jnp.asarray(cycles)), jnp.arange(cycles))
@@ -299,13 +292,12 @@ def save_points_checked_on_the_host():
 
 
 @eqx.filter_jit
-def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: int, progress: bool = False):
+def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: int, meter=None):
     """Adaptive solve in the angle domain from θ0 with y0 = (E, t, z), saving at ``theta_out``.
 
-    Ends early (a stall hand-over) where E falls to ``e_switch``; ``progress``: report to
-    the progress bar (diffrax's progress-meter hook, :class:`BarMeter`). Returns the saved
+    Ends early (a stall hand-over) where E falls to ``e_switch``; ``meter``: the key of a
+    progress bar to report to (diffrax's progress-meter hook, :class:`BarMeter`), or None. Returns the saved
     (E, t, z), the final θ and state, and whether it ended early."""
-    count_trace()
     E0, t0, z0 = y0
     e_ref = E0
     w_ref = jnp.sqrt(2 * E0 / scene.train.mean_inertia)
@@ -325,7 +317,7 @@ def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: in
             event=event,
             max_steps=max_steps,
             throw=False,
-            progress_meter=BarMeter() if progress else dfx.NoProgressMeter(),
+            progress_meter=BarMeter(meter) if meter is not None else dfx.NoProgressMeter(),
         )
     e, tau, z = sol.ys
     n = theta_out.shape[0]
@@ -353,7 +345,6 @@ def _time_field(t, y, args):
 def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool, max_steps: int):
     """Adaptive solve in time from (θ, ω, z) = y0 until θ reaches ``theta_end``, ω falls to
     zero (if ``stop_at_stall``) or t reaches ``t_end``. Returns every accepted step."""
-    count_trace()
     conds = [lambda t, y, args, **kw: y[0] - theta_end]
     dirs = [True]
     if stop_at_stall:
@@ -385,7 +376,6 @@ def dense_at_angles(sol, t_guess, theta_q, omega_ref):
     """(t, ω, z) where the time-domain solution passes the angles ``theta_q``: Newton's
     method (optimistix) on θ(t) = θ_q with the solver's dense output, from the guesses
     ``t_guess``."""
-    count_trace()
 
     def one(t0, th_q):
         sol_t = optx.root_find(
@@ -441,9 +431,7 @@ def linear_losses(load, friction_abc):
 
 # ----------------------------------------------------------------------------- fixed steps on the grid
 @eqx.filter_jit
-def grid_run(
-    scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride: int, e_switch, progress: bool = False
-):
+def grid_run(scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride: int, e_switch, meter=None):
     """Classic RK4 in the angle domain with ``steps_per_cycle`` equal steps per cycle, on the
     table nodes when it divides their number (then the right-hand side is one smooth cubic
     within each step). A lax.scan: no step-size control, no per-step overhead.
@@ -451,8 +439,7 @@ def grid_run(
     Returns the states (E, t, z) every ``stride`` steps (cycles, steps_per_cycle/stride),
     the end state and the first cycle where E fell to ``e_switch`` or the time quadrature
     cannot be trusted (:func:`untrusted_steps`; or ``cycles``).
-    ``progress``: report to the progress bar (:func:`report_progress`)."""
-    count_trace()
+    ``meter``: the key of a progress bar to report to (:func:`report_progress`), or None."""
     h = scene.train.cycle_rad / steps_per_cycle
 
     def field(theta, y):
@@ -483,8 +470,8 @@ def grid_run(
         bad = bad | untrusted_steps(E_all, t_all)
         stalled_at = jnp.where((stalled_at == cycles) & bad, k, stalled_at)
         keep = stalled_at == cycles
-        if progress:
-            _report_every(k, cycles)
+        if meter is not None:
+            _report_every(meter, k, cycles)
         return (jnp.where(keep, y_end, y), stalled_at), ys[::stride]
 
     y0 = jnp.stack([jnp.asarray(v, dtype=jnp.float64) for v in y0])

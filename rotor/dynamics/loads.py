@@ -249,7 +249,7 @@ def _numbers(text: str, n: int, spec: str) -> list[float]:
     except ValueError:
         vals = []
     if len(vals) != n or not all(np.isfinite(vals)):
-        raise EngineError(f"--load {spec!r}: expected {n} number{'s' if n > 1 else ''} after the colon")
+        raise EngineError(f"load={spec!r}: expected {n} number{'s' if n > 1 else ''} after the colon", argument="load")
     return vals
 
 
@@ -266,7 +266,7 @@ def parse_load(spec: str) -> Load | None:
             try:
                 return ConstantLoad(as_f64(float(s)))
             except ValueError:
-                raise EngineError(f"--load {spec!r}: not understood; {LOAD_HELP}") from None
+                raise EngineError(f"load={spec!r}: not understood; {LOAD_HELP}", argument="load") from None
         if kind == "constant":
             return ConstantLoad(*map(as_f64, _numbers(rest, 1, spec)))
         if kind == "poly":
@@ -281,11 +281,11 @@ def parse_load(spec: str) -> Load | None:
         if kind == "table":
             pairs = [p.split("=") for p in rest.split(",")]
             if any(len(p) != 2 for p in pairs):
-                raise EngineError(f"--load {spec!r}: a table is RPM=TORQUE_NM pairs separated by commas")
+                raise EngineError(f"load={spec!r}: a table is RPM=TORQUE_NM pairs separated by commas", argument="load")
             rpm, tq = zip(*[(float(a), float(b)) for a, b in pairs])
             return TableLoad(as_f64(list(rpm)), as_f64(list(tq)))
     except ValueError as e:
         if isinstance(e, EngineError):
             raise
-        raise EngineError(f"--load {spec!r}: {e}; {LOAD_HELP}") from None
-    raise EngineError(f"--load {spec!r}: unknown kind {kind!r}; {LOAD_HELP}")
+        raise EngineError(f"load={spec!r}: {e}; {LOAD_HELP}", argument="load") from None
+    raise EngineError(f"load={spec!r}: unknown kind {kind!r}; {LOAD_HELP}", argument="load")

@@ -58,7 +58,6 @@ from .crank_train import (
 )
 from .equation import (
     Scene,
-    count_trace,
     friction_coefficients,
     grid_run,
     hermite_cumulative,
@@ -325,7 +324,6 @@ def _flat_solution(train, d_inertia, s, a, omega_m, balance):
 def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
     """E, t on the nodes 0…N, x and convergence: :func:`_flat_solution` where ``flat``
     (static: G ≡ 0), else the general closed form (:func:`_closed_solution`)."""
-    count_trace()
     if flat:
         return _flat_solution(train, d_inertia, s, a, omega_m, balance)
     train = shift_inertia(train, d_inertia)
@@ -336,7 +334,6 @@ def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
 @eqx.filter_jit
 def _closed_steady(train, d_inertia, s, fr, load, a, c, omega_m, balance, flat):
     """The whole closed-form steady state in one compiled call: solution and arrays."""
-    count_trace()
     E, t, x, ok = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
     return E[:-1], t[:-1], x, ok, _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
@@ -377,7 +374,6 @@ def _shooting_kernel(scene, omega_m, guess_E0, guess_x, balance):
     The cycle map is RK4 with one step per table node, so it is a smooth function of
     (E0, x) (no adaptive step choices) and Newton converges to rounding. Returns the
     arrays of the result as well."""
-    count_trace()
     train = scene.train
     period = train.cycle_rad / omega_m
     e_ref = jax.lax.stop_gradient(guess_E0)
@@ -522,7 +518,7 @@ def _check_combustion(train, balance):
     if balance == "fuel" and work is not None and not work > 0:
         raise EngineError(
             "a given load needs a firing engine: the fuelling is scaled to carry it, but this engine's pressure has "
-            "no combustion; give no load (load=None, --load none) to balance the mean engine torque instead"
+            "no combustion; give no load (load=None) to balance the mean engine torque instead"
         )
 
 
@@ -542,7 +538,6 @@ def textbook_excess(train, scales, omega_m):
 def _finish_arrays(scene, E, t, omega_m, d_inertia):
     """The result's arrays on the table nodes; ``d_inertia`` [kg·m²] is added to the
     tables' I(θ) (the crankshaft inertia of a prepared engine changed)."""
-    count_trace()
     train = scene.train
     theta = train.nodes()
     val, der, sc = train.values, train.slopes, scene.scales[0]  # the result lies on the table nodes

@@ -41,6 +41,7 @@ from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
 from ..errors import EngineError
+from ..progress import Progress
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 from .crank_train import COL_I
@@ -49,7 +50,6 @@ from .loads import ConstantLoad
 from .prepared import PreparedEngine, checked_reference, prepare
 from .result import parabola_peak
 from .steady import STOP_FRACTION, coarse_stride, flat_balance, flat_energy, steady_state, textbook_excess
-from .transient import Progress
 
 __all__ = ["SteadySweep", "steady_sweep"]
 

@@ -10,8 +10,8 @@ time, ``"grid"`` otherwise.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
-import sys
 import time
 import warnings
 from typing import Any, Literal
@@ -27,14 +27,13 @@ from ..cycles import cycle_delta, cycle_slopes
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..errors import EngineError
+from ..progress import Progress
 from ..units import RPM_PER_RAD_S
-from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, crank_train
+from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain, crank_train
 from .equation import (
-    PROGRESS,
     Scene,
     angle_run,
     closed_run,
-    count_trace,
     dense_at_angles,
     friction_coefficients,
     grid_run,
@@ -48,7 +47,7 @@ from .operating import given_operating_point
 from .prepared import PreparedEngine, resolve_engine
 from .result import CycleSummary, SpeedResult, cycle_extremes
 
-__all__ = ["simulate", "METHODS", "chunk_cycles"]
+__all__ = ["simulate", "METHODS", "RunPlan", "chunk_cycles", "plan_run", "run_plan"]
 
 METHODS = ("auto", "closed", "grid", "angle", "time")
 DEFAULT_RTOL = 1e-9  # the cheapest that meets 1e-6 in ω on every scene (benchmarks/defaults.py)
@@ -76,53 +75,6 @@ def chunk_cycles(method: str, cycles: int, steps_per_cycle: int = 0, nodes_per_c
     else:
         per = CHUNK_ANGLE_CYCLES
     return int(min(max(per, 1), cycles))
-
-
-class Progress:
-    """A one-line progress bar on stderr, shown only after ~2 s and only on a terminal.
-
-    ``total``: units of work (cycles in a run); ``enabled``: True, False or None (when
-    stderr is a terminal); ``verb`` and ``unit``: what the bar says (``simulating``,
-    ``cycles``).
-    """
-
-    def __init__(self, total: int, enabled: bool | None, verb: str = "simulating", unit: str = "cycles"):
-        self.total, self.start, self.shown, self.last = total, time.perf_counter(), False, 0
-        self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
-        self.verb, self.unit = verb, unit
-
-    def fraction(self, done: float) -> None:
-        """Show that the fraction ``done`` (0…1) of the run is done."""
-        self.update(int(round(done * self.total)))
-
-    def update(self, done: int) -> None:
-        """Show that ``done`` of the cycles are done (once the run has taken ~2 s)."""
-        if not self.enabled or (self.shown and done < self.last):
-            return
-        self.last = done
-        elapsed = time.perf_counter() - self.start
-        if elapsed < 2.0 and done < self.total:
-            return
-        frac = done / self.total
-        bar = "#" * int(30 * frac)
-        eta = elapsed / frac - elapsed if frac > 0 else float("nan")
-        sys.stderr.write(
-            f"\r{self.verb} [{bar:<30}] {done}/{self.total} {self.unit}, {elapsed:5.1f} s, ~{eta:4.0f} s left"
-        )
-        sys.stderr.flush()
-        self.shown = True
-
-    def clear(self) -> None:
-        """Blank the bar's line (before a line of its own on stderr); the next update redraws it."""
-        if self.shown:
-            sys.stderr.write("\r" + " " * 79 + "\r")
-            sys.stderr.flush()
-
-    def close(self) -> None:
-        """End the bar's line, if it was shown."""
-        if self.shown:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
 
 
 def _whole(name, value):
@@ -155,7 +107,7 @@ def _warn_runaway(train, scales, fr, rpm):
             f"({friction_Nm:.1f} N·m) at {float(rpm):g} rpm: the engine will accelerate and δ will not be that of an "
             "operating point; give a load (e.g. rotor.ConstantLoad(rotor.steady_state(engine, rpm).load_torque_Nm), "
             "the one that balances it) or a governor",
-            stacklevel=3,
+            stacklevel=4,
         )
 
 
@@ -173,6 +125,45 @@ def _check_scales(combustion, cycles, n):
         if not np.all(np.isfinite(c)) or np.any(c < 0):
             raise EngineError("combustion scales must be finite and not negative")
     return jnp.asarray(c, dtype=jnp.float64)
+
+
+@dataclasses.dataclass(frozen=True)
+class RunPlan:
+    """A run of :func:`simulate`, its arguments checked: what :func:`run_plan` carries out.
+
+    **Fields:** ``engine`` (:class:`rotor.Engine`); ``train``: its tables
+    (:class:`rotor.dynamics.crank_train.CrankTrain`); ``scene``: the numbers of the equation
+    of motion (:class:`rotor.dynamics.equation.Scene`); ``cycles``; ``method``:
+    ``"closed"``, ``"grid"``, ``"angle"`` or ``"time"`` (``"auto"`` resolved);
+    ``fidelity``; ``points_per_cycle``: samples kept per cycle; ``stride``: table nodes per
+    sample; ``rpm``: the start speed [rpm]; ``rtol``: the adaptive methods' tolerance (a
+    float64 array); ``at_rest``: whether the run starts from rest; ``losses``: (a, c) of
+    losses a + c·ω² constant in time, or None; ``governor``; ``steps_per_cycle``: as given
+    (None: the default of ``"grid"``); ``step_deg`` and ``grid_deg`` [deg];
+    ``stop_at_stall``; ``max_time_s`` [s] or None; ``keep_cycles`` or None; ``started``:
+    ``time.perf_counter()`` when the call began [s].
+    """
+
+    engine: Engine
+    train: CrankTrain
+    scene: Scene
+    cycles: int
+    method: str
+    fidelity: str
+    points_per_cycle: int
+    stride: int
+    rpm: Any
+    rtol: Any
+    at_rest: bool
+    losses: tuple[Any, Any] | None
+    governor: Governor | None
+    steps_per_cycle: int | None
+    step_deg: float
+    grid_deg: float
+    stop_at_stall: bool
+    max_time_s: float | None
+    keep_cycles: int | None
+    started: float
 
 
 def simulate(
@@ -231,12 +222,46 @@ def simulate(
     **Returns:** a :class:`rotor.SpeedResult` (``kind="transient"``).
     """
     engine = resolve_engine(engine)  # a prepared engine: its tables are reused
-    wall = time.perf_counter()
-    if method not in METHODS:
-        raise EngineError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
-    cycles = _whole("cycles", cycles)
-    if keep_cycles is not None:
-        keep_cycles = _whole("keep_cycles", keep_cycles)
+    started = time.perf_counter()
+    plan = plan_run(
+        engine,
+        rpm,
+        cycles,
+        load,
+        method=method,
+        fidelity=fidelity,
+        rtol=rtol,
+        friction=friction,
+        governor=governor,
+        combustion=combustion,
+        step_deg=step_deg,
+        grid_deg=grid_deg,
+        steps_per_cycle=steps_per_cycle,
+        stop_at_stall=stop_at_stall,
+        max_time_s=max_time_s,
+        keep_cycles=keep_cycles,
+        started=started,
+    )
+    # the progress bar hears from inside each compiled chunk (a host callback: the same
+    # kernels, compiled once) and between chunks
+    bar = Progress(plan.cycles, progress)
+    try:
+        result = run_plan(plan, bar)
+    except KeyboardInterrupt:
+        # Ctrl-C between two chunks: let the chunk already sent to XLA finish (well under a
+        # second) before the interpreter goes down, which it would otherwise do under it
+        for x in jax.live_arrays():
+            x.block_until_ready()
+        raise
+    finally:
+        bar.close()
+    check_speed_result(result)  # time increases, speeds finite, min ≤ mean ≤ max: else a SolverError
+    return result
+
+
+def _check_sizes(engine, cycles, keep_cycles, step_deg, grid_deg):
+    """Refuse angles that are not positive numbers of degrees, and a run whose tables,
+    per-cycle figures or kept samples would not fit in memory, before any work."""
     for name, value in (("step_deg", step_deg), ("grid_deg", grid_deg)):
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise TypeError(f"{name} = {value!r}: takes a number of degrees, not a {type(value).__name__}")
@@ -260,9 +285,57 @@ def simulate(
         kept * P_est * SAMPLE_BYTES,
         f"{'cycles' if keep_cycles is None else 'keep_cycles'} = {kept} with every sample kept "
         f"({P_est:.0f} per cycle at step_deg = {step_deg:g})",
-        "keep only the last cycles' samples with keep_cycles= (--keep-cycles on the command line), "
-        "or save fewer samples per cycle with a larger step_deg",
+        "keep only the last cycles' samples with keep_cycles=, or save fewer samples per cycle with a larger step_deg",
     )
+
+
+def _pick_method(method, at_rest, losses):
+    """The method of a run: ``method``, or for ``"auto"`` the cheapest valid one; an
+    :class:`rotor.EngineError` for one that cannot run this scene."""
+    if method == "auto":
+        method = "time" if at_rest else ("closed" if losses is not None else "grid")
+    if method == "closed" and losses is None:
+        raise EngineError(
+            "method='closed' needs losses a + c·ω² that do not change in time and no governor; "
+            "use method='angle' (or 'auto')"
+        )
+    if method in ("closed", "grid", "angle") and at_rest:
+        raise EngineError(
+            f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
+            "a start from rest needs method='time' (or 'auto')"
+        )
+    return method
+
+
+def plan_run(
+    engine: Engine,
+    rpm: ArrayLike | None,
+    cycles: int,
+    load: Load | None,
+    *,
+    method: str,
+    fidelity: str,
+    rtol: ArrayLike | None,
+    friction: Friction | Literal[False] | None,
+    governor: Governor | None,
+    combustion: ArrayLike | None,
+    step_deg: float,
+    grid_deg: float,
+    steps_per_cycle: int | None,
+    stop_at_stall: bool,
+    max_time_s: float | None,
+    keep_cycles: int | None,
+    started: float,
+) -> RunPlan:
+    """The arguments of :func:`simulate` checked (an :class:`rotor.EngineError` or a
+    :class:`TypeError` naming the argument) and the engine's tables found: the
+    :class:`RunPlan` of the run."""
+    if method not in METHODS:
+        raise EngineError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
+    cycles = _whole("cycles", cycles)
+    if keep_cycles is not None:
+        keep_cycles = _whole("keep_cycles", keep_cycles)
+    _check_sizes(engine, cycles, keep_cycles, step_deg, grid_deg)
     rpm = engine.operating.rpm if rpm is None else rpm
     r = concrete(rpm)
     if r is not None and not (r.ndim == 0 and np.isfinite(r) and r >= 0):
@@ -285,300 +358,316 @@ def simulate(
         raise EngineError(
             f"step_deg = {step_deg!r}: must be a multiple of grid_deg ({grid_deg:g}°) that divides the cycle"
         )
-    stride = train.points // P
     scales = _check_scales(combustion, cycles, engine.cylinders)
     fr = friction_coefficients(engine, friction)
-    scene = Scene(train, scales, fr, load, governor)
     at_rest = r is not None and r == 0
-    lin = linear_losses(load, fr) if governor is None else None
-    if method == "auto":
-        method = "time" if at_rest else ("closed" if lin is not None else "grid")
-    if method == "closed" and lin is None:
-        raise EngineError(
-            "method='closed' needs losses a + c·ω² that do not change in time and no governor; "
-            "use method='angle' (or 'auto')"
-        )
-    if method in ("closed", "grid", "angle") and at_rest:
-        raise EngineError(
-            f"method={method!r} works in the crank-angle domain and needs a start speed above 0; "
-            "a start from rest needs method='time' (or 'auto')"
-        )
+    losses = linear_losses(load, fr) if governor is None else None
+    method = _pick_method(method, at_rest, losses)
     rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
     if load is None and governor is None:
         _warn_runaway(train, scales, fr, rpm)
-    # the progress bar hears from inside each compiled chunk (a host callback: the same
-    # kernels, compiled once) and between chunks
-    bar = Progress(cycles, progress)
-    PROGRESS["report"] = bar.fraction if bar.enabled else None
-    try:
-        result = _run(
-            engine,
-            train,
-            scene,
-            cycles,
-            method,
-            fidelity,
-            P,
-            stride,
-            rpm,
-            rtol_a,
-            at_rest,
-            lin,
-            governor,
-            steps_per_cycle,
-            step_deg,
-            grid_deg,
-            stop_at_stall,
-            max_time_s,
-            bar,
-            wall,
-            keep_cycles,
-        )
-    except KeyboardInterrupt:
-        # Ctrl-C between two chunks: let the chunk already sent to XLA finish (well under a
-        # second) before the interpreter goes down, which it would otherwise do under it
-        for x in jax.live_arrays():
-            x.block_until_ready()
-        raise
-    finally:
-        PROGRESS["report"] = None
-        bar.close()
-    check_speed_result(result)  # time increases, speeds finite, min ≤ mean ≤ max: else a SolverError
-    return result
-
-
-def _run(
-    engine,
-    train,
-    scene,
-    cycles,
-    method,
-    fidelity,
-    P,
-    stride,
-    rpm,
-    rtol_a,
-    at_rest,
-    lin,
-    governor,
-    steps_per_cycle,
-    step_deg,
-    grid_deg,
-    stop_at_stall,
-    max_time_s,
-    bar,
-    wall,
-    keep_cycles,
-):
-    """The run of :func:`simulate` once its arguments are checked: the angle-domain methods
-    in chunks of :func:`chunk_cycles` cycles (one compiled call each; the last padded past
-    the end and cut), each chunk's samples handed to a sink that keeps them all or only
-    the last ``keep_cycles`` cycles' with per-cycle summaries of every cycle."""
-    omega0, E0, e_switch = _start(train, rpm)
-    theta_step = train.cycle_rad / P
-    cyc = train.cycle_rad
-    streaming = keep_cycles is not None and keep_cycles < cycles
-    sink: _AllSamples | _LastCycles = (
-        _LastCycles(scene, P, cyc, keep_cycles, cycles) if streaming else _AllSamples(scene, P)
+    return RunPlan(
+        engine=engine,
+        train=train,
+        scene=Scene(train, scales, fr, load, governor),
+        cycles=cycles,
+        method=method,
+        fidelity=fidelity,
+        points_per_cycle=P,
+        stride=train.points // P,
+        rpm=rpm,
+        rtol=rtol_a,
+        at_rest=at_rest,
+        losses=losses,
+        governor=governor,
+        steps_per_cycle=steps_per_cycle,
+        step_deg=step_deg,
+        grid_deg=grid_deg,
+        stop_at_stall=stop_at_stall,
+        max_time_s=max_time_s,
+        keep_cycles=keep_cycles,
+        started=started,
     )
-    f64 = functools.partial(jnp.asarray, dtype=jnp.float64)  # strong types: one trace for every chunk
-    done, t_now, E_now, z_now = 0, f64(0.0), f64(E0), f64(0.0)
-    handover = None  # (theta, t, omega, z) where the time domain takes over
-    extras: dict[str, Any] = {}  # typed fields of the result: steps_per_cycle, solver_steps, incomplete
-    spc = 0
-    if method == "grid":
-        if steps_per_cycle is None:  # two per degree, or one per saved sample if those are finer
-            spc = max(int(round(2 * np.rad2deg(cyc))), P)
-        else:
-            spc = int(steps_per_cycle)
-        if spc < 8 or spc % P:
-            raise EngineError(
-                f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
-                f"(step_deg = {step_deg:g}); raise step_deg or steps_per_cycle"
-            )
-        check_size(
-            spc * 3 * 8 * 4.0,
-            f"steps_per_cycle = {spc}",
-            "give fewer steps per cycle (the default is two per degree)",
+
+
+_f64 = functools.partial(jnp.asarray, dtype=jnp.float64)  # strong types: one trace for every chunk
+
+
+def _grid_steps(plan: RunPlan) -> int:
+    """RK4 steps per cycle of ``method="grid"``: as given, or two per degree (one per saved
+    sample if those are finer); an :class:`rotor.EngineError` for a count that does not fit."""
+    P, steps_per_cycle = plan.points_per_cycle, plan.steps_per_cycle
+    if steps_per_cycle is None:
+        spc = max(int(round(2 * np.rad2deg(plan.train.cycle_rad))), P)
+    else:
+        spc = int(steps_per_cycle)
+    if spc < 8 or spc % P:
+        raise EngineError(
+            f"steps_per_cycle = {steps_per_cycle!r}: needs a whole multiple of the {P} saved points per cycle "
+            f"(step_deg = {plan.step_deg:g}); raise step_deg or steps_per_cycle"
         )
+    check_size(
+        spc * 3 * 8 * 4.0,
+        f"steps_per_cycle = {spc}",
+        "give fewer steps per cycle (the default is two per degree)",
+    )
+    return spc
+
+
+@dataclasses.dataclass
+class _Chunks:
+    """A run's angle-domain part in chunks of ``size`` cycles, one compiled call each (the
+    last padded past the end and cut); ``meter``: the progress bar's key for the kernels
+    (an int32 array), or None."""
+
+    plan: RunPlan
+    size: int
+    sink: Any
+    bar: Progress
+    meter: Any
+
+    def part(self, done: int):
+        """The scene of the chunk from cycle ``done`` and the chunk's start angle and first
+        cycle in it: for a chunked run, the combustion scales of cycles done − 1 … done +
+        size (clipped to the run) with the chunk starting one cycle in, so that the kernels
+        see the same shapes in every chunk of every run and compile once; else the whole
+        run's. Tells the progress bar which cycles the chunk covers."""
+        plan, cyc = self.plan, self.plan.train.cycle_rad
+        self.bar.within(done, self.size)
+        if self.size >= plan.cycles:
+            return plan.scene, done * cyc, done
+        rows = np.clip(np.arange(done - 1, done + self.size + 1), 0, plan.cycles - 1)
+        return eqx.tree_at(lambda s: s.scales, plan.scene, plan.scene.scales[rows]), cyc, 1
+
+    def valid(self, done: int) -> int:
+        """The cycles of the chunk from cycle ``done`` that lie in the run."""
+        return min(self.size, self.plan.cycles - done)
+
+
+def _run_closed(chunks: _Chunks, E_now, t_now):
+    """``method="closed"``: the run in closed form, chunk by chunk. Returns the hand-over
+    to the time domain (θ, t, ω, z) after a stall, or None."""
+    plan, P, cyc = chunks.plan, chunks.plan.points_per_cycle, chunks.plan.train.cycle_rad
+    assert plan.losses is not None  # checked by plan_run
+    a, c = plan.losses
+    done = 0
+    while done < plan.cycles:
+        valid = chunks.valid(done)
+        sc, _, first = chunks.part(done)
+        E, t, E_end, t_end, stalled_at = closed_run(
+            sc, a, c, E_now, t_now, jnp.asarray(first, dtype=jnp.int32), chunks.size, plan.stride, chunks.meter
+        )
+        k = min(int(_known(stalled_at, chunks.size)), valid)  # a stall in the padding is past the end
+        if k == valid < chunks.size:  # the padding's first node is the state at the end of the run
+            E_end, t_end = E[valid, 0], t[valid, 0]
+        if k:
+            chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, None)
+        done += k
+        E_now, t_now = E_end, t_end
+        chunks.bar.update(done)
+        if k < valid:
+            return (done * cyc, t_end, _omega_at(plan.train, done * cyc, E_end), 0.0)
+    chunks.sink.add_extra(np.array([done * cyc]), t_now, E_now, None, None)
+    return None
+
+
+def _run_grid(chunks: _Chunks, spc: int, e_switch, E_now, t_now, z_now):
+    """``method="grid"``: RK4 on the table grid, ``spc`` steps per cycle, chunk by chunk.
+    Returns the hand-over to the time domain (θ, t, ω, z) after a stall, or None."""
+    plan, P, cyc = chunks.plan, chunks.plan.points_per_cycle, chunks.plan.train.cycle_rad
+    done = 0
+    while done < plan.cycles:
+        valid = chunks.valid(done)
+        sc, th_start, _ = chunks.part(done)
+        (E, t, z), y_end, stalled_at = grid_run(
+            sc, _f64(th_start), (E_now, t_now, z_now), chunks.size, spc, spc // P, e_switch, chunks.meter
+        )
+        k = min(int(_known(stalled_at, chunks.size)), valid)
+        if k == valid < chunks.size:  # the padding's first state is the state at the end of the run
+            y_end = (E[valid, 0], t[valid, 0], z[valid, 0])
+        if k:
+            chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, z[:k])
+        done += k
+        E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
+        chunks.bar.update(done)
+        if k < valid:
+            return (done * cyc, t_now, _omega_at(plan.train, done * cyc, E_now), z_now)
+    chunks.sink.add_extra(np.array([done * cyc]), t_now, E_now, None, z_now)
+    return None
+
+
+def _angle_chunk(chunks: _Chunks, done: int, e_switch, y_now):
+    """One chunk of ``method="angle"`` from cycle ``done`` and state ``y_now`` = (E, t, z):
+    the adaptive solve's samples with the chunk's start prepended (θ, t, E, z), its raw
+    samples (E, t, z), the samples that lie in the run, the samples saved before a stall
+    hand-over (or None), and the solver's steps. A failure to reach the chunk's end is an
+    :class:`rotor.EngineError`."""
+    plan, P, cyc = chunks.plan, chunks.plan.points_per_cycle, chunks.plan.train.cycle_rad
+    theta_step = cyc / P
+    valid = chunks.valid(done)
+    need = valid * P
+    th0 = done * cyc
+    theta_out = th0 + np.arange(1, chunks.size * P + 1) * theta_step
+    sc, th_start, _ = chunks.part(done)
+    (E, t, z), end, stopped, ok, n_steps = angle_run(
+        sc,
+        _f64(th_start),
+        y_now,
+        th_start + np.arange(1, chunks.size * P + 1) * theta_step,
+        plan.rtol,
+        e_switch,
+        4000 * chunks.size + 10000,
+        chunks.meter,
+    )
+    stopped = bool(_known(stopped, False))
+    ok = bool(_known(ok, True))
+    reached = need
+    if stopped or not ok:
+        reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the end
+        if reached >= need:  # the hand-over or the failure fell in the padding past the run's end
+            stopped, ok = False, True
+    if not ok and not stopped:
+        raise EngineError(
+            f"the angle-domain solver could not reach the end of cycle {done + valid} "
+            f"(stopped at crank angle {float(np.rad2deg(end[0] - th_start + th0)):.1f}°); "
+            "try a looser rtol or method='time'"
+        )
+    # samples at θ_out[i] hold the state after step i; prepend the chunk's start
+    th = np.concatenate([[th0], theta_out[:-1]])
+    Es, ts, zs = _prepend(y_now, (E, t, z))
+    return (th, ts, Es, zs), (E, t, z), theta_out, need, (reached if stopped else None), int(_known(n_steps, 0))
+
+
+def _run_angle(chunks: _Chunks, e_switch, E_now, t_now, z_now):
+    """``method="angle"``: the adaptive angle-domain solve, chunk by chunk. Returns the
+    hand-over to the time domain (θ, t, ω, z) after a stall, or None, and the solver's
+    steps."""
+    plan, P, cyc = chunks.plan, chunks.plan.points_per_cycle, chunks.plan.train.cycle_rad
+    steps = done = need = 0
+    theta_out = np.zeros(1)
+    while done < plan.cycles:
+        valid = chunks.valid(done)
+        (th, ts, Es, zs), (E, t, z), theta_out, need, reached, n_steps = _angle_chunk(
+            chunks, done, e_switch, (E_now, t_now, z_now)
+        )
+        steps += n_steps
+        if reached is not None:  # a stall: hand over at the start of the incomplete cycle
+            whole = min(reached // P, valid)
+            keep = whole * P
+            if keep:
+                chunks.sink.add_cycles(done, th[:keep], ts[:keep], Es[:keep], None, zs[:keep])
+            done += whole
+            if keep > 0:
+                E_h, t_h, z_h = E[keep - 1], t[keep - 1], z[keep - 1]
+            else:
+                E_h, t_h, z_h = E_now, t_now, z_now
+            th_h = done * cyc
+            return (th_h, t_h, _omega_at(plan.train, th_h, E_h), z_h), steps
+        chunks.sink.add_cycles(done, th[:need], ts[:need], Es[:need], None, zs[:need])
+        E_now, t_now, z_now = E[need - 1], t[need - 1], z[need - 1]
+        done += valid
+        chunks.bar.update(done)
+    chunks.sink.add_extra(theta_out[need - 1 : need], t_now, E_now, None, z_now)
+    return None, steps
+
+
+def _run_time_domain(plan: RunPlan, handover, omega0, extras: dict[str, Any]):
+    """The time domain from the hand-over (θ, t, ω, z) to the end of the run, or to a
+    stall. Returns its steps (θ, t, ω, z, the solution, the reference speed), whether it
+    stalled, and the stall's time [s] and angle [rad] (or None); a run that ends short of
+    the end says so in ``extras["incomplete"]``."""
+    th_h, t_h, w_h, z_h = handover
+    theta_end = plan.cycles * plan.train.cycle_rad
+    w_ref = omega0 if not plan.at_rest else plan.engine.operating.omega
+    if plan.governor is not None and plan.at_rest:
+        w_ref = plan.governor.omega
+    if plan.max_time_s is None:
+        t_max = float(t_h) + 20.0 * (theta_end - float(th_h)) / float(w_ref) + 10.0
+    else:
+        t_max = float(t_h) + float(plan.max_time_s)
+    ts, (th, w, z), mask, ok, sol = time_run(
+        plan.scene,
+        _f64(t_h),
+        (_f64(th_h), _f64(w_h), _f64(z_h)),
+        jnp.asarray(theta_end),
+        jnp.asarray(t_max),
+        plan.rtol,
+        _f64(w_ref),
+        plan.stop_at_stall,
+        TIME_DOMAIN_STEPS,
+    )
+    ts_np = np.asarray(ts)
+    keep = np.isfinite(ts_np)
+    # an event on the last step saves that step's end twice: keep the later (located) state
+    keep[:-1] &= ~(ts_np[:-1] == ts_np[1:])
+    ts, th, w, z = ts[keep], th[keep], w[keep], z[keep]
+    stalled, stall_t, stall_th = False, None, None
+    if plan.stop_at_stall and bool(mask[1]):
+        stalled = True
+        stall_t, stall_th = float(ts[-1]), float(th[-1])
+    elif not bool(mask[0]):
+        extras["incomplete"] = (
+            f"the time-domain run ended at t = {float(ts[-1]):.3f} s, crank angle "
+            f"{float(np.rad2deg(th[-1])):.1f}°, before reaching the end of cycle {plan.cycles}"
+            + ("" if bool(ok) else " (step limit)")
+        )
+    return (th, ts, w, z, sol, w_ref), stalled, stall_t, stall_th
+
+
+def run_plan(plan: RunPlan, bar: Progress) -> SpeedResult:
+    """Carry out ``plan`` (:func:`plan_run`), reporting to the progress bar ``bar``: the
+    angle-domain methods in chunks of :func:`chunk_cycles` cycles (one compiled call each;
+    the last padded past the end and cut), each chunk's samples handed to a sink that keeps
+    them all or only the last ``keep_cycles`` cycles' with per-cycle summaries of every
+    cycle; after a stall, or for ``method="time"``, the time domain."""
+    train, P, cycles, method = plan.train, plan.points_per_cycle, plan.cycles, plan.method
+    omega0, E0, e_switch = _start(train, plan.rpm)
+    streaming = plan.keep_cycles is not None and plan.keep_cycles < cycles
+    sink: _AllSamples | _LastCycles = (
+        _LastCycles(plan.scene, P, train.cycle_rad, plan.keep_cycles, cycles)
+        if streaming
+        else _AllSamples(plan.scene, P)
+    )
+    extras: dict[str, Any] = {}  # typed fields of the result: steps_per_cycle, solver_steps, incomplete
+    spc = _grid_steps(plan) if method == "grid" else 0
     size = chunk_cycles(method, cycles, spc, train.points) if method != "time" else cycles
-    chunked = size < cycles
-
-    def part(done):
-        """The scene of the chunk from cycle ``done`` and the chunk's start angle in it: for a
-        chunked run, the combustion scales of cycles done − 1 … done + size (clipped to the
-        run) with the chunk starting one cycle in, so that the kernels see the same shapes
-        in every chunk of every run and compile once; else the whole run's."""
-        if not chunked:
-            return scene, done * cyc, done
-        rows = np.clip(np.arange(done - 1, done + size + 1), 0, cycles - 1)
-        return eqx.tree_at(lambda s: s.scales, scene, scene.scales[rows]), cyc, 1
-
-    # the progress bar: from inside a lone chunk (a host callback), else between chunks as well
-    kprog = bar.enabled
-    base = [0]
-    if kprog:
-        PROGRESS["report"] = lambda f: bar.update(min(cycles, base[0] + int(round(float(f) * size))))
+    # the progress bar: from inside each chunk (a host callback with the bar's key), and between chunks
+    meter = jnp.asarray(bar.key, dtype=jnp.int32) if bar.enabled else None
+    chunks = _Chunks(plan, size, sink, bar, meter)
+    E_now, t_now, z_now = _f64(E0), _f64(0.0), _f64(0.0)
     if method == "closed":
-        assert lin is not None  # checked above
-        a, c = lin
-        while done < cycles:
-            valid, base[0] = min(size, cycles - done), done
-            sc, _, first = part(done)
-            E, t, E_end, t_end, stalled_at = closed_run(
-                sc, a, c, E_now, t_now, jnp.asarray(first, dtype=jnp.int32), size, stride, kprog
-            )
-            k = min(int(_known(stalled_at, size)), valid)  # a stall in the padding is past the end
-            if k == valid < size:  # the padding's first node is the state at the end of the run
-                E_end, t_end = E[valid, 0], t[valid, 0]
-            if k:
-                sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, None)
-            done += k
-            E_now, t_now = E_end, t_end
-            bar.update(done)
-            if k < valid:
-                handover = (done * cyc, t_end, _omega_at(train, done * cyc, E_end), 0.0)
-                break
-        if handover is None:
-            sink.add_extra(np.array([done * cyc]), t_now, E_now, None, None)
+        handover = _run_closed(chunks, E_now, t_now)
     elif method == "grid":
-        while done < cycles:
-            valid, base[0] = min(size, cycles - done), done
-            sc, th_start, _ = part(done)
-            (E, t, z), y_end, stalled_at = grid_run(
-                sc, f64(th_start), (E_now, t_now, z_now), size, spc, spc // P, e_switch, kprog
-            )
-            k = min(int(_known(stalled_at, size)), valid)
-            if k == valid < size:  # the padding's first state is the state at the end of the run
-                y_end = (E[valid, 0], t[valid, 0], z[valid, 0])
-            if k:
-                sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, z[:k])
-            done += k
-            E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
-            bar.update(done)
-            if k < valid:
-                handover = (done * cyc, t_now, _omega_at(train, done * cyc, E_now), z_now)
-                break
-        if handover is None:
-            sink.add_extra(np.array([done * cyc]), t_now, E_now, None, z_now)
+        handover = _run_grid(chunks, spc, e_switch, E_now, t_now, z_now)
         extras["steps_per_cycle"] = spc
     elif method == "angle":
-        steps = 0
-        need = 0
-        theta_out = np.zeros(1)
-        while done < cycles:
-            valid, base[0] = min(size, cycles - done), done
-            need = valid * P
-            th0 = done * cyc
-            theta_out = th0 + np.arange(1, size * P + 1) * theta_step
-            sc, th_start, _ = part(done)
-            (E, t, z), end, stopped, ok, n_steps = angle_run(
-                sc,
-                f64(th_start),
-                (E_now, t_now, z_now),
-                th_start + np.arange(1, size * P + 1) * theta_step,
-                rtol_a,
-                e_switch,
-                4000 * size + 10000,
-                kprog,
-            )
-            steps += int(_known(n_steps, 0))
-            stopped = bool(_known(stopped, False))
-            ok = bool(_known(ok, True))
-            reached = need
-            if stopped or not ok:
-                reached = int(np.sum(np.isfinite(np.asarray(E))))  # samples saved before the end
-                if reached >= need:  # the hand-over or the failure fell in the padding past the run's end
-                    stopped, ok = False, True
-            if not ok and not stopped:
-                raise EngineError(
-                    f"the angle-domain solver could not reach the end of cycle {done + valid} "
-                    f"(stopped at crank angle {float(np.rad2deg(end[0] - th_start + th0)):.1f}°); "
-                    "try a looser rtol or method='time'"
-                )
-            # samples at θ_out[i] hold the state after step i; prepend the chunk's start
-            th = np.concatenate([[th0], theta_out[:-1]])
-            Es, ts, zs = _prepend((E_now, t_now, z_now), (E, t, z))
-            if stopped:
-                whole = min(reached // P, valid)
-                keep = whole * P
-                if keep:
-                    sink.add_cycles(done, th[:keep], ts[:keep], Es[:keep], None, zs[:keep])
-                done += whole
-                # hand over at the start of the incomplete cycle
-                if keep > 0:
-                    E_h, t_h, z_h = E[keep - 1], t[keep - 1], z[keep - 1]
-                else:
-                    E_h, t_h, z_h = E_now, t_now, z_now
-                th_h = done * cyc
-                handover = (th_h, t_h, _omega_at(train, th_h, E_h), z_h)
-                break
-            sink.add_cycles(done, th[:need], ts[:need], Es[:need], None, zs[:need])
-            E_now, t_now, z_now = E[need - 1], t[need - 1], z[need - 1]
-            done += valid
-            bar.update(done)
-        if handover is None:
-            sink.add_extra(theta_out[need - 1 : need], t_now, E_now, None, z_now)
-        extras["solver_steps"] = steps
+        handover, extras["solver_steps"] = _run_angle(chunks, e_switch, E_now, t_now, z_now)
     else:
         handover = (0.0, 0.0, omega0, 0.0)
-
-    stalled = False
-    stall_t = stall_th = None
-    time_domain = None
+    stalled, stall_t, stall_th, time_domain = False, None, None, None
     if handover is not None:
-        th_h, t_h, w_h, z_h = handover
-        theta_end = cycles * train.cycle_rad
-        w_ref = omega0 if not at_rest else engine.operating.omega
-        if governor is not None and at_rest:
-            w_ref = governor.omega
-        if max_time_s is None:
-            t_max = float(t_h) + 20.0 * (theta_end - float(th_h)) / float(w_ref) + 10.0
-        else:
-            t_max = float(t_h) + float(max_time_s)
-        ts, (th, w, z), mask, ok, sol = time_run(
-            scene,
-            jnp.asarray(t_h, dtype=jnp.float64),
-            (
-                jnp.asarray(th_h, dtype=jnp.float64),
-                jnp.asarray(w_h, dtype=jnp.float64),
-                jnp.asarray(z_h, dtype=jnp.float64),
-            ),
-            jnp.asarray(theta_end),
-            jnp.asarray(t_max),
-            rtol_a,
-            jnp.asarray(w_ref, dtype=jnp.float64),
-            stop_at_stall,
-            TIME_DOMAIN_STEPS,
-        )
-        ts_np = np.asarray(ts)
-        keep = np.isfinite(ts_np)
-        # an event on the last step saves that step's end twice: keep the later (located) state
-        keep[:-1] &= ~(ts_np[:-1] == ts_np[1:])
-        ts, th, w, z = ts[keep], th[keep], w[keep], z[keep]
-        if stop_at_stall and bool(mask[1]):
-            stalled = True
-            stall_t, stall_th = float(ts[-1]), float(th[-1])
-        elif not bool(mask[0]):
-            extras["incomplete"] = (
-                f"the time-domain run ended at t = {float(ts[-1]):.3f} s, crank angle "
-                f"{float(np.rad2deg(th[-1])):.1f}°, before reaching the end of cycle {cycles}"
-                + ("" if bool(ok) else " (step limit)")
-            )
-        time_domain = (th, ts, w, z, sol, w_ref)
-        if method == "time":
-            method = "time"
-        else:
-            method = f"{method}+time"
+        time_domain, stalled, stall_t, stall_th = _run_time_domain(plan, handover, omega0, extras)
+        method = "time" if method == "time" else f"{method}+time"
     return _assemble(
-        engine, train, scene, sink, time_domain, method, fidelity, P, stalled, stall_t, stall_th, wall, extras
+        plan.engine,
+        train,
+        plan.scene,
+        sink,
+        time_domain,
+        method,
+        plan.fidelity,
+        P,
+        stalled,
+        stall_t,
+        stall_th,
+        plan.started,
+        extras,
     )
 
 
 @eqx.filter_jit
 def _samples(scene, theta, t, E, omega, z):
     """ω (from E where given), engine and load torque, dω/dt and fuel at the samples."""
-    count_trace()
     return _samples_at(scene, theta, t, E, omega, z)
 
 
@@ -656,7 +745,6 @@ def _gather(scene, pieces, P: int):
     """All pieces (first cycle or None, θ, t, E or None, ω or None, z or None), flat, as the
     flat sample arrays (θ, t, ω, engine torque, load torque, dω/dt, fuel), in one compiled
     call. A piece with a first cycle holds whole cycles on the table nodes (:func:`_cycle_samples`)."""
-    count_trace()
     parts = []
     for first, th, t, E, w, z in pieces:
         if first is not None:
@@ -678,7 +766,6 @@ def _chunk_figures(scene, first, th, t, E, w, P: int, z=None):
     """The samples of whole cycles from cycle ``first`` (:func:`_cycle_samples`, flat) and
     per cycle: its start time, mean engine torque and highest and lowest speed, in one
     compiled call."""
-    count_trace()
     arrays = (th, t) + _cycle_samples(scene, first, t, E, w, z, P)
     k = th.shape[0] // P
     omega, torque = arrays[2].reshape(k, P), arrays[3].reshape(k, P)
