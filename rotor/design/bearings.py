@@ -75,8 +75,8 @@ import numpy as np
 from ..checks import check_size
 from ..engine.forces import cylinder_pressure
 from ..engine.mechanism import engine_piston_motion
-from ..engine.model import Engine
-from ..engine.plausible import check_results_finite, check_speed_rpm, require_engine, require_number, require_whole
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import check_results_finite, check_speed_rpm, require_number, require_whole
 from ..engine.shaft import journal_count, journal_positions_m, span_of_throw, throw_positions_m, web_positions_m
 from ..errors import EngineError
 from ..results import Result, json_safe
@@ -666,32 +666,9 @@ def _capped(indices: range, peaks: np.ndarray, limit: int = 10) -> list:
     return [*keep, None]
 
 
-def bearing_loads(
-    engine: Engine,
-    rpm: float | None = None,
-    *,
-    step_deg: float = 1.0,
-    rays: int = 12,
-    sector_deg: float = 60.0,
-    model: str = "exact",
-) -> BearingLoads:
-    """Crank-pin, big-end, main-journal and main-bearing loads, wear diagrams and running
-    torques over one cycle at constant crank speed (Shishkov (2014) §3.2.4–3.2.9; frames and
-    signs in :mod:`rotor.design.bearings`).
-
-    **Arguments:**
-    - ``engine``: a :class:`rotor.Engine`.
-    - ``rpm``: crank speed [rev/min]; default the engine's ``[operating] rpm``.
-    - ``step_deg``: angle step [deg]; must divide the cycle (720° or 360°); angles 0 … cycle − step.
-    - ``rays``: rays of the wear diagrams (3 or more; 12 = every 30°).
-    - ``sector_deg``: half-width of the sector a load acts on in the wear diagram [deg], in (0, 180].
-    - ``model``: piston kinematics, ``"exact"`` (default) or ``"series"`` (the λ-series of
-      the textbook's table; the rod angle is exact in both, as in :func:`rotor.crank_forces`,
-      so with ``"series"`` the pins' T·R differs from the series torque by O(λ³), about 0.5 %).
-
-    **Returns:** a :class:`BearingLoads`.
-    """
-    require_engine(engine, "bearing_loads(engine)").check()
+def _checked_arguments(engine: Engine, rpm: Any, step_deg: Any, rays: Any, sector_deg: Any, model: Any):
+    """:func:`bearing_loads`' arguments checked: (rpm, the cycle [deg], the step [deg], the
+    number of angles, of rays, the sector's half-width [deg])."""
     rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "bearing_loads(rpm)")
     cycle = 360.0 * engine.strokes / 2
     step = require_number(step_deg, "bearing_loads(step_deg)", "deg")
@@ -722,36 +699,19 @@ def bearing_loads(
         raise EngineError(
             f"bearing_loads(model) = {model!r}: 'exact' (the default) or 'series' (the textbook's λ-series)"
         )
+    return rpm, cycle, step, n, n_rays, sector
 
-    omega = rpm * RAD_S_PER_RPM
-    angle_deg = np.arange(n) * step
-    theta = np.deg2rad(angle_deg)
+
+def _journal_forces(engine: Engine, omega: float, on: list, pin_t: np.ndarray, pin_z1: np.ndarray, psi: np.ndarray):
+    """The forces on the crankshaft in the block frame (the throws' pin loads less their
+    unbalanced rotating masses, the counterweights), each shared between the two main
+    journals on either side by the lever rule: (x, y components on each journal (n,
+    journals) [N], the throws' and the journals' axial positions [m], the journal count).
+    ``on``: the cylinders of each throw; ``psi``: each throw's angle (n, throws) [rad]."""
     g = engine.geometry
     R = float(g.crank_radius_m)
-    t_cyl, z_cyl, delta = rod_pin_forces(engine, theta, omega, model)
-    slaves = engine.slave_index()
-    own = [i for i in range(engine.cylinders) if i not in slaves]
     m2 = float(engine.masses.big_end_kg(g.rod_length_m))
     m_rot = engine.masses.rotating_at_pin_kg(g.rod_length_m)
-    s2 = -m2 * R * omega**2
-    z1_cyl = z_cyl + s2  # slaves' columns are not used below
-
-    # big ends: each rod's own load turned into the rod's frame by φ + β
-    cd, sd = np.cos(delta[:, own]), np.sin(delta[:, own])
-    big_t = t_cyl[:, own] * cd - z1_cyl[:, own] * sd
-    big_z = z1_cyl[:, own] * cd + t_cyl[:, own] * sd
-
-    # crank pins: the rods on each throw
-    throw_of = engine.throw_index
-    nt = engine.throw_count
-    on = [[i for i in own if throw_of[i] == k] for k in range(nt)]
-    pin_t = np.stack([t_cyl[:, c].sum(axis=1) for c in on], axis=1)
-    pin_z1 = np.stack([z1_cyl[:, c].sum(axis=1) for c in on], axis=1)
-    throw_cylinders = tuple(tuple(i + 1 for i in range(engine.cylinders) if throw_of[i] == k) for k in range(nt))
-
-    # forces on the crankshaft in the block frame, at their axial positions
-    throw_deg = np.asarray(engine.layout.throw_angles_deg, dtype=np.float64)
-    psi = theta[:, None] - np.deg2rad(np.array([throw_deg[c[0]] for c in on]))[None, :]  # (n, throws)
     cp, sp = np.cos(psi), np.sin(psi)
     unbalanced = (float(m_rot) - m2) * np.array([len(c) for c in on], dtype=np.float64)
     z_throw = pin_z1 - unbalanced * R * omega**2
@@ -779,9 +739,67 @@ def bearing_loads(
         share[i, s] = (xj[s + 1] - x) / length
         share[i, s + 1] = (x - xj[s]) / length
     jx, jy = fx_all @ share, fy_all @ share  # (n, journals), block frame
+    return jx, jy, xs[0], xj, nj
 
+
+def bearing_loads(
+    engine: Engine,
+    rpm: float | None = None,
+    *,
+    step_deg: float = 1.0,
+    rays: int = 12,
+    sector_deg: float = 60.0,
+    model: str = "exact",
+) -> BearingLoads:
+    """Crank-pin, big-end, main-journal and main-bearing loads, wear diagrams and running
+    torques over one cycle at constant crank speed (Shishkov (2014) §3.2.4–3.2.9; frames and
+    signs in :mod:`rotor.design.bearings`).
+
+    **Arguments:**
+    - ``engine``: a :class:`rotor.Engine`.
+    - ``rpm``: crank speed [rev/min]; default the engine's ``[operating] rpm``.
+    - ``step_deg``: angle step [deg]; must divide the cycle (720° or 360°); angles 0 … cycle − step.
+    - ``rays``: rays of the wear diagrams (3 or more; 12 = every 30°).
+    - ``sector_deg``: half-width of the sector a load acts on in the wear diagram [deg], in (0, 180].
+    - ``model``: piston kinematics, ``"exact"`` (default) or ``"series"`` (the λ-series of
+      the textbook's table; the rod angle is exact in both, as in :func:`rotor.crank_forces`,
+      so with ``"series"`` the pins' T·R differs from the series torque by O(λ³), about 0.5 %).
+
+    **Returns:** a :class:`BearingLoads`.
+    """
+    require_engine(engine, "bearing_loads(engine)").check()
+    rpm, cycle, step, n, n_rays, sector = _checked_arguments(engine, rpm, step_deg, rays, sector_deg, model)
+    omega = rpm * RAD_S_PER_RPM
+    angle_deg = np.arange(n) * step
+    theta = np.deg2rad(angle_deg)
+    g = engine.geometry
+    R = float(g.crank_radius_m)
+    t_cyl, z_cyl, delta = rod_pin_forces(engine, theta, omega, model)
+    slaves = engine.slave_index()
+    own = [i for i in range(engine.cylinders) if i not in slaves]
+    m2 = float(engine.masses.big_end_kg(g.rod_length_m))
+    s2 = -m2 * R * omega**2
+    z1_cyl = z_cyl + s2  # slaves' columns are not used below
+
+    # big ends: each rod's own load turned into the rod's frame by φ + β
+    cd, sd = np.cos(delta[:, own]), np.sin(delta[:, own])
+    big_t = t_cyl[:, own] * cd - z1_cyl[:, own] * sd
+    big_z = z1_cyl[:, own] * cd + t_cyl[:, own] * sd
+
+    # crank pins: the rods on each throw
+    throw_of = engine.throw_index
+    nt = engine.throw_count
+    on = [[i for i in own if throw_of[i] == k] for k in range(nt)]
+    pin_t = np.stack([t_cyl[:, c].sum(axis=1) for c in on], axis=1)
+    pin_z1 = np.stack([z1_cyl[:, c].sum(axis=1) for c in on], axis=1)
+    throw_cylinders = tuple(tuple(i + 1 for i in range(engine.cylinders) if throw_of[i] == k) for k in range(nt))
+
+    # forces on the crankshaft in the block frame, shared out onto the main journals
+    throw_deg = np.asarray(engine.layout.throw_angles_deg, dtype=np.float64)
+    psi = theta[:, None] - np.deg2rad(np.array([throw_deg[c[0]] for c in on]))[None, :]  # (n, throws)
+    cp, sp = np.cos(psi), np.sin(psi)
+    jx, jy, x_throw, xj, nj = _journal_forces(engine, omega, on, pin_t, pin_z1, psi)
     # shaft frame: the nearest throw in front of each journal (throw 1 for journal 1)
-    x_throw = xs[0]
     frame = [max([k for k in range(nt) if x_throw[k] < xj[j]], default=0) for j in range(nj)]
     cf, sf = cp[:, frame], sp[:, frame]
     journal_t = jx * -sf + jy * cf

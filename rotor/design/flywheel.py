@@ -42,8 +42,8 @@ from ..dynamics.prepared import PreparedEngine, resolve_engine
 from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
-from ..engine.model import Engine
-from ..engine.plausible import PLAUSIBLE, check_results_finite, check_speed_rpm, require_engine, require_number
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import PLAUSIBLE, check_results_finite, check_speed_rpm, require_number
 from ..errors import EngineError, NoSteadyStateError, SolverError
 from ..plotting.design import plot_disc_flywheel, plot_flywheel_design, plot_textbook_flywheel
 from ..results import Result, json_safe
@@ -895,6 +895,60 @@ def _load_name(load: Load | None) -> str:
     return "balanced" if load is None else type(load).__name__
 
 
+def _checked_points(
+    engine: Engine,
+    results: list,
+    J_design: float,
+    fidelity: str,
+    friction: FrictionArg,
+    grid_deg: float,
+    max_rpm: float | None,
+) -> tuple[list[PointResult], float]:
+    """The steady state of every operating point with the designed crankshaft inertia
+    ``J_design`` [kg·m²] (``results``: (point, its own inertia, Newton steps, textbook
+    sizing, δ target) each): the :class:`PointResult` of each, and the highest speed the
+    flywheel must stand [rpm] (``max_rpm``, else the larger of ``[operating] rpm`` and
+    the highest speed within the cycle at any point)."""
+    point_results = []
+    peak = float(engine.operating.rpm) if max_rpm is None else float(max_rpm)
+    for p, J, steps, tb, target in results:
+        try:  # the eager steady state: every check of rotor.steady_state applies to the design
+            r = steady_state(
+                with_crankshaft_inertia(engine, J_design),
+                p.rpm,
+                cast("Load | None", p.load),  # parsed by _points
+                fidelity=fidelity,
+                friction=friction,
+                imep_scale=cast(Any, p.imep_scale),
+                grid_deg=grid_deg,
+            )
+        except NoSteadyStateError as e:
+            raise NoSteadyStateError(
+                f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}"
+            ) from e
+        if max_rpm is None:
+            peak = max(peak, float(r.max_rpm))
+        fuel = r.fuel_scale if r.solved_for == "fuel_scale" else None
+        point_results.append(
+            PointResult(
+                rpm=p.rpm,
+                imep_scale=_jsonable(p.imep_scale),
+                load=_load_name(cast("Load | None", p.load)),  # parsed by _points
+                delta_target=target,
+                inertia_kgm2=J,
+                delta=float(r.delta),
+                peak_rpm=float(r.max_rpm),
+                newton_steps=steps,
+                textbook=tb,
+                fuel_scale=None if fuel is None else float(np.asarray(fuel)),
+                load_torque_Nm=None if r.load_torque_Nm is None else float(np.asarray(r.load_torque_Nm)),
+                fuel_scale_applied=None if r.fuel_scale is None else float(np.asarray(r.fuel_scale)),
+                solved_for=r.solved_for,
+            )
+        )
+    return point_results, peak
+
+
 def design_flywheel(
     engine: Engine | PreparedEngine,
     delta: float | None,
@@ -972,43 +1026,7 @@ def design_flywheel(
             "crankshaft inertia; the rods and pistons alone are enough (a [crankshaft] inertia_kgm2 "
             "must still be > 0)"
         )
-    point_results = []
-    peak = float(engine.operating.rpm) if max_rpm is None else float(max_rpm)
-    for p, J, steps, tb, target in results:
-        try:  # the eager steady state: every check of rotor.steady_state applies to the design
-            r = steady_state(
-                with_crankshaft_inertia(engine, J_design),
-                p.rpm,
-                cast("Load | None", p.load),  # parsed by _points
-                fidelity=fidelity,
-                friction=friction,
-                imep_scale=cast(Any, p.imep_scale),
-                grid_deg=grid_deg,
-            )
-        except NoSteadyStateError as e:
-            raise NoSteadyStateError(
-                f"the designed inertia {J_design:.4g} kg·m² has no steady state at {p.rpm:g} rpm: {e}"
-            ) from e
-        if max_rpm is None:
-            peak = max(peak, float(r.max_rpm))
-        fuel = r.fuel_scale if r.solved_for == "fuel_scale" else None
-        point_results.append(
-            PointResult(
-                rpm=p.rpm,
-                imep_scale=_jsonable(p.imep_scale),
-                load=_load_name(cast("Load | None", p.load)),  # parsed by _points
-                delta_target=target,
-                inertia_kgm2=J,
-                delta=float(r.delta),
-                peak_rpm=float(r.max_rpm),
-                newton_steps=steps,
-                textbook=tb,
-                fuel_scale=None if fuel is None else float(np.asarray(fuel)),
-                load_torque_Nm=None if r.load_torque_Nm is None else float(np.asarray(r.load_torque_Nm)),
-                fuel_scale_applied=None if r.fuel_scale is None else float(np.asarray(r.fuel_scale)),
-                solved_for=r.solved_for,
-            )
-        )
+    point_results, peak = _checked_points(engine, results, J_design, fidelity, friction, grid_deg, max_rpm)
     tb_worst = max((r[3] for r in results), key=lambda t: t.crankshaft_inertia_kgm2)
     shaft = float(shaft_inertia_kgm2)
     needed = J_design > shaft

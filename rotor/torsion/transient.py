@@ -55,9 +55,10 @@ from ..engine.plausible import PLAUSIBLE, require_number, require_whole, what_it
 from ..errors import EngineError, SolverError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
+from .driven import DrivenChain, driven_chain, mass_index, section_names
 from .model import TorsionalChain
 from .modes import natural_frequencies
-from .response import DrivenChain, TorsionalResponse, driven_chain, mass_index, section_names
+from .response import TorsionalResponse
 
 __all__ = ["TorsionalRun", "torsional_simulate", "SOLVERS", "STIFF_STEPS"]
 
@@ -330,6 +331,137 @@ def _initial(initial: Any, n: int, omega_ref: float, call: str) -> tuple[np.ndar
     )
 
 
+def _engine_or_chain(
+    engine: Any, chain: TorsionalChain | None, call: str
+) -> tuple[Engine | None, TorsionalChain | None]:
+    """(the engine or None, the chain or None) of ``torsional_simulate``'s first argument
+    and ``chain``."""
+    if isinstance(engine, TorsionalChain):
+        if chain is not None:
+            raise EngineError(f"{call}: give the chain once, as the first argument or as chain=, not both")
+        return None, engine
+    if isinstance(engine, Engine):
+        return engine, chain
+    hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, bytes)) else ""
+    raise TypeError(
+        f"{call}(engine): expected a rotor.Engine or a rotor.TorsionalChain{hint}, got {what_it_is(engine)}"
+    )
+
+
+def _checked_options(solver: str, rtol: Any, max_steps: Any, rpm: Any, eng: Engine | None, call: str):
+    """``rtol``, ``max_steps`` and ``rpm`` (default the engine's, a free chain's 0) checked:
+    (rtol, max_steps, rpm) as Python numbers."""
+    if solver not in SOLVERS:
+        raise EngineError(f"{call}(solver) = {solver!r}: one of {', '.join(map(repr, SOLVERS))}")
+    rtol = require_number(rtol, f"{call}(rtol)")
+    if not (1e-14 <= rtol <= 1e-2):
+        raise EngineError(f"{call}(rtol) = {rtol!r}: must lie between 1e-14 and 1e-2")
+    max_steps = require_whole(max_steps, f"{call}(max_steps)")
+    lo, hi, _, _ = PLAUSIBLE[("operating", "rpm")]
+    if rpm is None:
+        rpm = 0.0 if eng is None else float(eng.operating.rpm)
+    rpm = require_number(rpm, f"{call}(rpm)", "rpm")
+    if eng is not None and not (math.isfinite(rpm) and lo <= rpm <= hi):
+        raise EngineError(
+            f"{call}(rpm) = {rpm!r}: an engine run needs a positive, finite speed between {lo:g} and {hi:g} rpm"
+        )
+    if eng is None and not (math.isfinite(rpm) and abs(rpm) <= hi):
+        raise EngineError(f"{call}(rpm) = {rpm!r}: must be a finite speed below {hi:g} rpm")
+    return rtol, max_steps, rpm
+
+
+def _load_for(load: Any, dc: DrivenChain, eng: Engine | None, omega_ref: float, call: str) -> tuple[Load, float | None]:
+    """The run's load and its constant torque [N·m] (None for a load that varies): by
+    default the engine's mean gas torque less friction at ``omega_ref`` (a free chain: 0)."""
+    if load is None:
+        m0 = float(dc.mean_gas_torque()) - float(jnp.sum(dc.friction_torques(jnp.full(dc.size, omega_ref))))
+        return ConstantLoad(jnp.asarray(m0 if eng is not None else 0.0)), (m0 if eng is not None else None)
+    if isinstance(load, (int, float)) and not isinstance(load, bool):
+        return ConstantLoad(jnp.asarray(float(load))), float(load)
+    if isinstance(load, Load):
+        return load, (float(load.torque_Nm) if isinstance(load, ConstantLoad) else None)
+    raise TypeError(f"{call}(load): expected None, a number [N·m] or a rotor.Load, got {what_it_is(load)}")
+
+
+@dataclasses.dataclass(frozen=True)
+class _Span:
+    """A run's length and samples: ``solver``: the solver ``"auto"`` picks; ``points``:
+    samples per cycle (an engine run) or 0; ``cycles``; ``period``: the time unit of the
+    solver's state [s] (a cycle at the nominal speed, or the free run's length);
+    ``t_end`` [s]; ``theta_q``: the reference mass's angles to sample at [rad];
+    ``theta_end`` [rad]; ``by_angle``: sampled by angle (an engine run) or in time;
+    ``samples``: a free run's samples."""
+
+    solver: str
+    points: int
+    cycles: int
+    period: float
+    t_end: float
+    theta_q: np.ndarray
+    theta_end: float
+    by_angle: bool
+    samples: int
+
+
+def _span(dc, eng, cycles, duration_s, samples, omega_ref, omega_max, theta0, call: str) -> _Span:
+    """The length and samples of the run (:class:`_Span`): an engine run's ``cycles``
+    sampled on the grid of the reference mass's angle, a free chain's ``duration_s``
+    sampled in time; a run whose samples would not fit in memory is refused."""
+    n = dc.size
+    if eng is not None:
+        cycles = require_whole(cycles, f"{call}(cycles)")
+        period = eng.cycle_rad / omega_ref
+        P = dc.values.shape[0] if dc.values is not None else 0
+        total = cycles * P
+        check_size(total * n * SAMPLE_BYTES, f"{call}: {cycles} cycles × {P} samples", "run fewer cycles")
+        th_start = float(theta0[dc.reference_mass])
+        return _Span(
+            solver="kvaerno5" if omega_max * period / 3 > STIFF_STEPS else "dopri8",
+            points=P,
+            cycles=cycles,
+            period=period,
+            t_end=20.0 * cycles * period,  # the event at the last angle ends it long before
+            theta_q=th_start + np.arange(total) * (eng.cycle_rad / P),
+            theta_end=th_start + cycles * eng.cycle_rad,
+            by_angle=True,
+            samples=samples,
+        )
+    if duration_s is None:
+        raise EngineError(f"{call}: a free chain's run needs duration_s (its length [s])")
+    t_end = require_number(duration_s, f"{call}(duration_s)", "s")
+    if not (math.isfinite(t_end) and t_end > 0):
+        raise EngineError(f"{call}(duration_s) = {duration_s!r}: must be a positive, finite time [s]")
+    samples = require_whole(samples, f"{call}(samples)", 2)
+    check_size(samples * n * SAMPLE_BYTES, f"{call}: {samples} samples", "take fewer samples")
+    return _Span("dopri8", 0, 0, t_end, t_end, np.zeros(1), 0.0, False, samples)
+
+
+def _scaled_start(dc, load_obj, omega_ref, theta0, omega0, omega_max, eng, period):
+    """The scene the solver sees and its start state, scaled so that the state is of order
+    one: (:class:`_Scene`, (reference angle, twists, speeds))."""
+    twist0 = theta0[:-1] - theta0[1:]
+    k = np.asarray(dc.stiffnesses)
+    torque_scale = abs(float(dc.mean_gas_torque())) + abs(float(load_obj.torque(omega_ref, 0.0))) + 1.0
+    twist_scale = max(float(np.max(np.abs(twist0))), torque_scale / float(np.min(k)), 1e-12)
+    speed_scale = max(abs(omega_ref), float(np.max(np.abs(omega0))), omega_max * twist_scale, 1e-9)
+    angle_scale = eng.cycle_rad if eng is not None else 1.0
+    scene = _Scene(
+        dc,
+        load_obj,
+        jnp.asarray(omega_ref),
+        jnp.asarray(angle_scale),
+        jnp.asarray(twist_scale),
+        jnp.asarray(speed_scale),
+        jnp.asarray(period),
+    )
+    y0 = (
+        jnp.asarray(theta0[dc.reference_mass] / angle_scale),
+        jnp.asarray(twist0 / twist_scale),
+        jnp.asarray(omega0 / speed_scale),
+    )
+    return scene, y0
+
+
 def torsional_simulate(
     engine: Engine | TorsionalChain,
     rpm: float | None = None,
@@ -385,109 +517,31 @@ def torsional_simulate(
     """
     call = "torsional_simulate"
     start = time.perf_counter()
-    if isinstance(engine, TorsionalChain):
-        if chain is not None:
-            raise EngineError(f"{call}: give the chain once, as the first argument or as chain=, not both")
-        chain, eng = engine, None
-    elif isinstance(engine, Engine):
-        eng = engine
-    else:
-        hint = " (load it first: rotor.load_engine(...))" if isinstance(engine, (str, bytes)) else ""
-        raise TypeError(
-            f"{call}(engine): expected a rotor.Engine or a rotor.TorsionalChain{hint}, got {what_it_is(engine)}"
-        )
-    if solver not in SOLVERS:
-        raise EngineError(f"{call}(solver) = {solver!r}: one of {', '.join(map(repr, SOLVERS))}")
-    rtol = require_number(rtol, f"{call}(rtol)")
-    if not (1e-14 <= rtol <= 1e-2):
-        raise EngineError(f"{call}(rtol) = {rtol!r}: must lie between 1e-14 and 1e-2")
-    max_steps = require_whole(max_steps, f"{call}(max_steps)")
-    lo, hi, _, _ = PLAUSIBLE[("operating", "rpm")]
-    if rpm is None:
-        rpm = 0.0 if eng is None else float(eng.operating.rpm)
-    rpm = require_number(rpm, f"{call}(rpm)", "rpm")
-    if eng is not None and not (math.isfinite(rpm) and lo <= rpm <= hi):
-        raise EngineError(
-            f"{call}(rpm) = {rpm!r}: an engine run needs a positive, finite speed between {lo:g} and {hi:g} rpm"
-        )
-    if eng is None and not (math.isfinite(rpm) and abs(rpm) <= hi):
-        raise EngineError(f"{call}(rpm) = {rpm!r}: must be a finite speed below {hi:g} rpm")
+    eng, chain = _engine_or_chain(engine, chain, call)
+    rtol, max_steps, rpm = _checked_options(solver, rtol, max_steps, rpm, eng, call)
     dc = driven_chain(eng, chain, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
     assert chain is not None or eng is not None
-    ch = chain if chain is not None else None
     n = dc.size
     omega_ref = rpm / RPM_PER_RAD_S
     theta0, omega0 = _initial(initial, n, omega_ref, call)
-    # the load
-    if load is None:
-        m0 = float(dc.mean_gas_torque()) - float(jnp.sum(dc.friction_torques(jnp.full(n, omega_ref))))
-        load_obj: Load = ConstantLoad(jnp.asarray(m0 if eng is not None else 0.0))
-        load_value: float | None = m0 if eng is not None else None
-    elif isinstance(load, (int, float)) and not isinstance(load, bool):
-        load_obj, load_value = ConstantLoad(jnp.asarray(float(load))), float(load)
-    elif isinstance(load, Load):
-        load_obj, load_value = load, (float(load.torque_Nm) if isinstance(load, ConstantLoad) else None)
-    else:
-        raise TypeError(f"{call}(load): expected None, a number [N·m] or a rotor.Load, got {what_it_is(load)}")
-    # the length and the samples
+    load_obj, load_value = _load_for(load, dc, eng, omega_ref, call)
     K_hz = np.asarray(natural_frequencies(_mean_chain(dc)))
     omega_max = 2 * np.pi * float(K_hz[-1]) if K_hz.size else 0.0
-    if eng is not None:
-        cycles = require_whole(cycles, f"{call}(cycles)")
-        period = eng.cycle_rad / omega_ref
-        P = dc.values.shape[0] if dc.values is not None else 0
-        total = cycles * P
-        check_size(total * n * SAMPLE_BYTES, f"{call}: {cycles} cycles × {P} samples", "run fewer cycles")
-        pick = "kvaerno5" if omega_max * period / 3 > STIFF_STEPS else "dopri8"
-        t_end = 20.0 * cycles * period  # the event at the last angle ends it long before
-        th_start = float(theta0[dc.reference_mass])
-        theta_q = th_start + np.arange(total) * (eng.cycle_rad / P)
-        theta_end = th_start + cycles * eng.cycle_rad
-        by_angle = True
-    else:
-        if duration_s is None:
-            raise EngineError(f"{call}: a free chain's run needs duration_s (its length [s])")
-        t_end = require_number(duration_s, f"{call}(duration_s)", "s")
-        if not (math.isfinite(t_end) and t_end > 0):
-            raise EngineError(f"{call}(duration_s) = {duration_s!r}: must be a positive, finite time [s]")
-        samples = require_whole(samples, f"{call}(samples)", 2)
-        check_size(samples * n * SAMPLE_BYTES, f"{call}: {samples} samples", "take fewer samples")
-        pick, P, cycles, period = "dopri8", 0, 0, t_end
-        theta_q, theta_end, by_angle = np.zeros(1), 0.0, False
-    name = pick if solver == "auto" else solver
-    # scales: the state the solver sees is of order one
-    twist0 = theta0[:-1] - theta0[1:]
-    k = np.asarray(dc.stiffnesses)
-    torque_scale = abs(float(dc.mean_gas_torque())) + abs(float(load_obj.torque(omega_ref, 0.0))) + 1.0
-    twist_scale = max(float(np.max(np.abs(twist0))), torque_scale / float(np.min(k)), 1e-12)
-    speed_scale = max(abs(omega_ref), float(np.max(np.abs(omega0))), omega_max * twist_scale, 1e-9)
-    angle_scale = eng.cycle_rad if eng is not None else 1.0
-    scene = _Scene(
-        dc,
-        load_obj,
-        jnp.asarray(omega_ref),
-        jnp.asarray(angle_scale),
-        jnp.asarray(twist_scale),
-        jnp.asarray(speed_scale),
-        jnp.asarray(period),
-    )
-    y0 = (
-        jnp.asarray(theta0[dc.reference_mass] / angle_scale),
-        jnp.asarray(twist0 / twist_scale),
-        jnp.asarray(omega0 / speed_scale),
-    )
-    s_q = np.linspace(0.0, t_end / period, samples) if not by_angle else np.zeros(1)
+    span = _span(dc, eng, cycles, duration_s, samples, omega_ref, omega_max, theta0, call)
+    name = span.solver if solver == "auto" else solver
+    scene, y0 = _scaled_start(dc, load_obj, omega_ref, theta0, omega0, omega_max, eng, span.period)
+    s_q = np.linspace(0.0, span.t_end / span.period, span.samples) if not span.by_angle else np.zeros(1)
     t, theta, omega, ok, steps = _run_kernel(
         scene,
         y0,
-        jnp.asarray(t_end / period),
+        jnp.asarray(span.t_end / span.period),
         jnp.asarray(rtol),
         name,
         max_steps,
-        jnp.asarray(theta_end),
-        jnp.asarray(theta_q),
+        jnp.asarray(span.theta_end),
+        jnp.asarray(span.theta_q),
         jnp.asarray(s_q),
-        by_angle,
+        span.by_angle,
     )
     t, theta, omega, ok, steps = jax.device_get((t, theta, omega, ok, steps))
     if not ok:
@@ -499,7 +553,7 @@ def torsional_simulate(
     twist = theta[:, :-1] - theta[:, 1:]
     torque = np.asarray(dc.section_torques(twist, omega[:, :-1] - omega[:, 1:]))
     energy = np.asarray(dc.energy(theta, omega))
-    names = tuple(ch.names) if ch is not None else _engine_names(eng)
+    names = tuple(chain.names) if chain is not None else _engine_names(eng)
     return TorsionalRun(
         t=t,
         angle_rad=theta,
@@ -507,9 +561,9 @@ def torsional_simulate(
         twist_rad=twist,
         torque_Nm=torque,
         energy_J=energy,
-        sampled_by="angle" if by_angle else "time",
-        points_per_cycle=P,
-        cycles=cycles,
+        sampled_by="angle" if span.by_angle else "time",
+        points_per_cycle=span.points,
+        cycles=span.cycles,
         rpm=float(rpm),
         load_torque_Nm=load_value,
         solver=name,
