@@ -6,7 +6,7 @@ outcome* (:class:`SolverError`) is valid input for which a solver could not reac
 answer (no periodic steady state, a stall): the command line exits with code 1. An
 *internal error* (:class:`InternalError`) is a result rotor should never have produced
 (a NaN or an infinity where a number must exist): a bug in rotor, reported as one by the
-command line (exit code 70). Ground floor: imports nothing from rotor.
+command line (exit code 70). Base layer: imports nothing from rotor.
 """
 
 from __future__ import annotations

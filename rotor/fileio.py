@@ -1,7 +1,7 @@
 """Writing files whole or not at all, JSON files saved and loaded one way, and the one
 CSV writer (no NaN or infinity written).
 
-Ground floor: imports nothing from rotor but :mod:`rotor.errors`.
+Base layer: imports nothing from rotor but :mod:`rotor.errors`.
 """
 
 from __future__ import annotations

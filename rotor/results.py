@@ -12,7 +12,7 @@ spectrum, a log analysis, an identification, a calibration, a flywheel design â€
 - a short ``repr`` and, in notebooks, ``_repr_html_`` (the summary).
 
 :class:`Result` gives the last two from ``summary()``; a result class inherits it and
-writes the other four. Ground floor: imports nothing from rotor.
+writes the other four. Base layer: imports nothing from rotor.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 rotor computes in SI (m, kg, s, Pa, rad, rad/s, N·m, J); revolutions per minute, degrees
 and bar appear only at the edges (files, command line, printed output), in names that
-say so (``rpm``, ``angle_deg``, ``imep_bar``). This module is the ground floor: it
+say so (``rpm``, ``angle_deg``, ``imep_bar``). This module is in the base layer: it
 imports nothing from rotor.
 """
 

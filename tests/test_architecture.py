@@ -8,6 +8,7 @@ by ``make test`` as ``lint-imports``; ``test_layer_contracts_hold`` runs them he
 
 import ast
 import json
+import re
 import shutil
 import subprocess
 
@@ -107,7 +108,7 @@ def test_every_subpackage_says_what_lives_there_and_what_it_may_import(subpackag
     assert "import" in doc, f"rotor/{subpackage}/__init__.py must say what it may import"
 
 
-BASE = ("units", "errors", "checks", "fileio", "cache", "results", "cycles", "jaxconfig")
+BASE = ("units", "errors", "checks", "fileio", "cache", "results", "cycles", "jaxconfig", "progress")
 
 
 def test_the_base_layer_imports_only_its_own_modules():
@@ -171,3 +172,44 @@ def test_every_module_is_reachable_as_an_attribute_of_its_subpackage():
     )
     r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
+
+
+FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]+")
+SPEAKS_PYTHON = [ROOT / "rotor" / f"{name}.py" for name in BASE] + [
+    path
+    for name in ("engine", "dynamics", "design", "torsion", "plotting")
+    for path in (ROOT / "rotor" / name).rglob("*.py")
+]
+
+
+def _flags_in_messages(source: str) -> list[str]:
+    """The command-line flags (``--load``) in the string constants of ``source`` that are no docstring."""
+    tree = ast.parse(source)
+    docstrings = {
+        id(node.body[0].value)
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.Module, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+        and node.body
+        and isinstance(node.body[0], ast.Expr)
+        and isinstance(node.body[0].value, ast.Constant)
+    }
+    return [
+        f"line {node.lineno}: {node.value[:80]!r}"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Constant)
+        and isinstance(node.value, str)
+        and id(node) not in docstrings
+        and FLAG.search(node.value)
+    ]
+
+
+@pytest.mark.parametrize("path", SPEAKS_PYTHON, ids=lambda p: str(p.relative_to(ROOT)))
+def test_the_library_names_python_arguments_not_flags(path):
+    """A message of the library names the function's argument (``load='abc': …``, with
+    ``RotorError(argument=...)``); the command line turns it into the flag."""
+    assert not _flags_in_messages(path.read_text(encoding="utf-8"))
+
+
+def test_the_flag_check_sees_a_flag():
+    assert _flags_in_messages('raise EngineError(f"--load {spec!r}: not understood")')
+    assert not _flags_in_messages('def f():\n    """``--load`` on the command line."""\n')

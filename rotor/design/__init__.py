@@ -14,7 +14,7 @@ one HTML page with its figures and tables (:func:`~.report.report`). Every resul
 :class:`rotor.results.Result`; the drawing is in :mod:`rotor.plotting`.
 
 May import: :mod:`rotor.dynamics`, :mod:`rotor.engine`, :mod:`rotor.plotting` (to draw its
-results) and the ground floor. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or
+results) and the base layer. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or
 :mod:`rotor.cli`.
 """
 

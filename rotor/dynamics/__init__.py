@@ -8,7 +8,7 @@ once and reused: :mod:`.prepared`), the equation of motion and its integrators
 ω(θ, t) with δ and orders (:mod:`.result`).
 
 May import: :mod:`rotor.engine`, :mod:`rotor.plotting` (to draw its results) and the
-ground floor. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or :mod:`rotor.design`.
+base layer. Never :mod:`rotor.logs`, :mod:`rotor.diagnostics` or :mod:`rotor.design`.
 """
 
 from ..cache import submodules_on_demand

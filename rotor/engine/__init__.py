@@ -10,7 +10,7 @@ journals lie; the bearing loads and the balancing built on it are in :mod:`rotor
 :mod:`.plausible` holds what an engine's numbers may be: their Python types at the API
 edge and the plausible range of every input (a bore of 1e300 m is finite, not an engine).
 
-May import: the ground floor (:mod:`rotor.units`, :mod:`rotor.errors`,
+May import: the base layer (:mod:`rotor.units`, :mod:`rotor.errors`,
 :mod:`rotor.checks`, :mod:`rotor.fileio`, :mod:`rotor.results`) and :mod:`rotor.plotting`
 (its results draw themselves there). Nothing here integrates an equation of motion.
 """

@@ -1,11 +1,11 @@
 """Plotting: draws what a result hands it; computes nothing a result could.
 
 matplotlib is imported only here, and only when a plot is asked for. Every function takes
-``ax=`` (one Axes or an array of them) and returns what it drew on. One module per room
-whose results it draws: :mod:`.engine`, :mod:`.speed`, :mod:`.logs`, :mod:`.diagnostics`,
+``ax=`` (one Axes or an array of them) and returns what it drew on. One module per
+subpackage whose results it draws: :mod:`.engine`, :mod:`.speed`, :mod:`.logs`, :mod:`.diagnostics`,
 :mod:`.design`, :mod:`.torsion`; shared helpers in :mod:`.common`.
 
-May import: the ground floor only (:mod:`rotor.units`, :mod:`rotor.fileio`, …). The
+May import: the base layer only (:mod:`rotor.units`, :mod:`rotor.fileio`, …). The
 results call these functions, not the other way round, so plotting stays a leaf.
 """
 

@@ -1,4 +1,4 @@
-"""The plots of the design room: a flywheel design, the textbook sizing, a disc flywheel.
+"""The plots of the design subpackage: a flywheel design, the textbook sizing, a disc flywheel.
 
 Each function draws what the result hands it (the design's δ sweep comes computed, from
 :meth:`rotor.FlywheelDesign.delta_sweep`); nothing here evaluates the engine.

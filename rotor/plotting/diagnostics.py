@@ -1,4 +1,4 @@
-"""The plots of the diagnostics room: an identification (speed fit, cylinder torques, IMEP
+"""The plots of the diagnostics subpackage: an identification (speed fit, cylinder torques, IMEP
 and misfires), a calibration (measured against identified IMEP per cycle), TDC from the
 speed (the fit's residual against the offset) and a pressure gain from motored cycles (their
 compression on log p – log V axes)."""

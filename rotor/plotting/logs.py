@@ -1,4 +1,4 @@
-"""The plots of the logs room: a logged-speed analysis and a wheel's tooth errors."""
+"""The plots of the logs subpackage: a logged-speed analysis and a wheel's tooth errors."""
 
 from __future__ import annotations
 
