@@ -270,7 +270,7 @@ class Diagnosis(Result):
                 f"    cycle {k}: {f}\n" for k, f in flagged[:8]
             )
             if len(flagged) > 8:
-                text += f"    … and {len(flagged) - 8} more (see --json)\n"
+                text += f"    … and {len(flagged) - 8} more (listed in the JSON)\n"
         lead, tail = self.partial_deg
         if lead > 0 or tail > 0:
             text += (

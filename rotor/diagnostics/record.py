@@ -127,7 +127,7 @@ def record_run(
     body = path.read_text()
     with atomic_path(path) as tmp:
         pathlib.Path(tmp).write_text(
-            f"# rotor simulate --record: {name}, wheel {wheel}, cylinder 1's TDC {-gap:g}° after the gap; "
+            f"# a run recorded by rotor (record_run): {name}, wheel {wheel}, cylinder 1's TDC {-gap:g}° after the gap; "
             f"tooth edge times [s]; the truth in {truth_path(path).name}\n"
             f"# tdc_after_gap_deg: {-gap:g}\n"
             "# firing_parity: 0\n"
