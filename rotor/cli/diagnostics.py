@@ -116,7 +116,7 @@ def cmd_diagnose(args: argparse.Namespace) -> None:
 def _calibration(args: argparse.Namespace) -> tuple[Any, Any, str | None]:
     """The engine of ``--engine`` and the calibration of ``--calibration`` (checked against
     it) with where it came from."""
-    from ..diagnostics.calibration import Calibration
+    from ..diagnostics.calibration_record import Calibration
     from ..engine.file import load_engine
 
     engine = load_engine(args.engine)
@@ -129,7 +129,8 @@ def _calibration(args: argparse.Namespace) -> tuple[Any, Any, str | None]:
 
 def diagnose_file(args: argparse.Namespace, log: str) -> FileOutput:
     """``rotor diagnose`` of the one file ``log`` with the options ``args``: what it prints and writes."""
-    from ..diagnostics.calibration import calibrate, diagnose
+    from ..diagnostics.calibration import calibrate
+    from ..diagnostics.diagnosis import diagnose
     from ..errors import EngineError
 
     engine, cal, cal_source = _calibration(args)

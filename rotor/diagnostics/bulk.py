@@ -233,7 +233,7 @@ def _in_order(outcomes: Iterator[tuple[int, bool, Any]], n: int) -> list[Any]:
 
 # ----------------------------------------------------------------------------- the calls
 def _diagnose_file(engine, calibration, kwargs, path):
-    from .calibration import diagnose
+    from .diagnosis import diagnose
 
     return diagnose(engine, path, calibration, **kwargs)
 
