@@ -100,6 +100,7 @@ ARGUMENT_FLAGS = {
     "pressure_gain": "--pressure-gain",
     "rod_ratio": "--rod-ratio",
     "scaling": "--scaling",
+    "step_deg": "--step",
     "tdc_deg": "--tdc-deg",
     "tooth_errors": "--tooth-errors",
     "wheel": "--wheel",

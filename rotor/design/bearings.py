@@ -680,7 +680,7 @@ def _checked_arguments(engine: Engine, rpm: Any, step_deg: Any, rays: Any, secto
     check_size(
         cycle / step * BEARING_ROW_BYTES * max(engine.cylinders, 4),
         f"bearing loads at a step of {step:g}°",
-        "use a larger step_deg, e.g. 1",
+        "use a larger step, e.g. step_deg=1",
     )
     n = int(round(cycle / step))
     if not np.isclose(n * step, cycle, rtol=1e-12, atol=1e-9):

@@ -220,7 +220,7 @@ def table_angles_deg(engine: Engine, step_deg: float) -> np.ndarray:
     check_size(
         rows * TABLE_ROW_BYTES,
         f"a table at a step of {step_deg:g}° ({rows:.3g} rows)",
-        "use a larger step_deg, e.g. 1 or 10 degrees",
+        "use a larger step, e.g. step_deg=1 or step_deg=10 (degrees)",
     )
     n = int(round(cycle / step_deg))
     if not np.isclose(n * step_deg, cycle):
