@@ -24,12 +24,11 @@ from .design.report import report as report
 from .diagnostics.bulk import analyze_many as analyze_many
 from .diagnostics.bulk import diagnose_many as diagnose_many
 from .diagnostics.bulk import expand_logs as expand_logs
-from .diagnostics.calibration import Calibration as Calibration
-from .diagnostics.calibration import Diagnosis as Diagnosis
 from .diagnostics.calibration import calibrate as calibrate
-from .diagnostics.calibration import diagnose as diagnose
-from .diagnostics.calibration import measured_imep as measured_imep
-from .diagnostics.calibration import preset_calibration as preset_calibration
+from .diagnostics.calibration_record import Calibration as Calibration
+from .diagnostics.calibration_record import preset_calibration as preset_calibration
+from .diagnostics.diagnosis import Diagnosis as Diagnosis
+from .diagnostics.diagnosis import diagnose as diagnose
 from .diagnostics.identification import Identification as Identification
 from .diagnostics.identification import identify as identify
 from .diagnostics.inverse import HarmonicTorque as HarmonicTorque
@@ -45,6 +44,7 @@ from .diagnostics.phase import SpeedTdc as SpeedTdc
 from .diagnostics.phase import TdcCheck as TdcCheck
 from .diagnostics.phase import TdcNotDetermined as TdcNotDetermined
 from .diagnostics.phase import tdc_from_speed as tdc_from_speed
+from .diagnostics.pressure_work import measured_imep as measured_imep
 from .diagnostics.synthetic import simulated_recording as simulated_recording
 from .diagnostics.synthetic import simulated_tooth_errors as simulated_tooth_errors
 from .diagnostics.synthetic import simulated_tooth_times as simulated_tooth_times
@@ -120,10 +120,10 @@ from .errors import RotorError as RotorError
 from .errors import SolverError as SolverError
 from .logs.analysis import LogAnalysis as LogAnalysis
 from .logs.analysis import analyze_log as analyze_log
-from .logs.analysis import tdc_from_pressure as tdc_from_pressure
 from .logs.edges import Edges as Edges
 from .logs.edges import find_edges as find_edges
 from .logs.pattern import locate_teeth as locate_teeth
+from .logs.phasing import tdc_from_pressure as tdc_from_pressure
 from .logs.reader import Log as Log
 from .logs.reader import read_log as read_log
 from .logs.wheel import ToothErrors as ToothErrors
