@@ -105,8 +105,9 @@ it (dropped once more than two revolutions are held; a chunk longer than
 **Speed.** A chunk costs a few numpy operations on all its edges at once (the wheel's
 pattern checked on every tooth period, one interpolation for every time its firings need)
 and a few lines of Python per firing: a V8 at 8000 rpm on a 60-2 wheel, fed a revolution at
-a time, runs about 120× faster than real time on one core
-(``benchmarks/misfire_detection.py``).
+a time, runs about 130× faster than real time on one core, about 65× with an engine file
+(the model's IMEP of every firing: a few more whole-chunk products)
+(``benchmarks/misfire_detection.py --throughput-only``).
 
 Hand-written, not borrowed: no library follows a trigger wheel edge by edge.
 """
@@ -807,11 +808,13 @@ class MisfireMonitor:
             xb = xa + seg
             query += (xa - half, xa + half, xb - half, xb + half, xa, xb, (kk + 1) * cyc)
         model = self._model
-        if model is not None:
-            nq = model.windows + 1
-            for kk, jj in slots:
-                query += (kk * cyc + fire[jj] + model.span[jj]).tolist()
         tp = np.interp(query, th, tt).tolist()
+        if model is not None:
+            js = [jj for _, jj in slots]
+            tdc = np.array([kk * cyc + fire[jj] for kk, jj in slots])
+            imeps = model.estimate(
+                js, [self._fire_cyl[jj] - 1 for jj in js], np.interp(tdc[:, None] + model.span_all[js], th, tt)
+            )
         last_i = np.searchsorted(th, [xa + seg + half for xa in starts]).tolist()
         n_edges = th.size
         E = self._E
@@ -834,11 +837,7 @@ class MisfireMonitor:
                 end_s = t_dec + (ce - th_dec) / omega
             else:
                 end_s = t6
-            if model is None:
-                imep = (math.nan, math.nan)
-            else:
-                q0 = 7 * len(slots) + nq * i
-                imep = model.estimate(jj, self._fire_cyl[jj] - 1, tp[q0 : q0 + nq])
+            imep = (math.nan, math.nan) if model is None else imeps[i]
             if self._warm:
                 self._decide(kk, jj, e, t_dec, end_s, predicted, False, 0.0, imep, out)
             else:
@@ -995,7 +994,7 @@ class MisfireMonitor:
 class _ModelIndex:
     """Each firing's IMEP from the speed over its segment, through the engine's equation of
     motion (see the module doc, **With an engine**): per firing slot, the least-squares
-    solution for (E₀, s, L) is precomputed, so that a firing costs a (3 × K) product."""
+    solution for (E₀, s, L) is precomputed, so that a chunk's firings cost a few products."""
 
     def __init__(self, engine: Any, fire: np.ndarray, fire_cyl: list[int], windows: int = MODEL_WINDOWS) -> None:
         from ..dynamics.crank_train import COL_COMBUSTION, COL_I, COL_MOTORED, crank_train
@@ -1048,23 +1047,75 @@ class _ModelIndex:
             other = mean_cols[:, 1:].copy()
             other[:, c0] = 0.0
             self.others.append(other)
-        self.scales = np.ones(n)  # each cylinder's last estimated combustion scale
+        self.scales = [1.0] * n  # each cylinder's last estimated combustion scale
+        # the same stacked by slot for a chunk's firings at once: y = ½·J·w²/Δt² − known −
+        # others·scales; s = pinv₁·y; the residual r = M·y (M = 1 − A·pinv), its square
+        # |M·y₀|² − 2·g·scales + scalesᵀ·H·scales with y₀ the part without the others
+        # (g = (M·O)ᵀ·M·y₀, H = (M·O)ᵀ·(M·O)); only the cylinders whose combustion reaches
+        # a slot's segment (``near``) enter its sums
+        self.span_all = np.stack(self.span)
+        proj = [np.eye(K) - self.design[j] @ self.pinv[j] for j in range(nf)]
+        mo = [proj[j] @ self.others[j] for j in range(nf)]
+        # all of s₀, M·y₀ and g are linear in z = 1/Δt² (y₀ = w2i·z − known): one operator
+        # a slot, rows [s₀; M·y₀ (K); g (n)], and its constant
+        ops, consts = [], []
+        for j in range(nf):
+            w2i = self.inertia[j] * np.diff(self.span[j]) ** 2
+            lin = np.vstack([self.pinv[j][1:2], proj[j], mo[j].T @ proj[j]])
+            ops.append(lin * w2i[None, :])
+            consts.append(lin @ self.known[j])
+        self.op = np.stack(ops)
+        self.const = np.stack(consts)
+        self.cov11 = [float(c[1, 1]) for c in self.cov]
+        self.near: list[list[int]] = []
+        self.b: list[list[float]] = []
+        self.h: list[list[list[float]]] = []
+        for j in range(nf):
+            o = self.others[j]
+            size = np.abs(o).max(axis=0)
+            near = [c for c in range(n) if size[c] > 1e-9 * max(float(size.max()), 1e-300)]
+            self.near.append(near)
+            self.b.append([float(self.pinv[j][1] @ o[:, c]) for c in near])
+            hj = mo[j].T @ mo[j]
+            self.h.append([[float(hj[a, c]) for c in near] for a in near])
 
-    def estimate(self, j: int, c0: int, times: list[float]) -> tuple[float, float]:
-        """(IMEP, its standard deviation) [Pa] of the firing in slot ``j`` (cylinder ``c0``
-        from 0) from the log times at its windows' edges."""
-        dt = np.diff(times)
-        span = self.span[j]
-        omega = np.diff(span) / dt
-        y = self.inertia[j] * omega**2 - self.known[j] - self.others[j] @ self.scales
-        p = self.pinv[j] @ y
-        r = y - self.design[j] @ p
+    def estimate(self, slots: list[int], cyls: list[int], times: np.ndarray) -> list[tuple[float, float]]:
+        """(IMEP, its standard deviation) [Pa] of each firing, in slots ``slots`` of
+        cylinders ``cyls`` (from 0), from the log times at its windows' edges (one row a
+        firing; NaN where they are not all measured), in firing order: each takes the
+        scales of the firings before it."""
+        J = np.asarray(slots)
+        dt = times[:, 1:] - times[:, :-1]
+        ok = (dt > 0).all(axis=1).tolist()
+        if not all(ok):
+            dt[~np.asarray(ok)] = 1.0
+        R = ((self.op[J] * (1.0 / (dt * dt))[:, None, :]).sum(axis=2) - self.const[J]).tolist()
         K = self.windows
-        var_s = float(r @ r) / (K - 3) * self.cov[j][1, 1]
-        s = float(p[1])
-        self.scales[c0] = min(max(s, 0.0), 2.0)
-        imep = self.imep_motored[c0] + s * self.imep_combustion[c0]
-        return float(imep), math.sqrt(var_s) * abs(float(self.imep_combustion[c0]))
+        sc = self.scales
+        out = []
+        for i, (j, c0) in enumerate(zip(slots, cyls)):
+            if not ok[i]:
+                out.append((math.nan, math.nan))
+                continue
+            row = R[i]
+            s = row[0]
+            rss = 0.0
+            for x in row[1 : K + 1]:
+                rss += x * x
+            near, b, h = self.near[j], self.b[j], self.h[j]
+            g = row[K + 1 :]
+            for a, c in enumerate(near):
+                x = sc[c]
+                s -= b[a] * x
+                rss -= 2.0 * g[c] * x
+                hr = h[a]
+                for q, c2 in enumerate(near):
+                    rss += hr[q] * x * sc[c2]
+            sc[c0] = min(max(s, 0.0), 2.0)
+            comb = float(self.imep_combustion[c0])
+            std = math.sqrt(max(rss, 0.0) / (K - 3) * self.cov11[j]) * abs(comb)
+            out.append((float(self.imep_motored[c0]) + s * comb, std))
+        return out
 
 
 _bisect_left, _insort = bisect.bisect_left, bisect.insort
