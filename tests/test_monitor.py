@@ -306,3 +306,23 @@ def test_without_an_engine_there_is_no_imep(recorded):
     out = m.feed(t) + m.close()
     assert all(np.isnan(v.imep_pa) for v in out) and out[0].to_json_dict()["imep_bar"] is None
     assert m.result().median_imep_pa is None and "IMEP" not in out[0].line()
+
+
+def test_a_firing_whose_model_windows_are_not_all_measured_has_no_imep():
+    """A V8's segment starts 45° after TDC, its model windows at TDC: after a hole in the
+    data the first firing judged can have model windows before the first edge placed."""
+    import warnings
+
+    t = synthetic_teeth(12)
+    t = np.concatenate([t[:607], t[607:] + 1.0])
+    m = MisfireMonitor("60-2", tdc_deg=0.0, engine="v8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = m.feed(t[:100]) + m.feed(t[100:]) + m.close()
+    imep = np.array([v.imep_pa for v in out])
+    std = np.array([v.imep_std_pa for v in out])
+    assert np.isnan(imep).sum() == 1 and np.all(np.isfinite(imep) == np.isfinite(std))
+    assert (
+        all(np.isfinite(v.index) for v in out)
+        and out[int(np.argmax(np.isnan(imep)))].to_json_dict()["imep_bar"] is None
+    )
