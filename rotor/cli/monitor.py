@@ -32,7 +32,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--engine",
         metavar="ENGINE",
-        help="engine file or preset: cylinders, strokes and firing angles (else --cylinders and --firing-order)",
+        help="engine file or preset: cylinders, strokes, firing angles and each firing's IMEP from the model "
+        "(else --cylinders and --firing-order: no IMEP)",
     )
     p.add_argument("--wheel", required=True, metavar="SPEC", help="trigger wheel with a gap, e.g. 60-2, 36-1, 36-2-1")
     p.add_argument("--cylinders", type=_cylinders, metavar="N", help="cylinders, without --engine")
