@@ -82,7 +82,7 @@ segment (E = ½·J·ω², J the square of the window's mean √I(θ), so that a 
 read as the engine makes it), the tables (I(θ), the motored and each combustion torque)
 are those of :func:`rotor.crank_train`, the other cylinders' combustion in the segment (the
 tail of the firing before) is taken at their last estimated scale, and the least-squares
-solution of each firing slot is precomputed: a firing costs one small matrix product. The
+solution of each firing slot is precomputed: a chunk's firings cost one stacked product. The
 IMEP is the cylinder's motored IMEP plus s times its combustion IMEP, and ``imep_std_pa``
 the least-squares standard error of s from the fit's residual (the speed noise that is not
 common to the windows; a wheel's tooth errors, the same every cycle, bias the IMEP of a
