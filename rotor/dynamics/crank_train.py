@@ -506,10 +506,7 @@ def _remember_tables(key: str, entry: tuple) -> None:
     under ``key`` (:func:`table_key`), dropping the least recently used beyond
     :data:`TABLE_CACHE_SIZE`."""
     train, inertia_ref, low = entry
-    old = _TABLES.get(key)
     _TABLES[key] = KeptTables(train, inertia_ref, low)
-    if old is not None and old.train is train:
-        _TABLES[key].objects = old.objects
     while len(_TABLES) > TABLE_CACHE_SIZE:
         _TABLES.popitem(last=False)
 
