@@ -487,8 +487,7 @@ class WiebeCycle(_SingleZone):
 
     def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
         """The cycle's pressure [Pa] at cycle angles ``phi`` [rad] in a cylinder of ``geometry``."""
-        p0, p1 = self.pressure_parts(phi, geometry)
-        return p0 + self.heat_scale(geometry) * p1
+        return _fired_pressure(self, jnp.asarray(phi, dtype=float), geometry)
 
     def motored(self, strokes: int = 4) -> MotoredCycle:
         """The same engine with the fuel cut: the trace of a misfiring cylinder."""
@@ -519,7 +518,7 @@ class MotoredCycle(_SingleZone):
 
     def __call__(self, phi: ArrayLike, geometry: object, strokes: int = 4) -> Float[Array, ...]:
         """The motored pressure [Pa] at cycle angles ``phi`` [rad] in a cylinder of ``geometry``."""
-        return self._parts(phi, geometry, None)[0]
+        return _motored_pressure(self, jnp.asarray(phi, dtype=float), geometry)
 
     def motored(self, strokes: int = 4) -> MotoredCycle:
         """Itself: a motored cycle has no combustion to cut (``strokes`` must be 4)."""
@@ -542,3 +541,17 @@ _SINGLE_ZONE_FIELDS = (
 )
 
 PRESSURE_KINDS = {cls.kind: cls for cls in (PressureTable, WiebeCycle, MotoredCycle, NoPressure)}
+
+
+# One compiled program per shape of ``phi`` for a call outside a compiled function (inside
+# one, they are traced inline): evaluated op by op, a single-zone cycle would compile each of
+# its few hundred operations on its own at every new shape.
+@eqx.filter_jit
+def _fired_pressure(cycle: WiebeCycle, phi: Array, geometry: object) -> Float[Array, ...]:
+    p0, p1 = cycle.pressure_parts(phi, geometry)
+    return p0 + cycle.heat_scale(geometry) * p1
+
+
+@eqx.filter_jit
+def _motored_pressure(cycle: MotoredCycle, phi: Array, geometry: object) -> Float[Array, ...]:
+    return cycle._parts(phi, geometry, None)[0]
