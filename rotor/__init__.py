@@ -9,13 +9,17 @@ first use (``rotor.steady_state`` imports :mod:`rotor.dynamics.steady`, and JAX 
 so that ``rotor --help`` and the commands that compute nothing with JAX start fast.
 ``dir(rotor)`` and ``__all__`` list every public name all the same.
 
-rotor's modules that compute switch on one process-wide setting of JAX when they are
-imported: float64 (``jax_enable_x64``), which rotor's numerics need
-(:mod:`rotor.jaxconfig`). JAX's persistent compilation cache stays as the user left it:
+Importing rotor switches on one process-wide setting of JAX: float64
+(``jax_enable_x64``), which rotor's numerics need. Where JAX is not imported yet, through
+its documented environment variable ``JAX_ENABLE_X64`` (unless the user set it), which JAX
+reads when it is imported; where it is, through ``jax.config``. rotor's modules that
+compute set it again when they are imported (:mod:`rotor.jaxconfig`). JAX's persistent compilation cache stays as the user left it:
 the ``rotor`` command switches it on, and :func:`rotor.enable_compilation_cache` does so
 in Python.
 """
 
+import os as _os
+import sys as _sys
 from typing import Any
 
 import lazy_loader as _lazy
@@ -23,6 +27,11 @@ import lazy_loader as _lazy
 from .cache import submodules_on_demand as _submodules_on_demand
 
 __version__ = "0.1.0"
+
+if "jax" in _sys.modules:
+    _sys.modules["jax"].config.update("jax_enable_x64", True)
+else:
+    _os.environ.setdefault("JAX_ENABLE_X64", "1")
 
 _public, _, __all__ = _lazy.attach_stub(__name__, __file__)
 _submodule = _submodules_on_demand(__name__)

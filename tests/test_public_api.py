@@ -5,6 +5,7 @@ argument and the return, and a docstring (units are in the docstrings)."""
 import ast
 import importlib
 import inspect
+import os
 import types
 
 import pytest
@@ -85,3 +86,24 @@ def test_subpackages_and_modules_are_attributes_and_other_names_are_not():
     assert rotor.cycles.__name__ == "rotor.cycles"
     with pytest.raises(AttributeError):
         rotor.no_such_name  # noqa: B018
+
+
+@pytest.mark.parametrize("order", ["import rotor, jax.numpy as jnp", "import jax.numpy as jnp, rotor"])
+def test_importing_rotor_switches_jax_to_float64(order):
+    """An array made with JAX right after ``import rotor`` is float64, whether JAX was
+    imported before rotor or after, and ``import rotor`` itself still imports no JAX."""
+    import subprocess
+    import sys
+
+    code = f"{order}; print(jnp.zeros(1).dtype)"
+    env = {k: v for k, v in os.environ.items() if k != "JAX_ENABLE_X64"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert out.stdout.strip() == "float64"
+    bare = subprocess.run(
+        [sys.executable, "-c", "import sys, rotor; print('jax' in sys.modules)"],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=True,
+    )
+    assert bare.stdout.strip() == "False"
