@@ -63,7 +63,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/simulator_accuracy.py
 	$(PY) benchmarks/simulator_speed.py
 	$(PY) benchmarks/logged_speed.py
-	$(PY) benchmarks/seed004_accuracy.py
+	$(PY) benchmarks/textbook_tables.py
 	$(PY) benchmarks/flywheel.py
 
 # the quick forms (a few minutes)

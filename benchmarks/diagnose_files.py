@@ -1,4 +1,4 @@
-"""Files per second for ``rotor diagnose`` over N short simulated recordings (issue 19, item 4):
+"""Files per second for ``rotor diagnose`` over N short simulated recordings:
 
 - ``separate``: N separate ``rotor diagnose LOG --json`` commands (a shell loop);
 - ``one_call_jobs1``: one ``rotor diagnose 'DIR/*.txt' --json --jobs 1`` (in its process);

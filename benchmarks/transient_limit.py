@@ -1,4 +1,4 @@
-"""A 1000-cycle transient against the numba RK4 at equal error and equal output (issue 19).
+"""A 1000-cycle transient against the numba RK4 at equal error and equal output.
 
 The scene, the error and the baselines are those of ``work_precision.py`` (imported, not
 copied): each preset started at 0.95 × its operating speed under ``PropellerLoad(T,
@@ -32,7 +32,7 @@ engine.
     .venv/bin/python benchmarks/transient_limit.py --presets v8 --repeats 5
 
 Writes benchmarks/results/transient_limit.json and prints the ratio rotor/numba per
-preset (the issue's target: ≤ 2 on every preset).
+preset (the target: ≤ 2 on every preset).
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ CYCLES = 1000
 NUMBA_SPC = [90, 180, 360, 720]
 CLOSED_GRID = [4.0, 2.0, 1.0, 0.5, 0.25]
 GRID_SPC = [90, 180, 360, 720, 1440]
-TARGET_TIMES = 2.0  # the issue's target: rotor within 2× the numba time
+TARGET_TIMES = 2.0  # the target: rotor within 2× the numba time
 
 
 def timed(fn):

@@ -1,4 +1,4 @@
-"""Factories of the design room's results for the result-protocol test (small grids)."""
+"""Factories of the design subpackage's results for the result-protocol test (small grids)."""
 
 import rotor
 from rotor.design.flywheel import OperatingPoint

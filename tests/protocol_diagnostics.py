@@ -1,4 +1,4 @@
-"""Factories of the diagnostics room's results for the protocol test
+"""Factories of the diagnostics subpackage's results for the protocol test
 (tests/test_result_protocol.py): the simulated recording of ``protocol_logs``, identified,
 calibrated and diagnosed; inverse dynamics of a short simulated run."""
 

@@ -1,6 +1,6 @@
 """The one result protocol, as a check any test can call on any result object.
 
-Each room keeps the factories of its result types in ``tests/protocol_<room>.py`` as
+Each subpackage keeps the factories of its result types in ``tests/protocol_<subpackage>.py`` as
 ``FACTORIES = {"ClassName": callable returning an instance, ...}``;
 ``tests/test_result_protocol.py`` runs :func:`check_result_protocol` on every one and
 checks that every subclass of :class:`rotor.results.Result` has a factory."""

@@ -208,7 +208,7 @@ def test_speed_log_analysis():
     assert np.allclose(np.cos(ph), np.cos(ph[0]), atol=1e-3)
 
 
-# ------------------------------------------------------------------ review fixes
+# ------------------------------------------------------------------ edge cases of the analysis
 def _wheel_csv(tmp_path, teeth=36, missing=0, revs=3.3, rpm=1500.0, fs=100e3, name="idx.csv"):
     """time, encoder_v, index_v of a wheel at constant speed, sampled at fs."""
     w0 = rpm / 30 * np.pi

@@ -1,4 +1,4 @@
-"""Many logs in one call (issue 19, item 4): ``rotor diagnose`` and ``rotor analyze`` with
+"""Many logs in one call: ``rotor diagnose`` and ``rotor analyze`` with
 several LOGs or a glob pattern, in this process (--jobs 1), on two threads (--jobs 2),
 across a local pool of two spawned processes (diagnose_many(pool="process")) and on a
 local two-worker Dask cluster (--scheduler, and

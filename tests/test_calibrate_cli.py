@@ -1,4 +1,4 @@
-"""``rotor calibrate``: its own command over rotor.calibrate (issue 16, item 4): a simulated
+"""``rotor calibrate``: its own command over rotor.calibrate: a simulated
 bench recording with pressure, with and without the sensor's gain (from a motored stretch);
 JSON, the file it writes (which ``rotor diagnose --calibration`` reads) and one-line errors."""
 

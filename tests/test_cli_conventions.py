@@ -3,7 +3,7 @@
 --json on every command with a result, --plot DIR on every command that draws (--out DIR
 only for `rotor report`, whose product is a whole folder),
 --quiet where a progress bar may show, --format only for tables; the command modules
-import the library's rooms lazily, never the top-level package, and build no JSON."""
+import the library's subpackages lazily, never the top-level package, and build no JSON."""
 
 import argparse
 import ast
@@ -144,7 +144,7 @@ def test_debug_is_a_global_flag_and_exit_statuses_are_documented():
 
 @pytest.mark.parametrize("name", ["analyze", "diagnose"])
 def test_log_commands_take_many_logs_jobs_and_a_scheduler(name):
-    """Several LOGs or a pattern in one run (issue 19): --jobs, --scheduler, and the exit
+    """Several LOGs or a pattern in one run: --jobs, --scheduler, and the exit
     status of a run where some files fail is in the help."""
     p = COMMANDS[name]
     assert {"--jobs", "--scheduler", "--quiet"} <= _options(p)

@@ -1,6 +1,6 @@
 """The simulator against invariants, an independent scipy reference, and itself.
 
-Tolerances are the issue's: energy 1e-9, formulations 1e-6 at default settings,
+Tolerances: energy 1e-9, formulations 1e-6 at default settings,
 periodicity 1e-10, steady state vs a settled run 1e-6, gradients 1e-5.
 """
 
@@ -108,7 +108,7 @@ def test_fidelity_levels_differ_by_the_pinned_amounts(diesel):
     # a balanced inline four: no half orders, no first order
     for o in (0.5, 1.0, 1.5):
         assert ov[o] < 1e-9 * ov[2.0]
-    # the textbook estimate (seed 004) is within 0.5 % of the simulated δ here
+    # the textbook estimate (Shishkov, "Dinamika dvigatelei") is within 0.5 % of the simulated δ here
     assert float(v.textbook_delta / v.delta) - 1 == pytest.approx(0.0043, abs=5e-4)
 
 

@@ -1,4 +1,4 @@
-"""Fuzzing the command line (issue 15, item 8): random bytes and text as an engine file,
+"""Fuzzing the command line: random bytes and text as an engine file,
 a preset with one number replaced by a hostile one, random CSV-like text as a log, and
 random numbers (0, negative, 1e300, nan, inf, huge integers, text that is no number) for
 the numeric options of every command.

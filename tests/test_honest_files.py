@@ -1,5 +1,5 @@
 """Files rotor writes get the mode a plain ``open(path, "w")`` gives them, and errors name
-the user's path, never the temporary file beside it (issue 14)."""
+the user's path, never the temporary file beside it."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Numbers a user can trust (issue 14): per-cycle δ and orders of a transient with its trend
+"""Numbers a user can trust: per-cycle δ and orders of a transient with its trend
 removed, loads that are carried and never replaced, a runaway that says so, a progress bar
 that compiles nothing more, and a stall reported within its cycle."""
 

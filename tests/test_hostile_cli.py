@@ -1,9 +1,9 @@
-"""Hostile but realistic command lines (issue 15, items 2, 3, 7): for every command of
+"""Hostile but realistic command lines: for every command of
 ``rotor --help``, a table of bad numbers, bad files and bad output paths, each with the
 exit status and a fragment of the one line it must print; the error contract of the
 command line (internal errors, ``--debug``, Ctrl-C, out of memory); the one writer of JSON
 and CSV that never writes NaN or Infinity; file errors that name the user's path; wrong
-Python types at the ground floor's edge (``save_json``, ``load_json``, ``json_safe``).
+Python types at the base layer's edge (``save_json``, ``load_json``, ``json_safe``).
 
 Everything runs in-process through :func:`rotor.cli.app.main` (one subprocess checks the
 real exit status and stderr of ``python -m rotor.cli``)."""
@@ -161,7 +161,7 @@ CASES = [
     (["analyze", "{file}", "--wheel", "60-2"], 2, "{file}: line 1"),
     (["analyze", "{dir}", "--wheel", "60-2"], 2, "{dir}: is a folder"),
     (["analyze", "{missing}.csv", "--wheel", "60-2"], 2, "{missing}.csv: No such file"),
-    # several LOGs or a pattern (issue 19): the run's own errors are one line before any file is read
+    # several LOGs or a pattern: the run's own errors are one line before any file is read
     (["analyze", "{dir}/*.csv", "--wheel", "60-2"], 2, "{dir}/*.csv: the pattern matches no file"),
     (["analyze", "{log}", "{log}", *TOOTH, "--save-tooth-errors", "{file}"], 2, "takes a single LOG"),
     (["analyze", "{log}", "{log}", *TOOTH, "--jobs", "0"], 2, "must be 1 or more"),

@@ -1,4 +1,4 @@
-"""Hostile engines, tables and flywheels (issue 15, items 1, 3, 5 and 7): what is computed
+"""Hostile engines, tables and flywheels: what is computed
 is validated, not only what is read; no NaN or infinity reaches JSON or CSV; sizes are
 checked before anything is allocated; a flywheel is never negative; a byte-order mark,
 a file that is not UTF-8, an empty file or a directory gets one line naming the path;

@@ -1,4 +1,4 @@
-"""Hostile but realistic logs and calls (issue 15, items 3, 6, 7): a time column in ms or µs,
+"""Hostile but realistic logs and calls: a time column in ms or µs,
 a flat pressure channel, float32 time stamps, a log diagnosed as another engine, files
 that are empty, binary, too large or not files at all, decimal commas, a byte-order mark,
 an inverted wheel signal, size options, an order limit that keeps nothing, wrong Python

@@ -1,5 +1,6 @@
-"""Reduced inertia: closed forms, an independent kinetic-energy check, the seed 003 form,
-articulated rods, and gradients."""
+"""Reduced inertia: closed forms, an independent kinetic-energy check, the form of
+Anisimov, Yelenich and Melnyk ("Modelling a piston engine by the irregularity of its
+crankshaft's rotation"), articulated rods, and gradients."""
 
 import equinox as eqx
 import jax
@@ -90,7 +91,7 @@ def test_derivative_matches_finite_differences():
     assert np.allclose(dI[1:-1], fd[1:-1], atol=2e-5 * float(jnp.max(jnp.abs(dI))))
 
 
-def test_seed003_form_keeps_the_low_harmonics():
+def test_anisimov_form_keeps_the_low_harmonics():
     """Central two-mass cylinder: A, B, C agree with the lambda series to O(lambda^3), and
     what the form leaves out is the 3rd and 4th harmonic, -lam/2 and -lam^2/8 of m R^2."""
     for lam in (0.3, 0.15):
@@ -110,7 +111,7 @@ def test_seed003_form_keeps_the_low_harmonics():
 
 
 def test_inline_four_inertia_has_no_first_order_term(diesel):
-    """Seed 003 table 1.1: for an inline four the cos(theta) terms cancel; period 180 deg."""
+    """Anisimov, Yelenich and Melnyk, table 1.1: for an inline four the cos(theta) terms cancel; period 180 deg."""
     th = jnp.linspace(0, 2 * np.pi, 512, endpoint=False)
     I = np.asarray(rotor.reduced_inertia(diesel, th))
     c = np.abs(np.fft.rfft(I)) / th.size

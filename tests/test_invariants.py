@@ -1,4 +1,4 @@
-"""Invariants checked at the end of every run (issue 15, item 5): time increases, θ does not
+"""Invariants checked at the end of every run: time increases, θ does not
 go back, every number finite, ω positive in the angle domain, min ≤ mean ≤ max, a steady
 state's period and balance finite. A violation is a one-line SolverError that says what to
 tighten, never a printed number. And the case that was silently wrong: a starter torque of

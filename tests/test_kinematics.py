@@ -1,5 +1,5 @@
 """Crank kinematics: closed forms against autodiff, the lambda series against the exact
-forms (an O(lambda^3) difference), and the seed 000 formulas for the offset mechanism."""
+forms (an O(lambda^3) difference), and the textbook formulas for the offset mechanism (Lukanin, "Dvigateli vnutrennego sgoraniya", vol. 2)."""
 
 import jax
 import jax.numpy as jnp
@@ -54,7 +54,7 @@ def test_derivatives_match_autodiff(k):
 
 
 def test_seed000_formulas_offset():
-    """Seed 000: sin b = lam (sin a - z); rod angular velocity and acceleration; TDC at s = 0."""
+    """The offset mechanism (Lukanin, vol. 2): sin b = lam (sin a - z); rod angular velocity and acceleration; TDC at s = 0."""
     L, k = 0.17, 0.012
     lam, z = R / L, k / R
     a = TH

@@ -1,6 +1,6 @@
 """Long transient runs: chunks, bounded memory (``keep_cycles``), size refusals, Ctrl-C.
 
-Issue 15 items 3 and 4. The long-run memory and time figures are in
+The long-run memory and time figures are in
 ``benchmarks/long_run.py``; here the runs are short enough for the test suite.
 """
 

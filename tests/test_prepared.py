@@ -1,7 +1,7 @@
 """Prepare once (``rotor.prepare``), the table cache, and steady states in bulk (``rotor.steady_sweep``).
 
 The tables of an engine are built once and reused; a change to anything they depend on
-must never reuse them (the issue's "a geometry change after preparing never reuses stale
+must never reuse them ("a geometry change after preparing never reuses stale
 tables"), while the crankshaft inertia, the speed, the fuelling and the load change
 nothing prepared.
 """

@@ -132,7 +132,7 @@ def test_imep_equals_mean_gas_torque_work(diesel):
 
 
 def test_seed_table_imep_is_near_the_thermal_calculation(diesel):
-    """Seed 004 appendix 4 gives PI = 1.0025 MPa from its 5-deg calculation; the 10-deg
+    """Shishkov, "Dinamika dvigatelei", appendix 4, gives PI = 1.0025 MPa from its 5-deg calculation; the 10-deg
     table interpolated here gives 0.986 MPa (the table omits the rounding of the diagram)."""
     assert abs(float(rotor.imep_pa(diesel)) - 1.0025e6) / 1.0025e6 < 0.03
 

@@ -1,5 +1,5 @@
 """Property tests over random valid engines (hypothesis): energy balance over a cycle,
-periodicity of the steady state, agreement of the formulations (issue 4, item 6).
+periodicity of the steady state, agreement of the formulations.
 
 Examples are drawn reproducibly (the ``derandomize`` profile of conftest.py; ``make fuzz``
 draws new ones); cylinder counts come from a small set

@@ -289,7 +289,7 @@ def test_readme_is_a_landing_page():
 
 # --- words the documentation does not use ------------------------------------------------
 
-SEED = re.compile(r"seeds? 00", re.IGNORECASE)  # file names such as seed004_accuracy.py are not text
+SEED = re.compile(r"seeds? 00", re.IGNORECASE)
 INTERNAL = re.compile(
     r"\bground\b|\bground floor\b|\bhouse\b|\brooms?\b|\bissue \d+|\bissue's\b|\.\./shared|\breview\b",
     re.IGNORECASE,

@@ -1,4 +1,4 @@
-"""``rotor report``, ``rotor loads`` and ``rotor balance`` (issue 17, item 7): the report
+"""``rotor report``, ``rotor loads`` and ``rotor balance``: the report
 folder (one self-contained page, its figures as PNG, its tables as CSV), written whole or
 not at all; its numbers are the library's; the page renders in a headless browser.
 

@@ -1,6 +1,6 @@
 """Every result type speaks the one protocol (``rotor.results.Result``): summary, tidy
 pandas, JSON without NaN, plot(ax=), a short repr and HTML. Factories live beside each
-room's tests in ``tests/protocol_<room>.py``."""
+subpackage's tests in ``tests/protocol_<subpackage>.py``."""
 
 import importlib
 
@@ -10,14 +10,24 @@ from result_protocol import check_result_protocol
 import rotor
 from rotor.results import Result
 
-ROOMS = ["engine", "bearings", "balance", "dynamics", "logs", "diagnostics", "design", "torsion", "torsion_response"]
+SUBPACKAGES = [
+    "engine",
+    "bearings",
+    "balance",
+    "dynamics",
+    "logs",
+    "diagnostics",
+    "design",
+    "torsion",
+    "torsion_response",
+]
 
 
 def _factories():
     out = {}
-    for room in ROOMS:
+    for subpackage in SUBPACKAGES:
         try:
-            mod = importlib.import_module(f"protocol_{room}")
+            mod = importlib.import_module(f"protocol_{subpackage}")
         except ModuleNotFoundError:
             continue
         out.update(mod.FACTORIES)
@@ -38,7 +48,7 @@ def _all_result_types():
 
 
 def test_every_result_type_has_a_factory():
-    assert rotor  # every room imported
+    assert rotor  # every subpackage imported
     missing = [n for n in _all_result_types() if n not in FACTORIES]
     assert not missing, f"result types without a protocol check: {missing}"
 

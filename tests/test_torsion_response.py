@@ -1,4 +1,4 @@
-"""The torsional forced response, sweep and transient (issue 18, item 4) against their invariants:
+"""The torsional forced response, sweep and transient against their invariants:
 
 (a) very stiff shafts reproduce the rigid model's steady state (δ, the speed orders, ω(θ));
 (b) a free chain without damping conserves its energy over 1000 periods;

@@ -6,7 +6,7 @@ Prints a markdown table of the worst error of every column, as a percentage of t
 column's largest magnitude, for the lambda-series kinematics (the table's default, the
 book's own method) and for the exact kinematics, and writes the figures as JSON.
 
-    .venv/bin/python benchmarks/seed004_accuracy.py [--out benchmarks/results/seed004_accuracy.json]
+    .venv/bin/python benchmarks/textbook_tables.py [--out benchmarks/results/textbook_tables.json]
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def _read(name):
 
 def errors(kinematics):
     table = rotor.crank_table(rotor.load_engine("4chn15"), step_deg=10, kinematics=kinematics)
-    kin, dyn = _read("seed004_kinematics.csv"), _read("seed004_dynamics.csv")
+    kin, dyn = _read("shishkov_kinematics.csv"), _read("shishkov_dynamics.csv")
     out = {}
     for ours, theirs, scale in COLUMNS:
         seed = kin if theirs in kin else dyn
@@ -58,7 +58,7 @@ def errors(kinematics):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=str(HERE / "results" / "seed004_accuracy.json"))
+    ap.add_argument("--out", default=str(HERE / "results" / "textbook_tables.json"))
     args = ap.parse_args()
     res = {"series": errors("series"), "exact": errors("exact")}
     print("| column | series: worst error | at | exact: worst error | at |")

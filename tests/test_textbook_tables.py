@@ -1,4 +1,4 @@
-"""Seed 004, appendix 5: `rotor table 4chn15 --step 10 --format csv` reproduces the
+"""Shishkov, "Dinamika dvigatelei" (SUSU 2014), appendix 5: `rotor table 4chn15 --step 10 --format csv` reproduces the
 printed kinematic and dynamic tables of the 4ChN15/20.5 diesel, number by number."""
 
 import csv
@@ -44,7 +44,7 @@ def _compare(ours, seed, angles_ours, angles_seed):
 
 @pytest.mark.parametrize("col", ["s_m", "v_m_s", "j_m_s2"])
 def test_kinematics_columns(table, col):
-    seed = _read("seed004_kinematics.csv")
+    seed = _read("shishkov_kinematics.csv")
     assert len(seed["angle_deg"]) == 37
     err = _compare(table[col], seed[col], table["angle_deg"], seed["angle_deg"])
     assert err.max() < TOL, f"{col}: worst row {seed['angle_deg'][err.argmax()]} deg, {err.max():.2%}"
@@ -63,7 +63,7 @@ def test_kinematics_columns(table, col):
     ],
 )
 def test_dynamics_columns(table, ours, theirs):
-    seed = _read("seed004_dynamics.csv")
+    seed = _read("shishkov_dynamics.csv")
     assert len(seed["angle_deg"]) == 73
     err = _compare(table[ours], seed[theirs] * 1e3, table["angle_deg"], seed["angle_deg"])
     assert err.max() < TOL, f"{ours}: worst row {seed['angle_deg'][err.argmax()]} deg, {err.max():.2%}"
@@ -78,14 +78,14 @@ def test_exact_kinematics_is_why_series_is_the_table_default(diesel):
     about 0.8 % of its peak here, more than the 0.5 % the comparison allows."""
     import rotor
 
-    seed = _read("seed004_kinematics.csv")
+    seed = _read("shishkov_kinematics.csv")
     exact = rotor.crank_table(diesel, step_deg=10, kinematics="exact")
     err = _compare(exact["j_m_s2"], seed["j_m_s2"], exact["angle_deg"], seed["angle_deg"])
     assert 0.005 < err.max() < 0.01
 
 
 def test_total_torque_is_the_sum_of_the_cylinder_tables(diesel):
-    """Seed 004 §3.2.3: T_sum is the cylinder-1 table shifted by each cylinder's firing
+    """Shishkov, "Dinamika dvigatelei", §3.2.3: T_sum is the cylinder-1 table shifted by each cylinder's firing
     interval and summed; rotor's total torque over the engine must equal that."""
     import jax.numpy as jnp
 
