@@ -1,6 +1,7 @@
 import gc
 import json
 import os
+import signal
 import time
 from pathlib import Path
 
@@ -9,6 +10,11 @@ import pytest
 from hypothesis import settings
 
 matplotlib.use("Agg")
+
+# A suite started in the background by a non-interactive shell inherits SIGINT ignored
+# (POSIX), and so would every command it starts: the tests of Ctrl-C need the default.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 # JAX's persistent compilation cache in a folder of the checkout's own (build/, ignored by
 # git; inherited by the CLI subprocesses the tests start), not the user's ~/.cache/rotor/jax:
