@@ -177,7 +177,7 @@ def test_every_module_is_reachable_as_an_attribute_of_its_subpackage():
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]+")
 SPEAKS_PYTHON = [ROOT / "rotor" / f"{name}.py" for name in BASE] + [
     path
-    for name in ("engine", "dynamics", "design", "torsion", "plotting")
+    for name in ("engine", "dynamics", "design", "torsion", "plotting", "logs", "diagnostics")
     for path in (ROOT / "rotor" / name).rglob("*.py")
 ]
 
@@ -213,3 +213,20 @@ def test_the_library_names_python_arguments_not_flags(path):
 def test_the_flag_check_sees_a_flag():
     assert _flags_in_messages('raise EngineError(f"--load {spec!r}: not understood")')
     assert not _flags_in_messages('def f():\n    """``--load`` on the command line."""\n')
+
+
+def test_the_command_line_prints_the_library_notes_in_flags():
+    """A library note names its arguments; the command line shows the same note with its flags."""
+    from rotor.cli.args import cli_json_words, cli_words
+
+    assert cli_words("read as wheel='60-2', edge='rising'") == "read as --wheel 60-2 --edge rising"
+    assert cli_words("a calibration (tooth_errors=FILE) gives") == "a calibration (--tooth-errors FILE) gives"
+    assert cli_words("give cylinders=N, or") == "give --cylinders N, or"
+    assert cli_words("e.g. columns='time,encoder_d,-', if") == "e.g. --columns time,encoder_d,-, if"
+    assert cli_words("fit (compression_ratio=…, rod_ratio=…)") == "fit (--compression-ratio … --rod-ratio …)"
+    assert cli_words("a ratio=3 and wheels=2 stay") == "a ratio=3 and wheels=2 stay"
+    assert cli_json_words({"pins": "wheel='36-1'", "n": 3, "notes": ["calibration=None"]}) == {
+        "pins": "--wheel 36-1",
+        "n": 3,
+        "notes": ["--no-calibration"],
+    }

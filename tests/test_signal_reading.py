@@ -54,7 +54,7 @@ def test_choices_recorded_with_evidence_and_pins(tmp_path):
     assert r.wheel.spec == "60-2" and r.edge == "rising"
     assert r.choice("wheel").source is ChoiceSource.FOUND and "60-2" in r.choice("wheel").evidence
     assert r.choice("edge").source is ChoiceSource.FOUND
-    assert r.pins() == "--wheel 60-2 --edge rising" and "read as --wheel 60-2 --edge rising" in a.summary()
+    assert r.pins() == "wheel='60-2', edge='rising'" and "read as wheel='60-2', edge='rising'" in a.summary()
     d = a.to_json_dict()["wheel"]["reading"]
     assert d["choices"]["wheel"]["source"] == "found" and d["pins"] == r.pins()
     assert all(f["status"] in ("fits", "repaired", "over_budget", "no_fit", "no_edges") for f in d["tried"])
@@ -195,7 +195,7 @@ def test_plot_of_the_reading(tmp_path, capsys):
     ax = a.reading.plot()
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any(x.startswith("edges taken") for x in labels) and any(x.startswith("timed at") for x in labels)
-    assert "--wheel 60-2" in ax.get_title()
+    assert "wheel='60-2'" in ax.get_title()
 
 
 def test_calibrate_reads_the_file_once(tmp_path, monkeypatch):

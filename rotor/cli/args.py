@@ -121,6 +121,27 @@ def _flag(m: re.Match) -> str:
     return f"{ARGUMENT_FLAGS[name]} {value}"
 
 
+_FLAG_LIST = re.compile(r"(--[\w-]+(?: [^\s,;]+)?), (?=--)")
+
+
+def cli_words(text: str) -> str:
+    """``text`` (a library note or summary) with the arguments it names as settings
+    (``wheel='60-2', edge='rising'``, ``tooth_errors=FILE``) written as the command line's
+    flags (``--wheel 60-2 --edge rising``, ``--tooth-errors FILE``, :data:`ARGUMENT_FLAGS`)."""
+    return _FLAG_LIST.sub(r"\1 ", _ARGUMENT_SETTING.sub(_flag, text))
+
+
+def cli_json_words(data: Any) -> Any:
+    """``data`` (a ``to_json_dict()``) with :func:`cli_words` applied to its strings."""
+    if isinstance(data, str):
+        return cli_words(data)
+    if isinstance(data, dict):
+        return {k: cli_json_words(v) for k, v in data.items()}
+    if isinstance(data, list):
+        return [cli_json_words(v) for v in data]
+    return data
+
+
 def error_text(e: BaseException) -> str:
     """``e``'s message as one line, in the command line's words: where a library error
     names its argument (``RotorError.argument``, the message starting ``wheel=…``), the

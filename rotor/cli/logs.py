@@ -10,7 +10,18 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from .args import add_edge, add_json, add_plot, add_quiet, angle_deg, error_text, positive_float, whole
+from .args import (
+    add_edge,
+    add_json,
+    add_plot,
+    add_quiet,
+    angle_deg,
+    cli_json_words,
+    cli_words,
+    error_text,
+    positive_float,
+    whole,
+)
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
 __all__ = [
@@ -252,6 +263,10 @@ class FileOutput:
     text: str
     written: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:  # the library's notes name arguments, the command line flags
+        self.json, self.text = cli_json_words(self.json), cli_words(self.text)
+        self.warnings = [cli_words(w) for w in self.warnings]
 
 
 def _print_one(args: argparse.Namespace, log: str, out: FileOutput) -> None:

@@ -36,8 +36,8 @@ import pickle
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from ..dynamics.transient import Progress
 from ..errors import EngineError, LogError
+from ..progress import Progress
 
 __all__ = [
     "DASK_HINT",

@@ -225,13 +225,10 @@ def firing_run_note(te: ToothErrors, cylinders: int, strokes: int, max_order: fl
             )
     else:
         s = "tooth errors estimated from this firing run: no order stood out as the engine's, so none was left to it"
-    s += (
-        "; a calibration saved from a coast-down or motored run (tooth_errors=FILE, --tooth-errors FILE) gives the "
-        "full wheel pattern"
-    )
+    s += "; a calibration saved from a coast-down or motored run (tooth_errors=FILE) gives the full wheel pattern"
     if cylinders == 1 and not (strokes == 4 and len(ks) > 0):
         s += (
-            "; for an engine of several cylinders give cylinders (--cylinders N), or its fluctuation at the firing "
+            "; for an engine of several cylinders give cylinders=N, or its fluctuation at the firing "
             "orders may be taken for the wheel's errors"
         )
     return s

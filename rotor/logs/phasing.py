@@ -159,7 +159,7 @@ def _tdc(log, pressure, request: PhaseRequest, notes) -> tuple[float, str, Phase
         notes.append(
             "TDC is the pressure peak, which combustion puts late (13–27° on the tue-single bench's "
             "recordings): the orders' phases and the cycle start are late by as much; give the "
-            "compression ratio and rod ratio (--compression-ratio, --rod-ratio) for a fit of the "
+            "compression ratio and rod ratio (compression_ratio=…, rod_ratio=…) for a fit of the "
             "compression, or tdc_deg"
         )
     return tdc, method, PhaseSource.PRESSURE, _PressurePhase(p_parity, True)

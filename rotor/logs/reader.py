@@ -442,7 +442,7 @@ def read_log(
         notes.append(
             f"header line {first[0]} ({_short(first[1])}) read as a {known[0]} export: "
             f"{', '.join(f'{h} → {n}' for h, n in zip(tokens, columns) if n != '-')} (name the columns, "
-            f"e.g. --columns time,encoder_d,-, if the channels are wired otherwise)"
+            f"e.g. columns='time,encoder_d,-', if the channels are wired otherwise)"
         )
     elif columns is None:
         if header and all(t in COLUMN_NAMES for t in tokens):

@@ -176,10 +176,11 @@ class WheelReading:
         return next((c for c in self.choices if c.name == name), None)
 
     def pins(self) -> str:
-        """The command-line options that pin the automatic choices (``--wheel … --edge …``)."""
-        out = f"--wheel {self.wheel.spec}"
+        """The arguments that pin the automatic choices (``wheel='60-2', edge='rising'``;
+        the command line prints them as its flags, ``--wheel 60-2 --edge rising``)."""
+        out = f"wheel={self.wheel.spec!r}"
         if self.edge is not None:
-            out += f" --edge {self.edge}"
+            out += f", edge={self.edge!r}"
         return out
 
     def plot(self, ax: Any = None, *, revolutions: float = 2.5) -> Any:
