@@ -20,11 +20,12 @@ O(λ³ + λ²z²) for an offset one.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 from jaxtyping import Array, ArrayLike
 
-from ..jaxconfig import jnp
+from ..jaxconfig import jax, jnp
 
 __all__ = [
     "PistonMotion",
@@ -70,6 +71,7 @@ def _check_model(model: str) -> None:
         raise ValueError(f"kinematics model must be one of {_MODELS}, got {model!r}")
 
 
+@jax.jit  # one compiled program per shape, not one per operation when called outside a jit
 def rod_motion(
     theta: ArrayLike, crank_radius_m: ArrayLike, rod_length_m: ArrayLike, pin_offset_m: ArrayLike = 0.0
 ) -> RodMotion:
@@ -92,6 +94,7 @@ def rod_motion(
     return RodMotion(beta, jnp.asarray(dbeta), jnp.asarray(d2beta))
 
 
+@functools.partial(jax.jit, static_argnames="model")
 def piston_motion(
     theta: ArrayLike,
     crank_radius_m: ArrayLike,

@@ -60,6 +60,7 @@ def _pchip_slopes(x, y, period):
     return jnp.where(same_sign, m, 0.0)
 
 
+@eqx.filter_jit  # one compiled program per shape when called outside a jit
 def periodic_pchip(xq: ArrayLike, x: ArrayLike, y: ArrayLike, period: float) -> Array:
     """Evaluate the periodic monotone cubic through (x, y) at ``xq``.
 
