@@ -120,12 +120,17 @@ COMMITTED_COV = 0.0159  # net IMEP CoV of the 60 Yanmar L100V fired cycles, meas
 
 
 # ---------------------------------------------------------------------- variation
-def yanmar_variation():
-    """The CoV of the net IMEP of the Yanmar fired cycles and their standardised deviations
-    (None where the data folder is absent: the committed CoV, normal deviations)."""
-    path = YANMAR / "fired-18Nm.txt"
+YANMAR_VD_M3 = np.pi * 0.086**2 / 4 * 0.075
+"""The Yanmar L100V's displacement [m³] (bore 86 mm, stroke 75 mm)."""
+
+
+def yanmar_net_imep(name="fired-18Nm.txt"):
+    """The net IMEP [Pa] of each cycle of a Yanmar L100V pressure file (``fired-18Nm.txt``
+    or ``motored.txt``), in the order recorded: ∮p·dV/V_d over 720° from the engine's
+    bore, stroke, rod and compression ratio; None where the data folder is absent."""
+    path = YANMAR / name
     if not path.is_file():
-        return {"cov": COMMITTED_COV, "z": None, "source": "committed figure (data folder absent)"}
+        return None
     d = np.loadtxt(path)
     th = np.deg2rad(d[:, 0])
     p = d[:, 1:] * 1e5
@@ -134,7 +139,15 @@ def yanmar_variation():
     area = np.pi * bore**2 / 4
     vd = area * stroke
     v = vd / (cr - 1) + area * (r * (1 - np.cos(th)) + rod - np.sqrt(rod**2 - (r * np.sin(th)) ** 2))
-    imep = np.trapezoid(p * np.gradient(v, th)[:, None], th, axis=0) / vd
+    return np.trapezoid(p * np.gradient(v, th)[:, None], th, axis=0) / vd
+
+
+def yanmar_variation():
+    """The CoV of the net IMEP of the Yanmar fired cycles and their standardised deviations
+    (None where the data folder is absent: the committed CoV, normal deviations)."""
+    imep = yanmar_net_imep("fired-18Nm.txt")
+    if imep is None:
+        return {"cov": COMMITTED_COV, "z": None, "source": "committed figure (data folder absent)"}
     z = (imep - imep.mean()) / imep.std(ddof=1)
     return {
         "cov": float(imep.std(ddof=1) / imep.mean()),
@@ -165,10 +178,13 @@ def misfire_pattern(rng, fk, count):
     return mis
 
 
-def simulate(n, rpm, load, cycles, wheel, variation, faults=False, seed=0, substeps=4):
+def simulate(n, rpm, load, cycles, wheel, variation, faults=False, seed=0, substeps=4, work_of=None):
     """Tooth times of a ``n``-cylinder four-stroke (see the module doc): (times [s], their
     nominal crank angles [rad], firing angles, firing (cycle, slot), misfire mask). Angles
-    as the monitor counts them: θ = wheel angle − TDC + 2π, cycle k from kΘ."""
+    as the monitor counts them: θ = wheel angle − TDC + 2π, cycle k from kΘ. ``work_of``:
+    where given, each firing's work [J] (any sign) is ``work_of(cycle, slot)`` (arrays of
+    the firings) in place of the drawn variation and misfires (the load is still set by
+    ``load``)."""
     rng = np.random.default_rng(seed)
     teeth, pos = wheel_layout(wheel)
     pitch = 2 * np.pi / teeth
@@ -198,6 +214,8 @@ def simulate(n, rpm, load, cycles, wheel, variation, faults=False, seed=0, subst
     work = work_mean * (1 + variation["cov"] * z).clip(0)
     mis = misfire_pattern(rng, fk, fire.size) if faults else np.zeros(fire.size, dtype=bool)
     work[mis] = 0.0
+    if work_of is not None:
+        work = np.asarray(work_of(fk, fj), dtype=np.float64)
     # gas torque on the fine grid: each firing's ½·W·sin over its expansion stroke (a
     # point lies within π after at most ⌈π / interval⌉ firings)
     mid = fine[:-1] + d / 2

@@ -13,8 +13,9 @@ One definition, one code path, for :class:`rotor.SpeedResult` (a simulated run) 
   cycle, by engine order (cycles per revolution): a trend left in would leak into every
   order, the half orders of a four-stroke first.
 
-Pure array code (numpy for numpy input, jax.numpy for JAX arrays and tracers, so that
-``jax.grad`` flows through); base layer: imports nothing from rotor but
+Pure array code (jax.numpy for tracers, so that ``jax.grad`` and ``jax.jit`` flow through;
+numpy for concrete arrays, JAX's included, where each operation would otherwise compile a
+program of its own for every new shape); base layer: imports nothing from rotor but
 :mod:`rotor.jaxconfig` (JAX with float64 on).
 """
 
@@ -31,9 +32,9 @@ from .jaxconfig import jax
 __all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "cycle_delta"]
 
 
-def _xp(*arrays: Any) -> Any:
-    """jax.numpy when any argument is a JAX array or tracer, else numpy."""
-    return jnp if any(isinstance(a, jax.Array) for a in arrays) else np
+def array_module(*arrays: Any) -> Any:
+    """jax.numpy when any argument is a tracer (inside ``jit``, ``grad``, ``vmap``), else numpy."""
+    return jnp if any(isinstance(a, jax.core.Tracer) for a in arrays) else np
 
 
 def cycle_slopes(mean_omega: ArrayLike, cycle_rad: float) -> Any:
@@ -44,7 +45,7 @@ def cycle_slopes(mean_omega: ArrayLike, cycle_rad: float) -> Any:
     (one-sided, second order, at the ends; the difference of the two for two cycles);
     zero for a single cycle.
     """
-    xp = _xp(mean_omega)
+    xp = array_module(mean_omega)
     m = xp.asarray(mean_omega, dtype=xp.float64)
     C = m.shape[0]
     if C < 2:
@@ -62,7 +63,7 @@ def cycle_slopes(mean_omega: ArrayLike, cycle_rad: float) -> Any:
 def cycle_ramp(slopes: ArrayLike, points: int, cycle_rad: float) -> Any:
     """The trend of each cycle on its uniform grid of ``points`` samples [rad/s], zero at
     mid-cycle: slope·(ψ − Θ/2), ψ = 0, Θ/points, …; shape (cycles, points)."""
-    xp = _xp(slopes)
+    xp = array_module(slopes)
     psi = xp.arange(points) * (cycle_rad / points)
     return xp.asarray(slopes)[:, None] * (psi[None, :] - cycle_rad / 2)
 
@@ -79,7 +80,7 @@ def cycle_spectrum(omega: ArrayLike, mean_omega: ArrayLike, cycle_rad: float) ->
     """The complex harmonics of each detrended cycle, X_k = 2/P·Σ ω·e^(−2πi·k·n/P), so that
     ω(ψ) ≈ X_0/2 + Σ |X_k|·cos(k·2πψ/Θ + arg X_k); shape (cycles, points//2 + 1).
     Harmonic k of a cycle of r revolutions is engine order k/r."""
-    xp = _xp(omega, mean_omega)
+    xp = array_module(omega, mean_omega)
     w = detrended_cycles(omega, mean_omega, cycle_rad)
     P = np.shape(w)[1]
     return xp.fft.rfft(w, axis=1) * (2.0 / P)
@@ -89,5 +90,5 @@ def cycle_delta(detrended_max: ArrayLike, detrended_min: ArrayLike, mean_omega: 
     """δ of each cycle, (ω_max − ω_min)/ω_mean [-], from the extremes of its detrended speed
     [rad/s] (:func:`detrended_cycles`, refined or rebuilt as the caller's sampling needs)
     and its time-mean speed [rad/s]."""
-    xp = _xp(detrended_max, detrended_min, mean_omega)
+    xp = array_module(detrended_max, detrended_min, mean_omega)
     return (xp.asarray(detrended_max) - xp.asarray(detrended_min)) / xp.asarray(mean_omega)

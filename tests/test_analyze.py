@@ -301,7 +301,7 @@ def test_real_tdc_from_the_peak_is_noted(tue):
     a = rotor.analyze_log(TUE / "full_load.txt", "60-2", columns=COLS)
     assert "peak" in a.tdc_method
     assert np.rad2deg(a.tdc_rad) - np.rad2deg(tue["full_load"][0].tdc_rad) > 20  # the combustion's lag
-    assert any("TDC is the pressure peak" in n and "--compression-ratio" in n for n in a.notes)
+    assert any("TDC is the pressure peak" in n and "compression_ratio=" in n for n in a.notes)
     assert "TDC is the pressure peak" in a.summary()
     assert not any("pressure peak" in n for n in tue["full_load"][0].notes)
 

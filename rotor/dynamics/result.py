@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..cycles import cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
+from ..cycles import array_module, cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 
@@ -207,9 +207,10 @@ def cycle_extremes(x: ArrayLike, slopes: ArrayLike, cycle_rad: float) -> tuple[A
 
 def _spectrum(x, slopes, cycle_rad):
     """:func:`rotor.cycles.cycle_spectrum` of the rows ``x`` with given trends ``slopes``."""
+    xp = array_module(x, slopes)
     P = x.shape[1]
-    w = x - cycle_ramp(jnp.asarray(slopes), P, cycle_rad)
-    return jnp.fft.rfft(w, axis=1) * (2.0 / P)
+    w = x - cycle_ramp(xp.asarray(slopes), P, cycle_rad)
+    return xp.fft.rfft(w, axis=1) * (2.0 / P)
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -344,7 +345,7 @@ class SpeedResult(Result):
 
     def _cycle_matrix(self, x: jnp.ndarray) -> jnp.ndarray:
         n = self.kept_cycles * self.points_per_cycle
-        return x[:n].reshape(self.kept_cycles, self.points_per_cycle)
+        return array_module(x).asarray(x)[:n].reshape(self.kept_cycles, self.points_per_cycle)
 
     def _need_cycles(self) -> None:
         if self.uniform_cycles < 1:
@@ -362,7 +363,7 @@ class SpeedResult(Result):
     def mean_omega(self) -> Array:
         """Time-mean speed over the whole run, angle travelled / time taken [rad/s]."""
         if self.kind == "steady":
-            return self.cycle_rad / jnp.asarray(self.period_s)
+            return self.cycle_rad / array_module(self.period_s).asarray(self.period_s)
         if self._streamed:
             cs = self.cycle_summary
             assert cs is not None
@@ -379,17 +380,19 @@ class SpeedResult(Result):
         """Time-mean speed of each complete cycle [rad/s], shape (cycles,)."""
         self._need_cycles()
         P = self.points_per_cycle
+        xp = array_module(self.t, self.omega, self.period_s)
         if self.kind == "steady":
-            return jnp.reshape(self.mean_omega, (1,))
+            return xp.reshape(self.mean_omega, (1,))
         if self.cycle_summary is not None and self._streamed:
-            return jnp.asarray(self.cycle_summary.mean_omega)
+            return xp.asarray(self.cycle_summary.mean_omega)
         n = self.uniform_cycles * P
-        t_start = self.t[:n:P]
-        if self.t.shape[0] > n:  # the sample that ends the last whole cycle
-            t_end = jnp.concatenate([t_start[1:], self.t[n : n + 1]])
+        t, omega = xp.asarray(self.t), xp.asarray(self.omega)
+        t_start = t[:n:P]
+        if t.shape[0] > n:  # the sample that ends the last whole cycle
+            t_end = xp.concatenate([t_start[1:], t[n : n + 1]])
         else:
-            last = self.t[n - 1] + (self.cycle_rad / P) / self.omega[n - 1]
-            t_end = jnp.concatenate([t_start[1:], jnp.reshape(last, (1,))])
+            last = t[n - 1] + (self.cycle_rad / P) / omega[n - 1]
+            t_end = xp.concatenate([t_start[1:], xp.reshape(last, (1,))])
         return self.cycle_rad / (t_end - t_start)
 
     @property
@@ -401,7 +404,7 @@ class SpeedResult(Result):
         has no trend: its classic δ."""
         self._need_cycles()
         if self.cycle_summary is not None and self._streamed:
-            return jnp.asarray(self.cycle_summary.delta)
+            return array_module(self.omega).asarray(self.cycle_summary.delta)
         mean = self.cycle_mean_omega
         slopes = cycle_slopes(mean, self.cycle_rad)
         hi, lo = _extremes(self._cycle_matrix(self.omega), slopes, self.cycle_rad, self.kind == "steady")
@@ -423,24 +426,24 @@ class SpeedResult(Result):
             cs = self.cycle_summary  # the refined extremes at the run's first highest and lowest sample
             hi = cs.range_max[int(np.argmax(cs.max_omega))]
             lo = cs.range_min[int(np.argmin(cs.min_omega))]
-            return (hi - lo) / jnp.mean(jnp.asarray(cs.mean_omega))
+            return (hi - lo) / np.mean(cs.mean_omega)
         hi, lo = _range(self._cycle_matrix(self.omega), self.kind == "steady")
-        mean = self.mean_omega if self.kind == "steady" else jnp.mean(self.cycle_mean_omega)
+        mean = self.mean_omega if self.kind == "steady" else array_module(self.omega).mean(self.cycle_mean_omega)
         return (hi - lo) / mean
 
     @property
     def min_rpm(self) -> Array:
         """Lowest sampled speed [rpm] (of every sample, kept or not)."""
         if self.cycle_summary is not None and self._streamed:
-            return jnp.asarray(self.cycle_summary.omega_min_all) * RPM_PER_RAD_S
-        return jnp.min(self.omega) * RPM_PER_RAD_S
+            return array_module(self.omega).asarray(self.cycle_summary.omega_min_all) * RPM_PER_RAD_S
+        return array_module(self.omega).min(self.omega) * RPM_PER_RAD_S
 
     @property
     def max_rpm(self) -> Array:
         """Highest sampled speed [rpm] (of every sample, kept or not)."""
         if self.cycle_summary is not None and self._streamed:
-            return jnp.asarray(self.cycle_summary.omega_max_all) * RPM_PER_RAD_S
-        return jnp.max(self.omega) * RPM_PER_RAD_S
+            return array_module(self.omega).asarray(self.cycle_summary.omega_max_all) * RPM_PER_RAD_S
+        return array_module(self.omega).max(self.omega) * RPM_PER_RAD_S
 
     def orders(self, cycle: int | str = -1, max_order: float = 12.0) -> Orders:
         """Amplitude and phase of the speed and engine-torque harmonics by engine order.
@@ -470,6 +473,7 @@ class SpeedResult(Result):
                 f"(cycles {first + 1} … {C}); give one of those, or run with a larger keep_cycles"
             )
         # each cycle detrended as in rotor.analyze_log (rotor.cycles): a run-up leaks into no order
+        xp = array_module(self.omega, self.torque)
         m = self._cycle_matrix(self.torque)
         if self.cycle_summary is not None and self._streamed:
             # the trends from the whole run's cycle means, as if every sample were there
@@ -480,11 +484,11 @@ class SpeedResult(Result):
             Ms = _spectrum(m, cycle_slopes(cs.mean_torque_Nm, self.cycle_rad)[first:], self.cycle_rad)
         else:
             Ws = cycle_spectrum(self._cycle_matrix(self.omega), self.cycle_mean_omega, self.cycle_rad)
-            Ms = cycle_spectrum(m, jnp.mean(m, axis=1), self.cycle_rad)
+            Ms = cycle_spectrum(m, xp.mean(m, axis=1), self.cycle_rad)
         k_max = min(int(np.floor(max_order * revs + 1e-9)), P // 2 - 1)
 
         def pick(spectra):
-            one = jnp.mean(spectra, axis=0) if index is None else spectra[index - first]
+            one = xp.mean(spectra, axis=0) if index is None else spectra[index - first]
             return one[1 : k_max + 1]
 
         W, M = pick(Ws), pick(Ms)
@@ -492,10 +496,10 @@ class SpeedResult(Result):
         for field, key, _ in TORQUE_PARTS:
             x = getattr(self, field)
             if x is not None and not self._streamed:
-                xm = self._cycle_matrix(jnp.asarray(x))
-                parts[key] = jnp.abs(pick(cycle_spectrum(xm, jnp.mean(xm, axis=1), self.cycle_rad)))
+                xm = self._cycle_matrix(x)
+                parts[key] = xp.abs(pick(cycle_spectrum(xm, xp.mean(xm, axis=1), self.cycle_rad)))
         k = np.arange(1, k_max + 1)
-        return Orders(k / revs, jnp.abs(W), jnp.angle(W), jnp.abs(M), jnp.angle(M), self.engine_name, **parts)
+        return Orders(k / revs, xp.abs(W), xp.angle(W), xp.abs(M), xp.angle(M), self.engine_name, **parts)
 
     # ------------------------------------------------------------------ people
     def to_json_dict(self, max_order: float = 6.0) -> dict:

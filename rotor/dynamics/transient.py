@@ -600,7 +600,7 @@ def _run_time_domain(plan: RunPlan, handover, omega0, extras: dict[str, Any]):
     keep = np.isfinite(ts_np)
     # an event on the last step saves that step's end twice: keep the later (located) state
     keep[:-1] &= ~(ts_np[:-1] == ts_np[1:])
-    ts, th, w, z = ts[keep], th[keep], w[keep], z[keep]
+    ts, th, w, z = (np.asarray(a)[keep] for a in (ts, th, w, z))  # on the host: no program per length
     stalled, stall_t, stall_th = False, None, None
     if plan.stop_at_stall and bool(mask[1]):
         stalled = True
