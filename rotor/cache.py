@@ -24,11 +24,24 @@ from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
-__all__ = ["MAX_BYTES", "apply_compilation_cache", "enable_compilation_cache", "submodules_on_demand"]
+__all__ = ["MAX_BYTES", "apply_compilation_cache", "enable_compilation_cache", "padded_size", "submodules_on_demand"]
 
 _OFF = ("0", "off", "no", "false", "")
 MAX_BYTES = 1 << 30
 """The size cap of the persistent compilation cache [bytes]."""
+
+
+def padded_size(n: int) -> int:
+    """The smallest of 1, 2, 3, 4, 6, 8, 12, 16, 24, … (2ᵏ and 3·2ᵏ) that holds ``n`` items.
+
+    A compiled program serves one shape: a batch padded to one of these sizes reuses the
+    program of every other batch of that size (a few programs over all record lengths), at
+    most a third more work than the exact size."""
+    if n < 1:
+        raise ValueError(f"n = {n!r}: a size of at least 1")
+    power = 1 << (n - 1).bit_length()  # the power of two ≥ n
+    return 3 * power // 4 if power >= 4 and 3 * power // 4 >= n else power
+
 
 _WANTED: list[tuple[str, float]] = []  # the cache asked for before JAX was imported (the last one)
 

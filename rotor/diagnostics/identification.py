@@ -85,6 +85,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import ArrayLike
 
+from ..cache import padded_size
 from ..dynamics.crank_train import (
     COL_COMBUSTION,
     COL_I,
@@ -842,21 +843,27 @@ def identify(
     pos, own, nscale = block_layout(work_L, work_R, offset_L, L)
     na = L if load_per == "cycle" else 1
     blocks = np.stack([omega[s0 : s0 + L] for s0 in starts])
+    # as many blocks as a standard size (the last repeated, its fits dropped): a record of
+    # another length reuses the compiled fit; each block's fit is its own, so nothing changes
+    blocks = np.concatenate([blocks, np.repeat(blocks[-1:], padded_size(nb) - nb, axis=0)])
     vh = float(engine.geometry.displacement_m3)
     a_ref = float(np.sum(comb)) * vh / float(engine.cycle_rad)  # the engine file's mean combustion torque
-    p, cov, res, steps, e_ref, ok = jax.device_get(
-        _fit_blocks(
-            bases,
-            jnp.asarray(blocks),
-            jnp.asarray(pos),
-            jnp.asarray(offset_L),
-            jnp.asarray(a_ref),
-            rtol,
-            nscale,
-            na,
-            max_steps,
-        )
-    )  # a_ref traced: a new combustion does not recompile
+    p, cov, res, steps, e_ref, ok = (
+        a[:nb]
+        for a in jax.device_get(
+            _fit_blocks(
+                bases,
+                jnp.asarray(blocks),
+                jnp.asarray(pos),
+                jnp.asarray(offset_L),
+                jnp.asarray(a_ref),
+                rtol,
+                nscale,
+                na,
+                max_steps,
+            )
+        )  # a_ref traced: a new combustion does not recompile
+    )
 
     scale, scale_std, load_a, load_sd, covs, ident, resid = _per_cycle(
         (p, cov, res), cores, starts, pos, own, na, a_ref, (C, P, n)

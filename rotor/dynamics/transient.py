@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
+from ..cache import padded_size
 from ..checks import arrays_only, check_size, concrete
 from ..cycles import cycle_delta, cycle_slopes
 from ..engine.friction import Friction
@@ -65,16 +66,19 @@ CYCLE_BYTES = 12 * 8  # memory per cycle of the per-cycle figures [bytes], plus 
 
 def chunk_cycles(method: str, cycles: int, steps_per_cycle: int = 0, nodes_per_cycle: int = 0) -> int:
     """Cycles per compiled call of a run of ``cycles`` cycles by ``method`` (``"closed"``,
-    ``"grid"`` or ``"angle"``): ``cycles`` itself for a short run, else a fixed chunk that
-    takes well under a second. ``steps_per_cycle``: RK4 steps per cycle (``"grid"``);
-    ``nodes_per_cycle``: table nodes per cycle (``"closed"``)."""
+    ``"grid"`` or ``"angle"``): a fixed chunk that takes well under a second, or for a
+    shorter run ``cycles`` itself (``"angle"``: an adaptive solve steps to the run's end) or
+    the standard size that holds it (:func:`rotor.cache.padded_size`; ``"closed"`` and
+    ``"grid"``, whose fixed steps past the end change nothing before it), so that runs of
+    other lengths reuse the compiled program. ``steps_per_cycle``: RK4 steps per cycle
+    (``"grid"``); ``nodes_per_cycle``: table nodes per cycle (``"closed"``)."""
     if method == "grid":
         per = CHUNK_GRID_STEPS // max(int(steps_per_cycle), 1)
     elif method == "closed":
         per = CHUNK_CLOSED_NODES // max(int(nodes_per_cycle), 1)
     else:
-        per = CHUNK_ANGLE_CYCLES
-    return int(min(max(per, 1), cycles))
+        return int(min(max(CHUNK_ANGLE_CYCLES, 1), cycles))
+    return int(min(max(per, 1), padded_size(cycles)))
 
 
 def _whole(name, value):
@@ -430,11 +434,12 @@ class _Chunks:
         """The scene of the chunk from cycle ``done`` and the chunk's start angle and first
         cycle in it: for a chunked run, the combustion scales of cycles done − 1 … done +
         size (clipped to the run) with the chunk starting one cycle in, so that the kernels
-        see the same shapes in every chunk of every run and compile once; else the whole
-        run's. Tells the progress bar which cycles the chunk covers."""
+        see the same shapes in every chunk of every run and compile once (a short closed-form
+        or grid run too: one chunk of the standard size, :func:`chunk_cycles`); else (a short
+        adaptive run) the whole run's. Tells the progress bar which cycles the chunk covers."""
         plan, cyc = self.plan, self.plan.train.cycle_rad
         self.bar.within(done, self.size)
-        if self.size >= plan.cycles:
+        if self.size >= plan.cycles and plan.method == "angle":
             return plan.scene, done * cyc, done
         rows = np.clip(np.arange(done - 1, done + self.size + 1), 0, plan.cycles - 1)
         return eqx.tree_at(lambda s: s.scales, plan.scene, plan.scene.scales[rows]), cyc, 1
