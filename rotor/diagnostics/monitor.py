@@ -147,11 +147,11 @@ HISTORY = 32
 OWN_HISTORY = 8
 """Firings of each cylinder in its own baseline (the median of its e)."""
 MIN_OWN = 3
+"""Firings of every cylinder before verdicts are given (the earlier firings wait for them)."""
 COMMON_OUTLIER = 5.0
 """Deviations below minus this many spreads (losses) are left out of the common deviation."""
 COMMON_DEAD = 1.0
 """The common deviation is taken off only beyond this many of its standard errors."""
-"""Firings of every cylinder before verdicts are given (the earlier firings wait for them)."""
 DEFAULT_THRESHOLD = 8.0
 """A misfire: index below minus this many baseline spreads."""
 DEFAULT_MIN_SPREAD = 2e-4
