@@ -153,6 +153,34 @@ def _free_compiled_code():
         gc.collect()
 
 
+def run_cli(capsys: pytest.CaptureFixture | None, *argv: object) -> tuple[int, str, str]:
+    """``rotor argv`` in the test's own process through :func:`rotor.cli.app.main`: (exit
+    status, standard output, standard error). Each argument is passed as ``str`` (paths and
+    numbers may be given as they are); a usage error argparse raises as ``SystemExit`` gives
+    its exit status. ``capsys`` is the test's fixture, whose buffers are read (and emptied);
+    ``None`` in a fixture wider than one test, where no ``capsys`` exists: the output is then
+    caught with ``contextlib.redirect_stdout``/``redirect_stderr``."""
+    import contextlib
+    import io
+
+    from rotor.cli.app import main
+
+    def call() -> int:
+        try:
+            return main([str(a) for a in argv])
+        except SystemExit as e:  # argparse's own usage errors, --help
+            return 0 if e.code is None else e.code
+
+    if capsys is not None:
+        rc = call()
+        out, err = capsys.readouterr()
+        return rc, out, err
+    out_buf, err_buf = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out_buf), contextlib.redirect_stderr(err_buf):
+        rc = call()
+    return rc, out_buf.getvalue(), err_buf.getvalue()
+
+
 @pytest.fixture(scope="session")
 def diesel():
     return rotor.load_engine("4chn15")

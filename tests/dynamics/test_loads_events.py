@@ -5,6 +5,7 @@ import json
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from conftest import run_cli
 
 import rotor
 from rotor.cli import main
@@ -185,11 +186,7 @@ def test_cli_errors_are_one_line(capsys, argv, pattern, tmp_path):
         path.write_text(src.replace("inertia_kgm2 = 10.2", "inertia_kgm2 = 0.01"))
         argv = [argv[0], str(path), *argv[2:]]
         pattern = "kinetic energy would reach zero"
-    try:
-        rc = main(argv)
-    except SystemExit as e:
-        rc = e.code
+    rc, _, err = run_cli(capsys, *argv)
     assert rc == (1 if solver_outcome else 2)
-    err = capsys.readouterr().err
     assert err.count("\n") == 1 and (solver_outcome or "error" in err)
     assert pattern in err
