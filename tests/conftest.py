@@ -31,7 +31,7 @@ settings.register_profile("fuzz", derandomize=False)
 settings.load_profile("fuzz" if os.environ.get("ROTOR_FUZZ", "").strip() not in ("", "0") else "deterministic")
 
 # The kept outputs of `rotor table` and `rotor info` (rotor/cli/kept.py) are off: every CLI
-# test computes what it checks; tests/test_cli_latency.py switches them on in a folder of its own.
+# test computes what it checks; tests/cli/test_cli_latency.py switches them on in a folder of its own.
 os.environ.setdefault("ROTOR_OUTPUT_CACHE", "off")
 
 
@@ -41,7 +41,7 @@ import rotor  # noqa: E402  (switches float64 on)
 
 # Switched on for the tests in this process too, not only once a CLI command has run in it:
 # most of the suite's time is XLA compiling rotor's kernels, and many modules (and both
-# xdist workers, the CLI subprocesses and the notebook kernels of tests/test_notebooks.py,
+# xdist workers, the CLI subprocesses and the notebook kernels of tests/project/test_notebooks.py,
 # which share the folder) compile the same ones. A kernel compiled once in the session is
 # read back instead of compiled again, also after _free_compiled_code below drops it.
 # ROTOR_COMPILATION_CACHE=off runs the suite without it.

@@ -279,7 +279,7 @@ SOLVER_VALUES = {
 }
 """The values of each option: those refused before any solver runs (a plausible value, or
 one a solver must try, would start a real run of several seconds); the rest are the
-hostile-table's (tests/test_hostile_cli.py)."""
+hostile-table's (tests/cli/test_hostile_cli.py)."""
 
 PENDING: dict[tuple[str, str], str] = {}
 """(option, value) pairs that find a bug in a file this suite's author does not own:

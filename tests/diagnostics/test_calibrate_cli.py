@@ -21,8 +21,8 @@ ROD_RATIO = float(ENGINE.geometry.stroke_m) / 2 / float(ENGINE.geometry.rod_leng
 @pytest.fixture(scope="module", autouse=True)
 def _compilation_cache():
     """The test session's own persistent compilation cache (conftest.py sets its folder; the
-    CLI switches it on anyway): this module and tests/test_tdc_from_speed.py /
-    tests/test_calibrate_cli.py compile the same steady state and identification, and the
+    CLI switches it on anyway): this module and tests/diagnostics/test_tdc_from_speed.py /
+    tests/diagnostics/test_calibrate_cli.py compile the same steady state and identification, and the
     second reuses the first's code after conftest drops the compiled executables."""
     rotor.enable_compilation_cache()
 
@@ -34,7 +34,7 @@ def recording(tmp_path_factory):
 
 
 def test_calibrate_writes_what_diagnose_reads(recording, capsys):
-    """With the sensor's gain (the no-gain default is rotor.calibrate's, tests/test_calibration.py):
+    """With the sensor's gain (the no-gain default is rotor.calibrate's, tests/diagnostics/test_calibration.py):
     that gain back, TDC from the pressure within 0.5° of the simulated 29.4°, the file written
     and read back; the text names TDC and the file."""
     path, folder = recording

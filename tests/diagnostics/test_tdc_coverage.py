@@ -27,7 +27,7 @@ DATA = SHARED_DATA / "tue-4gb10"
 @pytest.fixture(scope="module", autouse=True)
 def _compilation_cache():
     """The test session's persistent compilation cache (conftest.py sets its folder): the
-    steady states compiled here are those of tests/test_tdc_from_speed.py."""
+    steady states compiled here are those of tests/diagnostics/test_tdc_from_speed.py."""
     rotor.enable_compilation_cache()
 
 
