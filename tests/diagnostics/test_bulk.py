@@ -16,7 +16,7 @@ import pytest
 from conftest import run_cli
 
 import rotor
-from rotor.cli import app, main
+from rotor.cli import app
 from rotor.cli.logs import FileOutput, for_each_log
 from rotor.diagnostics.bulk import analyze_many, diagnose_many, expand_logs, is_pattern
 from rotor.diagnostics.synthetic import simulated_recording
@@ -45,26 +45,11 @@ def separate(logs):
     _, paths, _ = logs
     out = []
     for p in paths:
-        with _Capture() as cap:
-            assert main(["diagnose", p, *DIAGNOSE]) == 0
-        assert cap.out.startswith("{\n")  # one indented JSON object, as before
-        out.append(json.loads(cap.out))
+        rc, text, err = run_cli(None, "diagnose", p, *DIAGNOSE)
+        assert rc == 0, err
+        assert text.startswith("{\n")  # one indented JSON object, as before
+        out.append(json.loads(text))
     return out
-
-
-class _Capture:
-    """stdout and stderr of a block (module fixtures cannot use capsys)."""
-
-    def __enter__(self):
-        import io
-
-        self.old = sys.stdout, sys.stderr
-        sys.stdout, sys.stderr = io.StringIO(), io.StringIO()
-        return self
-
-    def __exit__(self, *exc):
-        self.out, self.err = sys.stdout.getvalue(), sys.stderr.getvalue()
-        sys.stdout, sys.stderr = self.old
 
 
 def _same(a, b, path="result"):

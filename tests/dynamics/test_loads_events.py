@@ -8,7 +8,6 @@ import pytest
 from conftest import run_cli
 
 import rotor
-from rotor.cli import main
 from rotor.units import RPM_PER_RAD_S as RPM
 
 
@@ -139,8 +138,9 @@ def test_misfire_changes_speed_only_after_its_firing(diesel):
 
 # ----------------------------------------------------------------------------- command line
 def _json(capsys, argv):
-    assert main(argv) == 0
-    return json.loads(capsys.readouterr().out)
+    rc, out, err = run_cli(capsys, *argv)
+    assert rc == 0, err
+    return json.loads(out)
 
 
 def test_cli_steady_json(capsys):
