@@ -42,12 +42,12 @@ test: lint docs-build
 # the property and fuzz tests with new random draws (tests/conftest.py); what they find
 # becomes an explicit example in the test
 fuzz: $(STAMP)
-	ROTOR_FUZZ=1 $(PY) -m pytest -q -n 2 -p no:cacheprovider tests/test_fuzz.py tests/test_properties.py
+	ROTOR_FUZZ=1 $(PY) -m pytest -q -n 2 -p no:cacheprovider tests/cli/test_fuzz.py tests/dynamics/test_properties.py
 
 # the wheel installs in a clean virtualenv (its dependencies from the package index) and
 # runs `rotor demo` there (about a minute)
 wheel-check: $(STAMP)
-	ROTOR_WHEEL_CHECK=1 $(PY) -m pytest -q -p no:cacheprovider tests/test_packaging.py
+	ROTOR_WHEEL_CHECK=1 $(PY) -m pytest -q -p no:cacheprovider tests/project/test_packaging.py
 
 # re-execute the notebooks in their full form and save their outputs (a few minutes)
 notebooks: $(STAMP)

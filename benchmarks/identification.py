@@ -60,7 +60,7 @@ def tooth_times(t_of_theta, lo, hi, gap, rng, jitter_s=20e-9):
 
 
 def calibration():
-    """The wheel's errors from a bare-wheel coast-down 3000 → 500 rpm (as tests/test_analyze_roundtrip.py)."""
+    """The wheel's errors from a bare-wheel coast-down 3000 → 500 rpm (as tests/logs/test_analyze_roundtrip.py)."""
     edges = synthetic_wheel.coast_down_edges(20e-9)
     return rotor.estimate_tooth_errors(rotor.locate_teeth(edges, WHEEL), engine_orders=())
 

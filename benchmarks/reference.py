@@ -3,7 +3,7 @@
 The right-hand side evaluates I(θ) (``rotor.reduced_inertia``) and the gas torque from the
 pressure source and the exact piston kinematics at every call — not the simulator's
 tables, not diffrax. The angle-domain energy form dE/dθ = M_gas(θ) − c·ω², dt/dθ = 1/ω
-is integrated from θ = 0 with ω = rpm. Used by ``tests/test_dynamics.py`` and by
+is integrated from θ = 0 with ω = rpm. Used by ``tests/dynamics/test_dynamics.py`` and by
 ``benchmarks/simulator_accuracy.py``.
 """
 

@@ -8,7 +8,7 @@ tooth-spacing errors (rotor.logs.synthetic). Each is read with ``wheel="auto"`` 
 reading is right where it names the wheel and its δ is within 1 % of the δ read with that wheel
 and the documented edge given (the signal's own edge; for a Hall sensor's weak tooth, a narrow
 pulse both of whose edges move, the edge rotor took). The suite runs every fifth row
-(tests/test_signal_reading.py).
+(tests/logs/test_signal_reading.py).
 
     .venv/bin/python benchmarks/signal_matrix.py      # 432 readings, about 2 min
 

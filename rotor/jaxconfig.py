@@ -1,6 +1,6 @@
 """JAX as rotor computes with it: every module of rotor that imports JAX imports this one
 too, directly or through another (:mod:`rotor.checks`, :mod:`rotor.cycles`;
-``tests/test_architecture.py`` checks), before it computes anything.
+``tests/project/test_architecture.py`` checks), before it computes anything.
 
 Importing it switches on JAX's float64 (``jax_enable_x64``, process-wide), which rotor's
 numerics need, and applies the persistent compilation cache that

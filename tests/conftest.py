@@ -31,7 +31,7 @@ settings.register_profile("fuzz", derandomize=False)
 settings.load_profile("fuzz" if os.environ.get("ROTOR_FUZZ", "").strip() not in ("", "0") else "deterministic")
 
 # The kept outputs of `rotor table` and `rotor info` (rotor/cli/kept.py) are off: every CLI
-# test computes what it checks; tests/test_cli_latency.py switches them on in a folder of its own.
+# test computes what it checks; tests/cli/test_cli_latency.py switches them on in a folder of its own.
 os.environ.setdefault("ROTOR_OUTPUT_CACHE", "off")
 
 
@@ -41,7 +41,7 @@ import rotor  # noqa: E402  (switches float64 on)
 
 # Switched on for the tests in this process too, not only once a CLI command has run in it:
 # most of the suite's time is XLA compiling rotor's kernels, and many modules (and both
-# xdist workers, the CLI subprocesses and the notebook kernels of tests/test_notebooks.py,
+# xdist workers, the CLI subprocesses and the notebook kernels of tests/project/test_notebooks.py,
 # which share the folder) compile the same ones. A kernel compiled once in the session is
 # read back instead of compiled again, also after _free_compiled_code below drops it.
 # ROTOR_COMPILATION_CACHE=off runs the suite without it.
@@ -151,6 +151,34 @@ def _free_compiled_code():
     if used > MAPS_HIGH * limit:
         jax.clear_caches()
         gc.collect()
+
+
+def run_cli(capsys: pytest.CaptureFixture | None, *argv: object) -> tuple[int, str, str]:
+    """``rotor argv`` in the test's own process through :func:`rotor.cli.app.main`: (exit
+    status, standard output, standard error). Each argument is passed as ``str`` (paths and
+    numbers may be given as they are); a usage error argparse raises as ``SystemExit`` gives
+    its exit status. ``capsys`` is the test's fixture, whose buffers are read (and emptied);
+    ``None`` in a fixture wider than one test, where no ``capsys`` exists: the output is then
+    caught with ``contextlib.redirect_stdout``/``redirect_stderr``."""
+    import contextlib
+    import io
+
+    from rotor.cli.app import main
+
+    def call() -> int:
+        try:
+            return main([str(a) for a in argv])
+        except SystemExit as e:  # argparse's own usage errors, --help
+            return 0 if e.code is None else e.code
+
+    if capsys is not None:
+        rc = call()
+        out, err = capsys.readouterr()
+        return rc, out, err
+    out_buf, err_buf = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out_buf), contextlib.redirect_stderr(err_buf):
+        rc = call()
+    return rc, out_buf.getvalue(), err_buf.getvalue()
 
 
 @pytest.fixture(scope="session")

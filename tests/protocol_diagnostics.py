@@ -1,5 +1,5 @@
 """Factories of the diagnostics subpackage's results for the protocol test
-(tests/test_result_protocol.py): the simulated recording of ``protocol_logs``, identified,
+(tests/project/test_result_protocol.py): the simulated recording of ``protocol_logs``, identified,
 calibrated and diagnosed; inverse dynamics of a short simulated run."""
 
 import functools

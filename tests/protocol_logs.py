@@ -1,4 +1,4 @@
-"""Factories of the logs subpackage's results for the protocol test (tests/test_result_protocol.py):
+"""Factories of the logs subpackage's results for the protocol test (tests/project/test_result_protocol.py):
 a simulated bench recording of a few cycles, analysed."""
 
 import functools

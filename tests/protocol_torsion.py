@@ -1,4 +1,4 @@
-"""Result types of the torsion subpackage for the protocol test (``tests/test_result_protocol.py``)."""
+"""Result types of the torsion subpackage for the protocol test (``tests/project/test_result_protocol.py``)."""
 
 import functools
 

@@ -2,7 +2,7 @@
 
 Each subpackage keeps the factories of its result types in ``tests/protocol_<subpackage>.py`` as
 ``FACTORIES = {"ClassName": callable returning an instance, ...}``;
-``tests/test_result_protocol.py`` runs :func:`check_result_protocol` on every one and
+``tests/project/test_result_protocol.py`` runs :func:`check_result_protocol` on every one and
 checks that every subclass of :class:`rotor.results.Result` has a factory."""
 
 import json

@@ -29,7 +29,9 @@ from collections.abc import Sequence
 
 from ..errors import InternalError, RotorError, SolverError
 from ..fileio import INTERRUPT
-from . import demo, design, diagnostics, engine, logs, monitor, report, run, torsion  # light: see test_cli_latency.py
+
+# light: see tests/cli/test_cli_latency.py
+from . import demo, design, diagnostics, engine, logs, monitor, report, run, torsion
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
 
 __all__ = ["COMMAND_GROUPS", "build_parser", "check_outputs", "main", "report_error", "warning_line"]

@@ -126,7 +126,7 @@ def cmd_plot(args: argparse.Namespace) -> None:
 def preset_listing() -> dict[str, str]:
     """{preset name: engine name} of the built-in engines, read from their TOML files
     without building the engines (that would import JAX: ``rotor presets`` needs none;
-    tests/test_cli_latency.py checks the names against :func:`rotor.load_engine`)."""
+    tests/cli/test_cli_latency.py checks the names against :func:`rotor.load_engine`)."""
     import tomllib
     from importlib import resources
 

@@ -283,7 +283,7 @@ def _print_one(args: argparse.Namespace, log: str, out: FileOutput) -> None:
 def _error_line(e: Exception) -> tuple[int, str]:
     """The exit status and the one line ``rotor`` reports for ``e`` (``rotor: error: …``):
     the classification of :func:`rotor.cli.app.report_error` (which this module cannot
-    import: app imports it), for one file among several; ``tests/test_bulk.py`` holds the
+    import: app imports it), for one file among several; ``tests/diagnostics/test_bulk.py`` holds the
     two to the same answers."""
     import traceback
 

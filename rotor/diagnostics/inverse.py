@@ -545,7 +545,7 @@ def indicated_torque(
     **Accuracy:** with the simulation's own load and friction the torque is exact but for
     the derivative's error: on a 6-cycle 4chn15 run-up sampled every 1°, within 0.28 N·m
     (6e-5 of the 4.7 kN·m peak), the first and last cycles included; 0.075 N·m at 0.5°
-    (``tests/test_inverse.py``). Noise in ω is amplified by the order ν in dω/dθ: 1e-4
+    (``tests/diagnostics/test_inverse.py``). Noise in ω is amplified by the order ν in dω/dθ: 1e-4
     white noise at 1° gives 1.8 kN·m rms unregularised, 45 N·m keeping orders ≤ 12.
     """
     omega, end, t, t0, periodic = _speed_input(engine, speed, cycle_rad, t_start_s, periodic)

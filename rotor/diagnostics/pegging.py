@@ -33,7 +33,7 @@ have it; a real engine closes its intake 30–60° after BDC, with the charge ne
 manifold pressure there, so the window fitted (:data:`WINDOW_DEG`, before TDC) starts
 later and the polytrope is anchored at BDC. On simulated recordings (the engine file's
 single-zone cycle, the bench sensor's noise, two motored cycles) the gain came back within
-0.0–0.7 % (``tests/test_calibrate_cli.py`` holds 1 %): the recorded angle of each pressure
+0.0–0.7 % (``tests/diagnostics/test_calibrate_cli.py`` holds 1 %): the recorded angle of each pressure
 sample, read off the wheel, leaves the compression about 0.7 % low at the angles the
 engine's TDC puts it, the limit of this pegging rather than its noise.
 """

@@ -54,14 +54,14 @@ dynamics of the IC engine", IEEE Trans. Vehicular Technology, 1989):
 
 **Accuracy** (``benchmarks/tdc_from_speed.py``: simulated tue-single recordings at
 3000 rpm through a 60-2 wheel, the wheel's gap moved 0/30/90/180°, steady, with an
-ignition cut or coasting down, tooth times or the raw analog signal; ``tests/test_tdc_from_speed.py``
+ignition cut or coasting down, tooth times or the raw analog signal; ``tests/diagnostics/test_tdc_from_speed.py``
 holds its records under 1°): worst 0.6° steady, 0.4° coasting down, 1.2° with an ignition
 cut of two cycles (the cut's transient is not the steady signature).
 
 **Is the σ honest** (``benchmarks/tdc_coverage.py``, 240 simulated records over the four
 presets, 0.45–1.3 times their speed, loads 0.25–1, cycle-to-cycle variation, 20 ns–1 µs
 of timer jitter, tooth errors 0–0.3°, the wheels 60-2, 60-1, 36-1 and 36-2-1;
-``tests/test_tdc_coverage.py`` holds a smaller matrix to a binomial bound): see the table
+``tests/diagnostics/test_tdc_coverage.py`` holds a smaller matrix to a binomial bound): see the table
 in ``benchmarks/README.md``. The real single-cylinder bench recordings (speed only, against the
 pressure channel's polytropic-fit TDC of 29.4°, 30.7°, 28.9°): the speed puts TDC 7°
 later at full load, 11° at half load and 19° at no load (R² 0.97 / 0.94 / 0.80): the

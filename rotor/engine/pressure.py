@@ -398,7 +398,7 @@ class _WiebeBurn(eqx.Module):
         for a fractional m). The panels of a composite Gauss–Legendre rule on [s_lo, S]
         (a·S^(3m+3) = 40: e^(−40) of the charge is left) are summed once and each φ adds the
         part of its own panel, so a point costs ``nodes`` evaluations. Within 1e-9 of the heat
-        released (``tests/test_pressure.py`` checks it against an adaptive quadrature)."""
+        released (``tests/engine/test_pressure.py`` checks it against an adaptive quadrature)."""
         k = 3.0 * (self.m + 1)
 
         def s_of(x):  # cube root with a finite derivative before the burn (no inf·0)

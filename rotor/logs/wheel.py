@@ -748,7 +748,7 @@ def estimate_tooth_errors(
       varying reduced inertia I(θ) (reciprocating masses), which does not die with speed
       and would otherwise be taken for the wheel's, is removed first. This makes the
       engine's own fuel-cut coast-down a wheel calibration (4chn15: 0.29° wrong without,
-      0.01° with; ``tests/test_wheel_inertia.py``).
+      0.01° with; ``tests/logs/test_wheel_inertia.py``).
 
     **Returns:** :class:`ToothErrors`.
     """

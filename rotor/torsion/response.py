@@ -27,7 +27,7 @@ own grid (the flywheel's ω(φ) compares node by node with :func:`rotor.steady_s
 a trigger wheel samples the speed by angle too), and vmaps over speeds with a fixed
 problem size.
 
-**Accuracy** (``tests/test_torsion_response.py``; MWM six at 1500 and 2200 rpm, 0.25°
+**Accuracy** (``tests/torsion/test_torsion_response.py``; MWM six at 1500 and 2200 rpm, 0.25°
 grid): its chain with 10⁶ times stiffer shafts and no damping gives the rigid steady state's
 δ to 4e-9, the load torque to 1e-14 and, at the flywheel, ω(θ) to 3e-9 and every speed
 order to 1e-9 of the mean speed (at the damper, the other end, 4e-8 and 1e-8: the shafts'
@@ -46,7 +46,7 @@ derivatives of the periodic state come from the implicit function theorem
 (its transpose in reverse mode) on the right-hand side scaled to unit size (``ADJOINT_SOLVER``).
 The flywheel's mean-square speed fluctuation differentiated by ``jax.grad`` with respect to the
 six combustion scales and the eight stiffnesses agrees with central differences to 1e-10 of
-the largest derivative (``tests/test_torsion_response.py``).
+the largest derivative (``tests/torsion/test_torsion_response.py``).
 
 **Cost** (2-core CPU, after compile; the first call compiles for about 20 s, the cylinder
 tables included): one response of the nine-mass MWM chain in about 1–2 s on the 0.25° grid

@@ -6,19 +6,11 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 import rotor
 from rotor import cli
 from rotor.dynamics.operating import FuelScaleWarning, check_fuel_scale
-
-
-def run_cli(capsys, *argv):
-    try:
-        code = cli.main(list(argv))
-    except SystemExit as e:  # a usage error found by the parser
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 # ----------------------------------------------------------------------------- the load and the fuel scale

@@ -6,9 +6,8 @@ import io
 
 import numpy as np
 import pytest
-from conftest import DATA
+from conftest import DATA, run_cli
 
-from rotor.cli import main
 from rotor.units import RAD_S_PER_RPM
 
 TOL = 0.005  # of each column's largest magnitude, as the issue asks
@@ -22,12 +21,8 @@ def _read(name):
 
 @pytest.fixture(scope="module")
 def table():
-    import contextlib
-
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        assert main(["table", "4chn15", "--step", "10", "--format", "csv"]) == 0
-    text = buf.getvalue()
+    rc, text, err = run_cli(None, "table", "4chn15", "--step", "10", "--format", "csv")
+    assert rc == 0, err
     header = text.splitlines()[0]
     assert header == "angle_deg,s_m,v_m_s,j_m_s2,pg_N,pj_N,psum_N,n_N,k_N,z_N,t_N,m_Nm"
     rows = list(csv.DictReader(io.StringIO(text)))

@@ -18,12 +18,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rotor.cli import app
-
-PRESETS = Path(__file__).resolve().parents[1] / "rotor" / "presets"
+PRESETS = ROOT / "rotor" / "presets"
 FUZZ = settings(
     max_examples=25,
     deadline=None,
@@ -69,11 +68,7 @@ def small_memory_budget(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def check(capsys: pytest.CaptureFixture, argv: list[str]) -> int:
     """Run ``rotor argv`` in-process and assert the property; the exit status."""
-    try:
-        rc = app.main(argv)
-    except SystemExit as e:  # argparse's usage errors
-        rc = int(e.code or 0)
-    out, err = capsys.readouterr()
+    rc, out, err = run_cli(capsys, *argv)
     where = f"rotor {' '.join(argv)!r}: exit {rc}\n{err[-3000:]}"
     assert rc in (0, 1, 2), where
     assert "Traceback" not in err and "internal error" not in err, where
@@ -284,7 +279,7 @@ SOLVER_VALUES = {
 }
 """The values of each option: those refused before any solver runs (a plausible value, or
 one a solver must try, would start a real run of several seconds); the rest are the
-hostile-table's (tests/test_hostile_cli.py)."""
+hostile-table's (tests/cli/test_hostile_cli.py)."""
 
 PENDING: dict[tuple[str, str], str] = {}
 """(option, value) pairs that find a bug in a file this suite's author does not own:

@@ -5,19 +5,10 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 import rotor
-from rotor import cli
 from rotor.diagnostics.record import record_run, stated_phase
-
-
-def run_cli(capsys, *argv):
-    try:
-        code = cli.main(list(argv))
-    except SystemExit as e:
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_simulate_record_then_diagnose_gives_the_misfire_back(tmp_path, capsys):

@@ -4,7 +4,7 @@ Simulated runs (rotor.simulate) of the 4-cylinder 4chn15 and the 6-cylinder mwm6
 ±10 % IMEP spread between cylinders and misfires, turned into the tooth timestamps of a
 60-2 wheel with ±0.2° tooth-spacing errors and 20 ns of timer jitter, analysed back
 (rotor.analyze_log with the wheel's errors from a coast-down calibration, as in
-test_analyze_roundtrip.py) and identified (rotor.identify). IMEP errors are per cylinder
+tests/logs/test_analyze_roundtrip.py) and identified (rotor.identify). IMEP errors are per cylinder
 and firing, relative to the cylinder's nominal (the engine file's full-load) IMEP.
 Loads: 100 % and 20 % (the combustion scaled to 0.2 of the engine file's, the load torque
 balancing it at the steady speed).

@@ -8,9 +8,9 @@ import json
 
 import matplotlib.pyplot as plt
 import pytest
+from conftest import run_cli
 
 import rotor
-from rotor.cli import main
 from rotor.diagnostics.pegging import motored_cycles, pressure_gain_from_motored
 from rotor.diagnostics.synthetic import BENCH_GAIN_PA_PER_V, BENCH_OFFSET_V, DEFAULT_GAP_DEG, simulated_recording
 
@@ -21,19 +21,10 @@ ROD_RATIO = float(ENGINE.geometry.stroke_m) / 2 / float(ENGINE.geometry.rod_leng
 @pytest.fixture(scope="module", autouse=True)
 def _compilation_cache():
     """The test session's own persistent compilation cache (conftest.py sets its folder; the
-    CLI switches it on anyway): this module and tests/test_tdc_from_speed.py /
-    tests/test_calibrate_cli.py compile the same steady state and identification, and the
+    CLI switches it on anyway): this module and tests/diagnostics/test_tdc_from_speed.py /
+    tests/diagnostics/test_calibrate_cli.py compile the same steady state and identification, and the
     second reuses the first's code after conftest drops the compiled executables."""
     rotor.enable_compilation_cache()
-
-
-def _run(capsys, *argv):
-    try:
-        rc = main(list(argv))
-    except SystemExit as e:  # argparse's usage errors
-        rc = e.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @pytest.fixture(scope="module")
@@ -43,12 +34,12 @@ def recording(tmp_path_factory):
 
 
 def test_calibrate_writes_what_diagnose_reads(recording, capsys):
-    """With the sensor's gain (the no-gain default is rotor.calibrate's, tests/test_calibration.py):
+    """With the sensor's gain (the no-gain default is rotor.calibrate's, tests/diagnostics/test_calibration.py):
     that gain back, TDC from the pressure within 0.5° of the simulated 29.4°, the file written
     and read back; the text names TDC and the file."""
     path, folder = recording
     out_file = folder / "cal.json"
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "calibrate",
         str(path),
@@ -95,7 +86,7 @@ def test_calibrate_errors_are_one_line(recording, tmp_path, capsys):
         (["calibrate", str(path), "--engine", "mwm6", "--wheel", "60-2"], "cylinders"),
     ]
     for argv, needle in cases:
-        rc, out, err = _run(capsys, *argv)
+        rc, out, err = run_cli(capsys, *argv)
         assert rc == 2, (argv, err)
         assert err.count("\n") == 1 and needle in err, (argv, err)
 
@@ -126,7 +117,7 @@ def test_the_pressure_gain_from_a_motored_stretch(motored, recording, capsys):
     ax = gain.plot()
     assert len(ax.lines) == 2 and "motored" in ax.get_title()
     plt.close(ax.figure)
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "calibrate",
         str(motored),
@@ -146,7 +137,7 @@ def test_the_pressure_gain_from_a_motored_stretch(motored, recording, capsys):
     assert -d["pressure_offset_pa"] / d["pressure_gain_pa"] == pytest.approx(BENCH_OFFSET_V, abs=0.002)
     assert d["fit"]["motored"]["r2"] > 0.999
     path, _ = recording
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "calibrate",
         str(path),

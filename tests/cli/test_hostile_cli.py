@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT, run_cli
 
 from rotor.cli import app
 from rotor.cli.output import csv_text, json_text, print_json
@@ -26,7 +27,6 @@ from rotor.errors import EngineError, InternalError, LogError, SolverError
 from rotor.fileio import atomic_path, find_nonfinite, load_json, save_json, write_text_atomic
 from rotor.results import json_safe
 
-ROOT = Path(__file__).resolve().parents[1]
 TWO_PI = 2 * np.pi
 
 
@@ -62,16 +62,6 @@ def places(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
         "bad_web": str(bad_web),
         "bad_journals": str(bad_journals),
     }
-
-
-def run(capsys: pytest.CaptureFixture, argv: list[str]) -> tuple[int, str, str]:
-    """``rotor argv`` in-process: (exit status, stdout, stderr)."""
-    try:
-        rc = app.main(argv)
-    except SystemExit as e:  # argparse's own usage errors
-        rc = int(e.code or 0)
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def assert_contract(rc: int, out: str, err: str, argv: list[str]) -> None:
@@ -274,7 +264,7 @@ def test_hostile_case_is_one_line_with_its_exit_status(
     argv: list[str], code: int, fragment: str, places: dict[str, str], capsys: pytest.CaptureFixture
 ) -> None:
     argv = [_fill(a, places) for a in argv]
-    rc, out, err = run(capsys, argv)
+    rc, out, err = run_cli(capsys, *argv)
     assert_contract(rc, out, err, argv)
     assert rc == code, f"rotor {' '.join(argv)}: exit {rc}, expected {code}\n{err}"
     assert _fill(fragment, places) in err, err
@@ -343,12 +333,12 @@ def test_every_exception_is_one_line_with_its_exit_status(
     from rotor.cli import engine as cli_engine
 
     monkeypatch.setattr(cli_engine, "cmd_presets", _raising(exc))
-    rc, out, err = run(capsys, ["presets"])
+    rc, out, err = run_cli(capsys, "presets")
     assert rc == code and fragment in err, (rc, err)
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
     if code == 70:
         assert "(run again with --debug for the traceback; please report it)" in err
-    rc, out, err = run(capsys, ["--debug", "presets"])  # the traceback, then the same line
+    rc, out, err = run_cli(capsys, "--debug", "presets")  # the traceback, then the same line
     assert rc == code and fragment in err
     if code not in (0,):
         assert "Traceback (most recent call last)" in err
@@ -365,7 +355,7 @@ def test_foreign_errors_are_internal_errors(
 
     exc = make()
     monkeypatch.setattr(cli_engine, "cmd_presets", _raising(exc))
-    rc, out, err = run(capsys, ["presets"])
+    rc, out, err = run_cli(capsys, "presets")
     assert rc == 70, err
     assert err.startswith(f"rotor: internal error: this is a bug in rotor: {type(exc).__name__}: ")
     assert len(err.strip().splitlines()) == 1 and len(err) < 700, err
@@ -375,7 +365,7 @@ def test_closed_pipe_exits_0_silently(monkeypatch: pytest.MonkeyPatch, capsys: p
     from rotor.cli import engine as cli_engine
 
     monkeypatch.setattr(cli_engine, "cmd_presets", _raising(BrokenPipeError(32, "Broken pipe")))
-    assert run(capsys, ["presets"])[::2] == (0, "")
+    assert run_cli(capsys, "presets")[::2] == (0, "")
 
 
 def test_exit_statuses_are_documented() -> None:
@@ -413,7 +403,7 @@ def test_a_nan_in_a_result_is_an_internal_error_at_the_command_line(
     from rotor.cli import engine as cli_engine
 
     monkeypatch.setattr(cli_engine, "cmd_presets", lambda args: print_json({"mean_rpm": math.nan}))
-    rc, out, err = run(capsys, ["presets"])
+    rc, out, err = run_cli(capsys, "presets")
     assert rc == 70 and out == ""
     assert 'the result\'s "mean_rpm" is NaN' in err and "Out of range float" not in err
 
@@ -430,7 +420,7 @@ def test_table_csv_goes_through_the_writer(capsys: pytest.CaptureFixture) -> Non
     from rotor.engine.file import load_engine
     from rotor.engine.table import crank_table
 
-    rc, out, err = run(capsys, ["table", "4chn15", "--format", "csv", "--step", "30"])
+    rc, out, err = run_cli(capsys, "table", "4chn15", "--format", "csv", "--step", "30")
     assert rc == 0 and out == crank_table(load_engine("4chn15"), step_deg=30.0).to_csv()
 
 

@@ -5,9 +5,9 @@ import json
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from conftest import run_cli
 
 import rotor
-from rotor.cli import main
 from rotor.units import RPM_PER_RAD_S as RPM
 
 
@@ -138,8 +138,9 @@ def test_misfire_changes_speed_only_after_its_firing(diesel):
 
 # ----------------------------------------------------------------------------- command line
 def _json(capsys, argv):
-    assert main(argv) == 0
-    return json.loads(capsys.readouterr().out)
+    rc, out, err = run_cli(capsys, *argv)
+    assert rc == 0, err
+    return json.loads(out)
 
 
 def test_cli_steady_json(capsys):
@@ -185,11 +186,7 @@ def test_cli_errors_are_one_line(capsys, argv, pattern, tmp_path):
         path.write_text(src.replace("inertia_kgm2 = 10.2", "inertia_kgm2 = 0.01"))
         argv = [argv[0], str(path), *argv[2:]]
         pattern = "kinetic energy would reach zero"
-    try:
-        rc = main(argv)
-    except SystemExit as e:
-        rc = e.code
+    rc, _, err = run_cli(capsys, *argv)
     assert rc == (1 if solver_outcome else 2)
-    err = capsys.readouterr().err
     assert err.count("\n") == 1 and (solver_outcome or "error" in err)
     assert pattern in err

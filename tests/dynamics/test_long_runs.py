@@ -14,17 +14,15 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT, run_cli
 from kernel_traces import kernel_traces
 
 import rotor
 from rotor.cli import main as cli_main
 from rotor.dynamics.transient import chunk_cycles
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="module")
@@ -170,12 +168,9 @@ def test_cli_keeps_the_last_cycles_and_refuses_in_one_line(capsys, monkeypatch):
     assert out["cycles"] == 120 and out["kept_cycles"] == 3 and out["delta_max_cycle"] >= 1
     monkeypatch.setenv("ROTOR_MEMORY_LIMIT_GB", "1")
     for argv in (["--cycles", "1000000000000"], ["--steps-per-cycle", "720000000", "--method", "grid"]):
-        try:
-            code = cli_main(["simulate", "4chn15", *argv])
-        except SystemExit as e:
-            code = e.code
+        code, _, err = run_cli(capsys, "simulate", "4chn15", *argv)
         assert code == 2
-        err = capsys.readouterr().err.strip()
+        err = err.strip()
         assert len(err.splitlines()) == 1 and "GB" in err and "Traceback" not in err
 
 

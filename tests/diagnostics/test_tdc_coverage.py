@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 from types import SimpleNamespace
 
 import equinox as eqx
 import numpy as np
 import pytest
+from conftest import SHARED_DATA
 
 import rotor
 from rotor.diagnostics.phase import AGREE_SIGMA, TdcVerdict, check_tdc, tdc_from_speed
@@ -21,13 +21,13 @@ from rotor.diagnostics.synthetic import simulated_tooth_times
 
 PRESETS = ("tue-single", "4chn15", "mwm6", "v8")
 WHEELS = ("60-2", "36-1", "60-1")
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "tue-4gb10"
+DATA = SHARED_DATA / "tue-4gb10"
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _compilation_cache():
     """The test session's persistent compilation cache (conftest.py sets its folder): the
-    steady states compiled here are those of tests/test_tdc_from_speed.py."""
+    steady states compiled here are those of tests/diagnostics/test_tdc_from_speed.py."""
     rotor.enable_compilation_cache()
 
 

@@ -15,8 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from rotor.cli import app
+from conftest import ROOT, run_cli
 
 TWO_PI = 2 * np.pi
 
@@ -37,16 +36,6 @@ def teeth_log(tmp_path_factory: pytest.TempPathFactory) -> str:
     return str(path)
 
 
-def run(capsys: pytest.CaptureFixture, argv: list[str]) -> tuple[int, str, str]:
-    """``rotor argv`` in-process: (exit status, stdout, stderr)."""
-    try:
-        rc = app.main(argv)
-    except SystemExit as e:  # argparse's own usage errors
-        rc = int(e.code or 0)
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
 def assert_refused(rc: int, err: str, *fragments: str) -> None:
     """Exit 2 with one line on stderr holding every fragment, no traceback."""
     assert rc == 2, err
@@ -65,23 +54,23 @@ TOOTH = ["--wheel", "60-2", "--columns", "tooth_time_s"]
 def test_an_absurd_finite_angle_is_refused_in_one_line(
     value: str, teeth_log: str, capsys: pytest.CaptureFixture
 ) -> None:
-    rc, _, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", value])
+    rc, _, err = run_cli(capsys, "analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", value)
     assert_refused(rc, err, "--tdc-deg", "from -3600 to 3600 degrees")
 
 
 def test_diagnose_refuses_an_absurd_angle_too(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
     argv = ["diagnose", teeth_log, "--engine", "4chn15", *TOOTH, "--tdc-deg", "9223372036854775808"]
-    rc, _, err = run(capsys, argv)
+    rc, _, err = run_cli(capsys, *argv)
     assert_refused(rc, err, "--tdc-deg", "or 'speed'")
 
 
 def test_an_absurd_cylinder_count_is_refused_in_one_line(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
-    rc, _, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--cylinders", "100000000000000000000000"])
+    rc, _, err = run_cli(capsys, "analyze", teeth_log, *TOOTH, "--cylinders", "100000000000000000000000")
     assert_refused(rc, err, "--cylinders", "at most 64 cylinders")
 
 
 def test_a_plausible_angle_still_runs(teeth_log: str, capsys: pytest.CaptureFixture) -> None:
-    rc, out, err = run(capsys, ["analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", "-710"])
+    rc, out, err = run_cli(capsys, "analyze", teeth_log, *TOOTH, "--json", "--tdc-deg", "-710")
     assert rc == 0, err
     json.loads(out, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
 
@@ -115,14 +104,14 @@ def only_entry(folder: Path) -> Path:
 )
 def test_a_spoilt_kept_output_is_computed_afresh(spoil, kept_folder: Path, capsys: pytest.CaptureFixture) -> None:
     argv = ["info", "4chn15", "--json"]
-    rc, first, err = run(capsys, argv)
+    rc, first, err = run_cli(capsys, *argv)
     assert rc == 0, err
     entry = only_entry(kept_folder)
     entry.write_bytes(spoil(entry.read_bytes()))
-    rc, again, err = run(capsys, argv)
+    rc, again, err = run_cli(capsys, *argv)
     assert rc == 0 and again == first, err
     json.loads(again, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
-    rc, third, err = run(capsys, argv)  # the entry is whole again
+    rc, third, err = run_cli(capsys, *argv)  # the entry is whole again
     assert rc == 0 and third == first, err
     assert json.loads(only_entry(kept_folder).read_bytes().partition(b"\n")[2]) == json.loads(first)
 
@@ -137,7 +126,7 @@ def test_pruning_keeps_the_users_own_files(kept_folder: Path, capsys: pytest.Cap
         os.utime(p, ns=(i * 10**9, i * 10**9))
     monkeypatch.setattr(kept, "MAX_FILES", 2)
     for rpm in ("900", "1000", "1100"):
-        rc, _, err = run(capsys, ["info", "4chn15", "--json", "--rpm", rpm])
+        rc, _, err = run_cli(capsys, "info", "4chn15", "--json", "--rpm", rpm)
         assert rc == 0, err
     assert all(p.read_text() == f"the user's note {i}\n" for i, p in enumerate(mine))
     own = set(kept_folder.iterdir()) - set(mine)
@@ -168,7 +157,7 @@ def test_a_wheel_spec_beyond_the_real_limit_names_wheel(spec: str, fragment: str
         parse_wheel(spec)
     assert info.value.argument == "wheel" and str(info.value).startswith("wheel=")
     assert fragment in str(info.value)
-    rc, _, err = run(capsys, ["analyze", teeth_log, "--wheel", spec, "--columns", "tooth_time_s"])
+    rc, _, err = run_cli(capsys, "analyze", teeth_log, "--wheel", spec, "--columns", "tooth_time_s")
     assert_refused(rc, err, "rotor: error: --wheel ", fragment)
     assert "set_int_max_str_digits" not in err and "need 0 …" not in err and len(err) < 400
 
@@ -217,7 +206,7 @@ def test_a_malformed_wheel_file_is_refused_by_key(text: str, fragment: str, tmp_
     with pytest.raises(LogError, match="^" + str(path).replace("\\", "\\\\")) as info:
         read_wheel_file(path)
     assert fragment in str(info.value)
-    rc, _, err = run(capsys, ["analyze", str(tmp_path / "none.csv"), "--wheel", str(path)])
+    rc, _, err = run_cli(capsys, "analyze", str(tmp_path / "none.csv"), "--wheel", str(path))
     assert rc == 2 and "Traceback" not in err and "internal error" not in err, err
 
 
@@ -233,12 +222,11 @@ def test_a_wheel_file_with_a_byte_order_mark_is_read(tmp_path: Path) -> None:
 def test_a_folder_named_like_a_wheel_file_is_named_a_folder(tmp_path: Path, teeth_log: str, capsys) -> None:
     folder = tmp_path / "x.toml"
     folder.mkdir()
-    rc, _, err = run(capsys, ["analyze", teeth_log, "--wheel", str(folder), "--columns", "tooth_time_s"])
+    rc, _, err = run_cli(capsys, "analyze", teeth_log, "--wheel", str(folder), "--columns", "tooth_time_s")
     assert_refused(rc, err, "x.toml: is a folder, not a wheel file")
 
 
 # ----------------------------------------------------------------------------- user text in plots
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def with_dollars(tmp_path: Path, preset: str) -> Path:
@@ -256,7 +244,7 @@ def with_dollars(tmp_path: Path, preset: str) -> Path:
 def test_dollars_in_names_are_drawn_as_they_are(tmp_path: Path, capsys) -> None:
     engine = with_dollars(tmp_path, "mwm6")
     out = tmp_path / "out $b_$"
-    rc, _, err = run(capsys, ["modes", str(engine), "--plot", str(out)])
+    rc, _, err = run_cli(capsys, "modes", str(engine), "--plot", str(out))
     assert rc == 0, err
     assert [p.name for p in out.iterdir()] == ["modes.png"] and (out / "modes.png").stat().st_size > 1000
 
@@ -322,7 +310,7 @@ def test_an_unwritable_output_is_refused_before_the_work_naming_the_users_path(
 
     monkeypatch.setattr(rotor.engine.table, "crank_table", no_work)
     monkeypatch.setattr("rotor.design.balance.balance", no_work)
-    rc, _, err = run(capsys, argv)
+    rc, _, err = run_cli(capsys, *argv)
     assert_refused(rc, err, f"rotor: error: {path}: ")
     assert ".rotor" not in err
 
@@ -335,7 +323,7 @@ def test_a_dangling_link_as_the_output_folder_is_refused_before_the_work(
     link.symlink_to(tmp_path / "nowhere")
     monkeypatch.setattr("rotor.design.balance.balance", lambda *a, **k: pytest.fail("the work started"))
     argv = ["report", "4chn15", "--out", str(link)] if option == "--out" else ["balance", "4chn15", "--plot", str(link)]
-    rc, _, err = run(capsys, argv)
+    rc, _, err = run_cli(capsys, *argv)
     assert_refused(rc, err, f"{link}: is a link to {tmp_path / 'nowhere'}, which does not exist")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link"]
 
@@ -402,7 +390,7 @@ def test_an_interrupt_dropped_in_a_garbage_collector_callback_still_stops_the_ru
 
     monkeypatch.setattr(rotor.engine.table, "crank_table", crank_table_with_a_collection)
     out = tmp_path / "table.csv"
-    rc, _, err = run(capsys, ["table", "4chn15", "--format", "csv", "--output", str(out)])
+    rc, _, err = run_cli(capsys, "table", "4chn15", "--format", "csv", "--output", str(out))
     assert fired and rc == 130, err
     assert "rotor: interrupted" in err and not out.exists() and list(tmp_path.iterdir()) == []
     from rotor.fileio import INTERRUPT, write_text_atomic
@@ -428,7 +416,7 @@ def test_a_command_that_fails_removes_the_plot_folders_it_made(tmp_path: Path, c
         raise KeyboardInterrupt
 
     monkeypatch.setattr("rotor.cli.report.save_plot", interrupted)
-    rc, _, err = run(capsys, ["balance", "4chn15", "--plot", str(tmp_path / "new" / "a" / "b")])
+    rc, _, err = run_cli(capsys, "balance", "4chn15", "--plot", str(tmp_path / "new" / "a" / "b"))
     assert rc == 130 and "rotor: interrupted" in err, err
     assert list(tmp_path.iterdir()) == []
 
@@ -459,7 +447,7 @@ def test_a_nan_row_of_a_capture_is_named_by_its_line(tmp_path: Path, capsys) -> 
     lines.insert(50, "nan, nan, nan")
     path = tmp_path / "capture.csv"
     path.write_text("\n".join(lines) + "\n")
-    rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2"])
+    rc, _, err = run_cli(capsys, "analyze", str(path), "--wheel", "60-2")
     assert_refused(rc, err, "capture.csv: line 51, column 'time': nan is not a finite number")
     assert "dtype" not in err
 
@@ -469,16 +457,18 @@ def test_capture_channels_are_mapped_by_name_wherever_their_columns_stand(tmp_pa
     for order in ((0, 1), (1, 0)):
         path = tmp_path / f"capture{order[0]}{order[1]}.csv"
         path.write_text("\n".join(capture_lines(order)) + "\n")
-        rc, out, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--json"])
+        rc, out, err = run_cli(capsys, "analyze", str(path), "--wheel", "60-2", "--json")
         assert rc == 0, err
         results[order] = json.loads(out)
     assert results[(1, 0)]["cycles"] == results[(0, 1)]["cycles"]
     assert any("Channel 0 → encoder_d" in n and "Channel 1 → cam_d" in n for n in results[(1, 0)]["notes"])
     # the column names given win over the header's
     path = tmp_path / "capture10.csv"
-    rc, out, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--json", "--columns", "time,cam_d,encoder_d"])
+    rc, out, err = run_cli(
+        capsys, "analyze", str(path), "--wheel", "60-2", "--json", "--columns", "time,cam_d,encoder_d"
+    )
     assert rc == 0 and json.loads(out)["cycles"] == results[(0, 1)]["cycles"], err
-    rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_d,cam_d"])
+    rc, _, err = run_cli(capsys, "analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_d,cam_d")
     assert rc == 2 and "Traceback" not in err, err
 
 
@@ -490,7 +480,7 @@ def test_samples_cut_out_of_a_recording_are_named_without_a_warning(tmp_path: Pa
     keep = ~((t > 0.1) & (t < 0.105))  # 5 ms of samples lost
     path = tmp_path / "bench.csv"
     np.savetxt(path, np.column_stack([t[keep], tooth[keep] * 4.0 + 0.3]), fmt="%.7g", delimiter=",")
-    rc, _, err = run(capsys, ["analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_v"])
+    rc, _, err = run_cli(capsys, "analyze", str(path), "--wheel", "60-2", "--columns", "time,encoder_v")
     assert_refused(rc, err, "bench.csv: line 10002: the samples stop for 5 ms", "samples are missing")
     assert "Warning" not in err
 
@@ -547,7 +537,7 @@ def test_the_modes_of_a_long_chain_take_seconds_and_agree_with_the_exact_range(t
 
 @pytest.mark.parametrize("command", ["modes", "campbell"])
 def test_a_chain_of_ten_thousand_masses_is_refused_naming_the_table(command: str, tmp_path: Path, capsys) -> None:
-    rc, _, err = run(capsys, [command, str(long_chain(tmp_path, 10_000))])
+    rc, _, err = run_cli(capsys, command, str(long_chain(tmp_path, 10_000)))
     assert_refused(rc, err, "the [torsion] table's chain has 10000 masses", "about", "at most 2000 masses")
 
 
@@ -556,7 +546,7 @@ def test_a_chain_of_ten_thousand_masses_is_refused_naming_the_table(command: str
     [(100, "would take about 3 minutes per speed"), (1000, "× 1000 masses of the [torsion] table needs")],
 )
 def test_a_forced_response_too_big_is_refused_before_the_work(n: int, fragment: str, tmp_path: Path, capsys) -> None:
-    rc, _, err = run(capsys, ["torsion", str(long_chain(tmp_path, n))])
+    rc, _, err = run_cli(capsys, "torsion", str(long_chain(tmp_path, n)))
     assert_refused(rc, err, fragment)
     assert "--cycles" not in err and "--steps-per-cycle" not in err
 
@@ -575,8 +565,8 @@ def test_running_out_of_memory_names_only_the_commands_own_options(capsys, monke
 
     monkeypatch.setattr("rotor.cli.torsion.cmd_torsion", exhausted)
     monkeypatch.setattr("rotor.torsion.response.torsional_response", exhausted)
-    rc, _, err = run(capsys, ["torsion", "mwm6"])
+    rc, _, err = run_cli(capsys, "torsion", "mwm6")
     assert_refused(rc, err, "ran out of memory: reduce the size of the run (a smaller input)")
     monkeypatch.setattr("rotor.engine.table.crank_table", exhausted)
-    rc, _, err = run(capsys, ["table", "4chn15"])
+    rc, _, err = run_cli(capsys, "table", "4chn15")
     assert_refused(rc, err, "ran out of memory: reduce the size of the run (--step, or a smaller input")

@@ -17,15 +17,14 @@ with a margin for the rounding of the preset's numbers and for numerical noise:
 """
 
 import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT, SHARED_DATA
 
 import rotor
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / ".." / "shared" / "data"
+DATA = SHARED_DATA
 SCRIPT = ROOT / "benchmarks" / "calibrate_presets.py"
 
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"shared data not found at {DATA}")

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from rotor.cli import main
 
@@ -75,23 +76,14 @@ def test_unwritable_output_is_a_clean_error(tmp_path, capsys):
     assert capsys.readouterr().err.startswith("rotor: error:")
 
 
-def _run(capsys, *argv):
-    try:
-        rc = main(list(argv))
-    except SystemExit as e:  # argparse's usage errors
-        rc = e.code
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
 def test_table_json_is_the_tables_json(capsys):
     from rotor.engine.file import load_engine
     from rotor.engine.table import crank_table
 
-    rc, out, _ = _run(capsys, "table", "4chn15", "--step", "30", "--json")
+    rc, out, _ = run_cli(capsys, "table", "4chn15", "--step", "30", "--json")
     assert rc == 0
     assert json.loads(out) == crank_table(load_engine("4chn15"), step_deg=30.0).to_json_dict()
-    rc, _, err = _run(capsys, "table", "4chn15", "--json", "--format", "csv")
+    rc, _, err = run_cli(capsys, "table", "4chn15", "--json", "--format", "csv")
     assert rc == 2 and "not allowed with" in err
 
 
@@ -99,7 +91,7 @@ def test_info_prints_the_results_summary(capsys):
     from rotor.engine.file import load_engine
     from rotor.engine.summary import engine_summary
 
-    rc, out, _ = _run(capsys, "info", "v8", "--rpm", "2000")
+    rc, out, _ = run_cli(capsys, "info", "v8", "--rpm", "2000")
     assert rc == 0 and out == engine_summary(load_engine("v8"), rpm=2000).summary()
 
 
@@ -107,7 +99,7 @@ def test_steady_json_is_the_results_json(capsys):
     from rotor.dynamics.steady import steady_state
     from rotor.engine.file import load_engine
 
-    rc, out, _ = _run(capsys, "steady", "4chn15", "--json")
+    rc, out, _ = run_cli(capsys, "steady", "4chn15", "--json")
     assert rc == 0
     got, want = json.loads(out), steady_state(load_engine("4chn15")).to_json_dict()
     got.pop("wall_s"), want.pop("wall_s")
@@ -115,7 +107,7 @@ def test_steady_json_is_the_results_json(capsys):
 
 
 def test_presets_json(capsys):
-    rc, out, _ = _run(capsys, "presets", "--json")
+    rc, out, _ = run_cli(capsys, "presets", "--json")
     names = {p["name"]: p["engine"] for p in json.loads(out)["presets"]}
     assert rc == 0 and names["4chn15"] == "4ChN15/20.5 diesel" and "tue-single" in names
 
@@ -128,14 +120,14 @@ def test_solver_error_exits_1_and_closed_pipe_0(monkeypatch, capsys):
         raise NoSteadyStateError("no periodic solution\nat all")
 
     monkeypatch.setattr(rotor.dynamics.steady, "steady_state", no_answer)
-    rc, out, err = _run(capsys, "steady", "4chn15")
+    rc, out, err = run_cli(capsys, "steady", "4chn15")
     assert rc == 1 and out == "" and err == "rotor: no periodic solution at all\n"
 
     def closed(*a, **k):
         raise BrokenPipeError
 
     monkeypatch.setattr(rotor.dynamics.steady, "steady_state", closed)
-    assert _run(capsys, "steady", "4chn15")[0] == 0
+    assert run_cli(capsys, "steady", "4chn15")[0] == 0
 
 
 @pytest.mark.parametrize(
@@ -150,5 +142,5 @@ def test_solver_error_exits_1_and_closed_pipe_0(monkeypatch, capsys):
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(argv, capsys):
-    rc, out, err = _run(capsys, *argv)
+    rc, out, err = run_cli(capsys, *argv)
     assert rc == 2 and out == "" and err.count("\n") == 1 and "error:" in err

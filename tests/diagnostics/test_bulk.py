@@ -13,9 +13,10 @@ import math
 import sys
 
 import pytest
+from conftest import run_cli
 
 import rotor
-from rotor.cli import app, main
+from rotor.cli import app
 from rotor.cli.logs import FileOutput, for_each_log
 from rotor.diagnostics.bulk import analyze_many, diagnose_many, expand_logs, is_pattern
 from rotor.diagnostics.synthetic import simulated_recording
@@ -23,15 +24,6 @@ from rotor.errors import EngineError, InternalError, LogError, SolverError
 
 N = 20
 DIAGNOSE = ["--engine", "tue-single", "--columns", "time,-,encoder_v", "--json"]
-
-
-def _run(capsys, *argv):
-    try:
-        rc = main(list(argv))
-    except SystemExit as e:
-        rc = e.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @pytest.fixture(scope="module")
@@ -53,26 +45,11 @@ def separate(logs):
     _, paths, _ = logs
     out = []
     for p in paths:
-        with _Capture() as cap:
-            assert main(["diagnose", p, *DIAGNOSE]) == 0
-        assert cap.out.startswith("{\n")  # one indented JSON object, as before
-        out.append(json.loads(cap.out))
+        rc, text, err = run_cli(None, "diagnose", p, *DIAGNOSE)
+        assert rc == 0, err
+        assert text.startswith("{\n")  # one indented JSON object, as before
+        out.append(json.loads(text))
     return out
-
-
-class _Capture:
-    """stdout and stderr of a block (module fixtures cannot use capsys)."""
-
-    def __enter__(self):
-        import io
-
-        self.old = sys.stdout, sys.stderr
-        sys.stdout, sys.stderr = io.StringIO(), io.StringIO()
-        return self
-
-    def __exit__(self, *exc):
-        self.out, self.err = sys.stdout.getvalue(), sys.stderr.getvalue()
-        sys.stdout, sys.stderr = self.old
 
 
 def _same(a, b, path="result"):
@@ -105,7 +82,7 @@ def _check_bulk(rows, paths, separate, bad):
 
 def test_one_call_in_process_gives_the_numbers_of_separate_calls(logs, separate, capsys):
     folder, paths, bad = logs
-    rc, out, err = _run(capsys, "diagnose", str(folder / "rec*.txt"), bad, *DIAGNOSE, "--jobs", "1")
+    rc, out, err = run_cli(capsys, "diagnose", str(folder / "rec*.txt"), bad, *DIAGNOSE, "--jobs", "1")
     assert rc == 2, err  # one bad input among them
     _check_bulk(_lines(out), paths, separate, bad)
     assert err.splitlines()[-1] == f"rotor: 1 of {N + 1} files failed"
@@ -114,7 +91,7 @@ def test_one_call_in_process_gives_the_numbers_of_separate_calls(logs, separate,
 
 def test_two_threads_give_the_same_numbers(logs, separate, capsys):
     folder, paths, bad = logs
-    rc, out, err = _run(capsys, "diagnose", bad, str(folder / "rec*.txt"), *DIAGNOSE, "--jobs", "2", "--quiet")
+    rc, out, err = run_cli(capsys, "diagnose", bad, str(folder / "rec*.txt"), *DIAGNOSE, "--jobs", "2", "--quiet")
     assert rc == 2, err
     rows = _lines(out)
     _check_bulk([*rows[1:], rows[0]], paths, separate, bad)  # in the order given: the bad file first
@@ -143,7 +120,7 @@ def test_a_local_dask_cluster_gives_the_same_numbers(logs, separate, capsys):
         assert isinstance(got[-1], LogError) and "no column" in str(got[-1])
         for res, one in zip(got[:-1], separate):
             _same(json.loads(json.dumps(res.to_json_dict())), one)
-        rc, out, err = _run(
+        rc, out, err = run_cli(
             capsys, "diagnose", *paths[:4], *DIAGNOSE, "--scheduler", cluster.scheduler_address, "--quiet"
         )
         assert rc == 0, err
@@ -161,7 +138,7 @@ def test_python_in_process_matches_and_keeps_the_order(logs, separate):
 
 def test_text_form_names_each_file(logs, capsys):
     _, paths, bad = logs
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys, "diagnose", paths[0], paths[1], "--engine", "tue-single", "--columns", "time,-,encoder_v", "-j", "1"
     )
     assert out.startswith(f"==> {paths[0]} <==\n") and f"\n\n==> {paths[1]} <==\n" in out, err
@@ -173,10 +150,10 @@ def test_analyze_many_files(logs, capsys):
     args = ["--wheel", "60-2", "--columns", "time,pressure_v,encoder_v", "--json"]
     one = []
     for p in paths[:3]:
-        rc, out, err = _run(capsys, "analyze", p, *args)
+        rc, out, err = run_cli(capsys, "analyze", p, *args)
         assert rc == 0, err
         one.append(json.loads(out))
-    rc, out, err = _run(capsys, "analyze", *paths[:3], *args, "--jobs", "1")
+    rc, out, err = run_cli(capsys, "analyze", *paths[:3], *args, "--jobs", "1")
     assert rc == 0, err
     for row, d in zip(_lines(out), one):
         _same({k: v for k, v in row.items() if k != "file"}, d)
@@ -185,10 +162,10 @@ def test_analyze_many_files(logs, capsys):
 
 
 def test_a_pattern_that_matches_nothing_is_an_error(tmp_path, capsys):
-    rc, out, err = _run(capsys, "diagnose", str(tmp_path / "*.csv"), "--engine", "tue-single", "--json")
+    rc, out, err = run_cli(capsys, "diagnose", str(tmp_path / "*.csv"), "--engine", "tue-single", "--json")
     assert rc == 2 and out == "" and err.count("\n") == 1
     assert "the pattern matches no file" in err
-    rc, out, err = _run(capsys, "analyze", str(tmp_path / "nothing-[0-9].txt"))
+    rc, out, err = run_cli(capsys, "analyze", str(tmp_path / "nothing-[0-9].txt"))
     assert rc == 2 and "matches no file" in err
     with pytest.raises(LogError, match="matches no file"):
         expand_logs(str(tmp_path / "*.txt"))
@@ -210,18 +187,18 @@ def test_expand_logs(tmp_path):
 def test_scheduler_without_dask_is_one_line(monkeypatch, tmp_path, capsys):
     paths = [str(tmp_path / "a.txt"), str(tmp_path / "b.txt")]
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
-    rc, out, err = _run(capsys, "diagnose", *paths[:2], *DIAGNOSE, "--scheduler", "tcp://127.0.0.1:1")
+    rc, out, err = run_cli(capsys, "diagnose", *paths[:2], *DIAGNOSE, "--scheduler", "tcp://127.0.0.1:1")
     assert rc == 2 and out == "" and err.count("\n") == 1
     assert "pip install 'crank-rotor[dask]'" in err
 
 
 def test_options_of_one_log_refuse_several(tmp_path, capsys):
     paths = [str(tmp_path / "a.txt"), str(tmp_path / "b.txt")]
-    rc, _, err = _run(capsys, "diagnose", *paths[:2], *DIAGNOSE, "--save-calibration", str(tmp_path / "c.json"))
+    rc, _, err = run_cli(capsys, "diagnose", *paths[:2], *DIAGNOSE, "--save-calibration", str(tmp_path / "c.json"))
     assert rc == 2 and "--save-calibration takes a single LOG" in err
-    rc, _, err = _run(capsys, "analyze", *paths[:2], "--save-tooth-errors", str(tmp_path / "t.json"))
+    rc, _, err = run_cli(capsys, "analyze", *paths[:2], "--save-tooth-errors", str(tmp_path / "t.json"))
     assert rc == 2 and "--save-tooth-errors takes a single LOG" in err
-    rc, _, err = _run(capsys, "diagnose", *paths[:2], *DIAGNOSE, "--jobs", "0")
+    rc, _, err = run_cli(capsys, "diagnose", *paths[:2], *DIAGNOSE, "--jobs", "0")
     assert rc == 2 and "must be 1 or more" in err
 
 

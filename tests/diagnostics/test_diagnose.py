@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import SHARED_DATA, run_cli
 
 import rotor
 from rotor.cli import main
@@ -15,15 +15,6 @@ from rotor.units import PA_PER_BAR, RPM_PER_RAD_S
 TUE = SHARED_DATA / "tue-4gb10"
 needs_data = pytest.mark.skipif(not TUE.is_dir(), reason=f"shared data not found at {TUE}")
 GAIN = str(PA_PER_BAR / (5 * 0.00385))
-
-
-def _run(capsys, *argv):
-    try:
-        rc = main(list(argv))
-    except SystemExit as e:  # argparse's usage errors
-        rc = e.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +55,7 @@ def test_calibrate_and_diagnose_json(saved, capsys):
     c = rotor.Calibration.load(cal)
     assert c.wheel == "60-2" and c.tooth_errors is not None and c.source == "full_load.txt"
     # speed only, with the saved calibration (the pressure column skipped)
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "diagnose",
         str(TUE / "full_load.txt"),
@@ -94,7 +85,7 @@ def test_calibrate_and_diagnose_json(saved, capsys):
 @needs_data
 def test_text_output_compares_with_the_pressure(saved, capsys):
     cal, _ = saved
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "diagnose",
         str(TUE / "full_load.txt"),
@@ -111,7 +102,7 @@ def test_text_output_compares_with_the_pressure(saved, capsys):
 
 @needs_data
 def test_speed_only_needs_tdc(capsys):
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "diagnose",
         str(TUE / "No_load.txt"),
@@ -144,7 +135,7 @@ def test_one_line_errors(tmp_path, capsys):
         ),
     ]
     for argv, needle in cases:
-        rc, out, err = _run(capsys, *argv)
+        rc, out, err = run_cli(capsys, *argv)
         assert rc == 2, argv
         assert err.count("\n") == 1 and needle in err, (argv, err)
 
@@ -219,7 +210,7 @@ def test_coast_down_through_diagnose(tmp_path, capsys):
     assert ident.misfire.all()
     assert np.all(np.isfinite(ident.imep_pa)) and np.abs(ident.imep_pa - motored).max() < 0.1e5
     assert any("no firing" in n for n in ident.notes)
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "diagnose",
         str(path),
@@ -262,7 +253,7 @@ def test_arithmetic_failure_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(rotor.diagnostics.identification, "identify", boom)
     with pytest.raises(rotor.EngineError, match="charge-scale iteration failed"):
         rotor.diagnose(rotor.load_engine("tue-single"), path, PRESET_CAL, wheel="60-2")
-    rc, out, err = _run(capsys, "diagnose", str(path), "--engine", "tue-single", "--wheel", "60-2", "--json")
+    rc, out, err = run_cli(capsys, "diagnose", str(path), "--engine", "tue-single", "--wheel", "60-2", "--json")
     assert rc == 2 and out == "" and err.count("\n") == 1 and "math range error" in err
 
 
@@ -270,7 +261,7 @@ def test_calibration_of_another_engine_is_refused(tmp_path, capsys):
     cal = rotor.Calibration.load(PRESET_CAL)
     log = tmp_path / "log.csv"
     log.write_text("0.0\n")
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys, "diagnose", str(log), "--engine", "mwm6", "--calibration", PRESET_CAL, "--scaling", "none", "--json"
     )
     assert rc == 2 and out == "" and err.count("\n") == 1 and "another engine" in err and "MWM" in err
@@ -281,7 +272,7 @@ def test_calibration_of_another_engine_is_refused(tmp_path, capsys):
         d = {**cal.to_json_dict(), **change}
         other = tmp_path / "other.json"
         other.write_text(json.dumps(d))
-        rc, out, err = _run(capsys, "diagnose", str(log), "--engine", "tue-single", "--calibration", str(other))
+        rc, out, err = run_cli(capsys, "diagnose", str(log), "--engine", "tue-single", "--calibration", str(other))
         assert rc == 2 and "another engine" in err, err
 
 
@@ -310,7 +301,7 @@ def test_shipped_preset_calibration():
 def test_half_load_from_speed_with_the_preset_calibration(capsys):
     """No --calibration: the preset's own; half load's IMEP within the README's 0.10 bar of its pressure
     channel (measured −0.058 bar)."""
-    rc, out, err = _run(
+    rc, out, err = run_cli(
         capsys,
         "diagnose",
         str(TUE / "half_load.txt"),

@@ -1,6 +1,6 @@
 """TDC from the crank speed alone, and a calibration checked against the recording: a simulated engine whose wheel is mounted 30°, 90° and 180° away from the
 calibration's TDC, firing steadily and with an ignition cut, is corrected from the speed and
-diagnosed within the synthetic recordings' usual IMEP error (1 %, tests/test_synthetic.py),
+diagnosed within the synthetic recordings' usual IMEP error (1 %, tests/diagnostics/test_synthetic.py),
 never as misfires; a speed without the engine's signature is refused with the reason."""
 
 from __future__ import annotations
@@ -23,15 +23,15 @@ ENGINE = rotor.load_engine("tue-single")
 TDC = -DEFAULT_GAP_DEG  # the calibration's: 29.4° after the gap
 OFFSETS = (30.0, 90.0, 180.0)
 CUT = (3, 4)  # cycles of the ignition cut
-IMEP_REL = 0.01  # the usual IMEP error on a simulated recording (tests/test_synthetic.py)
+IMEP_REL = 0.01  # the usual IMEP error on a simulated recording (tests/diagnostics/test_synthetic.py)
 TDC_TOL_DEG = 1.0
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _compilation_cache():
     """The test session's own persistent compilation cache (conftest.py sets its folder; the
-    CLI switches it on anyway): this module and tests/test_tdc_from_speed.py /
-    tests/test_calibrate_cli.py compile the same steady state and identification, and the
+    CLI switches it on anyway): this module and tests/diagnostics/test_tdc_from_speed.py /
+    tests/diagnostics/test_calibrate_cli.py compile the same steady state and identification, and the
     second reuses the first's code after conftest drops the compiled executables."""
     rotor.enable_compilation_cache()
 

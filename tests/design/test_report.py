@@ -8,9 +8,7 @@ into a folder that holds a previous report, which it must replace."""
 from __future__ import annotations
 
 import base64
-import contextlib
 import csv
-import io
 import json
 import os
 import re
@@ -21,23 +19,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 import rotor
-from rotor.cli import app
 
 STEP = 30.0
 HTTP = re.compile(r"(?:https?:)?//[\w.-]+\.\w", re.IGNORECASE)
-
-
-def cli(argv: list[str]) -> tuple[int, str]:
-    """``rotor argv`` in-process: (exit status, standard output)."""
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        try:
-            rc = app.main(argv)
-        except SystemExit as e:
-            rc = int(e.code or 0)
-    return rc, out.getvalue()
 
 
 def read_csv(path: str | Path) -> dict[str, np.ndarray]:
@@ -68,7 +55,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> dict:
     (out / "tables").mkdir()
     (out / "index.html").write_text("<p>an older report</p>\n")
     (out / "figures" / "stale.png").write_bytes(b"old")
-    rc, text = cli(["report", "4chn15", "--out", str(out), "--step", str(STEP), "--json"])
+    rc, text, _ = run_cli(None, "report", "4chn15", "--out", out, "--step", STEP, "--json")
     assert rc == 0, text
     data = json.loads(text)
     data["root"] = root
@@ -220,17 +207,17 @@ def test_the_report_object_says_what_it_wrote() -> None:
     assert repr(r) == "<Report: E at 1250 rpm in out>"
 
 
-def test_loads_and_balance_commands(tmp_path: Path) -> None:
-    rc, text = cli(["balance", "4chn15", "--orders", "4", "--json", "--plot", str(tmp_path / "b")])
+def test_loads_and_balance_commands(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    rc, text, _ = run_cli(capsys, "balance", "4chn15", "--orders", "4", "--json", "--plot", str(tmp_path / "b"))
     assert rc == 0
     data = json.loads(text)
     assert [o["order"] for o in data["orders"]] == [1, 2, 3, 4]
     assert set(data["orders"][0]) >= {"order", "free_force_N", "free_moment_Nm"}
     assert data["plots"] == [str(tmp_path / "b" / "balance.png")]
-    rc, text = cli(["balance", "4chn15"])
+    rc, text, _ = run_cli(capsys, "balance", "4chn15")
     assert rc == 0 and "free force" in text
 
-    rc, text = cli(["loads", "4chn15", "--step", "10", "--plot", str(tmp_path / "l")])
+    rc, text, _ = run_cli(capsys, "loads", "4chn15", "--step", "10", "--plot", str(tmp_path / "l"))
     assert rc == 0 and "crank pins" in text
     assert sorted(os.listdir(tmp_path / "l")) == sorted(
         [
@@ -244,7 +231,7 @@ def test_loads_and_balance_commands(tmp_path: Path) -> None:
             "running_torques.png",
         ]
     )
-    rc, text = cli(["loads", "4chn15", "--step", "10", "--json"])
+    rc, text, _ = run_cli(capsys, "loads", "4chn15", "--step", "10", "--json")
     assert rc == 0 and json.loads(text)["step_deg"] == 10.0
 
 

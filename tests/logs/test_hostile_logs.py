@@ -8,10 +8,10 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 import rotor
 from rotor import EngineError, LogError
-from rotor.cli import main
 from rotor.logs.analysis import NoCompressionPeak
 from rotor.logs.reader import parse_columns
 
@@ -44,14 +44,8 @@ def wheel_samples(rpm=3000.0, seconds=0.3, fs=100e3, teeth=60, missing=2, narrow
     return t, v, phi
 
 
-def run(capsys, *argv):
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
 def one_line_error(capsys, *argv):
-    rc, out, err = run(capsys, *argv)
+    rc, out, err = run_cli(capsys, *argv)
     assert rc == 2, (rc, out, err)
     assert err.count("\n") == 1 and err.startswith("rotor: error:"), err
     assert "Traceback" not in err
@@ -188,7 +182,7 @@ def single_cylinder_log(tmp_path_factory):
 
 
 def test_single_cylinder_log_diagnosed_as_four_cylinders_says_so(single_cylinder_log, capsys):
-    rc, out, err = run(
+    rc, out, err = run_cli(
         capsys,
         "diagnose",
         single_cylinder_log,

@@ -10,20 +10,12 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from rotor import cli
 from rotor.diagnostics.monitor import MisfireMonitor, NoteKind, ToothLines
 
 MISFIRES = {(7, 2), (19, 4), (20, 4)}
-
-
-def run_cli(capsys, *argv):
-    try:
-        code = cli.main(list(argv))
-    except SystemExit as e:
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")

@@ -10,14 +10,13 @@ from __future__ import annotations
 import importlib.util
 import re
 import types
-from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
 import rotor
 from rotor.cli.app import build_parser
 
-ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 API = DOCS / "api"
 MKDOCS = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
