@@ -35,8 +35,8 @@ def padded_size(n: int) -> int:
     """The smallest of 1, 2, 3, 4, 6, 8, 12, 16, 24, … (2ᵏ and 3·2ᵏ) that holds ``n`` items.
 
     A compiled program serves one shape: a batch padded to one of these sizes reuses the
-    program of every other batch of that size (a few programs over all record lengths), at
-    most a third more work than the exact size."""
+    program of every other batch of that size (a few programs over all record lengths), for
+    at most half as much work again as the exact size."""
     if n < 1:
         raise ValueError(f"n = {n!r}: a size of at least 1")
     power = 1 << (n - 1).bit_length()  # the power of two ≥ n
