@@ -231,7 +231,7 @@ def summarise(rows):
 
 
 def real(folder):
-    from rotor.diagnostics.calibration import preset_calibration
+    from rotor.diagnostics.calibration_record import preset_calibration
 
     engine = rotor.load_engine("tue-single")
     cal = preset_calibration(engine)

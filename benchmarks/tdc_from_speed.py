@@ -54,7 +54,7 @@ import scipy
 from scipy.interpolate import CubicSpline
 
 import rotor
-from rotor.diagnostics.calibration import preset_calibration
+from rotor.diagnostics.calibration_record import preset_calibration
 from rotor.diagnostics.phase import tdc_from_speed
 from rotor.diagnostics.synthetic import (
     DEFAULT_GAP_DEG,

@@ -44,7 +44,7 @@ cylinder 1's):
    energy-balance inertia it read the calibration recording's IMEP 8 % high on
    ``tue-single``'s bench (7.8 %: the Wiebe cycle and the estimated piston and rod masses are not the
    engine's exactly). ``inertia_kgm2`` is therefore the inertia with which
-   :func:`diagnose` reproduces the recording's measured mean IMEP (a secant iteration on
+   :func:`rotor.diagnose` reproduces the recording's measured mean IMEP (a secant iteration on
    the identification from the speed alone); the energy-balance value stays in
    ``fit['energy_balance_inertia_kgm2']``. Their ratio is a figure of the model's error.
 
@@ -52,9 +52,10 @@ cylinder 1's):
 the calibration keeps σ, the recording's measured IMEP over the engine file's, as the
 start of :func:`rotor.diagnose`'s charge iteration.
 
-This module is also where ``rotor`` finds :class:`Calibration`, :func:`measured_imep`,
-:func:`preset_calibration` (:mod:`rotor.diagnostics.calibration_record`,
-:mod:`rotor.diagnostics.pressure_work`), :class:`Diagnosis` and :func:`diagnose`
+The saved calibration and the presets' are :class:`rotor.Calibration` and
+:func:`rotor.preset_calibration` (:mod:`rotor.diagnostics.calibration_record`); the
+pressure channel's work :func:`rotor.measured_imep` (:mod:`rotor.diagnostics.pressure_work`);
+the diagnosis :class:`rotor.Diagnosis` and :func:`rotor.diagnose`
 (:mod:`rotor.diagnostics.diagnosis`).
 """
 
@@ -73,47 +74,15 @@ from ..errors import EngineError
 from ..logs.analysis import LogAnalysis, PhaseSource
 from ..logs.wheel import ToothErrors
 from ..units import PA_PER_BAR
-from .calibration_record import (
-    CALIBRATION_FORMAT,
-    Calibration,
-    check_argument_types,
-    engine_geometry,
-    preset_calibration,
-)
+from .calibration_record import Calibration, check_argument_types, engine_geometry
 from .charge import check_scaling, scaled
-from .diagnosis import (
-    IMEP_FACTOR_MAX,
-    IMEP_MAX_PA,
-    PATTERN_FACTOR,
-    PATTERN_R2,
-    PISTON_SPEED_MAX_M_S,
-    SPEED_FACTOR_MAX,
-    Diagnosis,
-    DiagnosisVerdict,
-    diagnose,
-)
-from .pressure_work import check_single_cylinder, measured_imep, piston_displacement, signal_work
+from .pressure_work import check_single_cylinder, piston_displacement, signal_work
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
     from .pegging import MotoredGain
 
-__all__ = [
-    "Calibration",
-    "Diagnosis",
-    "DiagnosisVerdict",
-    "calibrate",
-    "diagnose",
-    "measured_imep",
-    "preset_calibration",
-    "CALIBRATION_FORMAT",
-    "IMEP_FACTOR_MAX",
-    "IMEP_MAX_PA",
-    "SPEED_FACTOR_MAX",
-    "PISTON_SPEED_MAX_M_S",
-    "PATTERN_FACTOR",
-    "PATTERN_R2",
-]
+__all__ = ["calibrate"]
 
 DEFAULT_MAX_ORDER = 4.0
 
@@ -154,7 +123,7 @@ def calibrate(
     - ``max_order``: the energy balance's low-pass [orders per revolution].
     - ``scaling``: ``"charge"`` (default) or ``"none"`` (see the module doc).
     - ``refine``: find the identification inertia (default) or keep the energy balance's.
-    - ``tooth_errors``, ``load_per``: passed to :func:`rotor.analyze_log` and :func:`diagnose`.
+    - ``tooth_errors``, ``load_per``: passed to :func:`rotor.analyze_log` and :func:`rotor.diagnose`.
     - ``edge``: ``"auto"`` (default: both read, the one that fits the wheel better taken,
       :func:`rotor.logs.track.read_track`), ``"rising"`` or ``"falling"`` edges of the wheel signal.
 

@@ -296,25 +296,8 @@ class Diagnosis(Result):
         with the IMEP the pressure channel measured per cycle (``measured_imep_pa``, when
         there is one) over the identified IMEP. Returns the three Axes, or with ``kind`` the
         one."""
-        from ..plotting.diagnostics import plot_identification
-
-        title = f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}"
-        if self.identification.warnings:
-            title += " (poor fit)"
-        if self.mismatch:
-            title += " (the engine does not match the log?)"
-        return plot_identification(
-            omega=self.omega,
-            omega_model=self.omega_model,
-            cylinder_torques=self.cylinder_torques(),
-            imep_pa=self.imep_pa,
-            imep_std_pa=self.imep_std_pa,
-            misfire=self.misfire,
-            title=title,
-            measured_imep_pa=self.measured_imep_pa,
-            ax=ax,
-            kind=kind,
-        )
+        end = " (the engine does not match the log?)" if self.mismatch else ""
+        return self.identification._plot(ax, kind, end, self.measured_imep_pa)
 
     def to_json_dict(self, written: Sequence[str] = ()) -> dict:
         """What ``rotor diagnose --json`` prints: per cycle its number ``cycle`` (from 1, as

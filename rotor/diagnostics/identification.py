@@ -323,6 +323,11 @@ class Identification(Result):
         (:func:`rotor.plotting.diagnostics.plot_identification`). ``kind``: None (the three
         panels on ``ax``, three Axes, or a new figure) or ``"speed"``, ``"torque"`` or
         ``"imep"`` (that panel alone on the one Axes ``ax``). Returns what it drew on."""
+        return self._plot(ax, kind)
+
+    def _plot(self, ax: Any, kind: str | None, title_end: str = "", measured_imep_pa: Any = None) -> Any:
+        """:meth:`plot`, the title ending in ``title_end`` and with the IMEP a pressure
+        channel measured per cycle [Pa] where given (:meth:`rotor.Diagnosis.plot`)."""
         from ..plotting.diagnostics import plot_identification
 
         return plot_identification(
@@ -333,7 +338,9 @@ class Identification(Result):
             imep_std_pa=self.imep_std_pa,
             misfire=self.misfire,
             title=f"{self.engine_name}: speed; rms residual {self.rms_residual:.3g} rad/s, R² {self.fit_r2:.4f}"
-            + (" (poor fit)" if self.warnings else ""),
+            + (" (poor fit)" if self.warnings else "")
+            + title_end,
+            measured_imep_pa=measured_imep_pa,
             ax=ax,
             kind=kind,
         )

@@ -279,7 +279,7 @@ def test_calibration_of_another_engine_is_refused(tmp_path, capsys):
 def test_shipped_preset_calibration():
     """rotor/presets/tue-single.calibration.json (benchmarks/diagnose_real.py from full_load.txt) is the
     tue-single preset's, and diagnose finds it by default."""
-    from rotor.diagnostics.calibration import preset_calibration
+    from rotor.diagnostics.calibration_record import preset_calibration
 
     eng = rotor.load_engine("tue-single")
     cal, path = preset_calibration(eng)

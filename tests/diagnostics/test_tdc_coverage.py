@@ -186,7 +186,7 @@ def test_real_recordings_state_the_model_error(name):
     3 stated σ, most of σ the model's — so the calibration agrees within 3 σ: never "agrees"
     at 8 σ, never "corrected" to the speed's."""
     engine = rotor.load_engine("tue-single")
-    cal = rotor.diagnostics.calibration.preset_calibration(engine)[0]
+    cal = rotor.diagnostics.calibration_record.preset_calibration(engine)[0]
     path = DATA / f"{name}.txt"
     truth = float(
         np.rad2deg(

@@ -154,7 +154,7 @@ def test_top_level_all_is_one_sorted_list():
 
 
 def test_every_module_is_reachable_as_an_attribute_of_its_subpackage():
-    """``import rotor`` is lazy, yet ``rotor.diagnostics.calibration.preset_calibration``
+    """``import rotor`` is lazy, yet ``rotor.diagnostics.calibration_record.preset_calibration``
     works in a fresh process, as it did when every module was imported eagerly."""
     import sys
 
