@@ -45,7 +45,7 @@ import rotor  # noqa: E402  (switches float64 on)
 # which share the folder) compile the same ones. A kernel compiled once in the session is
 # read back instead of compiled again, also after _free_compiled_code below drops it.
 # ROTOR_COMPILATION_CACHE=off runs the suite without it.
-COMPILATION_CACHE = rotor.enable_compilation_cache(min_compile_time_s=0.0)  # every program, as the command line
+COMPILATION_CACHE = rotor.enable_compilation_cache()
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
@@ -147,10 +147,6 @@ def _free_compiled_code():
     clear_caches, 1 100). Below half the limit the compiled code is kept for the tests after,
     which reuse it instead of tracing and compiling again."""
     yield
-    if COMPILATION_CACHE and jax.config.jax_persistent_cache_min_compile_time_secs:
-        # an in-process `main(argv)` keeps only programs of 0.1 s or more (a long Python
-        # session's choice); the suite keeps every program, as the command line does
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     used, limit = _memory_maps()
     if used > MAPS_HIGH * limit:
         jax.clear_caches()
