@@ -16,15 +16,7 @@ from typing import Any
 import griffe
 
 _ROLE = re.compile(r":(?:class|func|meth|mod|attr|data|obj|exc):`~?([^`]+)`")
-_WORDS = (
-    (re.compile(r"\bGround(\s+)floor\b"), r"Base\1layer"),
-    (re.compile(r"\bground(\s+)floor\b"), r"base\1layer"),
-    (re.compile(r"\bthe(\s+)ground\b"), r"the\1fixed frame"),
-    (re.compile(r"\brooms\b"), "subpackages"),
-    (re.compile(r"\broom\b"), "subpackage"),
-    (re.compile(r"\bRoom\b"), "Subpackage"),
-    (re.compile(r"\bhouse\b"), "package"),
-)
+_WORDS = ((re.compile(r"\bthe(\s+)ground\b"), r"the\1fixed frame"),)
 
 
 def markdown(text: str) -> str:

@@ -287,21 +287,12 @@ def wheel_reference() -> str:
     )
 
 
-_ISSUE = (
-    (re.compile(r"\(issue \d+(?:, part \d+)?: "), "("),
-    (re.compile(r" ?\(issue \d+(?:, part \d+)?\)"), ""),
-    (re.compile(r"\bOne house with rooms\b"), "Domain subpackages"),
-)
-
-
 def changelog_for_users(markdown: str) -> str:
-    """CHANGELOG.md as the site shows it: without the project's work-item numbers, and in
-    the site's words for the package's parts (see ``griffe_rotor.markdown``)."""
+    """CHANGELOG.md as the site shows it: Sphinx roles as code, a blank line before every
+    list (``griffe_rotor.markdown``)."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from griffe_rotor import markdown as docstring_markdown
 
-    for pattern, text in _ISSUE:
-        markdown = pattern.sub(text, markdown)
     return docstring_markdown(markdown)
 
 
