@@ -60,10 +60,22 @@ _PER_TEST: dict[str, list[float]] = {}
 """Per test file: [XLA programs compiled, seconds compiling, seconds in its tests]."""
 
 
-def _count_program(event: str, duration_secs: float, **_: object) -> None:
+# ROTOR_SUITE_PROFILE=1: also per test file and per function, the seconds tracing, lowering
+# and compiling (build/test-compilations/<worker>.json, "functions").
+_PROFILE = os.environ.get("ROTOR_SUITE_PROFILE", "").strip() not in ("", "0")
+_FUNCTIONS: dict[str, list[float]] = {}
+_CURRENT = {"file": ""}
+
+
+def _count_program(event: str, duration_secs: float, fun_name: str = "?", **_: object) -> None:
     if event == "/jax/core/compile/backend_compile_duration":
         _COMPILED["programs"] += 1
         _COMPILED["seconds"] += duration_secs
+    if _PROFILE and event.startswith("/jax/core/compile/"):
+        key = f"{_CURRENT['file']}|{event.rsplit('/', 1)[-1]}|{fun_name}"
+        row = _FUNCTIONS.setdefault(key, [0, 0.0])
+        row[0] += 1
+        row[1] += duration_secs
 
 
 def _count_cache_hit(event: str, **_: object) -> None:
@@ -90,6 +102,7 @@ def pytest_runtest_protocol(item, nextitem):
         _COMPILED["seconds"],
         time.perf_counter(),
     )
+    _CURRENT["file"] = item.nodeid.split("::")[0]
     yield
     row = _PER_TEST.setdefault(item.nodeid.split("::")[0], [0, 0.0, 0.0])
     row[0] += _COMPILED["programs"] - _COMPILED["from_cache"] - programs
@@ -100,7 +113,7 @@ def pytest_runtest_protocol(item, nextitem):
 def pytest_sessionfinish(session):
     worker = getattr(session.config, "workerinput", {}).get("workerid", "main")
     COMPILATIONS.mkdir(parents=True, exist_ok=True)
-    (COMPILATIONS / f"{worker}.json").write_text(json.dumps({**_COMPILED, "files": _PER_TEST}))
+    (COMPILATIONS / f"{worker}.json").write_text(json.dumps({**_COMPILED, "files": _PER_TEST, "functions": _FUNCTIONS}))
 
 
 def pytest_terminal_summary(terminalreporter):

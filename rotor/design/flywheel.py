@@ -38,7 +38,7 @@ import optimistix as optx
 from jaxtyping import Float
 
 from ..dynamics.loads import Load, parse_load
-from ..dynamics.prepared import PreparedEngine, resolve_engine
+from ..dynamics.prepared import PreparedEngine, prepare, resolve_engine
 from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
@@ -297,45 +297,28 @@ def with_crankshaft_inertia(engine: Engine, inertia_kgm2: float | Float[jax.Arra
 
 @eqx.filter_jit
 def _state(
-    engine: Engine,
-    inertia: Any,
-    rpm: Any,
-    scale: Any,
-    load: Load | None,
-    fidelity: str,
-    friction: FrictionArg,
-    grid_deg: float,
+    prepared: PreparedEngine, inertia: Any, rpm: Any, scale: Any, load: Load | None, friction: FrictionArg
 ) -> tuple[Any, Any]:
     """δ (NaN where the crankshaft nearly stops) and the textbook excess work [J] of the
-    steady state with ``[crankshaft] inertia_kgm2 = inertia``."""
-    r = steady_state(
-        with_crankshaft_inertia(engine, inertia),
-        rpm,
-        load,
-        fidelity=fidelity,
-        friction=friction,
-        imep_scale=scale,
-        grid_deg=grid_deg,
-    )
+    steady state with ``[crankshaft] inertia_kgm2 = inertia``, from the prepared tables."""
+    r = steady_state(prepared.with_inertia(inertia), rpm, load, friction=friction, imep_scale=scale)
     ok = jnp.min(r.omega) > 0.01 * r.mean_omega
     return jnp.where(ok, r.delta, jnp.nan), r.excess_work_J
 
 
 @eqx.filter_jit
 def _root(
-    engine: Engine,
+    prepared: PreparedEngine,
     u0: Any,
     log_target: Any,
     rpm: Any,
     scale: Any,
     load: Load | None,
-    fidelity: str,
     friction: FrictionArg,
-    grid_deg: float,
     rtol: float,
 ) -> tuple[Any, Any, Any]:
     def fn(u, _):
-        d, _ = _state(engine, jnp.exp(u), rpm, scale, load, fidelity, friction, grid_deg)
+        d, _ = _state(prepared, jnp.exp(u), rpm, scale, load, friction)
         return jnp.log(d) - log_target
 
     sol: Any = optx.root_find(fn, optx.Newton(rtol=rtol, atol=rtol), u0, max_steps=60, throw=False)
@@ -358,6 +341,9 @@ class DeltaOfInertia:
         self, engine: Engine, fidelity: str = "variable", friction: FrictionArg = None, grid_deg: float = 0.25
     ):
         self.engine, self.fidelity, self.friction, self.grid_deg = engine, fidelity, friction, grid_deg
+        # the tables are built once, outside the compiled search: the crankshaft inertia only
+        # shifts I(θ), so every inertia the search tries reuses them
+        self.prepared = prepare(engine, fidelity, grid_deg)
         self.mechanism_kgm2 = float(mean_reduced_inertia(engine)) - float(engine.crankshaft.inertia_kgm2)
 
     def _args(self, point: OperatingPoint) -> tuple[Any, Any, Any]:
@@ -368,14 +354,7 @@ class DeltaOfInertia:
     def state(self, inertia_kgm2: float, point: OperatingPoint) -> tuple[float, float]:
         """δ [-] (NaN where the crankshaft nearly stops) and the textbook excess work [J]
         at ``point`` (its load already parsed) with ``[crankshaft] inertia_kgm2`` [kg·m²]."""
-        out = _state(
-            self.engine,
-            jnp.asarray(inertia_kgm2, dtype=jnp.float64),
-            *self._args(point),
-            self.fidelity,
-            self.friction,
-            self.grid_deg,
-        )
+        out = _state(self.prepared, jnp.asarray(inertia_kgm2, dtype=jnp.float64), *self._args(point), self.friction)
         delta, excess = (float(v) for v in jax.device_get(out))
         return delta, excess
 
@@ -389,13 +368,11 @@ class DeltaOfInertia:
         inertia in kg·m²) to relative tolerance ``rtol`` [-]: u, whether it converged, and
         the number of steps."""
         u, ok, steps = _root(
-            self.engine,
+            self.prepared,
             jnp.asarray(u0, dtype=jnp.float64),
             jnp.asarray(log_target),
             *self._args(point),
-            self.fidelity,
             self.friction,
-            self.grid_deg,
             rtol,
         )
         return float(u), bool(ok), int(steps)
