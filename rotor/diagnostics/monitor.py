@@ -82,9 +82,10 @@ misfires, never more). A verdict still comes within a cycle of its cycle's end o
 and a misfire in the first cycles is still found where it stands out of that spread; one
 in the run's first cycle whose copy is the lead-in is in its own baseline twice and is
 missed. On simulated runs with 1.5 % misfires
-(``benchmarks/misfire_detection.py``, 144 conditions) the common deviation keeps the false
-alarms at the threshold of 1 per 1000 fault-free cycles to a median of 1.3 and at most 9
-per 1000 cycles, where the medians alone gave up to 29.
+(``benchmarks/misfire_detection.py``, 144 conditions, each firing's work shaped as the
+combustion torque) the common deviation keeps the false alarms at the threshold of 1 per
+1000 fault-free cycles to a median of 1.3 and at most 11 per 1000 cycles (with the half-sine
+work shape of before, the medians alone gave up to 29).
 This is the crankshaft speed-fluctuation approach of the on-board monitors (Plapp,
 Klenk, Moser: "Methods of on-board misfire detection", SAE 900232; Klenk, Moser, Müller,
 Wimmer: "Misfire detection by evaluating crankshaft speed — a means to comply with
