@@ -6,12 +6,15 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: install demo lint docs docs-build test fuzz wheel-check notebooks bench bench-quick clean
 
+# uv installs the same versions as pip, several times faster (its downloads in parallel);
+# pip does it where uv cannot be installed
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "rotor needs Python >= 3.11 (set PYTHON=...)")'
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip uninstall --quiet --yes rotor  # the distribution's name before crank-rotor
-	$(PY) -m pip install --quiet -e '.[test,docs]'
+	$(PY) -m pip install --quiet --disable-pip-version-check uv \
+	  && $(VENV)/bin/uv pip install --quiet --python $(PY) -e '.[test,docs]' \
+	  || $(PY) -m pip install --quiet -e '.[test,docs]'
 	@touch $(STAMP)
 
 install: $(STAMP)
@@ -35,9 +38,10 @@ docs-build: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
 # two worker processes (the CI machine has two cores), each taking whole test files, so that
-# a file's fixtures are computed once; property tests draw the same examples on every run
+# a file's fixtures are computed once, the longest files first (tests/file_seconds.json) so that
+# both finish together; property tests draw the same examples on every run
 test: lint docs-build
-	$(PY) -m pytest -q -n 2 --dist loadfile --durations=30
+	$(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 
 # the property and fuzz tests with new random draws (tests/conftest.py); what they find
 # becomes an explicit example in the test

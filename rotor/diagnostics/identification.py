@@ -482,11 +482,6 @@ def _energy(p, bases, pos, offset_L, e_ref, a_ref, L: int, na: int):
     return E
 
 
-def _omega_model(p, bases, pos, offset_L, e_ref, a_ref, L, na):
-    E = _energy(p, bases, pos, offset_L, e_ref, a_ref, L, na)[:, :-1]
-    return jnp.sqrt(2 * jnp.maximum(E, 1e-300) / bases.inertia)
-
-
 def _sandwich(J, r, npar, bins: int):
     """Covariance of least-squares parameters under stationary, coloured residual noise:
     (JᵀJ)⁻¹·JᵀΣJ·(JᵀJ)⁻¹, JᵀΣJ = (1/m)·Σ_f S(f)·Re(Ĵ(f)ᴴĴ(f)) with S the residual's
@@ -534,14 +529,17 @@ def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, na: int, 
         def E_flat(p):
             return _energy(p, bases, pos, offset_L, e_ref, a_ref, L, na)[:, :-1].reshape(-1)
 
-        # exact linear least squares in E, each sample weighted by 1/(I·ω): the speed error it makes
+        # E is affine in the parameters, E = E(0) + X·p: exact linear least squares in E, each
+        # sample weighted by 1/(I·ω) (the speed error it makes), then the speed residual
+        # √(2E/I) − ω from the same X (the model's ω without its recurrence in the solver)
         zero = jnp.zeros(npar)
-        X = jax.jacfwd(E_flat)(zero)
-        wt = (1.0 / (bases.inertia[None, :] * w)).reshape(-1)
-        p0 = _normal_solve(X * wt[:, None], (e_meas.reshape(-1) - E_flat(zero)) * wt)
+        E_zero, X = E_flat(zero), jax.jacfwd(E_flat)(zero)
+        inertia = jnp.tile(bases.inertia, L)
+        wt = 1.0 / (inertia * w.reshape(-1))
+        p0 = _normal_solve(X * wt[:, None], (e_meas.reshape(-1) - E_zero) * wt)
 
         def resid(p, args):
-            return (_omega_model(p, bases, pos, offset_L, e_ref, a_ref, L, na) - w).reshape(-1)
+            return jnp.sqrt(2 * jnp.maximum(E_zero + X @ p, 1e-300) / inertia) - w.reshape(-1)
 
         # normal equations (Cholesky): the parameters are scaled to O(1), JᵀJ is small and well conditioned,
         # and a QR of the tall Jacobian costs ~1 s on CPU
