@@ -38,8 +38,10 @@ docs-build: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
 # two worker processes (the CI machine has two cores), each taking whole test files, so that
-# a file's fixtures are computed once, the longest files first (tests/file_seconds.json) so that
-# both finish together; property tests draw the same examples on every run
+# a file's fixtures are computed once, in the order of the folders (a worker's next file is
+# usually its last one's neighbour and reuses what that compiled; the documentation and
+# notebook tests come late and read what the rest put into the compilation cache: taking the
+# longest files first was slower); property tests draw the same examples on every run
 test: lint docs-build
 	$(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 

@@ -87,17 +87,6 @@ jax.monitoring.register_event_duration_secs_listener(_count_program)
 jax.monitoring.register_event_listener(_count_cache_hit)
 
 
-FILE_SECONDS = Path(__file__).resolve().parent / "file_seconds.json"
-"""Seconds each test file took on a cold run (from the summary's build/test-file-seconds.json):
-the files run longest first, so that the two workers of `make test` finish together instead
-of one waiting on the other's last long file. Only the order depends on it."""
-
-
-def pytest_collection_modifyitems(config, items):
-    seconds = json.loads(FILE_SECONDS.read_text()) if FILE_SECONDS.exists() else {}
-    items.sort(key=lambda item: -seconds.get(item.nodeid.split("::")[0], 0.0))  # stable: a file's own order kept
-
-
 def pytest_configure(config):
     if not hasattr(config, "workerinput"):  # the main process, before any worker starts
         for old in COMPILATIONS.glob("*.json"):
@@ -139,9 +128,6 @@ def pytest_terminal_summary(terminalreporter):
         files: dict[str, list[float]] = {}
         for c in counts:
             files.update(c.get("files", {}))
-        (ROOT / "build" / "test-file-seconds.json").write_text(
-            json.dumps({name: round(row[2], 1) for name, row in sorted(files.items())}, indent=0) + "\n"
-        )
         slowest = sorted(files.items(), key=lambda kv: -kv[1][2])[:15]
         if slowest:
             terminalreporter.write_line("slowest test files: seconds (of them compiling), programs compiled")
