@@ -40,8 +40,8 @@ docs-build: $(STAMP)
 # two worker processes (the CI machine has two cores), each taking whole test files, so that
 # a file's fixtures are computed once, in the order of the folders (a worker's next file is
 # usually its last one's neighbour and reuses what that compiled; the documentation and
-# notebook tests come late and read what the rest put into the compilation cache: taking the
-# longest files first was slower); property tests draw the same examples on every run
+# notebook tests come late and read what the rest put into the compilation cache; taking the
+# longest files first was no faster); property tests draw the same examples on every run
 test: lint docs-build
 	$(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 
