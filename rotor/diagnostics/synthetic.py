@@ -173,71 +173,9 @@ def simulated_recording(
     cannot be used; :class:`rotor.NoSteadyStateError` where the engine has no steady state
     at that speed.
     """
-    from ..fileio import atomic_path
-
-    bench = _bench(
-        path,
-        engine,
-        rpm,
-        cycles,
-        imep_scale,
-        sample_rate_hz,
-        wheel,
-        gap_deg,
-        tooth_error_deg,
-        noise_v,
-        seed,
-        motored_cycles,
-    )
-    eng, comb_scale = _charged(bench.engine, bench.imep_scale)
-    rng = np.random.default_rng(bench.seed)
-    motion = _crank_motion(eng, bench, comb_scale, rng)
-    n = motion.ts.size
-    pv = pressure_volts(_pressure(eng, motion, comb_scale, bench.motored)) + rng.normal(0.0, bench.noise_v / 20, n)
-    ev = _encoder_volts(bench, motion) + rng.normal(0.0, bench.noise_v, n)
-    data = np.column_stack([motion.ts, pv, ev])
-    with atomic_path(bench.path) as tmp:
-        np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
-    return bench.path
-
-
-@dataclasses.dataclass(frozen=True)
-class _Bench:
-    """The arguments of :func:`simulated_recording`, checked: the file, the engine, what
-    is recorded and how."""
-
-    path: pathlib.Path
-    engine: Engine
-    rpm: float
-    cycles: int
-    imep_scale: float
-    fs: float
-    wheel: Wheel
-    gap_deg: float
-    tooth_error_deg: float
-    noise_v: float
-    seed: int
-    motored: frozenset[int]
-
-
-def _bench(
-    path,
-    engine,
-    rpm,
-    cycles,
-    imep_scale,
-    sample_rate_hz,
-    wheel,
-    gap_deg,
-    tooth_error_deg,
-    noise_v,
-    seed,
-    motored_cycles,
-) -> _Bench:
-    """:class:`rotor.EngineError` naming the argument of :func:`simulated_recording` that
-    cannot be used; else the arguments checked."""
     from ..engine.file import load_engine
     from ..engine.model import Engine
+    from ..fileio import atomic_path
 
     path = pathlib.Path(path)
     if not path.parent.is_dir():
@@ -289,9 +227,38 @@ def _bench(
     if w.missing > w.teeth - 3:
         raise EngineError(f"wheel = {w.spec!r}: too few teeth for a simulated recording")
 
-    return _Bench(
+    bench = _Bench(
         path, eng, rpm, cycles, imep_scale, fs, w, gap_deg, tooth_error_deg, noise_v, int(seed), frozenset(motored_set)
     )
+    eng, comb_scale = _charged(bench.engine, bench.imep_scale)
+    rng = np.random.default_rng(bench.seed)
+    motion = _crank_motion(eng, bench, comb_scale, rng)
+    n = motion.ts.size
+    pv = pressure_volts(_pressure(eng, motion, comb_scale, bench.motored)) + rng.normal(0.0, bench.noise_v / 20, n)
+    ev = _encoder_volts(bench, motion) + rng.normal(0.0, bench.noise_v, n)
+    data = np.column_stack([motion.ts, pv, ev])
+    with atomic_path(bench.path) as tmp:
+        np.savetxt(tmp, data, fmt=("%.8E", "%.7E", "%.7E"), delimiter="\t")
+    return bench.path
+
+
+@dataclasses.dataclass(frozen=True)
+class _Bench:
+    """The arguments of :func:`simulated_recording`, checked: the file, the engine, what
+    is recorded and how."""
+
+    path: pathlib.Path
+    engine: Engine
+    rpm: float
+    cycles: int
+    imep_scale: float
+    fs: float
+    wheel: Wheel
+    gap_deg: float
+    tooth_error_deg: float
+    noise_v: float
+    seed: int
+    motored: frozenset[int]
 
 
 def _charged(eng, imep_scale: float):
