@@ -340,7 +340,7 @@ class DeltaOfInertia:
     def __init__(
         self, engine: Engine, fidelity: str = "variable", friction: FrictionArg = None, grid_deg: float = 0.25
     ):
-        self.engine, self.fidelity, self.friction, self.grid_deg = engine, fidelity, friction, grid_deg
+        self.friction = friction
         # the tables are built once, outside the compiled search: the crankshaft inertia only
         # shifts I(θ), so every inertia the search tries reuses them
         self.prepared = prepare(engine, fidelity, grid_deg)

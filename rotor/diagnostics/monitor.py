@@ -1197,9 +1197,7 @@ class _Baseline:
         _insort(self.sorted, x)
 
     def median(self) -> float:
-        y = self.sorted
-        n = len(y)
-        return y[n // 2] if n % 2 else 0.5 * (y[n // 2 - 1] + y[n // 2])
+        return _median(self.sorted)
 
     def spread(self) -> float:
         y = self.sorted
@@ -1212,12 +1210,16 @@ class _Baseline:
         if len(y) < 2:
             return y[0] if y else 0.0
         i = _bisect_left(y, x)
-        rest = y[:i] + y[i + 1 :] if i < len(y) and y[i] == x else y
-        n = len(rest)
-        return rest[n // 2] if n % 2 else 0.5 * (rest[n // 2 - 1] + rest[n // 2])
+        return _median(y[:i] + y[i + 1 :] if i < len(y) and y[i] == x else y)
 
     def median_spread(self) -> tuple[float, float]:
         return self.median(), self.spread()
+
+
+def _median(y: list[float]) -> float:
+    """The median of the sorted values ``y`` (at least one)."""
+    n = len(y)
+    return y[n // 2] if n % 2 else 0.5 * (y[n // 2 - 1] + y[n // 2])
 
 
 def _slots(k0: int, j0: int, k1: int, j1: int, nf: int):
