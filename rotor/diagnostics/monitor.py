@@ -299,6 +299,10 @@ class MonitorResult(Result):
     threshold: float
     source: str
     median_imep_pa: np.ndarray | None = None
+    segments: list = dataclasses.field(default_factory=list)
+    """Each firing's segment, chosen by the monitor: ``(cylinder, segment_deg,
+    start_after_tdc_deg)`` in firing order (the angle to the next firing, at most 180°, from
+    TDC + (180° − segment)/8, where a firing's combustion work falls: the module doc)."""
 
     def summary(self) -> str:
         lines = [
@@ -312,6 +316,13 @@ class MonitorResult(Result):
             lines.append(
                 f"  {c + 1:>8} {int(self.judged[c]):>7} {int(self.misfires[c]):>9} "
                 f"{self.median_index[c]:>13.2f} {self.min_index[c]:>13.2f}{imep}"
+            )
+        if self.segments:
+            shown = sorted({(seg, start) for _, seg, start in self.segments})
+            lines.append(
+                "  segments: "
+                + ", ".join(f"{seg:g}° from {start:g}° after TDC" for seg, start in shown)
+                + " (to the next firing, at most 180°; started where a firing does its work)"
             )
         if self.misfire_list:
             shown = ", ".join(f"{k}:{c}" for k, c in self.misfire_list[:20])
@@ -335,6 +346,9 @@ class MonitorResult(Result):
                 "misfire_count": int(self.misfires.sum()),
                 "misfires": [list(p) for p in self.misfire_list],
                 "not_judged": self.not_judged,
+                "segments": [
+                    {"cylinder": c, "segment_deg": seg, "start_after_tdc_deg": start} for c, seg, start in self.segments
+                ],
                 "cylinders": [
                     {
                         "cylinder": c + 1,
@@ -591,6 +605,10 @@ class MisfireMonitor:
                 if self._model is None
                 else np.array([float(np.median(d)) if d else math.nan for d in self._imep_sketch])
             ),
+            segments=[
+                (c, round(math.degrees(seg), 6), round(math.degrees(off), 6))
+                for c, seg, off in zip(self._fire_cyl, self._seg_list, self._off_list)
+            ],
         )
 
     # ------------------------------------------------------------------ notes

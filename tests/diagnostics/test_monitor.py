@@ -357,8 +357,14 @@ def test_the_segment_starts_where_a_firing_does_its_work():
         6: [7.5] * 6,
         8: [11.25] * 8,
     }
-    out = MisfireMonitor("60-2", tdc_deg=0.0, cylinders=8).feed(v8_teeth(40, misfires={(10, 3), (25, 6)}))
+    m = MisfireMonitor("60-2", tdc_deg=0.0, cylinders=8)
+    out = m.feed(v8_teeth(40, misfires={(10, 3), (25, 6)}))
     assert {(v.cycle, v.cylinder) for v in out if v.misfire} == {(10, 4), (26, 7)}
+    # the choice is stated in the result: each firing's segment and where it starts
+    res = m.result()
+    assert sorted(res.segments) == [(c, 90.0, 11.25) for c in range(1, 9)]
+    assert {"cylinder": 1, "segment_deg": 90.0, "start_after_tdc_deg": 11.25} in res.to_json_dict()["segments"]
+    assert "90° from 11.25° after TDC" in res.summary()
 
 
 @pytest.mark.parametrize("seed", range(4))
