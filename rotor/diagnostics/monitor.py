@@ -318,10 +318,10 @@ class MonitorResult(Result):
                 f"{self.median_index[c]:>13.2f} {self.min_index[c]:>13.2f}{imep}"
             )
         if self.segments:
-            shown = sorted({(seg, start) for _, seg, start in self.segments})
+            kinds = sorted({(seg, start) for _, seg, start in self.segments})
             lines.append(
                 "  segments: "
-                + ", ".join(f"{seg:g}° from {start:g}° after TDC" for seg, start in shown)
+                + ", ".join(f"{seg:g}° from {start:g}° after TDC" for seg, start in kinds)
                 + " (to the next firing, at most 180°; started where a firing does its work)"
             )
         if self.misfire_list:
