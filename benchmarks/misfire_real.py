@@ -13,8 +13,9 @@ the project has no ``shared/``); the data are read from there, never copied:
    cycle-mean speed across the called cycle against the usual cycle-to-cycle change, and
    the speed over the cycle (30° bins) against the median cycle.
 2. **Mitsubishi 6G75 cranked with and without compression** (``ecu-triggers/6g75-*.csv``,
-   36-2-1-1 wheel, 130–170 rpm): the per-firing index and energy change e, and the ratio
-   of their typical magnitude (median |·|) with compression to without; TDC where the
+   36-2-1-1 wheel, 130–170 rpm): the per-firing swing (the speed's rise from TDC to half
+   the firing interval after), index and energy change e, and the ratio of their typical
+   magnitude (median |·|) with compression to without; TDC where the
    speed over the 120° firing interval is lowest with compression (the compression's end).
    Both edges are tried; what the monitor refuses is given with its own words.
 3. **tue-4gb10** (the single-cylinder bench, analog 60-2 wheel, no, half and full load):
@@ -276,6 +277,7 @@ def part_6g75():
             v, r, notes = run_monitor(t, wheel, per_rev, tdc_deg=tdc, cylinders=6, firing_order=G75_ORDER)
             idx = np.array([u.index for u in v])
             e = np.array([u.energy for u in v])
+            sw = np.array([u.swing for u in v])
             row = {
                 "edges": int(t.size),
                 "firings_judged": int(r.judged.sum()),
@@ -295,6 +297,10 @@ def part_6g75():
                     {
                         "median_abs_index": float(np.median(np.abs(idx))),
                         "median_abs_energy": float(np.median(np.abs(e))),
+                        "median_abs_swing": float(np.median(np.abs(sw))),
+                        "median_abs_swing_cranking": float(np.median(np.abs(sw[crank]))),
+                        "min_swing_cranking": float(np.min(sw[crank])),
+                        "max_abs_swing_cranking": float(np.max(np.abs(sw[crank]))),
                         "coast_down_from_s": release if math.isfinite(release) else None,
                         "firings_cranking": int(crank.sum()),
                         "median_abs_index_cranking": float(np.median(np.abs(idx[crank]))),
@@ -303,6 +309,7 @@ def part_6g75():
                         "calls_in_coast_down": [[u.cycle, u.cylinder] for u, c in zip(v, crank) if u.misfire and not c],
                         "index": [round(float(x), 3) for x in idx],
                         "energy": [round(float(x), 5) for x in e],
+                        "swing": [round(float(x), 5) for x in sw],
                         "cycle_cylinder": [[u.cycle, u.cylinder] for u in v],
                     }
                 )
@@ -314,6 +321,10 @@ def part_6g75():
         out["ratio_median_abs_index"] = w["median_abs_index"] / wo["median_abs_index"]
         out["ratio_median_abs_energy"] = w["median_abs_energy"] / wo["median_abs_energy"]
         out["ratio_median_abs_energy_cranking"] = w["median_abs_energy_cranking"] / wo["median_abs_energy_cranking"]
+        out["ratio_median_abs_swing"] = w["median_abs_swing"] / wo["median_abs_swing"]
+        out["ratio_median_abs_swing_cranking"] = w["median_abs_swing_cranking"] / wo["median_abs_swing_cranking"]
+        # every cranking firing with compression against the largest without
+        out["ratio_min_swing_with_to_max_abs_without_cranking"] = w["min_swing_cranking"] / wo["max_abs_swing_cranking"]
         # without compression most of the cranking firings' indices are exactly 0: the first
         # firings of a short capture are judged against medians that hold their own value
         out["zero_indices_without_compression"] = int(
@@ -435,13 +446,12 @@ def figure(res, path):
         a = ax[0, 1]
         for k, col in (("with_compression", "tab:red"), ("without_compression", "tab:blue")):
             r = g.get(f"{k}_falling", {})
-            if "energy" in r:
-                a.plot(
-                    np.arange(1, len(r["energy"]) + 1), r["energy"], "o-", ms=3, color=col, label=k.replace("_", " ")
-                )
-        a.set_title("6G75 cranking: energy change e over each firing's segment", fontsize=9)
+            if "swing" in r:
+                a.plot(np.arange(1, len(r["swing"]) + 1), r["swing"], "o-", ms=3, color=col, label=k.replace("_", " "))
+        a.set_yscale("symlog", linthresh=1e-2)
+        a.set_title("6G75 cranking: each firing's swing, TDC to 60° after", fontsize=9)
         a.set_xlabel("firing")
-        a.set_ylabel("e = Δ(ω²)/ω²")
+        a.set_ylabel("swing = (ω²(TDC+60°) − ω²(TDC))/ω²")
         a.legend(fontsize=7)
     tu = res.get("tue-4gb10")
     if isinstance(tu, dict):
@@ -539,6 +549,11 @@ def report(key, r):
                 f"median |index| {r['ratio_median_abs_index']:.2f}x; while the starter turns it (coast-down left "
                 f"out): median |e| {r['ratio_median_abs_energy_cranking']:.1f}x, rms index "
                 f"{r['ratio_rms_index_cranking']:.2f}x"
+            )
+            print(
+                f"  swing with/without compression: median |swing| {r['ratio_median_abs_swing']:.1f}x, while the "
+                f"starter turns it {r['ratio_median_abs_swing_cranking']:.1f}x; the smallest swing with compression "
+                f"{r['ratio_min_swing_with_to_max_abs_without_cranking']:.1f}x the largest |swing| without"
             )
             wo = r["without_compression_falling"]
             print(

@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import run_cli
+from conftest import SHARED_DATA, run_cli
 
 from rotor import cli
 from rotor.diagnostics.monitor import MisfireMonitor, NoteKind, ToothLines
@@ -380,3 +380,61 @@ def test_the_first_verdicts_do_not_call_normal_firings_misfires(seed):
         m = MisfireMonitor("60-2", tdc_deg=0.0, cylinders=8)
         out = m.feed(v8_teeth(12, misfires={(4, 2)}, cov=0.05, copy_first=copy, seed=seed)) + m.close()
         assert {(v.cycle, v.cylinder) for v in out if v.misfire} == {(4 + copy, 3)}
+
+
+def compression_teeth(cycles, a, rpm=600.0, seed=0):
+    """Tooth times of a 4-cylinder engine on a 60-2 wheel whose crank slows into every TDC
+    (each 180°, the first at the gap) and speeds up after it: ω² = ω₀²·(1 − a·cos 2θ)."""
+    rng = np.random.default_rng(seed)
+    theta = np.deg2rad(np.arange(0, cycles * 720, 6.0))
+    w2 = (rpm * np.pi / 30) ** 2 * (1 - a * np.cos(2 * theta))
+    dt = np.diff(theta) / np.sqrt(0.5 * (w2[:-1] + w2[1:]))
+    t = np.concatenate([[0.0], np.cumsum(dt)]) + rng.normal(0, 20e-9, theta.size)
+    return t[(np.arange(theta.size) % 60) < 58]
+
+
+@pytest.mark.parametrize("a", [0.0, 0.01, 0.05])
+def test_the_swing_measures_the_compression_about_tdc(a):
+    """The swing over windows of 45° at TDC and 90° after it, to first order in a: the
+    mean of cos 2θ over a window is ±sin(45°)/(π/4), so swing = 2·a·sin(45°)/(π/4)."""
+    m = MisfireMonitor("60-2", tdc_deg=0.0, cylinders=4, firing_order=[1, 3, 4, 2])
+    out = m.feed(compression_teeth(20, a)) + m.close()
+    swing = np.array([v.swing for v in out])
+    expected = 2 * a * np.sin(np.pi / 4) / (np.pi / 4)
+    assert len(out) >= 4 * 18 and not any(v.misfire for v in out)
+    assert np.abs(swing - expected).max() <= 0.02 * a + 2e-5
+    assert m.result().median_swing == pytest.approx([expected] * 4, rel=0.02, abs=2e-5)
+
+
+def test_a_misfire_swings_less_than_every_fired_firing(recorded):
+    """At speed, a misfire's swing (no combustion after its TDC) is below every fired one's,
+    and the cylinders' median swings are alike (one engine, one load)."""
+    out, m, _ = feed_in_chunks(times_of(recorded[0]), 58)
+    fired = np.array([v.swing for v in out if not v.misfire])
+    lost = np.array([v.swing for v in out if v.misfire])
+    assert lost.size == 3 and lost.max() < fired.min() - 3 * (fired.max() - fired.min())
+    medians = [c["median_swing"] for c in m.result().to_json_dict()["cylinders"]]
+    assert np.ptp(medians) < 0.1 * np.ptp(np.concatenate([fired, lost]))
+    assert "median swing" in m.result().summary()
+
+
+ECU = SHARED_DATA / "ecu-triggers"
+
+
+@pytest.mark.skipif(not (ECU / "6g75-without-spark-crank.csv").is_file(), reason="../shared/data absent")
+def test_capture_6g75_with_compression_swings_ten_times_more_than_without():
+    """A V6 cranked with its spark plugs in and out (falling edges of its 36-2-1-1 wheel; TDC 55°
+    after the gap, where the speed with compression is lowest over the 120° firing
+    interval): each firing's swing is at least 10× larger with compression."""
+    import rotor
+    from rotor.logs.digital import digital_edges
+
+    median = {}
+    for name in ("6g75-withsparkplugs-cranking.csv", "6g75-without-spark-crank.csv"):
+        log = rotor.read_log(ECU / name)
+        t = digital_edges(log["time"], log["encoder_d"], edge="falling").times
+        m = MisfireMonitor("36-2-1-1", tdc_deg=55.0, cylinders=6)
+        out = m.feed(t) + m.close()
+        assert len(out) >= 12 and not any(v.misfire for v in out)
+        median[name] = np.median(np.abs([v.swing for v in out]))
+    assert median["6g75-withsparkplugs-cranking.csv"] >= 10 * median["6g75-without-spark-crank.csv"]
