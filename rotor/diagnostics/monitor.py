@@ -130,7 +130,7 @@ it (dropped once more than two revolutions are held; a chunk longer than
 **Speed.** A chunk costs a few numpy operations on all its edges at once (the wheel's
 pattern checked on every tooth period, one interpolation for every time its firings need)
 and a few lines of Python per firing: a V8 at 8000 rpm on a 60-2 wheel, fed a revolution at
-a time, runs about 130× faster than real time on one core, about 65× with an engine file
+a time, runs about 120× faster than real time on one core, about 66× with an engine file
 (the model's IMEP of every firing: a few more whole-chunk products)
 (``benchmarks/misfire_detection.py --throughput-only``).
 
@@ -890,13 +890,18 @@ class MisfireMonitor:
             query += (xa - half, xa + half, xb - half, xb + half, xa, xb, (kk + 1) * cyc)
             query += (tz - half, tz + half, tm - half, tm + half)
         model = self._model
-        tp = np.interp(query, th, tt).tolist()
+        nq = len(query)
+        if model is not None:
+            # and the ends of the model's windows over each segment
+            spans = model.span_list
+            for kk, jj in slots:
+                tz = kk * cyc + fire[jj]
+                query += [tz + x for x in spans[jj]]
+        tq = np.interp(query, th, tt)
+        tp = tq[:nq].tolist()
         if model is not None:
             js = [jj for _, jj in slots]
-            tdc = np.array([kk * cyc + fire[jj] for kk, jj in slots])
-            imeps = model.estimate(
-                js, [self._fire_cyl[jj] - 1 for jj in js], np.interp(tdc[:, None] + model.span_all[js], th, tt)
-            )
+            imeps = model.estimate(js, [self._fire_cyl[jj] - 1 for jj in js], tq[nq:].reshape(len(slots), -1))
         last_i = np.searchsorted(th, [xa + segs[jj] + wins[jj] / 2 for (_, jj), xa in zip(slots, starts)]).tolist()
         n_edges = th.size
         E = self._E
@@ -1151,7 +1156,7 @@ class _ModelIndex:
         # |M·y₀|² − 2·g·scales + scalesᵀ·H·scales with y₀ the part without the others
         # (g = (M·O)ᵀ·M·y₀, H = (M·O)ᵀ·(M·O)); only the cylinders whose combustion reaches
         # a slot's segment (``near``) enter its sums
-        self.span_all = np.stack(self.span)
+        self.span_list = [[float(x) for x in sp] for sp in self.span]
         proj = [np.eye(K) - self.design[j] @ self.pinv[j] for j in range(nf)]
         mo = [proj[j] @ self.others[j] for j in range(nf)]
         # all of s₀, M·y₀ and g are linear in z = 1/Δt² (y₀ = w2i·z − known): one operator
@@ -1187,7 +1192,7 @@ class _ModelIndex:
         ok = (dt > 0).all(axis=1).tolist()
         if not all(ok):
             dt[~np.asarray(ok)] = 1.0
-        R = ((self.op[J] * (1.0 / (dt * dt))[:, None, :]).sum(axis=2) - self.const[J]).tolist()
+        R = ((self.op[J] @ (1.0 / (dt * dt))[:, :, None])[..., 0] - self.const[J]).tolist()
         K = self.windows
         sc = self.scales
         out = []
