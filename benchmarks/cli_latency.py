@@ -11,7 +11,9 @@ compilation cache (rotor/cache.py) saves it. "cold": each run gets a new, empty 
 folder (``ROTOR_COMPILATION_CACHE``: a user's very first run); "warm": every run shares a
 folder that one untimed run filled first (every later run); "kept": warm, and the output
 of the same call kept by an untimed run (rotor/cli/kept.py: ``table`` and ``info`` then
-print it without importing JAX). "cold" and "warm" compute every time. The repeats go round the
+print it without importing JAX); "warm, tables built": warm, but the engines' tables are
+built in every process instead of read from their folder (``ROTOR_TABLE_CACHE=off``: the
+baseline of what keeping them saves). "cold" and "warm" compute every time. The repeats go round the
 commands in turn, so that the load of a shared machine falls on all of them alike; the
 median of each is reported, with every time. Three reference processes put the figures in
 proportion: ``python -c pass``, ``python -c 'import jax'`` and ``python -c 'import jax,
@@ -124,7 +126,7 @@ def phases(command: str, cache: str, repeats: int) -> dict:
     """Median seconds of each phase of ``rotor COMMAND 4chn15`` timed inside the process
     (warm cache), and the process's wall time for comparison."""
     runs = []
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache, ROTOR_OUTPUT_CACHE="off")
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache, ROTOR_TABLE_CACHE=cache + "-tables", ROTOR_OUTPUT_CACHE="off")
     argv = [sys.executable, "-c", PHASES, command, "4chn15"]
     subprocess.run(argv, env=env, check=True, capture_output=True)  # fills the cache
     for _ in range(repeats):
@@ -140,12 +142,19 @@ def rotor_exe() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "rotor.cli"]
 
 
-def wall(argv: list[str], cache: str, outputs: str = "off") -> tuple[float, float]:
+def wall(argv: list[str], cache: str, outputs: str = "off", tables: bool = True) -> tuple[float, float]:
     """Seconds from start to exit of ``argv`` in a fresh process with the compilation cache
     ``cache`` and the kept outputs ``outputs`` (rotor/cli/kept.py; "off": computed every
     time), and the CPU seconds it used (user + system: less sensitive than the wall time
-    to the other jobs of a shared machine, but counting every thread of the process)."""
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=cache, ROTOR_OUTPUT_CACHE=outputs)
+    to the other jobs of a shared machine, but counting every thread of the process). The
+    engines' tables are kept in a folder beside ``cache`` (``tables=False``: not kept, built
+    in every process)."""
+    env = dict(
+        os.environ,
+        ROTOR_COMPILATION_CACHE=cache,
+        ROTOR_TABLE_CACHE=cache + "-tables" if tables else "off",
+        ROTOR_OUTPUT_CACHE=outputs,
+    )
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     out = subprocess.run(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -208,7 +217,9 @@ def main() -> None:
         cases[f"rotor {name}"] = ([*rotor, *argv], "warm")
     top = Path(tempfile.mkdtemp(prefix="rotor-cli-latency-"))
     for name, argv in {**light, **compiled}.items():
-        kinds = (() if args.no_cold else ("cold",)) + ("warm",) + (("kept",) if name in light else ())
+        kinds = (
+            (() if args.no_cold else ("cold",)) + ("warm",) + (("kept",) if name in light else ("warm, tables built",))
+        )
         for kind in kinds:
             cases[f"rotor {name} [{kind}]"] = ([*rotor, *(a.replace("{tmp}", str(top)) for a in argv)], kind)
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
@@ -216,17 +227,19 @@ def main() -> None:
     try:
         warm, kept = str(top / "warm"), str(top / "outputs")
         for argv, kind in cases.values():  # fill the warm cache and the kept outputs (untimed)
-            if kind in ("warm", "kept"):
-                wall(argv, warm, kept if kind == "kept" else "off")
+            if kind in ("warm", "kept", "warm, tables built"):
+                wall(argv, warm, kept if kind == "kept" else "off", tables=kind != "warm, tables built")
         for r in range(repeats):
             for name, (argv, kind) in cases.items():
                 if kind == "cold":
                     cache = str(top / f"cold-{r}-{list(cases).index(name)}")
-                elif kind in ("warm", "kept"):
+                elif kind in ("warm", "kept", "warm, tables built"):
                     cache = warm
                 else:
                     cache = "off"
-                times[name].append(wall(argv, cache, kept if kind == "kept" else "off"))
+                times[name].append(
+                    wall(argv, cache, kept if kind == "kept" else "off", tables=kind != "warm, tables built")
+                )
                 if kind == "cold":
                     shutil.rmtree(cache, ignore_errors=True)
             print(f"repeat {r + 1}/{repeats} done", flush=True)

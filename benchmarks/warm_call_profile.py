@@ -96,6 +96,7 @@ def main() -> None:
         env = {
             **os.environ,
             "ROTOR_COMPILATION_CACHE": str(Path(scratch) / "cache"),
+            "ROTOR_TABLE_CACHE": str(Path(scratch) / "tables"),
             "ROTOR_OUTPUT_CACHE": "off",
             "PYTHONPATH": str(ROOT / "benchmarks"),
         }

@@ -22,6 +22,9 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
 # same clone reads back what the first compiled. Delete build/test-jax-cache to start cold.
 if "ROTOR_COMPILATION_CACHE" not in os.environ:
     os.environ["ROTOR_COMPILATION_CACHE"] = str(Path(__file__).resolve().parents[1] / "build" / "test-jax-cache")
+# The engines' tables (rotor.cache.table_folder) likewise, beside it.
+if "ROTOR_TABLE_CACHE" not in os.environ:
+    os.environ["ROTOR_TABLE_CACHE"] = str(Path(__file__).resolve().parents[1] / "build" / "test-tables")
 
 # Property tests draw the same examples on every run (``derandomize``), so that `make test`
 # runs what CI runs; `make fuzz` (ROTOR_FUZZ=1) draws new ones, and what it finds becomes an

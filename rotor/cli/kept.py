@@ -27,13 +27,14 @@ import re
 from pathlib import Path
 from typing import Any
 
+from ..cache import source_fingerprint
+
 __all__ = ["MAX_FILES", "entry_path", "keep_output", "kept_output", "output_key"]
 
 MAX_FILES = 256
 _ENTRY = re.compile(r"^rotor-output-[0-9a-f]{40}\.kept$")
 _MAGIC = "rotor kept output 1"
 _OFF = {"0", "off", "no", "false"}
-_PACKAGES = ("jax", "jaxlib", "equinox", "numpy")
 
 
 def _folder() -> Path | None:
@@ -62,26 +63,6 @@ def _engine_bytes(engine: str) -> bytes | None:
         return None
 
 
-def _source_fingerprint() -> bytes:
-    """rotor's source files (path, size, modification time) and the versions of the
-    numerical packages: what an output depends on besides its inputs."""
-    from importlib import metadata
-
-    root = Path(__file__).resolve().parent.parent
-    parts = []
-    for folder, _, files in sorted(os.walk(root)):
-        for name in sorted(files):
-            if name.endswith((".py", ".toml")):
-                st = os.stat(os.path.join(folder, name))
-                parts.append(f"{os.path.relpath(os.path.join(folder, name), root)}:{st.st_size}:{st.st_mtime_ns}")
-    for package in _PACKAGES:
-        try:
-            parts.append(f"{package}=={metadata.version(package)}")
-        except metadata.PackageNotFoundError:
-            parts.append(f"{package} missing")
-    return "\n".join(parts).encode()
-
-
 def output_key(command: str, engine: str, options: dict[str, Any]) -> str | None:
     """The digest under which ``command``'s output for ``engine`` (a preset name or a path)
     with ``options`` (numbers, strings, None) is kept; None where outputs are not kept or the engine
@@ -92,7 +73,7 @@ def output_key(command: str, engine: str, options: dict[str, Any]) -> str | None
     if raw is None:
         return None
     h = hashlib.blake2b(digest_size=20)
-    for part in (command.encode(), repr(sorted(options.items())).encode(), raw, _source_fingerprint()):
+    for part in (command.encode(), repr(sorted(options.items())).encode(), raw, source_fingerprint()):
         h.update(len(part).to_bytes(8, "little"))
         h.update(part)
     return h.hexdigest()

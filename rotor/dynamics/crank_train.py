@@ -39,6 +39,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from ..cache import keep_tables, kept_tables
 from ..checks import arrays_only, check_size, concrete
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
@@ -364,10 +365,25 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     key = table_key(engine, fidelity, points)
     hit = _TABLES.get(key) if key is not None else None
     if hit is None:
-        values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work = _build(
-            engine, fidelity, points
+        keep = key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None  # never keep a tracer
+        # on disk under the crankshaft inertia too (in I(θ) as built)
+        disk_key = (
+            f"{key}:{np.asarray(engine.crankshaft.inertia_kgm2, dtype=np.float64).tobytes().hex()}" if keep else ""
         )
-        check_tables(values, slopes, mean_i, engine)
+        stored = kept_tables(disk_key) if keep else None
+        if stored is not None and tuple(stored) == _TABLE_NAMES:
+            # as another process built and checked them
+            values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work = (
+                jnp.asarray(stored[name]) for name in _TABLE_NAMES
+            )
+        else:
+            values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work = _build(
+                engine, fidelity, points
+            )
+            check_tables(values, slopes, mean_i, engine)
+            if keep:
+                built = (values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work)
+                keep_tables(disk_key, {name: np.asarray(a) for name, a in zip(_TABLE_NAMES, built)})
         train = CrankTrain(
             values,
             slopes,
@@ -383,8 +399,8 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
             engine.strokes,
             fidelity,
         )
-        if key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None:  # never keep a tracer
-            _remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values[:, COL_I])))))
+        if keep and key is not None:
+            _remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values)[:, COL_I]))))
             remember_object(_TABLES[key], given, 0.0)
         return train
     assert key is not None
@@ -469,6 +485,9 @@ class KeptTables:
 
 
 _TABLES: OrderedDict[str, KeptTables] = OrderedDict()
+_TABLE_NAMES = ("values", "slopes", "imep_m", "imep_c", "mean_i", "firing", "textbook_k", "means", "work", "tb_work")
+"""What the table builder returns, in its order: the names its arrays are kept under on disk
+(:func:`rotor.cache.keep_tables`)."""
 
 
 def table_inputs(engine: Engine) -> tuple:
@@ -512,7 +531,9 @@ def _remember_tables(key: str, entry: tuple) -> None:
 
 
 def clear_table_cache() -> None:
-    """Forget every kept table (:func:`train_from_engine`); the next call builds them again."""
+    """Forget every table kept in this process (:func:`train_from_engine`); the next call reads
+    them from the table folder (:func:`rotor.cache.table_folder`, where tables are kept
+    between processes) or builds them again."""
     _TABLES.clear()
 
 

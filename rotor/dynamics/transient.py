@@ -626,7 +626,8 @@ def run_plan(plan: RunPlan, bar: Progress) -> SpeedResult:
     them all or only the last ``keep_cycles`` cycles' with per-cycle summaries of every
     cycle; after a stall, or for ``method="time"``, the time domain."""
     train, P, cycles, method = plan.train, plan.points_per_cycle, plan.cycles, plan.method
-    omega0, E0, e_switch = _start(train, plan.rpm)
+    # the speed as an array: a Python float would be a constant of the compiled program, one per speed
+    omega0, E0, e_switch = _start(train, jnp.asarray(plan.rpm, dtype=jnp.float64))
     streaming = plan.keep_cycles is not None and plan.keep_cycles < cycles
     sink: _AllSamples | _LastCycles = (
         _LastCycles(plan.scene, P, train.cycle_rad, plan.keep_cycles, cycles)

@@ -23,7 +23,7 @@ from rotor.diagnostics.bulk import analyze_many, diagnose_many, expand_logs, is_
 from rotor.diagnostics.synthetic import simulated_recording
 from rotor.errors import EngineError, InternalError, LogError, SolverError
 
-N = 20
+N = 8
 DIAGNOSE = ["--engine", "tue-single", "--columns", "time,-,encoder_v", "--json"]
 
 
