@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -35,6 +36,7 @@ __all__ = [
     "keep_tables",
     "kept_tables",
     "padded_size",
+    "prune",
     "source_fingerprint",
     "submodules_on_demand",
     "table_folder",
@@ -151,6 +153,20 @@ _TABLE_ENTRY = "rotor-tables-"
 _PACKAGES = ("jax", "jaxlib", "equinox", "numpy")
 
 
+def prune(folder: Path, name: re.Pattern, keep: int) -> None:
+    """Delete all but the ``keep`` newest files of ``folder`` whose names match ``name`` (no
+    other file of the folder is touched)."""
+    found = []
+    for item in os.scandir(folder):
+        if name.match(item.name) and item.is_file(follow_symlinks=False):
+            try:
+                found.append((item.stat(follow_symlinks=False).st_mtime_ns, item.path))
+            except OSError:
+                continue
+    for _, old in sorted(found)[:-keep]:
+        Path(old).unlink(missing_ok=True)
+
+
 def table_folder() -> Path | None:
     """Where the tables of the engines (:func:`rotor.crank_train`: I(θ), the torques and
     their integrals over a cycle) are kept between processes, or None where they are not.
@@ -242,18 +258,6 @@ def keep_tables(key: str, arrays: dict) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
             np.savez(f, entry=np.array(digest), **arrays)
-        kept = []
-        for item in os.scandir(path.parent):
-            if (
-                item.name.startswith(_TABLE_ENTRY)
-                and item.name.endswith(".npz")
-                and item.is_file(follow_symlinks=False)
-            ):
-                try:
-                    kept.append((item.stat(follow_symlinks=False).st_mtime_ns, item.path))
-                except OSError:
-                    continue
-        for _, old in sorted(kept)[:-TABLE_FILES]:
-            Path(old).unlink(missing_ok=True)
+        prune(path.parent, re.compile(rf"^{_TABLE_ENTRY}[0-9a-f]{{40}}\.npz$"), TABLE_FILES)
     except OSError:
         return

@@ -27,7 +27,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from ..cache import source_fingerprint
+from ..cache import prune, source_fingerprint
 
 __all__ = ["MAX_FILES", "entry_path", "keep_output", "kept_output", "output_key"]
 
@@ -125,14 +125,6 @@ def keep_output(key: str | None, text: str) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
             f.write(f"{_MAGIC} {len(body)} {_checksum(key, body)}\n".encode("ascii") + body)
-        kept = []
-        for entry in os.scandir(path.parent):
-            if _ENTRY.match(entry.name) and entry.is_file(follow_symlinks=False):
-                try:
-                    kept.append((entry.stat(follow_symlinks=False).st_mtime_ns, entry.path))
-                except OSError:
-                    continue
-        for _, old in sorted(kept)[:-MAX_FILES]:
-            Path(old).unlink(missing_ok=True)
+        prune(path.parent, _ENTRY, MAX_FILES)
     except OSError:
         return

@@ -106,106 +106,108 @@ def test_a_second_process_finds_every_program_of_a_command_in_the_cache(tmp_path
 
 
 # ---------------------------------------------------------------------- the engines' tables
-def _tables(monkeypatch, tmp_path):
-    """Tables kept in a folder of the test's own, as after rotor.enable_compilation_cache()."""
-    import rotor.cache as cache
-    from rotor.dynamics import crank_train as ct
-
-    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(tmp_path / "tables"))
-    monkeypatch.setattr(cache, "_TABLES_ON", [True])
-    ct.clear_table_cache()
-    return cache, ct
-
-
-def _built(monkeypatch, ct):
-    """Counts the calls of the table builder."""
-    calls = []
-    real = ct._build
-    monkeypatch.setattr(ct, "_build", lambda *a: calls.append(a) or real(*a))
-    return calls
+TABLES_CHILD = """
+import json, sys, jax, numpy as np, equinox as eqx, rotor
+rotor.enable_compilation_cache()
+traced = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, seconds, fun_name="?", **_: traced.append(fun_name) if event.endswith("jaxpr_trace_duration") else None
+)
+engine = rotor.load_engine("mwm6")
+if sys.argv[1] == "heavy":
+    engine = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, engine.crankshaft.inertia_kgm2 * 3)
+train = rotor.crank_train(engine)
+print(json.dumps({"built": "_build" in traced, "values": np.asarray(train.values).tobytes().hex()[:4096],
+                  "mean_inertia": float(train.mean_inertia), "delta": float(rotor.steady_state(engine).delta)}))
+"""
 
 
-def test_an_engines_tables_are_read_back_by_the_next_process_bit_for_bit(monkeypatch, tmp_path):
-    """Built and kept once; after the process forgets them (a new process), read back from the
-    folder, the builder not called, every array bit for bit; the results the same."""
-    import equinox as eqx
-    import numpy as np
-
-    import rotor
-
-    cache, ct = _tables(monkeypatch, tmp_path)
-    engine = rotor.load_engine("mwm6")
-    calls = _built(monkeypatch, ct)
-    first = rotor.crank_train(engine)
-    delta = float(rotor.steady_state(engine).delta)
-    assert len(calls) == 1 and len(list((tmp_path / "tables").glob("rotor-tables-*.npz"))) == 1
-    ct.clear_table_cache()
-    again = rotor.crank_train(engine)
-    assert len(calls) == 1, "read back, not built"
-    for name in ("values", "slopes", "imep_motored_pa", "imep_combustion_pa", "mean_inertia", "work"):
-        np.testing.assert_array_equal(np.asarray(getattr(again, name)), np.asarray(getattr(first, name)), name)
-    ct.clear_table_cache()
-    assert float(rotor.steady_state(engine).delta) == delta
-    # another fidelity, another engine, another crankshaft inertia: tables of their own
-    rotor.crank_train(engine, "constant")
-    rotor.crank_train(rotor.load_engine("4chn15"))
-    heavy = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, engine.crankshaft.inertia_kgm2 * 3)
-    ct.clear_table_cache()
-    built = rotor.crank_train(heavy)
-    ct.clear_table_cache()
-    np.testing.assert_array_equal(np.asarray(rotor.crank_train(heavy).values), np.asarray(built.values))
-    assert float(built.mean_inertia) > float(first.mean_inertia) + 1.9 * float(engine.crankshaft.inertia_kgm2)
-    assert len(calls) == 4 and len(list((tmp_path / "tables").glob("rotor-tables-*.npz"))) == 4
+def _tables_child(tmp_path, variant="plain"):
+    env = dict(os.environ, ROTOR_TABLE_CACHE=str(tmp_path / "tables"))
+    out = subprocess.run(
+        [sys.executable, "-c", TABLES_CHILD, variant], env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def test_a_damaged_or_foreign_entry_is_built_afresh(monkeypatch, tmp_path):
-    """A cut-off file, one copied under another engine's name, or one kept by another version
-    of rotor's source is a miss: the tables are built again and the entry replaced."""
-    import rotor
-
-    cache, ct = _tables(monkeypatch, tmp_path)
-    a, b = rotor.load_engine("4chn15"), rotor.load_engine("mwm6")
-    calls = _built(monkeypatch, ct)
-    rotor.crank_train(a), rotor.crank_train(b)
-    (pa, pb) = sorted((tmp_path / "tables").glob("rotor-tables-*.npz"), key=lambda p: p.stat().st_mtime_ns)
-    raw = pa.read_bytes()
-    pa.write_bytes(raw[: len(raw) // 2])
-    ct.clear_table_cache()
-    rotor.crank_train(a)
-    assert len(calls) == 3 and pa.read_bytes() == raw  # built again, kept whole again
-    pb.write_bytes(raw)  # engine a's tables under engine b's name
-    ct.clear_table_cache()
-    assert rotor.crank_train(b).values.shape[1] == 3 + 6 and len(calls) == 4
-    monkeypatch.setattr(cache, "_FINGERPRINT", [b"another version of rotor"])
-    ct.clear_table_cache()
-    rotor.crank_train(a)
-    assert len(calls) == 5
-
-
-def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, tmp_path):
-    """Off with ROTOR_TABLE_CACHE=off and before enable_compilation_cache(); at most
-    TABLE_FILES entries (the newest), no other file of the folder touched; a refused engine's
-    tables never kept."""
-    import equinox as eqx
+def test_an_engines_tables_are_read_back_by_the_next_process_bit_for_bit(tmp_path):
+    """The first process builds and keeps them; the next reads them back (the table builder not
+    traced), bit for bit, and solves the same; another crankshaft inertia has its own."""
     import pytest
 
     import rotor
 
-    cache, ct = _tables(monkeypatch, tmp_path)
+    first = _tables_child(tmp_path)
+    assert first["built"] and len(list((tmp_path / "tables").glob("rotor-tables-*.npz"))) == 1
+    again = _tables_child(tmp_path)
+    assert not again["built"] and again == {**first, "built": False}
+    heavy = _tables_child(tmp_path, "heavy")  # three times the crankshaft inertia
+    crankshaft = float(rotor.load_engine("mwm6").crankshaft.inertia_kgm2)
+    assert heavy["built"] and heavy["mean_inertia"] == pytest.approx(first["mean_inertia"] + 2 * crankshaft, rel=1e-12)
+    assert len(list((tmp_path / "tables").glob("rotor-tables-*.npz"))) == 2
+
+
+def _entries(folder):
+    return sorted(folder.glob("rotor-tables-*.npz"), key=lambda p: p.stat().st_mtime_ns)
+
+
+def test_a_damaged_or_foreign_entry_is_built_afresh(monkeypatch, tmp_path):
+    """A cut-off file, or one copied under another engine's name, is a miss: the tables are
+    built again (the same as built without the folder) and the entry replaced whole."""
+    import numpy as np
+
+    import rotor
+    from rotor.dynamics import crank_train as ct
+
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", "off")
+    ct.clear_table_cache()
+    a, b = rotor.load_engine("4chn15"), rotor.load_engine("mwm6")
+    want = {e.name: np.asarray(rotor.crank_train(e).values) for e in (a, b)}
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(tmp_path / "tables"))
+    rotor.enable_compilation_cache()  # on in the suite already: the tables are kept
+    for e in (a, b):
+        ct.clear_table_cache()
+        rotor.crank_train(e)
+    pa, pb = _entries(tmp_path / "tables")
+    raw = pa.read_bytes()
+    pa.write_bytes(raw[: len(raw) // 2])
+    ct.clear_table_cache()
+    np.testing.assert_array_equal(np.asarray(rotor.crank_train(a).values), want[a.name])
+    assert pa.read_bytes() == raw  # kept whole again
+    pb.write_bytes(raw)  # engine a's tables under engine b's name
+    ct.clear_table_cache()
+    np.testing.assert_array_equal(np.asarray(rotor.crank_train(b).values), want[b.name])
+    assert pb.read_bytes() != raw
+
+
+def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, tmp_path):
+    """At most TABLE_FILES entries (the newest), no other file of the folder touched; a refused
+    engine's tables never kept; off with ROTOR_TABLE_CACHE=off, and in a process that has not
+    switched the compilation cache on."""
+    import equinox as eqx
+    import pytest
+
+    import rotor
+    import rotor.cache as cache
+    from rotor.dynamics import crank_train as ct
+
     folder = tmp_path / "tables"
     folder.mkdir()
     (folder / "mine.txt").write_text("the user's own")
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(folder))
     monkeypatch.setattr(cache, "TABLE_FILES", 2)
+    rotor.enable_compilation_cache()
     engine = rotor.load_engine("4chn15")
     for k in range(3):
         rotor.crank_train(eqx.tree_at(lambda e: e.geometry.bore_m, engine, engine.geometry.bore_m * (1 + 0.01 * k)))
-    assert len(list(folder.glob("rotor-tables-*.npz"))) == 2 and (folder / "mine.txt").read_text() == "the user's own"
+    assert len(_entries(folder)) == 2 and (folder / "mine.txt").read_text() == "the user's own"
     bad = eqx.tree_at(lambda e: e.masses.reciprocating_kg, engine, -1e6)
+    ct.clear_table_cache()
     with pytest.raises(rotor.EngineError):
         rotor.crank_train(bad)
-    assert len(list(folder.glob("rotor-tables-*.npz"))) == 2
+    assert len(_entries(folder)) == 2
     monkeypatch.setenv("ROTOR_TABLE_CACHE", "off")
     assert cache.table_folder() is None
-    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(folder))
-    monkeypatch.setattr(cache, "_TABLES_ON", [])
-    assert cache.table_folder() is None
+    code = "import json, rotor.cache as c; print(json.dumps(str(c.table_folder())))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout) == "None"
