@@ -130,8 +130,8 @@ def write_log(
     """Simulate a record of ``cycles`` cycles with the misfires ``pairs`` and write its log.
 
     ``lead="copy"``: :func:`record_run`, as ``rotor simulate --record`` writes it (a lead-in
-    cycle that is a copy of the run's first cycle, a lead-out that is a copy of its last
-    revolution). ``lead="simulated"``: a run of two cycles more, its first cycle the lead-in
+    cycle that is a copy of the run's first cycle, a lead-out that is a copy of the first
+    revolution of its last cycle). ``lead="simulated"``: a run of two cycles more, its first cycle the lead-in
     and its last revolution after the record the lead-out, every cycle simulated (the
     header states the same phase); the record's cycle k is the run's cycle k + 1."""
     n = int(engine.cylinders)

@@ -17,8 +17,10 @@ use, ``# tdc_after_gap_deg: 29.4`` and ``# firing_parity: 0`` (:func:`stated_pha
 **Lead-in and lead-out.** A reader counts complete cycles from the first TDC it can place
 after the first gap; a run starts at cylinder 1's TDC before intake (crank angle 0). So
 that the log's first complete cycle is the run's cycle 1, the log starts one cycle
-before the run, that cycle a copy of the run's first; and it ends with a copy of the
-run's last revolution after it. The truth says so.
+before the run, that cycle a copy of the run's first; and it ends with a revolution after
+it, a copy of the first revolution of the run's last cycle (in the same phase of the
+cycle: where the firings are uneven, the last revolution itself would not join on). The
+truth says so.
 
 **The truth** (a JSON file beside the log, ``<log stem>.truth.json``): the engine, the
 wheel, ``tdc_after_gap_deg`` (cylinder 1's TDC after the gap [deg]), the run's cycles
@@ -103,13 +105,16 @@ def record_run(
     if theta[-1] < float(run.cycle_rad) + 2 * np.pi:
         raise EngineError("run: too short to record; it needs more than one cycle and a revolution")
     lead_in, lead_out = float(run.cycle_rad), 2 * np.pi
-    # the lead-in repeats the first cycle one cycle earlier, the lead-out the last revolution one
-    # revolution later: the engine's own fluctuation all through, as a reader expects of a log
+    # the lead-in repeats the first cycle one cycle earlier, the lead-out the first revolution
+    # of the last cycle one cycle later: the engine's own fluctuation all through, in its
+    # phase of the cycle (an uneven firing order repeats only every cycle), as a reader
+    # expects of a log
+    cycle = float(run.cycle_rad)
     first = (theta > 0) & (theta < lead_in)
     t_in = float(np.interp(lead_in, theta, t))
-    last = (theta > theta[-1] - lead_out) & (theta < theta[-1])
-    t_back = float(np.interp(theta[-1] - lead_out, theta, t))
-    theta_all = np.concatenate([theta[first] - lead_in, theta, theta[last] + lead_out])
+    last = (theta > theta[-1] - cycle) & (theta < theta[-1] - cycle + lead_out)
+    t_back = float(np.interp(theta[-1] - cycle, theta, t))
+    theta_all = np.concatenate([theta[first] - lead_in, theta, theta[last] + cycle])
     t_all = np.concatenate([t[first] - t_in, t, t[last] - t_back + t[-1]])
     padded = dataclasses.replace(run, theta=theta_all, t=t_all - t_all[0])
     path = pathlib.Path(path)
