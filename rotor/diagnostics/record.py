@@ -18,8 +18,9 @@ use, ``# tdc_after_gap_deg: 29.4`` and ``# firing_parity: 0`` (:func:`stated_pha
 after the first gap; a run starts at cylinder 1's TDC before intake (crank angle 0). So
 that the log's first complete cycle is the run's cycle 1, the log starts one cycle
 before the run, that cycle a copy of the run's first; and it ends with a revolution after
-it, a copy of the first revolution of the run's last cycle (in the same phase of the
-cycle: where the firings are uneven, the last revolution itself would not join on). The
+it: a copy of the run's last revolution where the engine's torque repeats every revolution
+(an even firing order), else of the first revolution of its last cycle (one cylinder, an
+uneven firing order: the last revolution would not join on in the phase of the cycle). The
 truth says so.
 
 **The truth** (a JSON file beside the log, ``<log stem>.truth.json``): the engine, the
@@ -105,16 +106,16 @@ def record_run(
     if theta[-1] < float(run.cycle_rad) + 2 * np.pi:
         raise EngineError("run: too short to record; it needs more than one cycle and a revolution")
     lead_in, lead_out = float(run.cycle_rad), 2 * np.pi
-    # the lead-in repeats the first cycle one cycle earlier, the lead-out the first revolution
-    # of the last cycle one cycle later: the engine's own fluctuation all through, in its
-    # phase of the cycle (an uneven firing order repeats only every cycle), as a reader
-    # expects of a log
+    # the lead-in repeats the first cycle one cycle earlier, the lead-out a revolution one
+    # cycle or one revolution later: the engine's own fluctuation all through, in its phase
+    # (:func:`_lead_out_source`), as a reader expects of a log
     cycle = float(run.cycle_rad)
     first = (theta > 0) & (theta < lead_in)
     t_in = float(np.interp(lead_in, theta, t))
-    last = (theta > theta[-1] - cycle) & (theta < theta[-1] - cycle + lead_out)
-    t_back = float(np.interp(theta[-1] - cycle, theta, t))
-    theta_all = np.concatenate([theta[first] - lead_in, theta, theta[last] + cycle])
+    back = _lead_out_source(theta, np.asarray(run.torque, dtype=np.float64)[keep], cycle)
+    last = (theta > theta[-1] - back) & (theta < theta[-1] - back + lead_out)
+    t_back = float(np.interp(theta[-1] - back, theta, t))
+    theta_all = np.concatenate([theta[first] - lead_in, theta, theta[last] + back])
     t_all = np.concatenate([t[first] - t_in, t, t[last] - t_back + t[-1]])
     padded = dataclasses.replace(run, theta=theta_all, t=t_all - t_all[0])
     path = pathlib.Path(path)
@@ -176,3 +177,20 @@ def _low_firings(imep: np.ndarray) -> list[tuple[int, int]]:
     typical = float(np.median(imep))
     low = imep < 0.25 * typical if typical > 0 else np.zeros_like(imep, dtype=bool)
     return [(int(k) + 1, int(c) + 1) for k, c in np.argwhere(low)]
+
+
+def _lead_out_source(theta: np.ndarray, torque: np.ndarray, cycle: float) -> float:
+    """How far back [rad] the revolution lies that the lead-out copies: the run's last
+    revolution (2π) where the engine's torque repeats every revolution (the median cycle's
+    two revolutions alike within 2 % of its range: the even firing orders of the usual
+    multi-cylinder engines), so that the speed's drift over the copy is least; else (one
+    cylinder, an uneven firing order, a two-stroke's one revolution) one cycle, so that
+    the copy is in the phase of the cycle."""
+    if cycle <= 2 * np.pi + 1e-9:
+        return cycle
+    cycles = int(theta[-1] // cycle)
+    grid = np.arange(cycles)[:, None] * cycle + np.linspace(0.0, cycle, 720, endpoint=False)[None, :]
+    median = np.median(np.interp(grid, theta, torque), axis=0)
+    span = float(np.ptp(median))
+    alike = span > 0 and float(np.max(np.abs(median[:360] - median[360:]))) <= 0.02 * span
+    return 2 * np.pi if alike else cycle
