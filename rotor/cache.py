@@ -20,6 +20,7 @@ With the compilation cache, the engines' tables are kept between processes too
 
 from __future__ import annotations
 
+import functools
 import importlib
 import os
 import re
@@ -186,15 +187,11 @@ def table_folder() -> Path | None:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rotor" / "tables"
 
 
-_FINGERPRINT: list[bytes] = []
-
-
+@functools.cache
 def source_fingerprint() -> bytes:
     """rotor's source files (path, size, modification time) and the versions of the
     numerical packages: what a kept result depends on besides its inputs (computed once a
     process)."""
-    if _FINGERPRINT:
-        return _FINGERPRINT[0]
     from importlib import metadata
 
     root = Path(__file__).resolve().parent
@@ -209,8 +206,7 @@ def source_fingerprint() -> bytes:
             parts.append(f"{package}=={metadata.version(package)}")
         except metadata.PackageNotFoundError:
             parts.append(f"{package} missing")
-    _FINGERPRINT.append("\n".join(parts).encode())
-    return _FINGERPRINT[0]
+    return "\n".join(parts).encode()
 
 
 def _table_entry(key: str) -> tuple[Path, str] | None:

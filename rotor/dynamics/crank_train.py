@@ -363,44 +363,18 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     given = engine
     engine = arrays_only(engine)
     key = table_key(engine, fidelity, points)
+    keep = key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None  # never keep a tracer
     hit = _TABLES.get(key) if key is not None else None
+    if hit is None and keep and key is not None:
+        hit = _read_kept(key, engine, fidelity)  # as another process built and checked them
     if hit is None:
-        keep = key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None  # never keep a tracer
-        # on disk under the crankshaft inertia too (in I(θ) as built)
-        disk_key = (
-            f"{key}:{np.asarray(engine.crankshaft.inertia_kgm2, dtype=np.float64).tobytes().hex()}" if keep else ""
-        )
-        stored = kept_tables(disk_key) if keep else None
-        if stored is not None and tuple(stored) == _TABLE_NAMES:
-            # as another process built and checked them
-            values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work = (
-                jnp.asarray(stored[name]) for name in _TABLE_NAMES
-            )
-        else:
-            values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work = _build(
-                engine, fidelity, points
-            )
-            check_tables(values, slopes, mean_i, engine)
-            if keep:
-                built = (values, slopes, imep_m, imep_c, mean_i, firing, textbook_k, means, work, tb_work)
-                keep_tables(disk_key, {name: np.asarray(a) for name, a in zip(_TABLE_NAMES, built)})
-        train = CrankTrain(
-            values,
-            slopes,
-            firing,
-            imep_m,
-            imep_c,
-            mean_i,
-            textbook_k,
-            means,
-            work,
-            tb_work,
-            engine.cycle_rad,
-            engine.strokes,
-            fidelity,
-        )
+        tables = dict(zip(_TABLE_NAMES, _build(engine, fidelity, points)))
+        check_tables(tables["values"], tables["slopes"], tables["mean_i"], engine)
+        train = _train(tables, engine, fidelity)
         if keep and key is not None:
-            _remember_tables(key, (train, engine.crankshaft.inertia_kgm2, float(np.min(np.asarray(values)[:, COL_I]))))
+            inertia = engine.crankshaft.inertia_kgm2
+            keep_tables(key, {**{k: np.asarray(v) for k, v in tables.items()}, "inertia_ref": np.asarray(inertia)})
+            _remember_tables(key, (train, inertia, float(np.min(np.asarray(tables["values"])[:, COL_I]))))
             remember_object(_TABLES[key], given, 0.0)
         return train
     assert key is not None
@@ -419,6 +393,37 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     if d is not None and d.ndim == 0:
         remember_object(kept, given, float(d))
     return shift_inertia(kept.train, d_inertia)
+
+
+def _read_kept(key: str, engine: Engine, fidelity: str) -> KeptTables | None:
+    """The tables kept on disk under ``key`` (:func:`rotor.cache.kept_tables`), put into this
+    process's table cache as built with their own crankshaft inertia (the caller shifts
+    them to ``engine``'s); None where none are kept."""
+    stored = kept_tables(key)
+    if stored is None or set(stored) != {*_TABLE_NAMES, "inertia_ref"}:
+        return None
+    train = _train({name: jnp.asarray(stored[name]) for name in _TABLE_NAMES}, engine, fidelity)
+    _remember_tables(key, (train, float(stored["inertia_ref"]), float(np.min(stored["values"][:, COL_I]))))
+    return _TABLES[key]
+
+
+def _train(t: dict, engine: Engine, fidelity: str) -> CrankTrain:
+    """A :class:`CrankTrain` of the table builder's arrays (:data:`_TABLE_NAMES`)."""
+    return CrankTrain(
+        t["values"],
+        t["slopes"],
+        t["firing"],
+        t["imep_m"],
+        t["imep_c"],
+        t["mean_i"],
+        t["textbook_k"],
+        t["means"],
+        t["work"],
+        t["tb_work"],
+        engine.cycle_rad,
+        engine.strokes,
+        fidelity,
+    )
 
 
 OBJECTS_PER_TABLE = 16

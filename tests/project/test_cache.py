@@ -132,7 +132,8 @@ def _tables_child(tmp_path, variant="plain"):
 
 def test_an_engines_tables_are_read_back_by_the_next_process_bit_for_bit(tmp_path):
     """The first process builds and keeps them; the next reads them back (the table builder not
-    traced), bit for bit, and solves the same; another crankshaft inertia has its own."""
+    traced), bit for bit, and solves the same; another crankshaft inertia reads the same
+    entry, its I(θ) shifted by the difference."""
     import pytest
 
     import rotor
@@ -143,8 +144,9 @@ def test_an_engines_tables_are_read_back_by_the_next_process_bit_for_bit(tmp_pat
     assert not again["built"] and again == {**first, "built": False}
     heavy = _tables_child(tmp_path, "heavy")  # three times the crankshaft inertia
     crankshaft = float(rotor.load_engine("mwm6").crankshaft.inertia_kgm2)
-    assert heavy["built"] and heavy["mean_inertia"] == pytest.approx(first["mean_inertia"] + 2 * crankshaft, rel=1e-12)
-    assert len(list((tmp_path / "tables").glob("rotor-tables-*.npz"))) == 2
+    assert not heavy["built"]
+    assert heavy["mean_inertia"] == pytest.approx(first["mean_inertia"] + 2 * crankshaft, rel=1e-12)
+    assert len(list((tmp_path / "tables").glob("rotor-tables-*.npz"))) == 1
 
 
 def _entries(folder):
@@ -181,15 +183,12 @@ def test_a_damaged_or_foreign_entry_is_built_afresh(monkeypatch, tmp_path):
 
 
 def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, tmp_path):
-    """At most TABLE_FILES entries (the newest), no other file of the folder touched; a refused
-    engine's tables never kept; off with ROTOR_TABLE_CACHE=off, and in a process that has not
-    switched the compilation cache on."""
+    """At most TABLE_FILES entries (the newest), no other file of the folder touched; off with
+    ROTOR_TABLE_CACHE=off, and in a process that has not switched the compilation cache on."""
     import equinox as eqx
-    import pytest
 
     import rotor
     import rotor.cache as cache
-    from rotor.dynamics import crank_train as ct
 
     folder = tmp_path / "tables"
     folder.mkdir()
@@ -201,11 +200,6 @@ def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, 
     for k in range(3):
         rotor.crank_train(eqx.tree_at(lambda e: e.geometry.bore_m, engine, engine.geometry.bore_m * (1 + 0.01 * k)))
     assert len(_entries(folder)) == 2 and (folder / "mine.txt").read_text() == "the user's own"
-    bad = eqx.tree_at(lambda e: e.masses.reciprocating_kg, engine, -1e6)
-    ct.clear_table_cache()
-    with pytest.raises(rotor.EngineError):
-        rotor.crank_train(bad)
-    assert len(_entries(folder)) == 2
     monkeypatch.setenv("ROTOR_TABLE_CACHE", "off")
     assert cache.table_folder() is None
     code = "import json, rotor.cache as c; print(json.dumps(str(c.table_folder())))"
