@@ -52,6 +52,7 @@ __all__ = [
     "CrankTrain",
     "crank_train",
     "check_engine",
+    "check_inertia",
     "check_tables",
     "checked_train",
     "clear_table_cache",
@@ -323,6 +324,27 @@ def _build(engine, fidelity, points):
     )
 
 
+_BUILDERS: OrderedDict[tuple, Any] = OrderedDict()
+
+
+def _build_now(engine, fidelity, points):
+    """:func:`_build` run now as a compiled program of its own, also where the caller is being
+    traced (a jitted function closing over a concrete engine): the tables are values, kept
+    for the calls after, never part of that trace. One program per structure of ``engine``
+    (the shapes of its arrays, its other fields), as :func:`_build` compiles."""
+    leaves, treedef = jax.tree_util.tree_flatten(engine)
+    sig = tuple((x.shape, x.dtype.str) if eqx.is_array(x) else ("static", repr(x)) for x in leaves)
+    key = (treedef, sig, fidelity, points)
+    compiled = _BUILDERS.get(key)
+    if compiled is None:
+        compiled = _build.lower(engine, fidelity, points).compile()
+        _BUILDERS[key] = compiled
+        while len(_BUILDERS) > TABLE_CACHE_SIZE:
+            _BUILDERS.popitem(last=False)
+    _BUILDERS.move_to_end(key)
+    return compiled(engine, fidelity, points)
+
+
 def cumulative_columns(f, df, h):
     """∫ from node 0 to each node of every column of ``f`` (nodes 0…N down the rows, with
     their dθ-derivatives ``df``) by the Hermite rule, step ``h`` [rad]:
@@ -351,8 +373,11 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     Tables of a concrete engine are kept (:func:`table_key`: keyed on the values of every
     field they depend on) and reused by the next call with the same values; the crankshaft
     inertia ``[crankshaft] inertia_kgm2`` is a constant added to I(θ), so a new value of it
-    (a flywheel sweep) reuses them too. Traced fields (inside ``jit``, ``vmap``, ``grad``)
-    build the tables in the trace.
+    (a flywheel sweep) reuses them too. The tables are built at no crankshaft inertia and
+    that inertia added after, so that an engine's tables are the same numbers whatever was
+    computed before, in this process or another. Traced fields (inside ``jit``, ``vmap``,
+    ``grad``) build the tables in the trace, except a traced crankshaft inertia: it is
+    added to tables built outside the trace.
 
     An engine object is immutable: one that was checked and found here before (at this
     fidelity and node count) is neither checked nor digested again."""
@@ -363,36 +388,39 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     given = engine
     engine = arrays_only(engine)
     key = table_key(engine, fidelity, points)
-    keep = key is not None and concrete(engine.crankshaft.inertia_kgm2) is not None  # never keep a tracer
-    hit = _TABLES.get(key) if key is not None else None
-    if hit is None and keep and key is not None:
-        hit = _read_kept(key, engine, fidelity)  # as another process built and checked them
-    if hit is None:
+    if key is None:  # traced inputs besides the crankshaft inertia: the tables in the trace
         tables = dict(zip(_TABLE_NAMES, _build(engine, fidelity, points)))
-        check_tables(tables["values"], tables["slopes"], tables["mean_i"], engine)
-        train = _train(tables, engine, fidelity)
-        if keep and key is not None:
-            inertia = engine.crankshaft.inertia_kgm2
-            keep_tables(key, {**{k: np.asarray(v) for k, v in tables.items()}, "inertia_ref": np.asarray(inertia)})
-            _remember_tables(key, (train, inertia, float(np.min(np.asarray(tables["values"])[:, COL_I]))))
-            remember_object(_TABLES[key], given, 0.0)
-        return train
-    assert key is not None
+        return _train(tables, engine, fidelity)
+    hit = _TABLES.get(key) or _find_tables(key, engine, fidelity, points)
     _TABLES.move_to_end(key)
     kept = hit
     d_inertia = engine.crankshaft.inertia_kgm2 - kept.inertia_ref
     d = concrete(d_inertia)
-    if d is not None and d == 0:
-        remember_object(kept, given, 0.0)
-        return kept.train
-    if d is not None and not kept.low + d > 0:
-        raise EngineError(
-            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {kept.low + d:g} kg·m²: it must stay "
-            "positive; check [crankshaft] inertia_kgm2"
-        )
+    if d is not None:
+        check_inertia(kept.low + d, float(kept.train.mean_inertia) + d, engine)
     if d is not None and d.ndim == 0:
         remember_object(kept, given, float(d))
+        if d == 0:
+            return kept.train
     return shift_inertia(kept.train, d_inertia)
+
+
+def _find_tables(key: str, engine: Engine, fidelity: str, points: int) -> KeptTables:
+    """The tables of ``engine`` (concrete but for its crankshaft inertia) under ``key``: read
+    from the table folder, as another process built and checked them, else built and kept."""
+    hit = _read_kept(key, engine, fidelity)
+    if hit is not None:
+        return hit
+    # built at no crankshaft inertia, which the caller adds: whichever inertia comes first,
+    # the same numbers in every process and in any order of calls
+    base = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, np.zeros((), np.float64))
+    tables = dict(zip(_TABLE_NAMES, _build_now(base, fidelity, points)))
+    check_finite_tables(tables["values"], tables["slopes"], engine)
+    keep_tables(key, {**{k: np.asarray(v) for k, v in tables.items()}, "inertia_ref": np.zeros(())})
+    _remember_tables(
+        key, (_train(tables, engine, fidelity), 0.0, float(np.min(np.asarray(tables["values"])[:, COL_I])))
+    )
+    return _TABLES[key]
 
 
 def _read_kept(key: str, engine: Engine, fidelity: str) -> KeptTables | None:
@@ -402,7 +430,8 @@ def _read_kept(key: str, engine: Engine, fidelity: str) -> KeptTables | None:
     stored = kept_tables(key)
     if stored is None or set(stored) != {*_TABLE_NAMES, "inertia_ref"}:
         return None
-    train = _train({name: jnp.asarray(stored[name]) for name in _TABLE_NAMES}, engine, fidelity)
+    with jax.ensure_compile_time_eval():  # arrays, not values of a trace this call may be in
+        train = _train({name: jnp.asarray(stored[name]) for name in _TABLE_NAMES}, engine, fidelity)
     _remember_tables(key, (train, float(stored["inertia_ref"]), float(np.min(stored["values"][:, COL_I]))))
     return _TABLES[key]
 
@@ -556,6 +585,26 @@ def check_tables(values: Any, slopes: Any, mean_inertia: Any, engine: Engine) ->
     v, d, mi = concrete(values), concrete(slopes), concrete(mean_inertia)
     if v is None or d is None or mi is None:
         return
+    check_finite_tables(v, d, engine)
+    check_inertia(np.min(v[:, COL_I]), mi, engine)
+
+
+def check_inertia(low: Any, mean: Any, engine: Engine) -> None:
+    """Refuse a smallest reduced inertia ``low`` or a mean ``mean`` [kg·m²] that is not
+    positive (each may be an array: a sweep over the crankshaft inertia)."""
+    low, mean = np.asarray(low), np.asarray(mean)
+    if not (np.all(low > 0) and np.all(np.isfinite(mean)) and np.all(mean > 0)):
+        raise EngineError(
+            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {np.min(low):g} kg·m² (mean "
+            f"{np.min(mean):g}): it must stay positive; check [crankshaft] inertia_kgm2 and [masses]"
+        )
+
+
+def check_finite_tables(values: Any, slopes: Any, engine: Engine) -> None:
+    """Refuse tables of a concrete ``engine`` with a value or slope that is not finite: a
+    :class:`rotor.EngineError` naming the column and the inputs it comes from. (That I(θ)
+    stays positive is checked with the crankshaft inertia added, :func:`train_from_engine`.)"""
+    v, d = np.asarray(values), np.asarray(slopes)
     for col in range(v.shape[1]):
         what, unit, cause = _COLUMN_CAUSE.get(
             col, (f"cylinder {col - COL_COMBUSTION + 1}'s combustion torque", "N·m", "[pressure] and [geometry]")
@@ -569,9 +618,3 @@ def check_tables(values: Any, slopes: Any, mean_inertia: Any, engine: Engine) ->
                     f"engine {engine.name!r}: {what}{name} is {table[i, col]:g} {unit} at {deg:g}°: not a finite "
                     f"number; check {cause}"
                 )
-    low = float(np.min(v[:, COL_I]))
-    if not (low > 0 and np.isfinite(mi) and mi > 0):
-        raise EngineError(
-            f"engine {engine.name!r}: the reduced inertia I(θ) falls to {low:g} kg·m² (mean {float(mi):g}): it must "
-            "stay positive; check [crankshaft] inertia_kgm2 and [masses]"
-        )

@@ -174,6 +174,40 @@ def test_the_crankshaft_inertia_is_a_constant_in_every_table(diesel, fidelity):
     )
 
 
+@pytest.mark.parametrize("fidelity", ["variable", "constant"])
+def test_an_engines_tables_do_not_depend_on_what_came_before(diesel, fidelity, tmp_path, monkeypatch):
+    """The tables of an engine are the same numbers, bit for bit, whether another crankshaft
+    inertia of the same engine was computed before or not, and whether they were built in
+    this process or read back from the table folder."""
+    J1 = diesel.crankshaft.inertia_kgm2
+    other = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, J1 * 3.0 + 0.1)
+
+    def tables(*engines, folder="off"):
+        monkeypatch.setenv("ROTOR_TABLE_CACHE", folder)
+        ct.clear_table_cache()
+        out = [train_from_engine(e, fidelity, 720) for e in engines]
+        return np.asarray(out[-1].values), float(out[-1].mean_inertia)
+
+    alone = tables(other)
+    for got in (
+        tables(diesel, other),
+        tables(other, folder=str(tmp_path)),
+        tables(diesel, other, folder=str(tmp_path)),
+    ):
+        assert np.array_equal(got[0], alone[0]) and got[1] == alone[1]
+
+
+def test_a_jitted_function_may_close_over_an_engine_not_seen_before(diesel, monkeypatch):
+    """jax.jit(lambda rpm: steady_state(engine, rpm)) with the engine's tables not yet built
+    anywhere: they are built as values (not inside the trace), kept, and the jitted steady
+    state is the plain one."""
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", "off")
+    ct.clear_table_cache()
+    engine = eqx.tree_at(lambda e: e.geometry.bore_m, diesel, diesel.geometry.bore_m * 1.0137)
+    jitted = float(jax.jit(lambda rpm: rotor.steady_state(engine, rpm).delta)(1250.0))
+    assert jitted == pytest.approx(float(rotor.steady_state(engine, 1250.0).delta), rel=1e-12)
+
+
 def test_the_gradient_over_the_inertia_of_a_prepared_engine(diesel, prepared):
     """dδ/dJ through the prepared tables (the implicit Newton derivative) against a central difference."""
     J0 = float(diesel.crankshaft.inertia_kgm2)
