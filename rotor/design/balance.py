@@ -51,12 +51,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import equinox as eqx
 import numpy as np
 
 from ..engine.kinematics import rod_motion
 from ..engine.mechanism import engine_piston_motion
-from ..engine.model import Engine, require_engine
+from ..engine.model import Engine, engine_jit, require_engine
 from ..engine.plausible import check_results_finite, check_speed_rpm, require_whole
 from ..engine.shaft import journal_positions_m, throw_positions_m, web_positions_m
 from ..errors import EngineError
@@ -395,7 +394,7 @@ class Balance(Result):
         raise ValueError(f"which must be 'orders' or 'ellipses', got {which!r}")
 
 
-@eqx.filter_jit
+@engine_jit
 def _motion(engine: Engine, theta: np.ndarray, model: str) -> tuple[Any, Any, Any]:
     """d²s/dα² of every piston, and every cylinder's mechanical angle α and rod angle β as
     if it were an ordinary mechanism (a master's is), shape (angles, cylinders); compiled

@@ -68,14 +68,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
 from ..checks import check_size
 from ..engine.forces import cylinder_pressure
 from ..engine.mechanism import engine_piston_motion
-from ..engine.model import Engine, require_engine
+from ..engine.model import Engine, engine_jit, require_engine
 from ..engine.plausible import check_results_finite, check_speed_rpm, require_number, require_whole
 from ..engine.shaft import journal_count, journal_positions_m, span_of_throw, throw_positions_m, web_positions_m
 from ..errors import EngineError
@@ -121,7 +120,7 @@ def wear_indices(direction_rad: Any, load_N: Any, rays: int, sector_deg: float) 
     return np.mean(q * acts, axis=0)
 
 
-@eqx.filter_jit  # one compiled call instead of hundreds of eagerly compiled operations
+@engine_jit  # one compiled call instead of hundreds of eagerly compiled operations
 def _piston_forces(engine, theta, omega, model):
     """P_Σ = P_g + P_j of every cylinder [N] and its mechanical angle [rad], each of shape
     ``theta.shape + (cylinders,)``."""

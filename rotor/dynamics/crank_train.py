@@ -44,7 +44,7 @@ from ..checks import arrays_only, check_size, concrete
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
-from ..engine.model import Engine, require_engine
+from ..engine.model import Engine, engine_jit, require_engine, unnamed
 from ..engine.plausible import require_number
 from ..errors import EngineError
 
@@ -287,7 +287,7 @@ def _shifted_columns(engine, fidelity, points):
     return values, slopes, jnp.full(engine.cylinders, work_m), textbook_k
 
 
-@eqx.filter_jit
+@engine_jit
 def _build(engine, fidelity, points):
     cycle = engine.cycle_rad
     w = cycle / points  # periodic trapezoid rule: spectrally accurate
@@ -332,6 +332,7 @@ def _build_now(engine, fidelity, points):
     traced (a jitted function closing over a concrete engine): the tables are values, kept
     for the calls after, never part of that trace. One program per structure of ``engine``
     (the shapes of its arrays, its other fields), as :func:`_build` compiles."""
+    engine = unnamed(engine)  # one program for every name, as _build is compiled
     leaves, treedef = jax.tree_util.tree_flatten(engine)
     sig = tuple((x.shape, x.dtype.str) if eqx.is_array(x) else ("static", repr(x)) for x in leaves)
     key = (treedef, sig, fidelity, points)

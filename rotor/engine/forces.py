@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
@@ -31,7 +30,7 @@ from ..checks import check_size
 from ..errors import EngineError
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
-from .model import require_engine
+from .model import engine_jit, require_engine
 from .plausible import require_number
 
 if TYPE_CHECKING:
@@ -50,7 +49,7 @@ __all__ = [
 ]
 
 
-@eqx.filter_jit  # one compiled call per shape, not hundreds of eager operations
+@engine_jit  # one compiled call per shape, not hundreds of eager operations
 def cylinder_pressure(engine, theta):
     """Absolute pressure in every cylinder [Pa], shape ``theta.shape + (cylinders,)``.
 
@@ -61,7 +60,7 @@ def cylinder_pressure(engine, theta):
     return engine.pressure(phi, engine.geometry, engine.strokes)
 
 
-@eqx.filter_jit  # one compiled call per shape, not hundreds of eager operations
+@engine_jit  # one compiled call per shape, not hundreds of eager operations
 def cylinder_gas_torques(engine, theta, model: str = "exact"):
     """Gas torque of each cylinder, (p − p_cc)·A·ds/dθ [N·m], shape ``theta.shape + (cylinders,)``.
 
@@ -74,7 +73,7 @@ def cylinder_gas_torques(engine, theta, model: str = "exact"):
     return force * ds
 
 
-@eqx.filter_jit  # one compiled call per shape, not hundreds of eager operations
+@engine_jit  # one compiled call per shape, not hundreds of eager operations
 def gas_torque(engine, theta, model: str = "exact"):
     """Total gas torque of the engine on the crankshaft [N·m], shape of ``theta``.
 
@@ -166,7 +165,7 @@ def _cycle_grid(engine, points_per_rev: int = 1440):
     return jnp.linspace(0.0, engine.cycle_rad, n, endpoint=False)
 
 
-@eqx.filter_jit  # one compiled call instead of dozens of eagerly compiled operations
+@engine_jit  # one compiled call instead of dozens of eagerly compiled operations
 def imep_pa(engine):
     """Indicated mean effective pressure of one cylinder, ∮p·dV / V_h [Pa].
 
@@ -183,7 +182,7 @@ def imep_pa(engine):
     return work / g.displacement_m3
 
 
-@eqx.filter_jit
+@engine_jit
 def mean_gas_torque(engine):
     """Cycle mean of the engine's gas torque [N·m] = n·IMEP·V_h / (cycle angle)."""
     require_engine(engine, "mean_gas_torque(engine)")

@@ -27,7 +27,8 @@ when throw 1 and bank 1 are zero: θ = 0 is cylinder 1's TDC at the start of int
 from __future__ import annotations
 
 import dataclasses
-from typing import ClassVar
+import functools
+from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
@@ -53,6 +54,8 @@ __all__ = [
     "Torsion",
     "Engine",
     "require_engine",
+    "engine_jit",
+    "unnamed",
 ]
 
 
@@ -835,6 +838,29 @@ class Engine(eqx.Module):
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         fields.update(changes)
         return Engine(**fields)
+
+
+def unnamed(engine: Any) -> Any:
+    """``engine`` with an empty name where it is an :class:`Engine`, else ``engine`` itself.
+    The name is a static field: a compiled function given the engine would be compiled again
+    for every name, though no computation reads it."""
+    if isinstance(engine, Engine) and engine.name:
+        return engine.replace(name="")
+    return engine
+
+
+def engine_jit(fn: Any) -> Any:
+    """``eqx.filter_jit`` for a function whose first argument is an :class:`Engine`,
+    compiled once for engines of the same structure whatever their names (:func:`unnamed`).
+    The function must not read the name."""
+    jitted = eqx.filter_jit(fn)
+
+    @functools.wraps(fn)
+    def call(engine: Any, *args: Any, **kwargs: Any) -> Any:
+        return jitted(unnamed(engine), *args, **kwargs)
+
+    call.lower = lambda engine, *args, **kwargs: jitted.lower(unnamed(engine), *args, **kwargs)  # type: ignore[attr-defined]
+    return call
 
 
 _TABLE_TYPES = (

@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-import equinox as eqx
 import numpy as np
 
 from ..checks import check_size
@@ -15,7 +14,7 @@ from ..units import RAD_S_PER_RPM
 from .forces import gas_torque, imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
 from .kinematics import mean_piston_speed
-from .model import Engine, require_engine
+from .model import Engine, engine_jit, require_engine
 from .plausible import check_results_finite, check_speed_rpm, require_whole
 
 __all__ = ["EngineSummary", "engine_summary", "EngineCurves", "engine_curves"]
@@ -173,7 +172,7 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
     )
 
 
-@eqx.filter_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
+@engine_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
 def _summary_arrays(engine, theta, omega):
     """What :func:`engine_summary` computes with JAX, at crank angles ``theta`` [rad] and
     speed ``omega`` [rad/s]."""
@@ -339,7 +338,7 @@ def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int 
     )
 
 
-@eqx.filter_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
+@engine_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
 def _curve_arrays(engine, theta, omega):
     """What :func:`engine_curves` computes with JAX, at crank angles ``theta`` [rad] and
     speed ``omega`` [rad/s]."""

@@ -7,7 +7,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
@@ -16,7 +15,7 @@ from ..fileio import csv_text
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
 from .forces import crank_forces, table_angles_deg
-from .model import Engine, require_engine
+from .model import Engine, engine_jit, require_engine
 from .plausible import check_results_finite, check_speed_rpm, require_whole
 
 __all__ = ["CrankTable", "crank_table", "TABLE_COLUMNS"]
@@ -183,7 +182,7 @@ def crank_table(
     return CrankTable(cols, engine.name, rpm, kinematics, cylinder, **header)
 
 
-@eqx.filter_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
+@engine_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
 def _table_columns(engine, angles_deg, omega, cylinder, kinematics):
     """The forces of the table at ``angles_deg`` (the cylinder's own cycle angle [deg]) and
     the inputs of its header."""

@@ -39,7 +39,7 @@ from ..dynamics.equation import friction_coefficients
 from ..engine.forces import cylinder_gas_torques
 from ..engine.friction import Friction
 from ..engine.inertia import cylinder_inertia
-from ..engine.model import Engine
+from ..engine.model import Engine, engine_jit
 from ..engine.plausible import what_it_is
 from ..errors import EngineError
 from .model import TorsionalChain, torsional_chain
@@ -204,7 +204,7 @@ def section_names(names: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(f"{a}–{b}" for a, b in zip(names[:-1], names[1:]))
 
 
-@eqx.filter_jit
+@engine_jit
 def _tables(engine: Engine, points: int):
     """Per cylinder on ``points`` nodes over the cycle: I_c, motored torque, combustion
     torque, and their derivatives (automatic differentiation), (points, cylinders, 3)."""

@@ -47,7 +47,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import check_finite, check_positive, concrete, fmt
 from ..engine.inertia import cylinder_inertia
-from ..engine.model import Engine, require_engine
+from ..engine.model import Engine, engine_jit, require_engine
 from ..engine.plausible import number, what_it_is
 from ..errors import EngineError
 
@@ -428,7 +428,7 @@ def throw_inertias(engine: Engine, theta: ArrayLike) -> Float[Array, "... n"]:
     return _throw_inertias(engine, jnp.asarray(theta, dtype=jnp.float64))
 
 
-@eqx.filter_jit
+@engine_jit
 def _throw_inertias(engine: Engine, theta: Array) -> Array:
     """:func:`throw_inertias`, compiled once per engine layout and grid shape (op by op, the
     inertia's many small kernels cost seconds to dispatch the first time)."""

@@ -208,6 +208,31 @@ def test_a_jitted_function_may_close_over_an_engine_not_seen_before(diesel, monk
     assert jitted == pytest.approx(float(rotor.steady_state(engine, 1250.0).delta), rel=1e-12)
 
 
+def test_engines_that_differ_only_in_name_share_their_compiled_programs(diesel, monkeypatch):
+    """The name is a static field of an engine; the functions compiled for an engine are
+    traced once for every engine of the same structure, whatever its name."""
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", "off")
+    traced = []
+
+    def listen(event, seconds, fun_name="?", **_):
+        if event.endswith("jaxpr_trace_duration"):
+            traced.append(fun_name)
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    try:
+        for name in ("a first name", "another name"):
+            renamed = diesel.replace(name=name)
+            traced.clear()
+            ct.clear_table_cache()
+            bore = eqx.tree_at(lambda e: e.geometry.bore_m, renamed, renamed.geometry.bore_m * 1.0213)
+            torque = float(rotor.mean_gas_torque(bore))
+            train_from_engine(bore, "variable", 720)
+        assert torque == pytest.approx(float(rotor.mean_gas_torque(bore.replace(name="x"))), rel=1e-15)
+        assert not {"mean_gas_torque", "_build"} & set(traced), traced
+    finally:
+        jax.monitoring.unregister_event_duration_listener(listen)
+
+
 def test_the_gradient_over_the_inertia_of_a_prepared_engine(diesel, prepared):
     """dδ/dJ through the prepared tables (the implicit Newton derivative) against a central difference."""
     J0 = float(diesel.crankshaft.inertia_kgm2)
