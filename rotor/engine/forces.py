@@ -50,7 +50,7 @@ __all__ = [
 
 
 @engine_jit  # one compiled call per shape, not hundreds of eager operations
-def cylinder_pressure(engine, theta):
+def cylinder_pressure(engine: Engine, theta: ArrayLike) -> Array:
     """Absolute pressure in every cylinder [Pa], shape ``theta.shape + (cylinders,)``.
 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``theta``: engine crank angle [rad].
@@ -61,7 +61,7 @@ def cylinder_pressure(engine, theta):
 
 
 @engine_jit  # one compiled call per shape, not hundreds of eager operations
-def cylinder_gas_torques(engine, theta, model: str = "exact"):
+def cylinder_gas_torques(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     """Gas torque of each cylinder, (p − p_cc)·A·ds/dθ [N·m], shape ``theta.shape + (cylinders,)``.
 
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``model``: piston
@@ -74,7 +74,7 @@ def cylinder_gas_torques(engine, theta, model: str = "exact"):
 
 
 @engine_jit  # one compiled call per shape, not hundreds of eager operations
-def gas_torque(engine, theta, model: str = "exact"):
+def gas_torque(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     """Total gas torque of the engine on the crankshaft [N·m], shape of ``theta``.
 
     **Arguments:** ``engine``; ``theta``: engine crank angle [rad]; ``model``: ``"exact"``/``"series"``.
@@ -166,7 +166,7 @@ def _cycle_grid(engine, points_per_rev: int = 1440):
 
 
 @engine_jit  # one compiled call instead of dozens of eagerly compiled operations
-def imep_pa(engine):
+def imep_pa(engine: Engine) -> Array:
     """Indicated mean effective pressure of one cylinder, ∮p·dV / V_h [Pa].
 
     ∮ p·A·(ds/dφ)·dφ over the cycle on a grid of 0.25° (the tests check it against the
@@ -183,7 +183,7 @@ def imep_pa(engine):
 
 
 @engine_jit
-def mean_gas_torque(engine):
+def mean_gas_torque(engine: Engine) -> Array:
     """Cycle mean of the engine's gas torque [N·m] = n·IMEP·V_h / (cycle angle)."""
     require_engine(engine, "mean_gas_torque(engine)")
     theta = _cycle_grid(engine)
