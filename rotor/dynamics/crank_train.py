@@ -261,11 +261,33 @@ def _one_cylinder(engine, fidelity, phi):
     return jnp.stack([inertia, k, m_mot, (fired - mot) * area_ds, textbook_k], axis=-1)
 
 
-def _shifted_columns(engine, fidelity, points):
-    """All columns from one cylinder's functions, shifted to each cylinder's phase."""
+class _CylinderParts(eqx.Module):
+    """What one ordinary cylinder's functions (:func:`_one_cylinder`) depend on: the engine's
+    geometry, masses and pressure, not its cylinders or their layout."""
+
+    geometry: Any
+    masses: Any
+    pressure: Any
+    strokes: int = eqx.field(static=True)
+    cycle_rad: float = eqx.field(static=True)
+
+
+@eqx.filter_jit
+def _cylinder_functions(parts, fidelity, points):
+    """:func:`_one_cylinder` and its dφ-derivative on ``points`` nodes over the cycle: the
+    costly part of the tables, compiled once for engines with any number of cylinders."""
+    phi = jnp.arange(points) * (parts.cycle_rad / points)
+    return jax.jvp(lambda x: _one_cylinder(parts, fidelity, x), (phi,), (jnp.ones_like(phi),))
+
+
+def _shifted_columns(engine, fidelity, points, cylinder=None):
+    """All columns from one cylinder's functions (``cylinder``: those of
+    :func:`_cylinder_functions`, else computed here), shifted to each cylinder's phase."""
     cycle = engine.cycle_rad
     phi = jnp.arange(points) * (cycle / points)
-    v1, d1 = jax.jvp(lambda x: _one_cylinder(engine, fidelity, x), (phi,), (jnp.ones_like(phi),))
+    if cylinder is None:
+        cylinder = jax.jvp(lambda x: _one_cylinder(engine, fidelity, x), (phi,), (jnp.ones_like(phi),))
+    v1, d1 = cylinder
     tdc = jnp.deg2rad(engine.tdc_angles_deg)
     fire_phase = engine.firing_angles_rad - (2 * np.pi if engine.strokes == 4 else 0.0)
     # each cylinder: I and k at its mechanical angle θ − tdc, torques at its cycle angle
@@ -288,11 +310,11 @@ def _shifted_columns(engine, fidelity, points):
 
 
 @engine_jit
-def _build(engine, fidelity, points):
+def _build(engine, fidelity, points, cylinder=None):
     cycle = engine.cycle_rad
     w = cycle / points  # periodic trapezoid rule: spectrally accurate
     if engine.articulated is None:
-        values, slopes, work_m, textbook_k = _shifted_columns(engine, fidelity, points)
+        values, slopes, work_m, textbook_k = _shifted_columns(engine, fidelity, points, cylinder)
     else:  # slave rods move differently: every cylinder on its own
         theta = jnp.arange(points) * w
         (values, m_mot), (slopes, _) = jax.jvp(
@@ -324,26 +346,38 @@ def _build(engine, fidelity, points):
     )
 
 
-_BUILDERS: OrderedDict[tuple, Any] = OrderedDict()
-
-
 def _build_now(engine, fidelity, points):
-    """:func:`_build` run now as a compiled program of its own, also where the caller is being
-    traced (a jitted function closing over a concrete engine): the tables are values, kept
-    for the calls after, never part of that trace. One program per structure of ``engine``
-    (the shapes of its arrays, its other fields), as :func:`_build` compiles."""
+    """:func:`_build` run now as compiled programs of their own, also where the caller is
+    being traced (a jitted function closing over a concrete engine): the tables are values,
+    kept for the calls after, never part of that trace. One ordinary cylinder's functions
+    (:func:`_cylinder_functions`) are computed first, by a program shared by engines with any
+    number of cylinders; the articulated rods and the A/B/C form build all in one."""
     engine = unnamed(engine)  # one program for every name, as _build is compiled
-    leaves, treedef = jax.tree_util.tree_flatten(engine)
+    cylinder = None
+    if engine.articulated is None and fidelity != "coefficients":
+        parts = _CylinderParts(engine.geometry, engine.masses, engine.pressure, engine.strokes, engine.cycle_rad)
+        cylinder = _now(_cylinder_functions, parts, fidelity, points)
+    return _now(_build, engine, fidelity, points, cylinder)
+
+
+_COMPILED: OrderedDict[tuple, Any] = OrderedDict()
+
+
+def _now(fn, *args):
+    """``fn(*args)`` (a compiled function of equinox's) run by its compiled program, kept per
+    structure of ``args`` (the shapes of their arrays, their other values): a compiled
+    program runs on the values it is given, also from inside a trace."""
+    leaves, treedef = jax.tree_util.tree_flatten(args)
     sig = tuple((x.shape, x.dtype.str) if eqx.is_array(x) else ("static", repr(x)) for x in leaves)
-    key = (treedef, sig, fidelity, points)
-    compiled = _BUILDERS.get(key)
+    key = (fn, treedef, sig)
+    compiled = _COMPILED.get(key)
     if compiled is None:
-        compiled = _build.lower(engine, fidelity, points).compile()
-        _BUILDERS[key] = compiled
-        while len(_BUILDERS) > TABLE_CACHE_SIZE:
-            _BUILDERS.popitem(last=False)
-    _BUILDERS.move_to_end(key)
-    return compiled(engine, fidelity, points)
+        compiled = fn.lower(*args).compile()
+        _COMPILED[key] = compiled
+        while len(_COMPILED) > 2 * TABLE_CACHE_SIZE:
+            _COMPILED.popitem(last=False)
+    _COMPILED.move_to_end(key)
+    return compiled(*args)
 
 
 def cumulative_columns(f, df, h):
