@@ -47,8 +47,11 @@ import rotor  # noqa: E402  (switches float64 on)
 # xdist workers, the CLI subprocesses and the notebook kernels of tests/project/test_notebooks.py,
 # which share the folder) compile the same ones. A kernel compiled once in the session is
 # read back instead of compiled again, also after _free_compiled_code below drops it.
+# Every program is kept, however quickly it compiled (the `rotor` command keeps those of 0.1 s
+# or more): the suite's many small ones (an operation of JAX on a concrete array of a new
+# shape) are compiled once for both workers and for the next run, not again in each.
 # ROTOR_COMPILATION_CACHE=off runs the suite without it.
-COMPILATION_CACHE = rotor.enable_compilation_cache()
+COMPILATION_CACHE = rotor.enable_compilation_cache(min_compile_time_s=0.0)
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
