@@ -53,7 +53,7 @@ __all__ = [
     "crank_train",
     "check_engine",
     "check_inertia",
-    "check_tables",
+    "check_finite_tables",
     "checked_train",
     "clear_table_cache",
     "shift_inertia",
@@ -432,7 +432,7 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     d_inertia = engine.crankshaft.inertia_kgm2 - kept.inertia_ref
     d = concrete(d_inertia)
     if d is not None:
-        check_inertia(kept.low + d, float(kept.train.mean_inertia) + d, engine)
+        check_inertia(kept.low + d, kept.mean + d, engine)
     if d is not None and d.ndim == 0:
         remember_object(kept, given, float(d))
         if d == 0:
@@ -452,9 +452,7 @@ def _find_tables(key: str, engine: Engine, fidelity: str, points: int) -> KeptTa
     tables = dict(zip(_TABLE_NAMES, _build_now(base, fidelity, points)))
     check_finite_tables(tables["values"], tables["slopes"], engine)
     keep_tables(key, {**{k: np.asarray(v) for k, v in tables.items()}, "inertia_ref": np.zeros(())})
-    _remember_tables(
-        key, (_train(tables, engine, fidelity), 0.0, float(np.min(np.asarray(tables["values"])[:, COL_I])))
-    )
+    _remember_tables(key, _train(tables, engine, fidelity), 0.0)
     return _TABLES[key]
 
 
@@ -467,7 +465,7 @@ def _read_kept(key: str, engine: Engine, fidelity: str) -> KeptTables | None:
         return None
     with jax.ensure_compile_time_eval():  # arrays, not values of a trace this call may be in
         train = _train({name: jnp.asarray(stored[name]) for name in _TABLE_NAMES}, engine, fidelity)
-    _remember_tables(key, (train, float(stored["inertia_ref"]), float(np.min(stored["values"][:, COL_I]))))
+    _remember_tables(key, train, float(stored["inertia_ref"]))
     return _TABLES[key]
 
 
@@ -541,15 +539,17 @@ TABLE_CACHE_SIZE = 16
 
 class KeptTables:
     """One entry of the table cache: ``train``, the crankshaft inertia it was built with
-    (``inertia_ref`` [kg·m²]), its smallest I(θ) (``low`` [kg·m²]) and ``objects``: the
-    engine objects already checked and found to have these tables, each with its
-    crankshaft inertia minus ``inertia_ref`` [kg·m²] (weak references: an engine that is
-    dropped is not kept alive)."""
+    (``inertia_ref`` [kg·m²]), its smallest and mean I(θ) (``low``, ``mean`` [kg·m²], read
+    off ``train`` once) and ``objects``: the engine objects already checked and found to
+    have these tables, each with its crankshaft inertia minus ``inertia_ref`` [kg·m²] (weak
+    references: an engine that is dropped is not kept alive)."""
 
-    __slots__ = ("train", "inertia_ref", "low", "objects")
+    __slots__ = ("train", "inertia_ref", "low", "mean", "objects")
 
-    def __init__(self, train: CrankTrain, inertia_ref: Any, low: float):
-        self.train, self.inertia_ref, self.low = train, inertia_ref, low
+    def __init__(self, train: CrankTrain, inertia_ref: float):
+        self.train, self.inertia_ref = train, inertia_ref
+        self.low = float(np.min(np.asarray(train.values)[:, COL_I]))
+        self.mean = float(train.mean_inertia)
         self.objects: list[tuple[weakref.ref, float]] = []
 
 
@@ -589,12 +589,10 @@ def table_key(engine: Engine, fidelity: str, points: int) -> str | None:
     return digest.hexdigest()
 
 
-def _remember_tables(key: str, entry: tuple) -> None:
-    """Keep ``entry`` = (train, its crankshaft inertia [kg·m²], its smallest I(θ) [kg·m²])
-    under ``key`` (:func:`table_key`), dropping the least recently used beyond
-    :data:`TABLE_CACHE_SIZE`."""
-    train, inertia_ref, low = entry
-    _TABLES[key] = KeptTables(train, inertia_ref, low)
+def _remember_tables(key: str, train: CrankTrain, inertia_ref: float) -> None:
+    """Keep ``train``, built with crankshaft inertia ``inertia_ref`` [kg·m²], under ``key``
+    (:func:`table_key`), dropping the least recently used beyond :data:`TABLE_CACHE_SIZE`."""
+    _TABLES[key] = KeptTables(train, inertia_ref)
     while len(_TABLES) > TABLE_CACHE_SIZE:
         _TABLES.popitem(last=False)
 
@@ -611,17 +609,6 @@ _COLUMN_CAUSE = {
     COL_K: ("the reciprocating inertia torque per ω²", "kg·m²", "[masses] reciprocating_kg and [geometry]"),
     COL_MOTORED: ("the motored gas torque", "N·m", "[pressure] and [geometry] bore_m"),
 }
-
-
-def check_tables(values: Any, slopes: Any, mean_inertia: Any, engine: Engine) -> None:
-    """Refuse tables of a concrete ``engine`` with a value that is not finite, or an
-    inertia I(θ) [kg·m²] that is not positive: a :class:`rotor.EngineError` naming the
-    column and the inputs it comes from. Traced tables pass."""
-    v, d, mi = concrete(values), concrete(slopes), concrete(mean_inertia)
-    if v is None or d is None or mi is None:
-        return
-    check_finite_tables(v, d, engine)
-    check_inertia(np.min(v[:, COL_I]), mi, engine)
 
 
 def check_inertia(low: Any, mean: Any, engine: Engine) -> None:

@@ -17,7 +17,7 @@ import pytest
 
 import rotor
 from rotor.cli import main
-from rotor.dynamics.crank_train import check_tables, train_from_engine
+from rotor.dynamics.crank_train import check_finite_tables, check_inertia, train_from_engine
 from rotor.engine import plausible
 from rotor.engine.file import preset_path
 from rotor.engine.plausible import PLAUSIBLE, finite_derived
@@ -146,15 +146,19 @@ def test_derived_quantities_name_the_input_that_overflowed():
 def test_tables_of_the_crank_train_are_checked(diesel):
     values = np.ones((16, 3 + diesel.cylinders))
     slopes = np.zeros_like(values)
-    check_tables(values, slopes, 1.0, diesel)
+    check_finite_tables(values, slopes, diesel)
+    check_inertia(1.0, 1.0, diesel)
     bad = values.copy()
     bad[3, 2] = np.inf
     with pytest.raises(rotor.EngineError, match="motored gas torque is inf N·m at 135°.*\\[pressure\\]"):
-        check_tables(bad, slopes, 1.0, diesel)
-    bad = values.copy()
-    bad[5, 0] = -1.0
+        check_finite_tables(bad, slopes, diesel)
+    with pytest.raises(rotor.EngineError, match="slope.*not a finite"):
+        check_finite_tables(values, bad, diesel)
     with pytest.raises(rotor.EngineError, match="reduced inertia I\\(θ\\) falls to -1"):
-        check_tables(bad, slopes, 1.0, diesel)
+        check_inertia(-1.0, 1.0, diesel)
+    # a sweep over the crankshaft inertia: every item must keep I(θ) positive
+    with pytest.raises(rotor.EngineError, match="falls to -0.5"):
+        check_inertia(np.array([0.2, -0.5, 1.0]), np.array([1.0, 0.3, 2.0]), diesel)
 
 
 # ----------------------------------------------------------------------------- item 2: eqx.tree_at
