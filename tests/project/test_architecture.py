@@ -174,7 +174,8 @@ def test_every_module_is_reachable_as_an_attribute_of_its_subpackage():
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
 
 
-FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]+")
+# rotor's flags are words joined by hyphens (``--tdc-deg``); XLA's options have underscores
+FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]+(?!\w)")
 SPEAKS_PYTHON = [ROOT / "rotor" / f"{name}.py" for name in BASE] + [
     path
     for name in ("engine", "dynamics", "design", "torsion", "plotting", "logs", "diagnostics")

@@ -91,8 +91,9 @@ sys.exit(code)
 def test_a_second_process_finds_every_program_of_a_command_in_the_cache(tmp_path):
     """The adaptive angle-domain run holds no host callback (diffrax's checks of its save
     points are made when it traces), so the persistent cache stores every program it
-    compiles: a second process compiles nothing."""
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"))
+    compiles: a second process compiles nothing. Both build the engine's tables (none kept
+    on disk), so that both run the same programs whatever the suite kept before."""
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"), ROTOR_TABLE_CACHE="off")
     argv = [sys.executable, "-c", COUNT_PROGRAMS, "simulate", "4chn15", "--cycles", "3", "--method", "angle", "--quiet"]
     counts = []
     for _ in range(2):
@@ -205,3 +206,25 @@ def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, 
     code = "import json, rotor.cache as c; print(json.dumps(str(c.table_folder())))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert json.loads(out.stdout) == "None"
+
+
+# ---------------------------------------------------------------------- XLA's CPU emitters
+EMITTERS_CHILD = "import os, rotor.jaxconfig; print(os.environ.get('XLA_FLAGS', ''))"
+
+
+def _xla_flags_after_import(xla_flags):
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    if xla_flags is not None:
+        env["XLA_FLAGS"] = xla_flags
+    out = subprocess.run([sys.executable, "-c", EMITTERS_CHILD], env=env, capture_output=True, text=True, check=True)
+    return out.stdout.strip()
+
+
+def test_rotor_chooses_xla_elemental_emitters_unless_the_user_chose():
+    """Importing rotor's JAX setup adds the elemental-emitter option to ``$XLA_FLAGS``, keeps
+    the user's other options, and leaves the option alone where the user set it."""
+    from rotor.jaxconfig import XLA_CPU_FLAG
+
+    assert _xla_flags_after_import(None) == XLA_CPU_FLAG
+    assert _xla_flags_after_import("--xla_dump_to=/tmp/x").split() == ["--xla_dump_to=/tmp/x", XLA_CPU_FLAG]
+    assert _xla_flags_after_import("--xla_cpu_use_fusion_emitters=true") == "--xla_cpu_use_fusion_emitters=true"
