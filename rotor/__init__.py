@@ -13,7 +13,9 @@ Importing rotor switches on one process-wide setting of JAX: float64
 (``jax_enable_x64``), which rotor's numerics need. Where JAX is not imported yet, through
 its documented environment variable ``JAX_ENABLE_X64`` (unless the user set it), which JAX
 reads when it is imported; where it is, through ``jax.config``. rotor's modules that
-compute set it again when they are imported (:mod:`rotor.jaxconfig`). JAX's persistent compilation cache stays as the user left it:
+compute set it again when they are imported (:mod:`rotor.jaxconfig`). It also chooses XLA's
+elemental emitters for the CPU, which compile rotor's kernels faster, through
+``$XLA_FLAGS`` unless the user named that option there (:data:`rotor.cache.XLA_CPU_FLAG`). JAX's persistent compilation cache stays as the user left it:
 the ``rotor`` command switches it on, and :func:`rotor.enable_compilation_cache` does so
 in Python.
 """
@@ -24,6 +26,7 @@ from typing import Any
 
 import lazy_loader as _lazy
 
+from .cache import choose_xla_emitters as _choose_xla_emitters
 from .cache import submodules_on_demand as _submodules_on_demand
 
 __version__ = "0.1.0"
@@ -32,6 +35,7 @@ if "jax" in _sys.modules:
     _sys.modules["jax"].config.update("jax_enable_x64", True)
 else:
     _os.environ.setdefault("JAX_ENABLE_X64", "1")
+_choose_xla_emitters()
 
 _public, _, __all__ = _lazy.attach_stub(__name__, __file__)
 _submodule = _submodules_on_demand(__name__)

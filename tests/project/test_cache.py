@@ -209,22 +209,28 @@ def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, 
 
 
 # ---------------------------------------------------------------------- XLA's CPU emitters
-EMITTERS_CHILD = "import os, rotor.jaxconfig; print(os.environ.get('XLA_FLAGS', ''))"
+EMITTERS_CHILD = (
+    "import os, sys, importlib; importlib.import_module(sys.argv[1]); print(os.environ.get('XLA_FLAGS', ''))"
+)
 
 
-def _xla_flags_after_import(xla_flags):
+def _xla_flags_after_import(xla_flags, module="rotor"):
     env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
     if xla_flags is not None:
         env["XLA_FLAGS"] = xla_flags
-    out = subprocess.run([sys.executable, "-c", EMITTERS_CHILD], env=env, capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", EMITTERS_CHILD, module], env=env, capture_output=True, text=True, check=True
+    )
     return out.stdout.strip()
 
 
 def test_rotor_chooses_xla_elemental_emitters_unless_the_user_chose():
-    """Importing rotor's JAX setup adds the elemental-emitter option to ``$XLA_FLAGS``, keeps
-    the user's other options, and leaves the option alone where the user set it."""
-    from rotor.jaxconfig import XLA_CPU_FLAG
+    """Importing rotor (or the module where rotor imports JAX) adds the elemental-emitter
+    option to ``$XLA_FLAGS``, keeps the user's other options, and leaves the option alone
+    where the user set it."""
+    from rotor.cache import XLA_CPU_FLAG
 
     assert _xla_flags_after_import(None) == XLA_CPU_FLAG
+    assert _xla_flags_after_import(None, "rotor.jaxconfig") == XLA_CPU_FLAG
     assert _xla_flags_after_import("--xla_dump_to=/tmp/x").split() == ["--xla_dump_to=/tmp/x", XLA_CPU_FLAG]
     assert _xla_flags_after_import("--xla_cpu_use_fusion_emitters=true") == "--xla_cpu_use_fusion_emitters=true"
