@@ -433,11 +433,10 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     d = concrete(d_inertia)
     if d is not None:
         check_inertia(kept.low + d, kept.mean + d, engine)
+    train = kept.train if d is not None and d.ndim == 0 and d == 0 else shift_inertia(kept.train, d_inertia)
     if d is not None and d.ndim == 0:
-        remember_object(kept, given, float(d))
-        if d == 0:
-            return kept.train
-    return shift_inertia(kept.train, d_inertia)
+        remember_object(key, given, train)
+    return train
 
 
 def _find_tables(key: str, engine: Engine, fidelity: str, points: int) -> KeptTables:
@@ -488,28 +487,48 @@ def _train(t: dict, engine: Engine, fidelity: str) -> CrankTrain:
     )
 
 
-OBJECTS_PER_TABLE = 16
-"""How many engine objects an entry of the table cache remembers as checked (the most recent)."""
+KNOWN_OBJECTS = 64
+"""How many engine objects the table cache remembers as checked, with their tables (the
+most recently used)."""
+
+_KNOWN: OrderedDict[int, tuple[weakref.ref, dict[tuple[str, int], tuple[str, CrankTrain]]]] = OrderedDict()
+"""Engine objects checked and found before, by ``id``: a weak reference to the object (an
+engine that is dropped is not kept alive, and its entry goes with it) and, per fidelity
+and node count, the key of its entry in the table cache and its tables with its own
+crankshaft inertia."""
 
 
-def remember_object(kept: KeptTables, engine: Any, d_inertia: float) -> None:
-    """Remember that the engine object ``engine`` was checked and has ``kept``'s tables
-    with ``d_inertia`` [kg·m²] added to I(θ)."""
-    kept.objects = [(ref, d) for ref, d in kept.objects if ref() is not None][-(OBJECTS_PER_TABLE - 1) :]
-    kept.objects.append((weakref.ref(engine), d_inertia))
+def remember_object(key: str, engine: Any, train: CrankTrain) -> None:
+    """Remember that the engine object ``engine`` was checked and has the tables ``train``
+    (its own crankshaft inertia added to those kept under ``key``)."""
+    ident = id(engine)
+    entry = _KNOWN.get(ident)
+    if entry is None or entry[0]() is not engine:
+
+        def forget(ref: weakref.ref, ident: int = ident) -> None:
+            if ident in _KNOWN and _KNOWN[ident][0] is ref:
+                del _KNOWN[ident]
+
+        entry = (weakref.ref(engine, forget), {})
+        _KNOWN[ident] = entry
+    entry[1][(train.fidelity, train.points)] = (key, train)
+    _KNOWN.move_to_end(ident)
+    while len(_KNOWN) > KNOWN_OBJECTS:
+        _KNOWN.popitem(last=False)
 
 
 def _known_object(engine: Any, fidelity: str, points: int) -> CrankTrain | None:
     """The tables of ``engine`` if this very object was checked and its tables found
     before, at ``fidelity`` and ``points`` nodes, and they are still kept; else None."""
-    for key, kept in reversed(_TABLES.items()):
-        if kept.train.fidelity != fidelity or kept.train.points != points:
-            continue
-        for ref, d in kept.objects:
-            if ref() is engine:
-                _TABLES.move_to_end(key)
-                return kept.train if d == 0 else shift_inertia(kept.train, d)
-    return None
+    entry = _KNOWN.get(id(engine))
+    if entry is None or entry[0]() is not engine:
+        return None
+    hit = entry[1].get((fidelity, points))
+    if hit is None or hit[0] not in _TABLES:
+        return None
+    _TABLES.move_to_end(hit[0])
+    _KNOWN.move_to_end(id(engine))
+    return hit[1]
 
 
 def checked_train(engine: Any, fidelity: str, points: int, call: str = "engine") -> CrankTrain:
@@ -540,17 +559,14 @@ TABLE_CACHE_SIZE = 16
 class KeptTables:
     """One entry of the table cache: ``train``, the crankshaft inertia it was built with
     (``inertia_ref`` [kg·m²]), its smallest and mean I(θ) (``low``, ``mean`` [kg·m²], read
-    off ``train`` once) and ``objects``: the engine objects already checked and found to
-    have these tables, each with its crankshaft inertia minus ``inertia_ref`` [kg·m²] (weak
-    references: an engine that is dropped is not kept alive)."""
+    off ``train`` once)."""
 
-    __slots__ = ("train", "inertia_ref", "low", "mean", "objects")
+    __slots__ = ("train", "inertia_ref", "low", "mean")
 
     def __init__(self, train: CrankTrain, inertia_ref: float):
         self.train, self.inertia_ref = train, inertia_ref
         self.low = float(np.min(np.asarray(train.values)[:, COL_I]))
         self.mean = float(train.mean_inertia)
-        self.objects: list[tuple[weakref.ref, float]] = []
 
 
 _TABLES: OrderedDict[str, KeptTables] = OrderedDict()
@@ -602,6 +618,7 @@ def clear_table_cache() -> None:
     them from the table folder (:func:`rotor.cache.table_folder`, where tables are kept
     between processes) or builds them again."""
     _TABLES.clear()
+    _KNOWN.clear()
 
 
 _COLUMN_CAUSE = {

@@ -30,6 +30,7 @@ import jax
 import numpy as np
 
 from ..errors import SolverError
+from ..units import RPM_PER_RAD_S
 from .result import SpeedResult
 
 __all__ = ["check_speed_result"]
@@ -93,7 +94,7 @@ def check_speed_result(result: SpeedResult) -> None:
     arrays = (result.t, result.theta, result.omega, result.accel, result.torque, result.load_torque)
     if _traced(arrays) or _traced((result.period_s, result.load_torque_Nm, result.fuel_scale)):
         return
-    t, theta, omega, accel, torque, load = (np.asarray(a, dtype=np.float64) for a in arrays)
+    t, theta, omega, accel, torque, load = (np.asarray(a, dtype=np.float64) for a in jax.device_get(arrays))
     kind = "steady state" if result.kind == "steady" else f"run (method {result.method!r})"
     remedy = _remedy(result)
 
@@ -152,7 +153,11 @@ def check_speed_result(result: SpeedResult) -> None:
             v = _number(getattr(result, key, None))
             if v is not None and not np.all(np.isfinite(v)):
                 fail(f"{what} is not finite")
-    lo, mean, hi = (np.asarray(v, dtype=np.float64) for v in (result.min_rpm, result.mean_rpm, result.max_rpm))
+    if getattr(result, "cycle_summary", None) is None:  # the extremes of the samples at hand
+        lo, hi = (np.asarray(f(omega, axis=-1) * RPM_PER_RAD_S) if omega.size else np.nan for f in (np.min, np.max))
+    else:  # of every sample, kept or not
+        lo, hi = np.asarray(result.min_rpm, dtype=np.float64), np.asarray(result.max_rpm, dtype=np.float64)
+    mean = np.asarray(result.mean_rpm, dtype=np.float64)
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(mean)) and np.all(np.isfinite(hi))):
         fail("the mean, lowest or highest speed is not finite")
     slack = MEAN_SLACK * np.maximum(np.abs(lo), np.abs(hi)) + 1e-300

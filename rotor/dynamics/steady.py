@@ -31,6 +31,7 @@ usable, and the caller must look at it.
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any, Literal
 
@@ -331,9 +332,10 @@ def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
     return _closed_solution(train, s_nodes, a, c, omega_m, balance)
 
 
-@eqx.filter_jit
+@functools.partial(jax.jit, static_argnames=("balance", "flat"))
 def _closed_steady(train, d_inertia, s, fr, load, a, c, omega_m, balance, flat):
-    """The whole closed-form steady state in one compiled call: solution and arrays."""
+    """The whole closed-form steady state in one compiled call: solution and arrays
+    (``jax.jit``: its dispatch is a quarter of ``eqx.filter_jit``'s on these arguments)."""
     E, t, x, ok = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
     return E[:-1], t[:-1], x, ok, _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
@@ -514,8 +516,10 @@ def steady_state(
 
 
 def _check_combustion(train, balance):
-    work = concrete(jnp.sum(train.imep_combustion_pa))
-    if balance == "fuel" and work is not None and not work > 0:
+    if balance != "fuel":
+        return
+    work = concrete(train.imep_combustion_pa)
+    if work is not None and not np.sum(work) > 0:
         raise EngineError(
             "a given load needs a firing engine: the fuelling is scaled to carry it, but this engine's pressure has "
             "no combustion; give no load (load=None) to balance the mean engine torque instead"
@@ -573,9 +577,10 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
 
 def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
     a = arrays
-    converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
-    if concrete(a["e_ratio"]) is not None:  # one transfer from the device for the checks
-        good, i_min, x_found = jax.device_get((converged, a["i_min"], x))
+    checkable = not isinstance(a["e_ratio"], jax.core.Tracer)
+    if checkable:  # one transfer from the device for the checks
+        ok, e_ratio, i_min, x_found = jax.device_get((ok, a["e_ratio"], a["i_min"], x))
+        converged = good = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION))
         # a fuel scale of a million or more and no steady state: a load in the wrong units
         absurd = balance == "fuel" and not np.all(good) and np.all(np.abs(x_found) >= 1e6)
         if not np.all(np.isfinite(x_found)) or absurd:
@@ -593,8 +598,10 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
                 "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
                 "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
             )
+    else:
+        converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
     load_carried = x if balance == "load" else a["carried_load"]
-    if concrete(a["e_ratio"]) is not None:
+    if checkable:
         fuel, carried = np.asarray(a["fuel_scale"]), np.asarray(load_carried)
         if balance == "fuel" and fuel.ndim == 0:
             imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)

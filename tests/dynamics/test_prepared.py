@@ -135,6 +135,26 @@ def test_an_engine_object_is_checked_and_its_tables_found_once(diesel, monkeypat
         rotor.steady_state(broken, rpm=1250.0, grid_deg=GRID)
 
 
+def test_the_checked_engine_objects_are_few_and_not_kept_alive(diesel):
+    """The table cache remembers at most ``KNOWN_OBJECTS`` engine objects, the most recently
+    used, and forgets one as soon as it is dropped: remembering never keeps an engine or
+    its tables alive."""
+    import gc
+
+    ct.clear_table_cache()
+    variants = [
+        eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, diesel.crankshaft.inertia_kgm2 * (1 + 0.01 * i))
+        for i in range(ct.KNOWN_OBJECTS + 5)
+    ]
+    trains = [ct.checked_train(v, "variable", ct.grid_points(4, GRID)) for v in variants]
+    assert len(ct._KNOWN) == ct.KNOWN_OBJECTS
+    assert ct._known_object(variants[0], "variable", trains[0].points) is None  # the oldest forgotten
+    assert ct._known_object(variants[-1], "variable", trains[-1].points) is trains[-1]
+    del variants, trains
+    gc.collect()
+    assert len(ct._KNOWN) == 0
+
+
 def test_prepared_steady_state_is_the_engines(diesel, prepared):
     """The prepared engine gives the same steady state as the engine, bit for bit, and
     another crankshaft inertia the same as an engine built with it (1e-12)."""
