@@ -135,24 +135,32 @@ def test_an_engine_object_is_checked_and_its_tables_found_once(diesel, monkeypat
         rotor.steady_state(broken, rpm=1250.0, grid_deg=GRID)
 
 
-def test_the_checked_engine_objects_are_few_and_not_kept_alive(diesel):
-    """The table cache remembers at most ``KNOWN_OBJECTS`` engine objects, the most recently
-    used, and forgets one as soon as it is dropped: remembering never keeps an engine or
-    its tables alive."""
+def test_the_checked_engine_objects_are_few_and_not_kept_alive(diesel, monkeypatch):
+    """The table cache remembers at most ``KNOWN_OBJECTS`` engine objects as checked, the
+    most recently used (an older one is checked again), and remembering one never keeps it
+    alive."""
     import gc
+    import weakref
 
     ct.clear_table_cache()
+    checks = []
+    real = rotor.Engine.check
+    monkeypatch.setattr(rotor.Engine, "check", lambda self: checks.append(self) or real(self))
+    points = ct.grid_points(4, GRID)
     variants = [
         eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, diesel, diesel.crankshaft.inertia_kgm2 * (1 + 0.01 * i))
         for i in range(ct.KNOWN_OBJECTS + 5)
     ]
-    trains = [ct.checked_train(v, "variable", ct.grid_points(4, GRID)) for v in variants]
-    assert len(ct._KNOWN) == ct.KNOWN_OBJECTS
-    assert ct._known_object(variants[0], "variable", trains[0].points) is None  # the oldest forgotten
-    assert ct._known_object(variants[-1], "variable", trains[-1].points) is trains[-1]
-    del variants, trains
+    trains = [ct.checked_train(v, "variable", points) for v in variants]
+    assert len(checks) == len(variants)
+    assert ct.checked_train(variants[-1], "variable", points) is trains[-1]
+    assert len(checks) == len(variants), "a recent object is not checked again"
+    ct.checked_train(variants[0], "variable", points)
+    assert len(checks) == len(variants) + 1, "the oldest object was forgotten, so it is checked again"
+    gone = weakref.ref(variants[-1])
+    del variants, trains, checks[:]
     gc.collect()
-    assert len(ct._KNOWN) == 0
+    assert gone() is None, "the table cache keeps no engine alive"
 
 
 def test_prepared_steady_state_is_the_engines(diesel, prepared):
