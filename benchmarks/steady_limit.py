@@ -17,7 +17,9 @@ Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
    - the same for δ alone;
    and δ of each (or ω, for the rows that return it) against the default
    ``steady_state(engine)``.
-3. Throughput: ``rotor.steady_sweep`` over speed × flywheel inertia for 1 … 10⁵ items
+3. The plain route: ``jax.jit(jax.vmap(lambda J: steady_state(eqx.tree_at(…, engine, J),
+   rpm).delta))`` over 10⁴ crankshaft inertias at once, per item.
+4. Throughput: ``rotor.steady_sweep`` over speed × flywheel inertia for 1 … 10⁵ items
    (10⁶ with ``--full``) on every core, and 10⁵ on one thread: steady states per second
    after compiling, the chunk size and the process's peak resident memory after each
    size.
@@ -174,6 +176,37 @@ def bench_batches(engine, sizes, repeats):
     return out
 
 
+def bench_plain_vmap(engine, items, repeats):
+    """The route a user writes without ``steady_sweep``: ``jax.jit(jax.vmap(...))`` over the
+    crankshaft inertia put into the engine by ``eqx.tree_at``, δ only, ``items`` at once."""
+    rpm = float(engine.operating.rpm)
+    J0 = float(engine.crankshaft.inertia_kgm2)
+
+    def delta(J):
+        return rotor.steady_state(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, J), rpm=rpm).delta
+
+    f = jax.jit(jax.vmap(delta))
+    Js = jax.numpy.linspace(0.5 * J0, 3.0 * J0, items)
+    t0 = time.perf_counter()
+    first = np.asarray(f(Js))
+    first_s = time.perf_counter() - t0
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        f(Js).block_until_ready()
+        times.append(time.perf_counter() - t0)
+    run = statistics.median(times)
+    one = float(rotor.steady_state(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, Js[7]), rpm=rpm).delta)
+    return {
+        "items": items,
+        "first_call_s": first_s,
+        "median_s": run,
+        "per_item_s": run / items,
+        "repeats": repeats,
+        "delta_item_7_minus_one_call": float(first[7]) - one,
+    }
+
+
 def plot(res, path):
     import matplotlib
 
@@ -227,6 +260,12 @@ def main():
     print(
         "  compiling the closed-over calls ahead of time: "
         + ", ".join(f"{k} {v:.2f} s" for k, v in res["single"]["compile_s"].items())
+    )
+    plain = res["plain_jit_vmap"] = bench_plain_vmap(engine, 10**4, 3)
+    print(
+        f"  jax.jit(jax.vmap(steady_state over eqx.tree_at inertia)).delta, {plain['items']} items: "
+        f"{plain['per_item_s'] * 1e3:.3f} ms an item (first call {plain['first_call_s']:.1f} s; "
+        f"item 7 − its own call {plain['delta_item_7_minus_one_call']:+.1e})"
     )
     print("throughput of rotor.steady_sweep (speed × inertia grid):")
     res["batches"] = bench_batches(engine, sizes, 3)
