@@ -17,7 +17,8 @@ _COUNT = {"traces": 0}
 # the compiled kernels that integrate or solve (what a new number must not compile again),
 # by module of rotor.dynamics
 _KERNELS = {
-    "equation": ("closed_run", "angle_run", "time_run", "dense_at_angles", "grid_run"),
+    "equation": ("closed_run", "grid_run"),
+    "adaptive": ("angle_run", "time_run", "dense_at_angles"),
     "steady": ("_closed_kernel", "_closed_steady", "_shooting_kernel", "_finish_arrays"),
     "transient": ("_samples", "_gather", "_chunk_figures"),
 }

@@ -30,17 +30,15 @@ from ..engine.model import Engine
 from ..errors import EngineError
 from ..progress import Progress
 from ..units import RPM_PER_RAD_S
+from .adaptive import angle_run, dense_at_angles, time_run
 from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain, crank_train
 from .equation import (
     Scene,
-    angle_run,
     closed_run,
-    dense_at_angles,
     friction_coefficients,
     grid_run,
     linear_losses,
     node_offsets,
-    time_run,
 )
 from .invariants import check_speed_result
 from .loads import Governor, Load

@@ -72,6 +72,16 @@ def test_the_checks_see_a_heavy_import():
     assert r["status"] == 0 and "jax" in r["heavy"] and "equinox" in r["heavy"]
 
 
+def test_a_steady_state_imports_no_adaptive_solver():
+    """``rotor steady`` solves in closed form: diffrax (the adaptive methods' solver, 0.15 s
+    to import) stays out; ``rotor simulate --method angle`` needs it."""
+    steady = _heavy_after("steady", "4chn15", "--json")
+    assert steady["status"] == 0 and "jax" in steady["heavy"]
+    assert not any(m.split(".")[0] == "diffrax" for m in steady["heavy"]), steady["heavy"]
+    angle = _heavy_after("simulate", "4chn15", "--cycles", "1", "--method", "angle", "--quiet", "--json")
+    assert angle["status"] == 0 and "diffrax" in angle["heavy"]
+
+
 def test_presets_lists_the_engines_load_engine_builds():
     from rotor.cli.engine import preset_listing
 
