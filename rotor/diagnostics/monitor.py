@@ -927,12 +927,12 @@ class MisfireMonitor:
                 end_s = t_dec + (ce - th_dec) / omega
             else:
                 end_s = t6
-            imep = (math.nan, math.nan, swing) if model is None else (*imeps[i], swing)
+            figures = (math.nan, math.nan, swing) if model is None else (*imeps[i], swing)
             self._raw_e.append(e)
             if self._warm:
-                self._decide(kk, jj, e, t_dec, end_s, predicted, False, 0.0, imep, out)
+                self._decide(kk, jj, e, t_dec, end_s, predicted, False, 0.0, figures, out)
             else:
-                self._waiting.append([kk, jj, e, t_dec, end_s, predicted, False, 0.0, imep])
+                self._waiting.append([kk, jj, e, t_dec, end_s, predicted, False, 0.0, figures])
                 out.extend(self._release_waiting(force=False))
         self._trim()
         return out
@@ -943,7 +943,7 @@ class MisfireMonitor:
         if not self._warm:
             # the first firings wait until every cylinder has a baseline of its own; each
             # goes into its cylinder's baseline as it is measured (an item: k, j, e, t_dec,
-            # cycle end, predicted, in the baselines, its deviation, the model's IMEP)
+            # cycle end, predicted, in the baselines, its deviation, its IMEP, σ and swing)
             item = self._waiting[-1] if self._waiting and not self._waiting[-1][6] else None
             if item is not None:
                 own[int(self._fire_cyl[item[1]]) - 1].append(item[2])
@@ -960,8 +960,8 @@ class MisfireMonitor:
                 item[7] = item[2] - own[c].median()
                 pool.append(item[2] - own[c].median_without(item[2]))
         while self._waiting:
-            k, j, e, td, es, pr, fed, r, model = self._waiting.pop(0)
-            self._decide(k, j, e, td, es, pr, fed, r if fed else 0.0, model, out)
+            k, j, e, td, es, pr, fed, r, figures = self._waiting.pop(0)
+            self._decide(k, j, e, td, es, pr, fed, r if fed else 0.0, figures, out)
         if force:
             self._finish(out, self._last_t_dec, force=True)
             if self._held is not None:
@@ -979,11 +979,12 @@ class MisfireMonitor:
         predicted: bool,
         fed: bool,
         d: float,
-        model: tuple[float, float, float],
+        figures: tuple[float, float, float],
         out: list,
     ) -> None:
         """Measure one firing against its cylinder's baseline (``fed``: its values are in
-        the baselines already, its deviation ``d``) and judge the firings whose neighbours
+        the baselines already, its deviation ``d``; ``figures``: its IMEP and the IMEP's
+        standard deviation from the model [Pa], NaN without an engine, and its swing) and judge the firings whose neighbours
         are measured; their verdicts (each held until the next is judged) go to ``out``."""
         c0 = self._fire_cyl[j] - 1
         own = self._own[c0]
@@ -993,7 +994,7 @@ class MisfireMonitor:
             own.append(e)
         # a loss (another misfire) is not part of the deviation common to its neighbours
         inlier = d > -COMMON_OUTLIER * self._s_now
-        self._pending.append((k, c0, d, e, end_s, predicted, model, n_own, fed, inlier))
+        self._pending.append((k, c0, d, e, end_s, predicted, figures, n_own, fed, inlier))
         if inlier:
             self._wsum += d
             self._wcnt += 1
@@ -1012,7 +1013,7 @@ class MisfireMonitor:
         ahead = self._ahead
         wsum, wcnt = self._wsum, self._wcnt
         while len(pending) > ahead or (force and pending):
-            k, c0, d, e, end_s, predicted, model, n_own, fed, inlier = pending.popleft()
+            k, c0, d, e, end_s, predicted, figures, n_own, fed, inlier = pending.popleft()
             r = d
             s = pool.spread() if pool.order else 0.0
             if self._measured < HISTORY:
@@ -1053,7 +1054,9 @@ class MisfireMonitor:
             # tail of its expansion stroke in this segment) is not this firing's misfire; a
             # firing before cycle 1 only feeds the baselines
             self._held = (
-                (k, c0 + 1, index, self._index_std[n_own], e, end_s, predicted, prev, t_dec, model) if k >= 1 else None
+                (k, c0 + 1, index, self._index_std[n_own], e, end_s, predicted, prev, t_dec, figures)
+                if k >= 1
+                else None
             )
         self._wsum, self._wcnt = wsum, wcnt
 
