@@ -1,4 +1,5 @@
-"""Articulated (master and slave) rods, seeds 000 and 001."""
+"""Articulated (master and slave) rods: the slave piston's stroke, TDC and derivatives, the
+engine's inertia and torque with slaves, gradients through the geometry, and what is refused."""
 
 import jax
 import jax.numpy as jnp

@@ -53,7 +53,7 @@ def test_derivatives_match_autodiff(k):
     assert np.allclose(rm.d2beta, jax.vmap(jax.grad(jax.grad(b)))(TH), atol=1e-12)
 
 
-def test_seed000_formulas_offset():
+def test_the_offset_mechanism_follows_lukanins_formulas():
     """The offset mechanism (Lukanin, vol. 2): sin b = lam (sin a - z); rod angular velocity and acceleration; TDC at s = 0."""
     L, k = 0.17, 0.012
     lam, z = R / L, k / R

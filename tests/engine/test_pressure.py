@@ -30,7 +30,7 @@ def test_pchip_passes_through_points_and_wraps(diesel):
 
 
 def test_step_does_not_ring(diesel):
-    """The seed's drop from 0.409 to 0.14 MPa between 530 and 540 deg, and the exhaust to
+    """The worked example's drop from 0.409 to 0.14 MPa between 530 and 540 deg, and the exhaust to
     intake step at 720/0 deg: no overshoot anywhere (monotone between points)."""
     phi = jnp.deg2rad(jnp.linspace(0, 720, 72001))
     p = np.asarray(diesel.pressure(phi, diesel.geometry, 4))
@@ -131,7 +131,7 @@ def test_imep_equals_mean_gas_torque_work(diesel):
         assert np.isclose(rotor.mean_gas_torque(e), expected, rtol=1e-6)
 
 
-def test_seed_table_imep_is_near_the_thermal_calculation(diesel):
+def test_the_worked_examples_table_imep_is_near_its_thermal_calculation(diesel):
     """Shishkov, "Dinamika dvigatelei", appendix 4, gives PI = 1.0025 MPa from its 5-deg calculation; the 10-deg
     table interpolated here gives 0.986 MPa (the table omits the rounding of the diagram)."""
     assert abs(float(rotor.imep_pa(diesel)) - 1.0025e6) / 1.0025e6 < 0.03

@@ -29,20 +29,20 @@ def table():
     return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
 
-def _compare(ours, seed, angles_ours, angles_seed):
-    idx = np.searchsorted(angles_ours, angles_seed)
-    assert np.allclose(angles_ours[idx], angles_seed)
-    scale = np.max(np.abs(seed))
-    err = np.abs(ours[idx] - seed) / scale
+def _compare(ours, book, angles_ours, angles_book):
+    idx = np.searchsorted(angles_ours, angles_book)
+    assert np.allclose(angles_ours[idx], angles_book)
+    scale = np.max(np.abs(book))
+    err = np.abs(ours[idx] - book) / scale
     return err
 
 
 @pytest.mark.parametrize("col", ["s_m", "v_m_s", "j_m_s2"])
 def test_kinematics_columns(table, col):
-    seed = _read("shishkov_kinematics.csv")
-    assert len(seed["angle_deg"]) == 37
-    err = _compare(table[col], seed[col], table["angle_deg"], seed["angle_deg"])
-    assert err.max() < TOL, f"{col}: worst row {seed['angle_deg'][err.argmax()]} deg, {err.max():.2%}"
+    book = _read("shishkov_kinematics.csv")
+    assert len(book["angle_deg"]) == 37
+    err = _compare(table[col], book[col], table["angle_deg"], book["angle_deg"])
+    assert err.max() < TOL, f"{col}: worst row {book['angle_deg'][err.argmax()]} deg, {err.max():.2%}"
 
 
 @pytest.mark.parametrize(
@@ -58,10 +58,10 @@ def test_kinematics_columns(table, col):
     ],
 )
 def test_dynamics_columns(table, ours, theirs):
-    seed = _read("shishkov_dynamics.csv")
-    assert len(seed["angle_deg"]) == 73
-    err = _compare(table[ours], seed[theirs] * 1e3, table["angle_deg"], seed["angle_deg"])
-    assert err.max() < TOL, f"{ours}: worst row {seed['angle_deg'][err.argmax()]} deg, {err.max():.2%}"
+    book = _read("shishkov_dynamics.csv")
+    assert len(book["angle_deg"]) == 73
+    err = _compare(table[ours], book[theirs] * 1e3, table["angle_deg"], book["angle_deg"])
+    assert err.max() < TOL, f"{ours}: worst row {book['angle_deg'][err.argmax()]} deg, {err.max():.2%}"
 
 
 def test_torque_is_t_times_r(table):
@@ -69,13 +69,13 @@ def test_torque_is_t_times_r(table):
 
 
 def test_exact_kinematics_is_why_series_is_the_table_default(diesel):
-    """The seed's table uses the lambda series: exact kinematics moves J by O(lambda^3),
+    """Shishkov's table uses the lambda series: exact kinematics moves J by O(lambda^3),
     about 0.8 % of its peak here, more than the 0.5 % the comparison allows."""
     import rotor
 
-    seed = _read("shishkov_kinematics.csv")
+    book = _read("shishkov_kinematics.csv")
     exact = rotor.crank_table(diesel, step_deg=10, kinematics="exact")
-    err = _compare(exact["j_m_s2"], seed["j_m_s2"], exact["angle_deg"], seed["angle_deg"])
+    err = _compare(exact["j_m_s2"], book["j_m_s2"], exact["angle_deg"], book["angle_deg"])
     assert 0.005 < err.max() < 0.01
 
 

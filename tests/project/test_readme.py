@@ -315,6 +315,26 @@ def test_no_internal_seed_references():
     assert not found, "internal working-copy references:\n" + "\n".join(found)
 
 
+PROCESS = re.compile(r"seeds? ?0\d\d|\bissue #?\d+|\breview fix", re.IGNORECASE)
+
+
+def test_code_tests_and_benchmarks_say_what_they_check_not_how_they_came_to_be():
+    """No "issue N", "seed 00N" or "review fixes" in the package, the tests, the benchmarks
+    or the Makefile: names and comments say what the code checks or does."""
+    paths = [ROOT / "Makefile", *sorted((ROOT / "benchmarks").glob("*.py"))]
+    for folder in ("rotor", "tests"):
+        paths += sorted((ROOT / folder).rglob("*.py"))
+    here = Path(__file__).resolve()
+    found = [
+        f"{path.relative_to(ROOT)}:{n}: {line.strip()[:100]}"
+        for path in paths
+        if path.resolve() != here
+        for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if PROCESS.search(line)
+    ]
+    assert not found, "process words:\n" + "\n".join(found)
+
+
 def test_documentation_speaks_to_users():
     """README.md and docs/ say "base layer", "layer" and "subpackage", cite published works,
     and point to no internal notes, paths outside the repository or review rounds."""
