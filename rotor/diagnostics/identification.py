@@ -769,6 +769,27 @@ def _notes(ident, ok, pairs, misfire) -> list[str]:
 
 
 # ----------------------------------------------------------------------------- entry point
+def _fit_padded(bases, blocks, pos, offset_L, a_ref, rtol, nscale, na, max_steps):
+    """:func:`_fit_blocks` of the list ``blocks`` of speed blocks (cycles, P) [rad/s], as many
+    as a standard size (the last repeated, its fits dropped): a record of another length
+    reuses the compiled fit; each block's fit is its own, so nothing changes. ``a_ref`` [N·m]
+    is traced: a new combustion does not recompile. Returns the fits of ``blocks`` as NumPy."""
+    nb = len(blocks)
+    stacked = np.stack(blocks + [blocks[-1]] * (padded_size(nb) - nb))
+    fits = _fit_blocks(
+        bases,
+        jnp.asarray(stacked),
+        jnp.asarray(pos),
+        jnp.asarray(offset_L),
+        jnp.asarray(a_ref),
+        rtol,
+        nscale,
+        na,
+        max_steps,
+    )
+    return tuple(a[:nb] for a in jax.device_get(fits))
+
+
 def identify(
     engine: Engine | PreparedEngine,
     speed: LogAnalysis | SpeedResult | ArrayLike,
@@ -847,27 +868,10 @@ def identify(
     nb = len(cores)
     pos, own, nscale = block_layout(work_L, work_R, offset_L, L)
     na = L if load_per == "cycle" else 1
-    blocks = np.stack([omega[s0 : s0 + L] for s0 in starts])
-    # as many blocks as a standard size (the last repeated, its fits dropped): a record of
-    # another length reuses the compiled fit; each block's fit is its own, so nothing changes
-    blocks = np.concatenate([blocks, np.repeat(blocks[-1:], padded_size(nb) - nb, axis=0)])
     vh = float(engine.geometry.displacement_m3)
     a_ref = float(np.sum(comb)) * vh / float(engine.cycle_rad)  # the engine file's mean combustion torque
-    p, cov, res, steps, e_ref, ok = (
-        a[:nb]
-        for a in jax.device_get(
-            _fit_blocks(
-                bases,
-                jnp.asarray(blocks),
-                jnp.asarray(pos),
-                jnp.asarray(offset_L),
-                jnp.asarray(a_ref),
-                rtol,
-                nscale,
-                na,
-                max_steps,
-            )
-        )  # a_ref traced: a new combustion does not recompile
+    p, cov, res, steps, e_ref, ok = _fit_padded(
+        bases, [omega[s0 : s0 + L] for s0 in starts], pos, offset_L, a_ref, rtol, nscale, na, max_steps
     )
 
     scale, scale_std, load_a, load_sd, covs, ident, resid = _per_cycle(

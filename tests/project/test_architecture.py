@@ -231,3 +231,19 @@ def test_the_command_line_prints_the_library_notes_in_flags():
         "n": 3,
         "notes": ["--no-calibration"],
     }
+
+
+MAX_FUNCTION_LINES = 150
+
+
+def test_no_function_of_the_package_is_over_150_lines():
+    """Every function in ``rotor/``, from its ``def`` to its last line (docstring included),
+    fits in 150 lines: a longer one holds more than one job."""
+    long = []
+    for path in sorted((ROOT / "rotor").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > MAX_FUNCTION_LINES:
+                    long.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name} ({lines} lines)")
+    assert not long, "functions over 150 lines:\n" + "\n".join(long)
