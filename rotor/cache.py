@@ -35,6 +35,7 @@ __all__ = [
     "XLA_CPU_FLAG",
     "apply_compilation_cache",
     "choose_xla_emitters",
+    "compilation_cache_on",
     "enable_compilation_cache",
     "keep_tables",
     "kept_tables",
@@ -42,6 +43,7 @@ __all__ = [
     "prune",
     "source_fingerprint",
     "submodules_on_demand",
+    "switched_off",
     "table_folder",
 ]
 
@@ -65,6 +67,20 @@ def choose_xla_emitters() -> None:
 
 
 _OFF = ("0", "off", "no", "false", "")
+
+
+def switched_off(value: str) -> bool:
+    """Whether an environment variable's value (``ROTOR_COMPILATION_CACHE`` and the like)
+    switches a cache off: ``0``, ``off``, ``no``, ``false`` or empty."""
+    return value.strip().lower() in _OFF
+
+
+def compilation_cache_on() -> bool:
+    """Whether :func:`enable_compilation_cache` has switched the compilation cache on in this
+    process (and so the tables and the kept programs, :mod:`rotor.programs`)."""
+    return bool(_TABLES_ON)
+
+
 MAX_BYTES = 1 << 30
 """The size cap of the persistent compilation cache [bytes]."""
 

@@ -41,6 +41,7 @@ os.environ.setdefault("ROTOR_OUTPUT_CACHE", "off")
 import jax  # noqa: E402
 
 import rotor  # noqa: E402  (switches float64 on)
+from rotor.programs import clear_programs  # noqa: E402
 
 # Switched on for the tests in this process too, not only once a CLI command has run in it:
 # most of the suite's time is XLA compiling rotor's kernels, and many modules (and both
@@ -169,6 +170,7 @@ def _free_compiled_code():
     used, limit = _memory_maps()
     if used > MAPS_HIGH * limit:
         jax.clear_caches()
+        clear_programs()
         gc.collect()
 
 

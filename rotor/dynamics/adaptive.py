@@ -4,42 +4,52 @@ most 4°) for a chosen tolerance, and the ``"time"`` method, θ and ω integrate
 (a start from rest, a stall), with the solve's dense output read at given angles.
 
 A module of its own so that what needs no adaptive solve (the steady state, the closed
-form, the grid) does not import diffrax.
+form, the grid) does not import diffrax; and diffrax is imported where a solve is traced
+(:func:`_diffrax`), so that a process that runs a kept program (:mod:`rotor.programs`)
+never imports it.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import sys
 from typing import Any
 
-import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 
+from ..programs import kept_program
 from .crank_train import COL_I
 from .equation import Scene, report_progress, speed_from_energy
 
 
-class BarMeter(dfx.AbstractProgressMeter):
-    """diffrax's progress hook reporting to the progress bar with key ``meter`` (about every
-    1 % of the solve)."""
+@functools.cache
+def _diffrax() -> tuple[Any, Any, type]:
+    """diffrax, optimistix and the progress meter class (imported on the first trace)."""
+    import diffrax as dfx
+    import optimistix as optx
 
-    meter: Any
+    class BarMeter(dfx.AbstractProgressMeter):
+        """diffrax's progress hook reporting to the progress bar with key ``meter`` (about every
+        1 % of the solve)."""
 
-    def init(self):
-        return jnp.asarray(0.0)
+        meter: Any
 
-    def step(self, state, progress):
-        due = (progress - state >= 0.01) | (progress >= 1.0)
-        jax.lax.cond(jnp.all(due), lambda: report_progress(self.meter, progress), lambda: None)
-        return jnp.where(due, progress, state)
+        def init(self):
+            return jnp.asarray(0.0)
 
-    def close(self, state):
-        report_progress(self.meter, jnp.asarray(1.0))
+        def step(self, state, progress):
+            due = (progress - state >= 0.01) | (progress >= 1.0)
+            jax.lax.cond(jnp.all(due), lambda: report_progress(self.meter, progress), lambda: None)
+            return jnp.where(due, progress, state)
+
+        def close(self, state):
+            report_progress(self.meter, jnp.asarray(1.0))
+
+    return dfx, optx, BarMeter
 
 
 # ----------------------------------------------------------------------------- diffrax
@@ -62,10 +72,12 @@ MAX_ANGLE_STEP = float(np.deg2rad(4.0))
 
 
 def _controller(rtol, dtmax=None):
+    dfx, _, _ = _diffrax()
     return dfx.PIDController(rtol=rtol, atol=rtol, pcoeff=0.0, icoeff=1.0, dtmax=dtmax)
 
 
 def _solver():
+    dfx, _, _ = _diffrax()
     # Dopri8: on these piecewise-cubic tables Tsit5's error estimate is too optimistic
     # (rtol 1e-9 gave 1e-6 in ω over two cycles); Dopri8 stays near its tolerance
     return dfx.Dopri8()
@@ -91,13 +103,15 @@ def save_points_checked_on_the_host():
         errors.EQX_ON_ERROR = mode
 
 
+@kept_program(static_argnames=("max_steps", "meter"))
 @eqx.filter_jit
 def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: int, meter=None):
     """Adaptive solve in the angle domain from θ0 with y0 = (E, t, z), saving at ``theta_out``.
 
     Ends early (a stall hand-over) where E falls to ``e_switch``; ``meter``: the key of a
-    progress bar to report to (diffrax's progress-meter hook, :class:`BarMeter`), or None. Returns the saved
+    progress bar to report to (diffrax's progress-meter hook, :func:`_diffrax`), or None. Returns the saved
     (E, t, z), the final θ and state, and whether it ended early."""
+    dfx, optx, BarMeter = _diffrax()
     E0, t0, z0 = y0
     e_ref = E0
     w_ref = jnp.sqrt(2 * E0 / scene.train.mean_inertia)
@@ -141,10 +155,12 @@ def _time_field(t, y, args):
     return omega, accel / w_ref, dz
 
 
+@kept_program(static_argnames=("stop_at_stall", "max_steps"))
 @eqx.filter_jit
 def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool, max_steps: int):
     """Adaptive solve in time from (θ, ω, z) = y0 until θ reaches ``theta_end``, ω falls to
     zero (if ``stop_at_stall``) or t reaches ``t_end``. Returns every accepted step."""
+    dfx, optx, _ = _diffrax()
     conds = [lambda t, y, args, **kw: y[0] - theta_end]
     dirs = [True]
     if stop_at_stall:
@@ -176,6 +192,7 @@ def dense_at_angles(sol, t_guess, theta_q, omega_ref):
     """(t, ω, z) where the time-domain solution passes the angles ``theta_q``: Newton's
     method (optimistix) on θ(t) = θ_q with the solver's dense output, from the guesses
     ``t_guess``."""
+    _, optx, _ = _diffrax()
 
     def one(t0, th_q):
         sol_t = optx.root_find(

@@ -39,6 +39,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..programs import kept_program
 from ..progress import report
 from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain
 from .loads import Governor, Load
@@ -189,6 +190,7 @@ def linear_cycle(train: CrankTrain, parts, E0, t0):
     return E, omega, t, dE
 
 
+@kept_program(static_argnames=("cycles", "stride", "meter"))
 @eqx.filter_jit
 def closed_run(scene: Scene, a, c, E0, t0, first_cycle, cycles: int, stride: int, meter=None):
     """``cycles`` cycles in closed form from E0, t0; the combustion scale of cycle k is
@@ -261,6 +263,7 @@ def linear_losses(load, friction_abc):
 
 
 # ----------------------------------------------------------------------------- fixed steps on the grid
+@kept_program(static_argnames=("cycles", "steps_per_cycle", "stride", "meter"))
 @eqx.filter_jit
 def grid_run(scene: Scene, theta0, y0, cycles: int, steps_per_cycle: int, stride: int, e_switch, meter=None):
     """Classic RK4 in the angle domain with ``steps_per_cycle`` equal steps per cycle, on the

@@ -17,6 +17,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..cycles import array_module, cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
+from ..programs import kept_program
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
 
@@ -141,6 +142,7 @@ def parabola_peak(y0, y1, y2, sign):
     return jnp.where(ok, y1 - (y0 - y2) ** 2 / (8 * safe), y1)
 
 
+@kept_program(static_argnames=("periodic",))
 @functools.partial(jax.jit, static_argnums=3)
 def _extremes(x, slopes, cycle_rad, periodic: bool):
     """(max, min) of each row of x (rows: consecutive cycles sampled uniformly in angle)
@@ -171,6 +173,7 @@ def _extremes(x, slopes, cycle_rad, periodic: bool):
     return out[0], out[1]
 
 
+@kept_program(static_argnames=("periodic",))
 @functools.partial(jax.jit, static_argnums=1)
 def _range(x, periodic: bool):
     """(max, min) over all of x (rows: cycles) with parabolic refinement at the sample."""

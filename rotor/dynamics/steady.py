@@ -39,7 +39,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import ArrayLike
 
 from ..checks import arrays_only, concrete
@@ -47,6 +46,7 @@ from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
 from ..errors import EngineError, NoSteadyStateError
+from ..programs import kept_program
 from ..units import RPM_PER_RAD_S
 from .crank_train import (
     COL_COMBUSTION,
@@ -332,6 +332,7 @@ def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
     return _closed_solution(train, s_nodes, a, c, omega_m, balance)
 
 
+@kept_program(static_argnames=("balance", "flat"))
 @functools.partial(jax.jit, static_argnames=("balance", "flat"))
 def _closed_steady(train, d_inertia, s, fr, load, a, c, omega_m, balance, flat):
     """The whole closed-form steady state in one compiled call: solution and arrays
@@ -353,8 +354,11 @@ def _solve_newton(residual: Any, u0: jnp.ndarray, tol: float = 1e-13, max_steps:
 
     Differentiable by the implicit function theorem (``optx.ImplicitAdjoint``): the
     derivative of the root is −J⁻¹·∂r/∂p at the root, whatever the iterations did.
-    Returns the root and whether it is one (finite, max |r| < 1e-8).
+    Returns the root and whether it is one (finite, max |r| < 1e-8). Optimistix is imported
+    here, where a kernel is traced: a warm process that runs a kept program never needs it.
     """
+    import optimistix as optx
+
     sol: Any = optx.root_find(
         lambda u, _: residual(u),
         optx.Newton(rtol=tol, atol=tol),

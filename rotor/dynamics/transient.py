@@ -28,6 +28,7 @@ from ..cycles import cycle_delta, cycle_slopes
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..errors import EngineError
+from ..programs import kept_program
 from ..progress import Progress
 from ..units import RPM_PER_RAD_S
 from .adaptive import angle_run, dense_at_angles, time_run
@@ -669,6 +670,7 @@ def run_plan(plan: RunPlan, bar: Progress) -> SpeedResult:
     )
 
 
+@kept_program()
 @eqx.filter_jit
 def _samples(scene, theta, t, E, omega, z):
     """ω (from E where given), engine and load torque, dω/dt and fuel at the samples."""
@@ -693,6 +695,7 @@ def _theta_grid(first_cycle, cycles, P, cycle_rad):
     return k * cycle_rad + np.arange(P)[None, :] * (cycle_rad / P)
 
 
+@kept_program()
 @eqx.filter_jit
 def _start(train, rpm):
     """ω0 [rad/s] and kinetic energy [J] at the start, θ = 0, and the energy [J] below
@@ -744,6 +747,7 @@ def _cycle_samples(scene, first, t, E, omega, z, P: int):
     return tuple(jnp.reshape(a, (-1,)) for a in (omega, m_eng, m_loss, accel, fuel))
 
 
+@kept_program(static_argnames=("P",))
 @eqx.filter_jit
 def _gather(scene, pieces, P: int):
     """All pieces (first cycle or None, θ, t, E or None, ω or None, z or None), flat, as the
@@ -765,6 +769,7 @@ def _flat(a):
     return None if a is None else jnp.reshape(jnp.asarray(a, dtype=jnp.float64), (-1,))
 
 
+@kept_program(static_argnames=("P",))
 @eqx.filter_jit
 def _chunk_figures(scene, first, th, t, E, w, P: int, z=None):
     """The samples of whole cycles from cycle ``first`` (:func:`_cycle_samples`, flat) and

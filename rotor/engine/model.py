@@ -38,6 +38,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
 from ..errors import EngineError
+from ..programs import kept_program
 from ..units import RAD_S_PER_RPM
 from .friction import Friction
 from .plausible import check_fields_plausible, finite_derived, number, what_it_is
@@ -859,7 +860,7 @@ def engine_jit(fn: Any) -> Any:
     """``eqx.filter_jit`` for a function whose first argument is an :class:`Engine`,
     compiled once for engines of the same structure whatever their names (:func:`unnamed`).
     The function must not read the name."""
-    jitted = eqx.filter_jit(fn)
+    jitted = kept_program()(eqx.filter_jit(fn))
 
     @functools.wraps(fn)
     def call(engine: Any, *args: Any, **kwargs: Any) -> Any:

@@ -74,21 +74,28 @@ def test_the_checks_see_a_heavy_import():
 
 def test_a_steady_state_imports_no_adaptive_solver():
     """A steady state, ``closed`` and ``grid`` need no diffrax (the adaptive methods' solver,
-    0.15 s to import): the modules of ``rotor steady`` leave it out, the adaptive
-    integrators' module brings it."""
+    0.7 s to import): the modules of ``rotor steady`` leave it out, and so does the adaptive
+    integrators' module, which imports it where a solve is traced (a process that runs a
+    kept program never does: tests/project/test_programs.py)."""
     code = (
         "import json, sys, importlib\n"
         "for name in sys.argv[1:]:\n"
         "    importlib.import_module(name)\n"
+        "if 'rotor.dynamics.adaptive' in sys.argv:\n"
+        "    import rotor\n"
+        "    rotor.simulate(rotor.load_engine('4chn15'), cycles=1, method='angle', rtol=1e-5)\n"
         "print(json.dumps('diffrax' in sys.modules))"
     )
 
     def diffrax_after(*modules):
-        out = subprocess.run([sys.executable, "-c", code, *modules], capture_output=True, text=True, check=True)
+        env = dict(os.environ, ROTOR_PROGRAM_CACHE="off")
+        out = subprocess.run(
+            [sys.executable, "-c", code, *modules], capture_output=True, text=True, check=True, env=env
+        )
         return json.loads(out.stdout.strip().splitlines()[-1])
 
     assert not diffrax_after("rotor.cli.run", "rotor.dynamics.steady", "rotor.dynamics.sweep")
-    assert diffrax_after("rotor.dynamics.adaptive")
+    assert diffrax_after("rotor.dynamics.adaptive")  # traced: imported
 
 
 def test_presets_lists_the_engines_load_engine_builds():

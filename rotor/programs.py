@@ -1,0 +1,243 @@
+"""Kernels compiled once and kept: a warm process runs them without tracing them again.
+
+``jax.jit`` turns a kernel's Python into a program by tracing it and lowering it to XLA's
+input in every new process, even where JAX's persistent compilation cache
+(:mod:`rotor.cache`) then finds the compiled code: for the adaptive angle-domain solver
+(diffrax's Dopri8 with an event) that is 2–4 s a process, for the closed-form steady state
+about 0.5 s. A kernel declared with :func:`kept_program` is compiled on its first call with
+arguments of a new structure and its executable kept on disk (JAX's
+``serialize_executable``, as the compilation cache keeps them); a later process loads it
+(tens of ms) and runs it, with no tracing, lowering or compiling. It is the same program:
+the results agree to the last bit (``tests/project/test_programs.py``);
+``benchmarks/cli_latency.py`` and ``benchmarks/warm_call_profile.py`` measure what it saves.
+
+Programs are kept where rotor has switched the compilation cache on
+(:func:`rotor.cache.enable_compilation_cache`: the ``rotor`` command does; in Python, call
+it), in its folder's subfolder ``rotor-programs`` (``$ROTOR_PROGRAM_CACHE`` if set; ``0``,
+``off`` or ``no`` switches them off), at most :data:`PROGRAM_FILES` files (the most recently
+written; 0.1–1 MB each). A program is found by the kernel's name, the structure, shapes and
+dtypes of its array arguments, the values of its other arguments, rotor's source files, the
+versions of JAX and the numerical packages, XLA's options and the processor
+(:func:`rotor.cache.source_fingerprint`): a change to any of them compiles the kernel again.
+Delete the folder to clear them. As with JAX's own cache, a kept program is loaded by
+unpickling: keep the folder where only you can write.
+
+Inside a transformation (``jit``, ``vmap``, ``grad`` of the caller's: an argument is a
+tracer), with an argument that is neither an array nor a number, string or None, or where
+a program cannot be serialized, the kernel is called as it is jitted (``jax.jit`` or
+``equinox.filter_jit``), as it would be without this module.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import inspect
+import os
+import pickle
+import platform
+import re
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
+
+import equinox as eqx
+import numpy as np
+from jax.experimental import serialize_executable
+
+from .cache import compilation_cache_on, prune, source_fingerprint, switched_off
+from .fileio import atomic_path
+from .jaxconfig import jax
+
+__all__ = ["PROGRAMS_PER_KERNEL", "PROGRAM_FILES", "clear_programs", "kept_program", "program_folder"]
+
+PROGRAM_FILES = 256
+"""How many kept programs are kept on disk (the most recently written)."""
+
+_ENTRY = "rotor-program-"
+_NAME = re.compile(rf"^{_ENTRY}[0-9a-f]{{40}}\.bin$")
+_MISSING = object()
+_PLAIN = (bool, int, float, complex, str, bytes, type(None))
+PROGRAMS_PER_KERNEL = 32
+"""At most this many programs of one kernel a process (a loop over a static argument's values is
+traced as ``jit`` would trace it, not kept)."""
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def program_folder() -> Path | None:
+    """Where kernels' programs are kept between processes, or None where they are not (see
+    the module doc)."""
+    env = os.environ.get("ROTOR_PROGRAM_CACHE")
+    if not compilation_cache_on() or (env is not None and switched_off(env)):
+        return None
+    if env is not None:
+        return Path(env).expanduser()
+    folder = getattr(jax.config, "jax_compilation_cache_dir", None)
+    return Path(folder) / "rotor-programs" if folder else None
+
+
+def _spec(leaf: Any) -> jax.ShapeDtypeStruct:
+    if isinstance(leaf, jax.Array):
+        return jax.ShapeDtypeStruct(leaf.shape, leaf.dtype, weak_type=leaf.weak_type)
+    a = np.asarray(leaf)
+    return jax.ShapeDtypeStruct(a.shape, a.dtype)
+
+
+class _Kept:
+    """One kernel's programs, found in this process or on disk, by their arguments."""
+
+    def __init__(self, traced: Callable[..., Any], static_argnames: tuple[str, ...]) -> None:
+        self.traced = traced
+        self.fn = inspect.unwrap(traced)
+        self.static_argnames = static_argnames
+        self.name = f"{self.fn.__module__}.{self.fn.__qualname__}"
+        self.calls: dict[Any, Any] = {}
+        _KERNELS.append(self)
+        self.positions = {
+            i: name for i, name in enumerate(inspect.signature(self.fn).parameters) if name in static_argnames
+        }
+
+    def __getattr__(self, name: str) -> Any:  # ``lower``, ``trace`` and the rest of the jitted function's
+        return getattr(self.traced, name)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        folder = program_folder()
+        if folder is None:
+            return self.traced(*args, **kwargs)
+        named = {self.positions[i]: a for i, a in enumerate(args) if i in self.positions}
+        named.update((k, kwargs[k]) for k in self.static_argnames if k in kwargs)
+        dynamic, static = eqx.partition((args, kwargs), _is_dynamic)
+        for name in named:  # an argument named static stays so, whatever its type
+            dynamic, static = _static_argument(dynamic, static, args, kwargs, self.positions, name)
+        leaves, tree = jax.tree_util.tree_flatten(dynamic)
+        fixed, fixed_tree = jax.tree_util.tree_flatten(static)
+        if any(isinstance(x, jax.core.Tracer) for x in leaves) or not all(type(x) in _PLAIN for x in fixed):
+            return self.traced(*args, **kwargs)
+        specs = tuple(_spec(x) for x in leaves)
+        key = (tree, fixed_tree, tuple((type(x), x) for x in fixed), specs)
+        call = self.calls.get(key, _MISSING)
+        if call is _MISSING:
+            if len(self.calls) >= PROGRAMS_PER_KERNEL:  # a loop over static values: traced as it would be
+                return self.traced(*args, **kwargs)
+            call = self.calls[key] = self._program(folder, tree, static, specs, key)
+        if call is None:
+            return self.traced(*args, **kwargs)
+        return call(*leaves)
+
+    def _program(self, folder: Path, tree: Any, static: Any, specs: tuple, key: Any) -> Callable[..., Any] | None:
+        """The kept program, read from disk or compiled now and kept, or None where the
+        kernel cannot be kept."""
+        text = repr(
+            (self.name, str(key[0]), str(key[1]), key[2], [(s.shape, str(s.dtype), s.weak_type) for s in specs])
+        )
+        digest = hashlib.blake2b(text.encode() + b"\0" + _machine(), digest_size=20).hexdigest()
+        path = folder / f"{_ENTRY}{digest}.bin"
+        try:
+            blob: bytes | None = path.read_bytes()
+        except OSError:
+            blob = None
+        if blob == b"":  # kept as a kernel that cannot be kept
+            return None
+        if blob is not None:
+            try:
+                serialized, in_tree, out_tree = pickle.loads(blob)
+                return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
+            except Exception:  # noqa: BLE001 - a partial or foreign file is a miss, whatever it raises
+                pass
+
+        def flat(*leaves: Any) -> Any:
+            args, kwargs = eqx.combine(jax.tree_util.tree_unflatten(tree, leaves), static)
+            return self.fn(*args, **kwargs)
+
+        flat.__name__, flat.__qualname__ = self.fn.__name__, self.fn.__qualname__  # JAX's events name the kernel
+
+        try:
+            lowered = jax.jit(flat).lower(*specs)
+            compiled = lowered.compile()
+        except Exception:  # noqa: BLE001 - e.g. a number that must be static: called as jitted, which says what is wrong
+            return None
+        try:
+            blob = pickle.dumps(serialize_executable.serialize(compiled)) if _self_contained(lowered) else b""
+        except Exception:  # noqa: BLE001 - a program that cannot be serialized is compiled in each process
+            blob = b""
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            with atomic_path(path) as tmp:
+                Path(tmp).write_bytes(blob)
+            prune(folder, _NAME, PROGRAM_FILES)
+        except OSError:
+            pass
+        return compiled if blob else None
+
+
+@functools.cache
+def _machine() -> bytes:
+    """What a compiled program depends on besides its kernel and arguments: rotor's source and
+    the numerical packages (:func:`rotor.cache.source_fingerprint`), XLA's options, the
+    backend and the processor (a program compiled for one CPU may not run on another)."""
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = "".join(line for line in f if line.startswith(("model name", "flags")))[:4096]
+    except OSError:
+        cpu = platform.processor() or platform.machine()
+    backend = jax.devices()[0].client
+    parts = (
+        os.environ.get("XLA_FLAGS", ""),
+        str(getattr(jax.config, "jax_enable_x64", None)),
+        backend.platform,
+        backend.platform_version,
+        jax.devices()[0].device_kind,
+        cpu,
+    )
+    return source_fingerprint() + b"\0" + "\n".join(parts).encode()
+
+
+def _self_contained(lowered: Any) -> bool:
+    """Whether a lowered program runs without this process: no call back into Python (a
+    progress bar, a debug print) and no other side effect. JAX's compilation cache never
+    keeps such a program either (the callback's address is part of its key); where this
+    version of JAX does not say, the program is not kept."""
+    args = getattr(getattr(lowered, "_lowering", None), "compile_args", None)
+    if not isinstance(args, dict) or not {"host_callbacks", "ordered_effects", "unordered_effects"} <= set(args):
+        return False
+    return not (args["host_callbacks"] or args["ordered_effects"] or args["unordered_effects"] or args.get("keepalive"))
+
+
+_KERNELS: list[_Kept] = []
+
+
+def clear_programs() -> None:
+    """Forget the programs this process has read or compiled (as ``jax.clear_caches()`` does
+    JAX's): their compiled code is freed, and a later call reads it from disk again."""
+    for kernel in _KERNELS:
+        kernel.calls.clear()
+
+
+def _is_dynamic(x: Any) -> bool:
+    """Traced: arrays and floating-point numbers; ints, bools, strings and None are static."""
+    return eqx.is_array(x) or isinstance(x, (float, complex))
+
+
+def _static_argument(dynamic: Any, static: Any, args: tuple, kwargs: dict, positions: dict, name: str) -> tuple:
+    """``dynamic`` and ``static`` with the argument ``name`` moved whole to ``static``."""
+    where = [i for i, n in positions.items() if n == name and i < len(args)]
+    if where:
+        i = where[0]
+        dyn_args, stat_args = list(dynamic[0]), list(static[0])
+        dyn_args[i], stat_args[i] = None, args[i]
+        return (tuple(dyn_args), dynamic[1]), (tuple(stat_args), static[1])
+    return (dynamic[0], {**dynamic[1], name: None}), (static[0], {**static[1], name: kwargs[name]})
+
+
+def kept_program(*, static_argnames: tuple[str, ...] = ()) -> Callable[[F], F]:
+    """Declare a jitted kernel (``jax.jit`` or ``equinox.filter_jit`` of it, called so where
+    no program is kept) one whose program is kept between processes (see the module doc).
+    Where it is kept, arrays and floating-point numbers are traced arguments, and ints,
+    bools, strings, None and the arguments ``static_argnames`` static."""
+
+    def declare(traced: F) -> F:
+        return functools.wraps(inspect.unwrap(traced))(_Kept(traced, tuple(static_argnames)))  # type: ignore[return-value]
+
+    return declare

@@ -1,0 +1,139 @@
+"""Kept programs (rotor.programs): a kernel compiled in one process is loaded by the next,
+which then neither traces it nor imports its solver's package; the results are the same to
+the last bit; a damaged file is a miss; a transformation of the caller's still traces."""
+
+import json
+import os
+import subprocess
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rotor import programs
+
+# a child process: run a steady state and a short adaptive run, report the kernels JAX traced,
+# whether diffrax and optimistix were imported, and the results
+CHILD = """
+import json, sys
+import jax
+traced = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, secs, **kw: traced.append(kw.get("fun_name")) if event.endswith("jaxpr_trace_duration") else None
+)
+import numpy as np, rotor
+rotor.enable_compilation_cache()
+engine = rotor.load_engine("4chn15")
+steady = rotor.steady_state(engine, rpm=1500)
+run = rotor.simulate(engine, rpm=1500, cycles=2, method="angle", rtol=1e-6)
+print(json.dumps({
+    "traced": sorted(set(t for t in traced if t)),
+    "imported": [m for m in ("diffrax", "optimistix") if m in sys.modules],
+    "steady": np.asarray(steady.omega).tolist(),
+    "run": np.asarray(run.omega).tolist(),
+}))
+"""
+
+
+def _child(tmp_path, programs_env: str) -> dict:
+    env = dict(
+        os.environ,
+        ROTOR_COMPILATION_CACHE=str(tmp_path / "jax"),
+        ROTOR_TABLE_CACHE=str(tmp_path / "tables"),
+        ROTOR_PROGRAM_CACHE=programs_env,
+    )
+    out = subprocess.run([sys.executable, "-c", CHILD], env=env, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_a_second_process_loads_the_kernels_and_agrees_to_the_bit(tmp_path):
+    folder = tmp_path / "programs"
+    first = _child(tmp_path, str(folder))
+    kept = sorted(folder.glob("rotor-program-*.bin"))
+    assert kept and all(p.stat().st_size > 0 for p in kept)
+    assert {"_closed_steady", "angle_run"} <= set(first["traced"])
+    second = _child(tmp_path, str(folder))
+    assert "_closed_steady" not in second["traced"] and "angle_run" not in second["traced"]
+    assert second["imported"] == [], "a process that runs kept programs needs neither diffrax nor optimistix"
+    assert second["steady"] == first["steady"] and second["run"] == first["run"]
+    without = _child(tmp_path, "off")  # traced and compiled as jit does: the same program
+    assert "angle_run" in without["traced"] and "diffrax" in without["imported"]
+    assert without["steady"] == first["steady"] and without["run"] == first["run"]
+
+
+@pytest.fixture
+def kept_here(tmp_path, monkeypatch):
+    """Programs kept in a folder of this test's, forgotten in this process before and after."""
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", str(tmp_path / "programs"))
+    programs.clear_programs()
+    yield tmp_path / "programs"
+    programs.clear_programs()
+
+
+@programs.kept_program(static_argnames=("power",))
+@jax.jit
+def _cubic(x, scale, power=3):
+    return scale * x**power
+
+
+def test_a_damaged_program_is_a_miss_and_is_written_again(kept_here):
+    x = np.linspace(0.0, 1.0, 5)
+    expected = 2.0 * x**3
+    np.testing.assert_array_equal(_cubic(x, 2.0), expected)
+    (path,) = kept_here.glob("rotor-program-*.bin")
+    path.write_bytes(b"not a program")
+    programs.clear_programs()
+    np.testing.assert_array_equal(_cubic(x, 2.0), expected)
+    assert path.stat().st_size > len(b"not a program")
+
+
+def test_arguments_of_a_new_structure_or_static_value_get_programs_of_their_own(kept_here):
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    np.testing.assert_array_equal(_cubic(x, 3.0), 3.0 * x**3)  # a new value of a traced number: the same program
+    assert len(list(kept_here.glob("*.bin"))) == 1
+    np.testing.assert_array_equal(_cubic(x[:3], 2.0), 2.0 * x[:3] ** 3)  # a new shape
+    np.testing.assert_array_equal(_cubic(x, 2.0, power=2), 2.0 * x**2)  # a new static value
+    assert len(list(kept_here.glob("*.bin"))) == 3
+
+
+def test_a_callers_transformation_traces_the_kernel(kept_here):
+    x = jnp.linspace(0.0, 1.0, 5)
+    grad = jax.grad(lambda s: jnp.sum(_cubic(x, s)))(2.0)
+    np.testing.assert_allclose(grad, np.sum(np.asarray(x) ** 3), rtol=1e-15)
+    batched = jax.vmap(lambda s: _cubic(x, s))(jnp.array([1.0, 2.0]))
+    np.testing.assert_array_equal(batched[1], 2.0 * np.asarray(x) ** 3)
+    assert not kept_here.exists() or not list(kept_here.glob("*.bin"))
+
+
+def test_a_loop_over_static_values_stops_keeping(kept_here, monkeypatch):
+    monkeypatch.setattr(programs, "PROGRAMS_PER_KERNEL", 2)
+    x = np.linspace(0.0, 1.0, 4)
+    for power in range(1, 6):
+        np.testing.assert_array_equal(_cubic(x, 1.0, power=power), x**power)
+    assert len(list(kept_here.glob("*.bin"))) == 2
+
+
+def test_programs_are_off_where_asked(kept_here, monkeypatch):
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")
+    assert programs.program_folder() is None
+    monkeypatch.delenv("ROTOR_PROGRAM_CACHE")
+    folder = programs.program_folder()
+    assert folder is not None and folder.name == "rotor-programs"  # in the compilation cache's folder
+
+
+@programs.kept_program()
+@jax.jit
+def _reporting(x):
+    jax.debug.callback(lambda v: None, x)
+    return 2.0 * x
+
+
+def test_a_program_that_calls_back_into_python_is_not_kept(kept_here):
+    x = np.arange(3.0)
+    for _ in range(2):  # the second call finds the mark and calls the jitted kernel
+        np.testing.assert_array_equal(_reporting(x), 2.0 * x)
+    (path,) = kept_here.glob("rotor-program-*.bin")
+    assert path.stat().st_size == 0  # marked: compiled in each process, as JAX's cache does
