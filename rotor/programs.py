@@ -30,6 +30,7 @@ a program cannot be serialized, the kernel is called as it is jitted (``jax.jit`
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import inspect
@@ -37,7 +38,8 @@ import os
 import pickle
 import platform
 import re
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -154,9 +156,12 @@ class _Kept:
 
         try:
             lowered = jax.jit(flat).lower(*specs)
-            compiled = lowered.compile()
+            with _compiled_afresh() as fresh:
+                compiled = lowered.compile()
         except Exception:  # noqa: BLE001 - e.g. a number that must be static: called as jitted, which says what is wrong
             return None
+        if not fresh():  # read back from JAX's cache: such an executable cannot be serialized again whole
+            return compiled
         try:
             blob = pickle.dumps(serialize_executable.serialize(compiled)) if _self_contained(lowered) else b""
         except Exception:  # noqa: BLE001 - a program that cannot be serialized is compiled in each process
@@ -192,6 +197,39 @@ def _machine() -> bytes:
         cpu,
     )
     return source_fingerprint() + b"\0" + "\n".join(parts).encode()
+
+
+_CACHE_HITS = [0]
+
+
+def _count_cache_hit(event: str, **kwargs: Any) -> None:
+    if event == "/jax/compilation_cache/cache_hits":
+        _CACHE_HITS[0] += 1
+
+
+jax.monitoring.register_event_listener(_count_cache_hit)
+
+
+@contextlib.contextmanager
+def _compiled_afresh() -> Iterator[Callable[[], bool]]:
+    """Compile without JAX's persistent compilation cache, and say whether it was so.
+
+    An executable that JAX read back from its cache serializes without parts of its code
+    (the next process fails with "Function … not found"), so a program to keep is compiled
+    afresh: JAX's cache key is withheld for the block (``jax._src.compiler._get_cache_key``,
+    JAX's own switch, private: where this version of JAX lacks it, the cache is left on and
+    the yielded check says whether the executable was read back). The check is False where
+    the executable came from the cache."""
+    hits = _CACHE_HITS[0]
+    compiler = sys.modules.get("jax._src.compiler")
+    original = getattr(compiler, "_get_cache_key", None)
+    if original is not None:
+        compiler._get_cache_key = lambda *args, **kwargs: None  # type: ignore[union-attr]
+    try:
+        yield lambda: _CACHE_HITS[0] == hits
+    finally:
+        if original is not None:
+            compiler._get_cache_key = original  # type: ignore[union-attr]
 
 
 def _self_contained(lowered: Any) -> bool:
