@@ -14,8 +14,8 @@ the results agree to the last bit (``tests/project/test_programs.py``);
 Programs are kept where rotor has switched the compilation cache on
 (:func:`rotor.cache.enable_compilation_cache`: the ``rotor`` command does; in Python, call
 it), in its folder's subfolder ``rotor-programs`` (``$ROTOR_PROGRAM_CACHE`` if set; ``0``,
-``off`` or ``no`` switches them off), at most :data:`PROGRAM_FILES` files (the most recently
-written; 0.1–1 MB each). A program is found by the kernel's name, the structure, shapes and
+``off`` or ``no`` switches them off), at most :data:`PROGRAM_BYTES` in all (the most
+recently written; 0.02–1.3 MB each). A program is found by the kernel's name, the structure, shapes and
 dtypes of its array arguments, the values of its other arguments, rotor's source files, the
 versions of JAX and the numerical packages, XLA's options and the processor
 (:func:`rotor.cache.source_fingerprint`): a change to any of them compiles the kernel again.
@@ -47,14 +47,15 @@ import equinox as eqx
 import numpy as np
 from jax.experimental import serialize_executable
 
-from .cache import compilation_cache_on, prune, source_fingerprint, switched_off
+from .cache import compilation_cache_on, source_fingerprint, switched_off
 from .fileio import atomic_path
 from .jaxconfig import jax
 
-__all__ = ["PROGRAMS_PER_KERNEL", "PROGRAM_FILES", "clear_programs", "kept_program", "program_folder"]
+__all__ = ["PROGRAMS_PER_KERNEL", "PROGRAM_BYTES", "clear_programs", "kept_program", "program_folder"]
 
-PROGRAM_FILES = 256
-"""How many kept programs are kept on disk (the most recently written)."""
+PROGRAM_BYTES = 512 << 20
+"""The size cap of the kept programs on disk [bytes] (half of JAX's compilation cache's):
+past it the least recently written go."""
 
 _ENTRY = "rotor-program-"
 _NAME = re.compile(rf"^{_ENTRY}[0-9a-f]{{40}}\.bin$")
@@ -91,8 +92,12 @@ class _Kept:
 
     def __init__(self, traced: Callable[..., Any], static_argnames: tuple[str, ...]) -> None:
         self.traced = traced
-        self.fn = inspect.unwrap(traced)
+        # the function jitted, one level down (a vmap of another function stays one)
+        self.fn: Callable[..., Any] = traced.__wrapped__  # type: ignore[attr-defined]
         self.static_argnames = static_argnames
+        # what is traced: as the kernel's own jit traces it (eqx.filter_jit: arrays; jax.jit:
+        # arrays and numbers), so that a check made while tracing sees the same values
+        self.is_dynamic = eqx.is_array if isinstance(traced, eqx.Module) else _array_or_number
         self.name = f"{self.fn.__module__}.{self.fn.__qualname__}"
         self.calls: dict[Any, Any] = {}
         _KERNELS.append(self)
@@ -109,7 +114,7 @@ class _Kept:
             return self.traced(*args, **kwargs)
         named = {self.positions[i]: a for i, a in enumerate(args) if i in self.positions}
         named.update((k, kwargs[k]) for k in self.static_argnames if k in kwargs)
-        dynamic, static = eqx.partition((args, kwargs), _is_dynamic)
+        dynamic, static = eqx.partition((args, kwargs), self.is_dynamic)
         for name in named:  # an argument named static stays so, whatever its type
             dynamic, static = _static_argument(dynamic, static, args, kwargs, self.positions, name)
         leaves, tree = jax.tree_util.tree_flatten(dynamic)
@@ -170,10 +175,29 @@ class _Kept:
             folder.mkdir(parents=True, exist_ok=True)
             with atomic_path(path) as tmp:
                 Path(tmp).write_bytes(blob)
-            prune(folder, _NAME, PROGRAM_FILES)
+            _prune(folder)
         except OSError:
             pass
         return compiled if blob else None
+
+
+def _prune(folder: Path) -> None:
+    """Delete the oldest kept programs until they hold at most :data:`PROGRAM_BYTES` (no
+    other file of the folder is touched)."""
+    found = []
+    for item in os.scandir(folder):
+        if _NAME.match(item.name) and item.is_file(follow_symlinks=False):
+            try:
+                st = item.stat(follow_symlinks=False)
+            except OSError:
+                continue
+            found.append((st.st_mtime_ns, st.st_size, item.path))
+    total = sum(size for _, size, _ in found)
+    for _, size, path in sorted(found):
+        if total <= PROGRAM_BYTES:
+            break
+        Path(path).unlink(missing_ok=True)
+        total -= size
 
 
 @functools.cache
@@ -253,9 +277,8 @@ def clear_programs() -> None:
         kernel.calls.clear()
 
 
-def _is_dynamic(x: Any) -> bool:
-    """Traced: arrays and floating-point numbers; ints, bools, strings and None are static."""
-    return eqx.is_array(x) or isinstance(x, (float, complex))
+def _array_or_number(x: Any) -> bool:
+    return eqx.is_array(x) or isinstance(x, (bool, int, float, complex))
 
 
 def _static_argument(dynamic: Any, static: Any, args: tuple, kwargs: dict, positions: dict, name: str) -> tuple:
@@ -272,10 +295,13 @@ def _static_argument(dynamic: Any, static: Any, args: tuple, kwargs: dict, posit
 def kept_program(*, static_argnames: tuple[str, ...] = ()) -> Callable[[F], F]:
     """Declare a jitted kernel (``jax.jit`` or ``equinox.filter_jit`` of it, called so where
     no program is kept) one whose program is kept between processes (see the module doc).
-    Where it is kept, arrays and floating-point numbers are traced arguments, and ints,
-    bools, strings, None and the arguments ``static_argnames`` static."""
+    The arguments are traced as the kernel's own jit traces them (``equinox.filter_jit``:
+    arrays; ``jax.jit``: arrays and numbers), the rest and the arguments ``static_argnames``
+    (the jit's own static ones) are static: part of the program's key, so they must be
+    numbers, strings, bools or None (else the kernel is called as jitted)."""
 
     def declare(traced: F) -> F:
-        return functools.wraps(inspect.unwrap(traced))(_Kept(traced, tuple(static_argnames)))  # type: ignore[return-value]
+        kept = _Kept(traced, tuple(static_argnames))
+        return functools.wraps(kept.fn)(kept)  # type: ignore[return-value]
 
     return declare

@@ -27,6 +27,7 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..errors import LogError
+from .windows import running
 
 GLOBAL_LEVELS = "global levels"  # Edges.method of each way of finding the levels
 ADAPTIVE_LEVELS = "adaptive levels"
@@ -408,8 +409,6 @@ def _envelope(v: np.ndarray, name: str, teeth: int = 2) -> tuple[np.ndarray, np.
     either side: the periods run from one rising crossing of the signal's median to the
     next (with a small hysteresis), so the window follows the speed — at 300 rpm as at
     3000 — and a gap's period takes the levels of the teeth around it."""
-    from scipy.ndimage import maximum_filter1d, minimum_filter1d
-
     mid = float(np.median(v))
     h = 0.02 * float(np.percentile(v, 99) - np.percentile(v, 1))
     decisive = (v > mid + h) | (v < mid - h)  # a small hysteresis: noise around the median is no crossing
@@ -422,8 +421,8 @@ def _envelope(v: np.ndarray, name: str, teeth: int = 2) -> tuple[np.ndarray, np.
     starts = np.concatenate([[0], cross])
     lengths = np.diff(np.concatenate([starts, [v.size]]))
     w = 2 * teeth + 1
-    hi = maximum_filter1d(np.maximum.reduceat(v, starts), w, mode="nearest")
-    lo = minimum_filter1d(np.minimum.reduceat(v, starts), w, mode="nearest")
+    hi = running(np.maximum.reduceat(v, starts), w, np.max, "nearest")
+    lo = running(np.minimum.reduceat(v, starts), w, np.min, "nearest")
     return np.repeat(lo, lengths), np.repeat(hi, lengths)
 
 

@@ -38,6 +38,7 @@ from jaxtyping import ArrayLike
 from ..errors import LogError
 from .pattern import END_REVS, locate_teeth, pitches, place, remove_extra_edges
 from .wheel import Repair, ToothTrack, Wheel, parse_wheel
+from .windows import running
 
 __all__ = [
     "FitStatus",
@@ -174,9 +175,7 @@ def gap_misfit(track: ToothTrack) -> float:
     ok = single[a] & single[b]
     unit = np.where(ok, 0.5 * (u[a] + u[b]), np.nan)
     if not np.all(ok):
-        from scipy.ndimage import median_filter
-
-        med = median_filter(np.where(single, u, np.median(u[single]) if single.any() else 1.0), 9, mode="nearest")
+        med = running(np.where(single, u, np.median(u[single]) if single.any() else 1.0), 9, np.median, "nearest")
         unit = np.where(ok, unit, med[g])
     span = dt[g - 1] + dt[g] + dt[g + 1]
     want = (k[g - 1] + k[g] + k[g + 1]) * unit

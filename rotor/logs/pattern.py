@@ -47,6 +47,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from ..errors import LogError
 from .wheel import Repair, ToothTrack, Wheel, parse_wheel, period_ratios, repairs_json, repairs_summary
+from .windows import running
 
 __all__ = ["Repair", "locate_teeth", "follow_pattern", "repairs_json", "repairs_summary", "pitches"]
 
@@ -63,13 +64,11 @@ def pitches(dt: np.ndarray, refine: int = 4) -> tuple[np.ndarray, np.ndarray]:
     speed that changes by half within a few teeth, as while cranking; against the median
     of the 2·4 + 1 periods around it: robust to a stray edge next to it). The first comes
     from the second in ``refine`` rounds."""
-    from scipy.ndimage import median_filter
-
     n = dt.size
     if n < 2 * HALF + 1:
         p0 = dt / np.median(dt)
     else:
-        p0 = dt / median_filter(dt, 2 * HALF + 1, mode="mirror")  # the ends reflected, as np.pad(…, "reflect")
+        p0 = dt / running(dt, 2 * HALF + 1, np.median, "mirror")  # the ends reflected
     p = p0
     if n < 3:
         return p, p0

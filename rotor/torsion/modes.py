@@ -55,6 +55,7 @@ from jaxtyping import Array, ArrayLike, Float
 from ..engine.model import Engine
 from ..engine.plausible import check_speed_rpm, require_whole, what_it_is
 from ..errors import EngineError, SolverError
+from ..programs import kept_program
 from ..results import Result, json_safe
 from .model import TorsionalChain, mass_inertias, torsional_chain
 
@@ -105,9 +106,9 @@ def _modal(inertias: Array, stiffnesses: Array) -> tuple[Array, Array]:
     return jnp.sqrt(jnp.clip(lam[1:], 0.0)) / (2 * jnp.pi), phi.T[1:]
 
 
-_modal_jit = jax.jit(_modal)
+_modal_jit = kept_program()(jax.jit(_modal))
 
-natural_frequencies_of = jax.jit(_natural_frequencies_hz)
+natural_frequencies_of = kept_program()(jax.jit(_natural_frequencies_hz))
 """``natural_frequencies_of(inertias_kgm2, stiffnesses_Nm_per_rad)``: the elastic natural
 frequencies [Hz] of the chain with these inertias [kg·m², (n,)] and stiffnesses
 [N·m/rad, (n − 1,)], compiled once per chain size; vmap it over inertias (the crank-angle
@@ -541,7 +542,7 @@ def chain_of(chain_or_engine: Any, call: str) -> tuple[TorsionalChain, Engine | 
     )
 
 
-_spread = jax.jit(jax.vmap(_natural_frequencies_hz, in_axes=(0, None)))
+_spread = kept_program()(jax.jit(jax.vmap(_natural_frequencies_hz, in_axes=(0, None))))
 
 EXACT_SPREAD_MASSES = 32
 """Chains of up to this many masses have their frequencies' range over the crank angle from

@@ -373,6 +373,7 @@ def test_a_number_that_should_exist_and_does_not_is_an_error(diesel, monkeypatch
     import rotor.engine.summary as summary
 
     monkeypatch.setattr(summary, "imep_pa", lambda engine: jnp.nan)
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")  # a kept program is found by rotor's source, not by a patch
     jax.clear_caches()  # engine_summary is one compiled call: compile it again with the NaN
     try:
         with pytest.raises(rotor.EngineError, match="imep_pa is nan, not a finite number") as e:

@@ -58,7 +58,8 @@ def test_a_compiled_kernel_is_reused_by_the_next_process(tmp_path):
         "import jax, rotor; rotor.enable_compilation_cache(); e = rotor.load_engine('4chn15'); "
         "jax.block_until_ready(rotor.steady_state(e, grid_deg=2.0).omega)"
     )
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"))
+    # JAX's cache itself: no kept programs (tests/project/test_programs.py), which bypass it
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"), ROTOR_PROGRAM_CACHE="off")
     subprocess.run([sys.executable, "-c", code], env=env, check=True)
     written = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "c").glob("*-cache")}
     assert any("_closed_steady" in n for n in written), written
@@ -93,7 +94,9 @@ def test_a_second_process_finds_every_program_of_a_command_in_the_cache(tmp_path
     points are made when it traces), so the persistent cache stores every program it
     compiles: a second process compiles nothing. Both build the engine's tables (none kept
     on disk), so that both run the same programs whatever the suite kept before."""
-    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"), ROTOR_TABLE_CACHE="off")
+    env = dict(
+        os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"), ROTOR_TABLE_CACHE="off", ROTOR_PROGRAM_CACHE="off"
+    )
     argv = [sys.executable, "-c", COUNT_PROGRAMS, "simulate", "4chn15", "--cycles", "3", "--method", "angle", "--quiet"]
     counts = []
     for _ in range(2):

@@ -143,3 +143,15 @@ def test_a_program_that_calls_back_into_python_is_not_kept(kept_here):
         np.testing.assert_array_equal(_reporting(x), 2.0 * x)
     (path,) = kept_here.glob("rotor-program-*.bin")
     assert path.stat().st_size == 0  # marked: compiled in each process, as JAX's cache does
+
+
+def test_the_oldest_programs_go_past_the_size_cap(kept_here, monkeypatch):
+    x = np.linspace(0.0, 1.0, 4)
+    _cubic(x, 1.0, power=1)
+    (first,) = kept_here.glob("*.bin")
+    monkeypatch.setattr(programs, "PROGRAM_BYTES", int(1.5 * first.stat().st_size))
+    os.utime(first, ns=(1, 1))  # the oldest
+    stranger = kept_here / "notes.txt"
+    stranger.write_text("mine")
+    _cubic(x, 1.0, power=2)
+    assert not first.exists() and len(list(kept_here.glob("*.bin"))) == 1 and stranger.exists()
