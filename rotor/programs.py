@@ -39,6 +39,7 @@ import pickle
 import platform
 import re
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
@@ -245,15 +246,24 @@ def _compiled_afresh() -> Iterator[Callable[[], bool]]:
     the yielded check says whether the executable was read back). The check is False where
     the executable came from the cache."""
     hits = _CACHE_HITS[0]
-    compiler = sys.modules.get("jax._src.compiler")
-    original = getattr(compiler, "_get_cache_key", None)
-    if original is not None:
-        compiler._get_cache_key = lambda *args, **kwargs: None  # type: ignore[union-attr]
+    with _AFRESH_LOCK:  # threads compiling at once: the first in switches JAX's key off, the last out on
+        compiler = sys.modules.get("jax._src.compiler")
+        if _AFRESH["depth"] == 0 and getattr(compiler, "_get_cache_key", None) is not None:
+            _AFRESH["original"] = compiler._get_cache_key  # type: ignore[union-attr]
+            compiler._get_cache_key = lambda *args, **kwargs: None  # type: ignore[union-attr]
+        _AFRESH["depth"] += 1
     try:
         yield lambda: _CACHE_HITS[0] == hits
     finally:
-        if original is not None:
-            compiler._get_cache_key = original  # type: ignore[union-attr]
+        with _AFRESH_LOCK:
+            _AFRESH["depth"] -= 1
+            if _AFRESH["depth"] == 0 and _AFRESH["original"] is not None:
+                compiler._get_cache_key = _AFRESH["original"]  # type: ignore[union-attr]
+                _AFRESH["original"] = None
+
+
+_AFRESH_LOCK = threading.Lock()
+_AFRESH: dict[str, Any] = {"depth": 0, "original": None}
 
 
 def _self_contained(lowered: Any) -> bool:

@@ -155,3 +155,25 @@ def test_the_oldest_programs_go_past_the_size_cap(kept_here, monkeypatch):
     stranger.write_text("mine")
     _cubic(x, 1.0, power=2)
     assert not first.exists() and len(list(kept_here.glob("*.bin"))) == 1 and stranger.exists()
+
+
+def test_compiling_programs_in_threads_leaves_jaxs_cache_on(kept_here):
+    """A program to keep is compiled without JAX's cache (an executable read back from it
+    cannot be serialized again whole); threads doing so at once leave it on after."""
+    import threading
+
+    x = np.linspace(0.0, 1.0, 6)
+    threads = [threading.Thread(target=_cubic, args=(x, 1.0), kwargs={"power": p}) for p in range(5, 11)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(list(kept_here.glob("*.bin"))) == 6
+    asked = []
+    jax.monitoring.register_event_listener(
+        lambda event, **kw: (
+            asked.append(event) if event == "/jax/compilation_cache/compile_requests_use_cache" else None
+        )
+    )
+    jax.block_until_ready(jax.jit(lambda v: jnp.cos(v) * 7.0 - 1.0)(jnp.arange(11.0)))
+    assert asked, "JAX's persistent cache is no longer asked"
