@@ -155,8 +155,7 @@ def _time_field(t, y, args):
     return omega, accel / w_ref, dz
 
 
-@kept_program(static_argnames=("stop_at_stall", "max_steps"))
-@eqx.filter_jit
+@eqx.filter_jit  # not kept: it returns diffrax's solution whole (its dense output)
 def time_run(scene: Scene, t0, y0, theta_end, t_end, rtol, omega_ref, stop_at_stall: bool, max_steps: int):
     """Adaptive solve in time from (θ, ω, z) = y0 until θ reaches ``theta_end``, ω falls to
     zero (if ``stop_at_stall``) or t reaches ``t_end``. Returns every accepted step."""
