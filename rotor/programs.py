@@ -268,13 +268,17 @@ _AFRESH: dict[str, Any] = {"depth": 0, "original": None}
 
 def _self_contained(lowered: Any) -> bool:
     """Whether a lowered program runs without this process: no call back into Python (a
-    progress bar, a debug print) and no other side effect. JAX's compilation cache never
+    progress bar, a debug print), no other side effect and no call of a library function. JAX's compilation cache never
     keeps such a program either (the callback's address is part of its key); where this
     version of JAX does not say, the program is not kept."""
     args = getattr(getattr(lowered, "_lowering", None), "compile_args", None)
     if not isinstance(args, dict) or not {"host_callbacks", "ordered_effects", "unordered_effects"} <= set(args):
         return False
-    return not (args["host_callbacks"] or args["ordered_effects"] or args["unordered_effects"] or args.get("keepalive"))
+    if args["host_callbacks"] or args["ordered_effects"] or args["unordered_effects"] or args.get("keepalive"):
+        return False
+    # nor a call of a library function that JAX readies only while it lowers a program (LAPACK's,
+    # for an eigenproblem or a linear solve): a loaded program that calls it unreadied crashes
+    return "custom_call" not in lowered.as_text()
 
 
 _KERNELS: list[_Kept] = []

@@ -177,3 +177,18 @@ def test_compiling_programs_in_threads_leaves_jaxs_cache_on(kept_here):
     )
     jax.block_until_ready(jax.jit(lambda v: jnp.cos(v) * 7.0 - 1.0)(jnp.arange(11.0)))
     assert asked, "JAX's persistent cache is no longer asked"
+
+
+@programs.kept_program()
+@jax.jit
+def _eigenvalues(a):
+    return jnp.linalg.eigvalsh(a)
+
+
+def test_a_program_that_calls_a_library_function_is_not_kept(kept_here):
+    """LAPACK's functions are readied by JAX while it lowers a program: a process that loaded
+    such a program without lowering any would call an unreadied function."""
+    a = np.array([[2.0, 1.0], [1.0, 3.0]])
+    np.testing.assert_allclose(_eigenvalues(a), np.linalg.eigvalsh(a), rtol=1e-14)
+    (path,) = kept_here.glob("rotor-program-*.bin")
+    assert path.stat().st_size == 0
