@@ -131,7 +131,7 @@ def enable_compilation_cache(
     """
     env = os.environ.get("ROTOR_COMPILATION_CACHE")
     if path is None:
-        if env is not None and env.strip().lower() in _OFF:
+        if env is not None and switched_off(env):
             _TABLES_ON.clear()
             return None
         own = _own_cache_dir()
@@ -191,18 +191,24 @@ _TABLE_ENTRY = "rotor-tables-"
 _PACKAGES = ("jax", "jaxlib", "equinox", "numpy")
 
 
-def prune(folder: Path, name: re.Pattern, keep: int) -> None:
-    """Delete all but the ``keep`` newest files of ``folder`` whose names match ``name`` (no
-    other file of the folder is touched)."""
+def prune(folder: Path, name: re.Pattern, keep: int | None = None, max_bytes: int | None = None) -> None:
+    """Delete the oldest files of ``folder`` whose names match ``name`` (no other file of the
+    folder is touched) until at most ``keep`` of them are left and they hold at most
+    ``max_bytes`` [bytes] (either bound may be None)."""
     found = []
     for item in os.scandir(folder):
         if name.match(item.name) and item.is_file(follow_symlinks=False):
             try:
-                found.append((item.stat(follow_symlinks=False).st_mtime_ns, item.path))
+                st = item.stat(follow_symlinks=False)
             except OSError:
                 continue
-    for _, old in sorted(found)[:-keep]:
+            found.append((st.st_mtime_ns, st.st_size, item.path))
+    count, total = len(found), sum(size for _, size, _ in found)
+    for _, size, old in sorted(found):
+        if (keep is None or count <= keep) and (max_bytes is None or total <= max_bytes):
+            break
         Path(old).unlink(missing_ok=True)
+        count, total = count - 1, total - size
 
 
 def table_folder() -> Path | None:
@@ -220,7 +226,7 @@ def table_folder() -> Path | None:
         return None
     env = os.environ.get("ROTOR_TABLE_CACHE")
     if env is not None:
-        return None if env.strip().lower() in _OFF else Path(env).expanduser()
+        return None if switched_off(env) else Path(env).expanduser()
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rotor" / "tables"
 
 

@@ -48,7 +48,7 @@ import equinox as eqx
 import numpy as np
 from jax.experimental import serialize_executable
 
-from .cache import compilation_cache_on, source_fingerprint, switched_off
+from .cache import compilation_cache_on, prune, source_fingerprint, switched_off
 from .fileio import atomic_path
 from .jaxconfig import jax
 
@@ -162,6 +162,9 @@ class _Kept:
 
         try:
             lowered = jax.jit(flat).lower(*specs)
+            if not _self_contained(lowered):  # marked, and left to the jitted kernel: compiled once, not twice
+                _write(folder, path, b"")
+                return None
             with _compiled_afresh() as fresh:
                 compiled = lowered.compile()
         except Exception:  # noqa: BLE001 - e.g. a number that must be static: called as jitted, which says what is wrong
@@ -169,36 +172,23 @@ class _Kept:
         if not fresh():  # read back from JAX's cache: such an executable cannot be serialized again whole
             return compiled
         try:
-            blob = pickle.dumps(serialize_executable.serialize(compiled)) if _self_contained(lowered) else b""
+            blob = pickle.dumps(serialize_executable.serialize(compiled))
         except Exception:  # noqa: BLE001 - a program that cannot be serialized is compiled in each process
             blob = b""
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            with atomic_path(path) as tmp:
-                Path(tmp).write_bytes(blob)
-            _prune(folder)
-        except OSError:
-            pass
-        return compiled if blob else None
+        _write(folder, path, blob)
+        return compiled
 
 
-def _prune(folder: Path) -> None:
-    """Delete the oldest kept programs until they hold at most :data:`PROGRAM_BYTES` (no
-    other file of the folder is touched)."""
-    found = []
-    for item in os.scandir(folder):
-        if _NAME.match(item.name) and item.is_file(follow_symlinks=False):
-            try:
-                st = item.stat(follow_symlinks=False)
-            except OSError:
-                continue
-            found.append((st.st_mtime_ns, st.st_size, item.path))
-    total = sum(size for _, size, _ in found)
-    for _, size, path in sorted(found):
-        if total <= PROGRAM_BYTES:
-            break
-        Path(path).unlink(missing_ok=True)
-        total -= size
+def _write(folder: Path, path: Path, blob: bytes) -> None:
+    """Keep ``blob`` at ``path``, whole or not at all, within the size cap; silently nothing
+    where the folder cannot be written."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp:
+            Path(tmp).write_bytes(blob)
+        prune(folder, _NAME, max_bytes=PROGRAM_BYTES)
+    except OSError:
+        pass
 
 
 @functools.cache

@@ -27,19 +27,18 @@ import re
 from pathlib import Path
 from typing import Any
 
-from ..cache import prune, source_fingerprint
+from ..cache import prune, source_fingerprint, switched_off
 
 __all__ = ["MAX_FILES", "entry_path", "keep_output", "kept_output", "output_key"]
 
 MAX_FILES = 256
 _ENTRY = re.compile(r"^rotor-output-[0-9a-f]{40}\.kept$")
 _MAGIC = "rotor kept output 1"
-_OFF = {"0", "off", "no", "false"}
 
 
 def _folder() -> Path | None:
     env = os.environ.get("ROTOR_OUTPUT_CACHE")
-    if env is not None and env.strip().lower() in _OFF:
+    if env is not None and switched_off(env):
         return None
     if env:
         return Path(env).expanduser()
