@@ -1,16 +1,24 @@
 """Validation helpers shared by the parameter modules.
 
 Checks run only on concrete values: inside ``jax.jit``/``jax.grad`` the fields are
-tracers and were already checked when the object was first built from numbers.
+tracers and were already checked when the object was first built from numbers. JAX is
+imported where a JAX array is made: the size and number checks of a log's reading need none.
 """
 
 from __future__ import annotations
 
-import jax.numpy as jnp
+import sys
+
 import numpy as np
 
 from .errors import EngineError
-from .jaxconfig import jax
+
+
+def is_tracer(x) -> bool:
+    """Whether ``x`` is a JAX tracer (inside ``jit``, ``grad``, ``vmap``); False in a process
+    that has not imported JAX."""
+    jax = sys.modules.get("jax")
+    return jax is not None and isinstance(x, jax.core.Tracer)
 
 
 def as_f64(x):
@@ -18,16 +26,18 @@ def as_f64(x):
 
     Tracers pass through unchanged so that modules can be rebuilt inside ``jax.jit``.
     """
-    if isinstance(x, jax.core.Tracer):
+    if is_tracer(x):
         return x
     if isinstance(x, (bool, np.bool_)):
         raise EngineError(f"expected a number, got the boolean {x!r}")
-    return jnp.asarray(x, dtype=jnp.float64)
+    from .jaxconfig import jax
+
+    return jax.numpy.asarray(x, dtype=np.float64)
 
 
 def concrete(x):
     """``x`` as a numpy float64 array, or ``None`` if it is a tracer (not checkable)."""
-    if isinstance(x, jax.core.Tracer):
+    if is_tracer(x):
         return None
     return np.asarray(x, dtype=np.float64)
 
@@ -67,9 +77,11 @@ def arrays_only(tree):
     would treat it as a constant and compile again for every new value.
     """
 
+    from .jaxconfig import jax
+
     def leaf(x):
         if isinstance(x, (float, int, np.floating, np.integer)) and not isinstance(x, (bool, np.bool_)):
-            return jnp.asarray(x, dtype=jnp.float64)
+            return jax.numpy.asarray(x, dtype=np.float64)
         return x
 
     return jax.tree_util.tree_map(leaf, tree)

@@ -16,25 +16,29 @@ One definition, one code path, for :class:`rotor.SpeedResult` (a simulated run) 
 Pure array code (jax.numpy for tracers, so that ``jax.grad`` and ``jax.jit`` flow through;
 numpy for concrete arrays, JAX's included, where each operation would otherwise compile a
 program of its own for every new shape); base layer: imports nothing from rotor but
-:mod:`rotor.jaxconfig` (JAX with float64 on).
+:mod:`rotor.jaxconfig` (JAX with float64 on) where a tracer comes in.
 """
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
-import jax.numpy as jnp
 import numpy as np
-from jaxtyping import ArrayLike
-
-from .jaxconfig import jax
+from numpy.typing import ArrayLike
 
 __all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "cycle_delta"]
 
 
 def array_module(*arrays: Any) -> Any:
-    """jax.numpy when any argument is a tracer (inside ``jit``, ``grad``, ``vmap``), else numpy."""
-    return jnp if any(isinstance(a, jax.core.Tracer) for a in arrays) else np
+    """jax.numpy when any argument is a tracer (inside ``jit``, ``grad``, ``vmap``), else numpy.
+    A process that has not imported JAX has no tracer (a log's figures import no JAX)."""
+    jax = sys.modules.get("jax")
+    if jax is None or not any(isinstance(a, jax.core.Tracer) for a in arrays):
+        return np
+    from .jaxconfig import jax
+
+    return jax.numpy
 
 
 def cycle_slopes(mean_omega: ArrayLike, cycle_rad: float) -> Any:

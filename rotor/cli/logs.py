@@ -207,9 +207,18 @@ def cmd_analyze(args: argparse.Namespace) -> None:
     for_each_log(args, analyze_file, "analysing", one_only=("save_tooth_errors",))
 
 
+def _engine_of(name: str | None) -> Any:
+    """The engine of ``--engine`` (a preset or an engine file), or None: JAX is imported only
+    where an engine is given (a log alone is read with NumPy)."""
+    if not name:
+        return None
+    from ..engine.file import load_engine
+
+    return load_engine(name)
+
+
 def analyze_file(args: argparse.Namespace, log: str) -> FileOutput:
     """``rotor analyze`` of the one file ``log`` with the options ``args``: what it prints and writes."""
-    from ..engine.file import load_engine
     from ..errors import LogError
     from ..logs.analysis import analyze_log
 
@@ -236,7 +245,7 @@ def analyze_file(args: argparse.Namespace, log: str) -> FileOutput:
         compression_ratio=args.compression_ratio,
         rod_ratio=args.rod_ratio,
         denoise=not args.no_denoise,
-        engine=load_engine(args.engine) if args.engine else None,
+        engine=_engine_of(args.engine),
     )
     written = []
     if args.save_tooth_errors:

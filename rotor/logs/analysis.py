@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -308,8 +309,9 @@ class LogAnalysis(Result):
 
 def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise):
     """TypeError naming the argument of :func:`analyze_log` that has the wrong type."""
-    from ..engine.model import Engine
     from .track import WheelReading
+
+    model = sys.modules.get("rotor.engine.model")  # not imported: no Engine was made, and JAX stays out
 
     if not isinstance(source, (str, os.PathLike, Log, WheelReading)):
         raise TypeError(
@@ -320,7 +322,7 @@ def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, to
     for key, v in (("tdc_deg", tdc_deg), ("max_order", max_order)):
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating))):
             raise TypeError(f"{key} = {v!r}: a number or None, not {type(v).__name__}")
-    if engine is not None and not isinstance(engine, Engine):
+    if engine is not None and (model is None or not isinstance(engine, model.Engine)):
         raise TypeError(
             f"engine = {engine!r}: a rotor.Engine (e.g. rotor.load_engine('4chn15')) or None, not {type(engine).__name__}"
         )

@@ -15,7 +15,7 @@ is the cleaner one depends on the sensor and its conditioning, so both are offer
 from __future__ import annotations
 
 import numpy as np
-from jaxtyping import ArrayLike
+from numpy.typing import ArrayLike
 
 from ..errors import LogError
 from .edges import Edges

@@ -24,7 +24,7 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from jaxtyping import ArrayLike
+from numpy.typing import ArrayLike
 
 from ..errors import LogError
 from .windows import running

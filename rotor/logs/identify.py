@@ -33,7 +33,7 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from jaxtyping import ArrayLike
+from numpy.typing import ArrayLike
 
 from ..errors import LogError
 from .pattern import END_REVS, locate_teeth, pitches, place, remove_extra_edges

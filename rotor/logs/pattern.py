@@ -42,8 +42,8 @@ from collections import Counter
 from collections.abc import Callable
 
 import numpy as np
-from jaxtyping import ArrayLike
 from numpy.lib.stride_tricks import sliding_window_view
+from numpy.typing import ArrayLike
 
 from ..errors import LogError
 from .wheel import Repair, ToothTrack, Wheel, parse_wheel, period_ratios, repairs_json, repairs_summary

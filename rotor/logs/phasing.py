@@ -16,7 +16,7 @@ import enum
 from typing import TYPE_CHECKING
 
 import numpy as np
-from jaxtyping import ArrayLike
+from numpy.typing import ArrayLike
 
 from ..errors import LogError
 from .digital import digital_edges

@@ -24,7 +24,7 @@ a note says so. (On a simulated 60-2 log with a 2 % fluctuation, stamps rounded 
 from __future__ import annotations
 
 import numpy as np
-from jaxtyping import ArrayLike
+from numpy.typing import ArrayLike
 
 from ..errors import LogError
 from ..units import RPM_PER_RAD_S
@@ -117,7 +117,7 @@ def check_speed_time_base(t: ArrayLike, rpm: ArrayLike, source: str) -> None:
             "is the time column in seconds?",
         )
         raise LogError(
-            f"{source}: the samples lie {rev:.3g} revolutions apart at {float(np.median(rpm)):.4g} rpm, too far to "
+            f"{source}: the samples lie {rev:.3g} revolutions apart at {float(np.median(w)) * RPM_PER_RAD_S:.4g} rpm, too far to "
             f"follow the speed within a cycle (half a revolution at most); {hint}"
         )
 

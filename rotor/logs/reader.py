@@ -57,7 +57,7 @@ import re
 from collections.abc import Sequence
 
 import numpy as np
-from jaxtyping import ArrayLike
+from numpy.typing import ArrayLike
 
 from ..checks import check_size
 from ..errors import LogError

@@ -12,6 +12,7 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from conftest import ROOT
 
@@ -70,6 +71,39 @@ def test_the_checks_see_a_heavy_import():
     """The check above can fail: a command that computes does import JAX."""
     r = _heavy_after("info", "4chn15", "--json")
     assert r["status"] == 0 and "jax" in r["heavy"] and "equinox" in r["heavy"]
+
+
+def test_analysing_a_log_imports_no_jax(tmp_path):
+    """A log's analysis is NumPy (and scipy's splines): ``rotor analyze`` of tooth times and of
+    a sampled wheel signal with its pressure imports neither JAX nor equinox (their import is
+    most of a warm command's time); with an engine file it does."""
+    rng = np.random.default_rng(3)
+    w = 2 * np.pi * 1500 / 60
+    ang = 0.37 + 2 * np.pi * np.arange(16)[:, None] + 2 * np.pi / 60 * np.arange(58)[None, :]
+    teeth = tmp_path / "teeth.csv"
+    np.savetxt(teeth, (ang.ravel() + 0.02 * np.sin(ang.ravel() / 2)) / w, fmt="%.12g")
+    t = np.arange(0.0, 0.5, 1e-5)
+    phi = w * t + 0.3
+    square = (np.mod(phi / (2 * np.pi / 60), 1.0) < 0.5) & (np.mod(np.floor(phi / (2 * np.pi / 60)), 60) < 58)
+    pressure = 1.0 + np.exp(-(((np.mod(phi, 4 * np.pi) - 2 * np.pi) / 0.5) ** 2)) + 0.001 * rng.standard_normal(t.size)
+    sampled = tmp_path / "wheel.csv"
+    np.savetxt(
+        sampled,
+        np.c_[t, pressure, square * 5.0],
+        delimiter=",",
+        header="time,pressure_v,encoder_v",
+        comments="",
+        fmt="%.8g",
+    )
+    for argv in (
+        ["analyze", str(teeth), "--wheel", "60-2", "--json"],
+        ["analyze", str(sampled), "--wheel", "60-2", "--columns", "time,pressure_v,encoder_v", "--json"],
+    ):
+        r = _heavy_after(*argv)
+        assert r["status"] in (0, None), r
+        assert not {"jax", "equinox"} & {m.split(".")[0] for m in r["heavy"]}, f"rotor {' '.join(argv)}: {r['heavy']}"
+    r = _heavy_after("analyze", str(teeth), "--wheel", "60-2", "--engine", "4chn15", "--tdc-deg", "0", "--json")
+    assert r["status"] in (0, None) and "jax" in r["heavy"]  # the check can fail
 
 
 def test_a_steady_state_imports_no_adaptive_solver():
