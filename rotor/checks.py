@@ -32,6 +32,11 @@ def as_f64(x):
         raise EngineError(f"expected a number, got the boolean {x!r}")
     from .jaxconfig import jax
 
+    if not isinstance(x, jax.Array):
+        try:  # numbers and lists of them: put on the device as they are (no program compiled)
+            return jax.device_put(np.asarray(x, dtype=np.float64))
+        except (TypeError, ValueError):
+            pass  # JAX says what it cannot convert
     return jax.numpy.asarray(x, dtype=np.float64)
 
 

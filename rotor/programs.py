@@ -172,7 +172,12 @@ class _Kept:
         if not fresh():  # read back from JAX's cache: such an executable cannot be serialized again whole
             return compiled
         try:
-            blob = pickle.dumps(serialize_executable.serialize(compiled))
+            serialized, in_tree, out_tree = serialize_executable.serialize(compiled)
+            blob = pickle.dumps((serialized, in_tree, out_tree))
+            # its argument and result structures must come back equal: an equinox module's
+            # holds sentinels that another process would not recognise (not kept)
+            if pickle.loads(blob)[1:] != (in_tree, out_tree):
+                blob = b""
         except Exception:  # noqa: BLE001 - a program that cannot be serialized is compiled in each process
             blob = b""
         _write(folder, path, blob)

@@ -68,7 +68,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..checks import check_size
@@ -144,10 +143,8 @@ def rod_pin_forces(
     """
     g = engine.geometry
     R, L, k = float(g.crank_radius_m), float(g.rod_length_m), float(g.pin_offset_m)
-    th, w = (
-        jnp.asarray(theta, dtype=jnp.float64),
-        jnp.asarray(omega, dtype=jnp.float64),
-    )  # traced: no recompile per speed
+    # arrays, traced by the compiled call (no recompile per speed), made without a program of their own
+    th, w = np.asarray(theta, dtype=np.float64), np.asarray(omega, dtype=np.float64)
     psum, alpha = (np.asarray(x) for x in _piston_forces(engine, th, w, model))
     sin_b = (R * np.sin(alpha) - k) / L
     cos_b = np.sqrt(1.0 - sin_b**2)

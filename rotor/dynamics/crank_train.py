@@ -47,6 +47,7 @@ from ..engine.kinematics import piston_motion
 from ..engine.model import Engine, engine_jit, require_engine, unnamed
 from ..engine.plausible import require_number
 from ..errors import EngineError
+from ..programs import kept_program
 
 __all__ = [
     "CrankTrain",
@@ -429,7 +430,8 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     hit = _TABLES.get(key) or _find_tables(key, engine, fidelity, points)
     _TABLES.move_to_end(key)
     kept = hit
-    d_inertia = engine.crankshaft.inertia_kgm2 - kept.inertia_ref
+    given_inertia = concrete(engine.crankshaft.inertia_kgm2)  # NumPy where concrete: no program for a difference
+    d_inertia = (engine.crankshaft.inertia_kgm2 if given_inertia is None else given_inertia) - kept.inertia_ref
     d = concrete(d_inertia)
     if d is not None:
         check_inertia(kept.low + d, kept.mean + d, engine)
@@ -463,7 +465,7 @@ def _read_kept(key: str, engine: Engine, fidelity: str) -> KeptTables | None:
     if stored is None or set(stored) != {*_TABLE_NAMES, "inertia_ref"}:
         return None
     with jax.ensure_compile_time_eval():  # arrays, not values of a trace this call may be in
-        train = _train({name: jnp.asarray(stored[name]) for name in _TABLE_NAMES}, engine, fidelity)
+        train = _train({name: jax.device_put(np.asarray(stored[name])) for name in _TABLE_NAMES}, engine, fidelity)
     _remember_tables(key, train, float(stored["inertia_ref"]))
     return _TABLES[key]
 
@@ -543,12 +545,17 @@ def checked_train(engine: Any, fidelity: str, points: int, call: str = "engine")
     return train_from_engine(engine, fidelity, points)
 
 
-@jax.jit
 def shift_inertia(train: CrankTrain, d_inertia: ArrayLike) -> CrankTrain:
     """``train`` with ``d_inertia`` [kg·m²] added to I(θ) and its mean: the tables of the
     same engine with another crankshaft inertia (a constant in I(θ) at every fidelity)."""
-    values = train.values.at[:, COL_I].add(d_inertia)
-    return eqx.tree_at(lambda t: (t.values, t.mean_inertia), train, (values, train.mean_inertia + d_inertia))
+    values, mean = _inertia_added(train.values, train.mean_inertia, d_inertia)
+    return eqx.tree_at(lambda t: (t.values, t.mean_inertia), train, (values, mean))
+
+
+@kept_program()
+@jax.jit
+def _inertia_added(values: Array, mean_inertia: Array, d_inertia: ArrayLike) -> tuple[Array, Array]:
+    return values.at[:, COL_I].add(d_inertia), mean_inertia + d_inertia
 
 
 # ----------------------------------------------------------------------------- the table cache

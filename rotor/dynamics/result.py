@@ -439,14 +439,16 @@ class SpeedResult(Result):
         """Lowest sampled speed [rpm] (of every sample, kept or not)."""
         if self.cycle_summary is not None and self._streamed:
             return array_module(self.omega).asarray(self.cycle_summary.omega_min_all) * RPM_PER_RAD_S
-        return array_module(self.omega).min(self.omega) * RPM_PER_RAD_S
+        xp = array_module(self.omega)
+        return xp.min(xp.asarray(self.omega)) * RPM_PER_RAD_S
 
     @property
     def max_rpm(self) -> Array:
         """Highest sampled speed [rpm] (of every sample, kept or not)."""
         if self.cycle_summary is not None and self._streamed:
             return array_module(self.omega).asarray(self.cycle_summary.omega_max_all) * RPM_PER_RAD_S
-        return array_module(self.omega).max(self.omega) * RPM_PER_RAD_S
+        xp = array_module(self.omega)
+        return xp.max(xp.asarray(self.omega)) * RPM_PER_RAD_S
 
     def orders(self, cycle: int | str = -1, max_order: float = 12.0) -> Orders:
         """Amplitude and phase of the speed and engine-torque harmonics by engine order.

@@ -37,6 +37,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
+from ..cycles import array_module
 from ..errors import EngineError
 from ..programs import kept_program
 from ..units import RAD_S_PER_RPM
@@ -64,6 +65,13 @@ def _tuple_of_ints(x):
     return tuple(int(v) for v in x)
 
 
+def _alike(*xs: Any) -> tuple[Any, ...]:
+    """``xs`` as NumPy arrays where none is a tracer (the derived figures of a concrete engine
+    compile no program of their own), else as they are for JAX."""
+    xp = array_module(*xs)
+    return xs if xp is not np else tuple(np.asarray(x, dtype=np.float64) for x in xs)
+
+
 class Geometry(eqx.Module):
     """``[geometry]``: cylinder and crank dimensions.
 
@@ -82,7 +90,8 @@ class Geometry(eqx.Module):
             check_positive(self.table, key, getattr(self, key))
         check_finite(self.table, "pin_offset_m", self.pin_offset_m)
         check_fields_plausible(self)
-        R, L, k = concrete(self.crank_radius_m), concrete(self.rod_length_m), concrete(self.pin_offset_m)
+        S, L, k = concrete(self.stroke_m), concrete(self.rod_length_m), concrete(self.pin_offset_m)
+        R = None if S is None else S / 2  # in NumPy: a check compiles nothing
         if R is not None and L is not None and k is not None and not L > R + abs(k):
             extra = f" plus the pin offset |k| = {abs(k):g} m" if k != 0 else ""
             raise EngineError(
@@ -93,12 +102,14 @@ class Geometry(eqx.Module):
     @property
     def crank_radius_m(self):
         """R = stroke/2 [m]."""
-        return self.stroke_m / 2
+        (stroke,) = _alike(self.stroke_m)
+        return stroke / 2
 
     @property
     def rod_ratio(self):
         """λ = R/L [-]."""
-        return self.crank_radius_m / self.rod_length_m
+        radius, length = _alike(self.crank_radius_m, self.rod_length_m)
+        return radius / length
 
     @property
     def piston_area_m2(self):
@@ -186,18 +197,19 @@ class Masses(eqx.Module):
         """
         if self.rod_kg is None or self.rod_cg_from_big_end_m is None:  # the two-mass model
             return self.reciprocating_kg, self.rotating_kg
-        a_over_l = self.rod_cg_from_big_end_m / jnp.asarray(rod_length_m)
-        return (
-            self.reciprocating_kg + self.rod_kg * a_over_l,
-            self.rotating_kg + self.rod_kg * (1 - a_over_l),
+        rec, rot, rod, cg, length = _alike(
+            self.reciprocating_kg, self.rotating_kg, self.rod_kg, self.rod_cg_from_big_end_m, rod_length_m
         )
+        a_over_l = cg / length
+        return rec + rod * a_over_l, rot + rod * (1 - a_over_l)
 
     def big_end_kg(self, rod_length_m: ArrayLike) -> Array:
         """m₂, the rod's mass at the crank pin [kg] (its centrifugal force loads the crank pin),
         for a rod ``rod_length_m`` [m] long: ``rod_big_end_kg`` if given, the full rod's
         static share at the big end, or else the whole ``rotating_kg``."""
         if self.rod_kg is not None and self.rod_cg_from_big_end_m is not None:
-            return self.rod_kg * (1 - self.rod_cg_from_big_end_m / jnp.asarray(rod_length_m))
+            rod, cg, length = _alike(self.rod_kg, self.rod_cg_from_big_end_m, rod_length_m)
+            return rod * (1 - cg / length)
         return self.rotating_kg if self.rod_big_end_kg is None else self.rod_big_end_kg
 
     def rotating_at_pin_kg(self, rod_length_m: ArrayLike) -> Array:
@@ -205,7 +217,8 @@ class Masses(eqx.Module):
         the throw (for the bearing loads and the balance): the two-mass split's rotating
         mass, or m₂ where that is larger (the big ends' inertia counted in
         ``[crankshaft] inertia_kgm2``, see the class docstring); ``rod_length_m`` [m]."""
-        return jnp.maximum(self.two_mass_split(rod_length_m)[1], self.big_end_kg(rod_length_m))
+        rotating, big_end = _alike(self.two_mass_split(rod_length_m)[1], self.big_end_kg(rod_length_m))
+        return array_module(rotating).maximum(rotating, big_end)
 
 
 class Crankshaft(eqx.Module):
@@ -561,7 +574,8 @@ class Engine(eqx.Module):
             raise EngineError(
                 f"{where('layout', 'firing_order')} = {list(fo)}: must list each cylinder 1…{n} exactly once"
             )
-        tdc = concrete(self.tdc_angles_deg)
+        throws, banks = concrete(self.layout.throw_angles_deg), concrete(self.layout.banks_deg)
+        tdc = None if throws is None or banks is None else throws + banks  # tdc_angles_deg, in NumPy
         if tdc is not None:
             _, span, cycle = _firing_tdc_deg(np, tdc, fo, self.strokes)
             if span >= cycle - 1e-9 and n > 1:

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
+
+from ..cycles import array_module
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -56,7 +57,8 @@ def journal_spacing_m(engine: Engine) -> Array:
     s = engine.crankshaft.journal_spacing_m
     if s is not None:
         return s
-    return DEFAULT_SPACING_BORES * engine.geometry.bore_m * throws_per_span(engine)
+    bore = engine.geometry.bore_m
+    return DEFAULT_SPACING_BORES * array_module(bore).asarray(bore) * throws_per_span(engine)
 
 
 def span_of_throw(engine: Engine) -> np.ndarray:
@@ -67,20 +69,24 @@ def span_of_throw(engine: Engine) -> np.ndarray:
 def throw_positions_m(engine: Engine) -> Array:
     """Axial position of each throw's crank pin centre [m], shape (throws,)."""
     q = throws_per_span(engine)
-    part = journal_spacing_m(engine) / q
-    k = jnp.arange(engine.throw_count, dtype=jnp.float64)
-    return (k + 0.5) * part
+    spacing = journal_spacing_m(engine)
+    xp = array_module(spacing)  # NumPy for a concrete engine: no program compiled
+    k = xp.arange(engine.throw_count, dtype=xp.float64)
+    return (k + 0.5) * (xp.asarray(spacing) / q)
 
 
 def journal_positions_m(engine: Engine) -> Array:
     """Axial position of each main journal [m], shape (journals,); journal 1 at 0."""
-    return jnp.arange(journal_count(engine), dtype=jnp.float64) * journal_spacing_m(engine)
+    spacing = journal_spacing_m(engine)
+    xp = array_module(spacing)
+    return xp.arange(journal_count(engine), dtype=xp.float64) * xp.asarray(spacing)
 
 
 def web_positions_m(engine: Engine) -> Array:
     """Axial position of each crank web [m], shape (2·throws,): webs 2k − 1 and 2k (1-based)
     a quarter of the throw's part of its span in front of and behind throw k."""
     q = throws_per_span(engine)
-    quarter = journal_spacing_m(engine) / q / 4
     x = throw_positions_m(engine)
-    return jnp.stack([x - quarter, x + quarter], axis=-1).reshape(-1)
+    xp = array_module(x)
+    quarter = xp.asarray(journal_spacing_m(engine)) / q / 4
+    return xp.stack([x - quarter, x + quarter], axis=-1).reshape(-1)

@@ -189,3 +189,30 @@ def test_a_program_that_calls_a_library_function_is_not_kept(kept_here):
     np.testing.assert_allclose(_eigenvalues(a), np.linalg.eigvalsh(a), rtol=1e-14)
     (path,) = kept_here.glob("rotor-program-*.bin")
     assert path.stat().st_size == 0
+
+
+class _Tagged:
+    """A result whose structure holds an object that another process would not recognise
+    (as an equinox module's sentinel for a missing field)."""
+
+    TAG = object()
+
+    def __init__(self, x):
+        self.x = x
+
+
+jax.tree_util.register_pytree_node(_Tagged, lambda b: ((b.x,), _Tagged.TAG), lambda tag, kids: _Tagged(*kids))
+
+
+@programs.kept_program()
+@jax.jit
+def _tagged(x):
+    return _Tagged(3.0 * x)
+
+
+def test_a_program_whose_structure_would_not_come_back_is_not_kept(kept_here):
+    x = np.arange(3.0)
+    for _ in range(2):
+        np.testing.assert_array_equal(_tagged(x).x, 3.0 * x)
+    (path,) = kept_here.glob("rotor-program-*.bin")
+    assert path.stat().st_size == 0
