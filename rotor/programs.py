@@ -24,7 +24,8 @@ unpickling: keep the folder where only you can write.
 
 Inside a transformation (``jit``, ``vmap``, ``grad`` of the caller's: an argument is a
 tracer), with an argument that is neither an array nor a number, string or None, or where
-a program cannot be serialized, the kernel is called as it is jitted (``jax.jit`` or
+a program cannot be kept (it calls back into Python, calls a library function other than
+LAPACK's, or cannot be serialized), the kernel is called as it is jitted (``jax.jit`` or
 ``equinox.filter_jit``), as it would be without this module.
 """
 
@@ -149,7 +150,9 @@ class _Kept:
             return None
         if blob is not None:
             try:
-                serialized, in_tree, out_tree = pickle.loads(blob)
+                serialized, in_tree, out_tree, lapack = pickle.loads(blob)
+                if lapack:
+                    _ready_lapack()
                 return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
             except Exception:  # noqa: BLE001 - a partial or foreign file is a miss, whatever it raises
                 pass
@@ -162,7 +165,8 @@ class _Kept:
 
         try:
             lowered = jax.jit(flat).lower(*specs)
-            if not _self_contained(lowered):  # marked, and left to the jitted kernel: compiled once, not twice
+            calls = _library_calls(lowered.as_text())
+            if not _self_contained(lowered, calls):  # marked, and left to the jitted kernel: compiled once, not twice
                 _write(folder, path, b"")
                 return None
             with _compiled_afresh() as fresh:
@@ -173,10 +177,11 @@ class _Kept:
             return compiled
         try:
             serialized, in_tree, out_tree = serialize_executable.serialize(compiled)
-            blob = pickle.dumps((serialized, in_tree, out_tree))
+            lapack = bool(calls)  # LAPACK's alone (any other is not kept)
+            blob = pickle.dumps((serialized, in_tree, out_tree, lapack))
             # its argument and result structures must come back equal: an equinox module's
             # holds sentinels that another process would not recognise (not kept)
-            if pickle.loads(blob)[1:] != (in_tree, out_tree):
+            if pickle.loads(blob)[1:3] != (in_tree, out_tree):
                 blob = b""
         except Exception:  # noqa: BLE001 - a program that cannot be serialized is compiled in each process
             blob = b""
@@ -261,19 +266,35 @@ _AFRESH_LOCK = threading.Lock()
 _AFRESH: dict[str, Any] = {"depth": 0, "original": None}
 
 
-def _self_contained(lowered: Any) -> bool:
+def _self_contained(lowered: Any, calls: set[str]) -> bool:
     """Whether a lowered program runs without this process: no call back into Python (a
-    progress bar, a debug print), no other side effect and no call of a library function. JAX's compilation cache never
-    keeps such a program either (the callback's address is part of its key); where this
-    version of JAX does not say, the program is not kept."""
+    progress bar, a debug print) and no other side effect, which JAX's compilation cache
+    never keeps either (the callback's address is part of its key), and no library function
+    but LAPACK's; where this version of JAX does not say, the program is not kept."""
     args = getattr(getattr(lowered, "_lowering", None), "compile_args", None)
     if not isinstance(args, dict) or not {"host_callbacks", "ordered_effects", "unordered_effects"} <= set(args):
         return False
     if args["host_callbacks"] or args["ordered_effects"] or args["unordered_effects"] or args.get("keepalive"):
         return False
-    # nor a call of a library function that JAX readies only while it lowers a program (LAPACK's,
-    # for an eigenproblem or a linear solve): a loaded program that calls it unreadied crashes
-    return "custom_call" not in lowered.as_text()
+    # nor a call of a library function (``calls``, :func:`_library_calls`) other than LAPACK's,
+    # which is readied before such a program loads
+    return all(target.startswith("lapack_") for target in calls)
+
+
+_CALL = re.compile(r"custom_call\s*@([\w.$-]+)")
+
+
+def _library_calls(text: str) -> set[str]:
+    """The library functions (XLA custom calls) a lowered program's text calls."""
+    return set(_CALL.findall(text)) | ({"?"} if "custom_call" in text and not _CALL.search(text) else set())
+
+
+def _ready_lapack() -> None:
+    """Ready LAPACK's functions, as JAX does while it lowers a program that calls them: a
+    loaded program calls them without lowering anything (unreadied, the process crashes)."""
+    from jaxlib import lapack
+
+    lapack.prepare_lapack_call("syevd_ffi", np.dtype(np.float64))
 
 
 _KERNELS: list[_Kept] = []

@@ -46,6 +46,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..checks import check_finite, check_positive, concrete, fmt
+from ..cycles import array_module
 from ..engine.inertia import cylinder_inertia
 from ..engine.model import Engine, engine_jit, require_engine
 from ..engine.plausible import number, what_it_is
@@ -246,16 +247,19 @@ class TorsionalChain(eqx.Module):
 
     def mass_matrix(self) -> Float[Array, "n n"]:
         """M = diag(J) [kg·m²], (n, n)."""
-        return jnp.diag(self.inertias_kgm2)
+        xp = array_module(self.inertias_kgm2)
+        return xp.diag(xp.asarray(self.inertias_kgm2))
 
     def damping_matrix(self) -> Float[Array, "n n"]:
         """C [N·m·s/rad], (n, n): diag(absolute damping) plus the shafts' relative damping
         in K's pattern. Modal damping is not in it: :func:`rotor.torsional_modes` adds it
         in modal coordinates."""
         n = self.size
-        C = jnp.zeros((n, n))
-        if self.absolute_damping_Nms_per_rad is not None:
-            C = C + jnp.diag(self.absolute_damping_Nms_per_rad)
+        absolute = self.absolute_damping_Nms_per_rad
+        xp = array_module(absolute, self.relative_damping_Nms_per_rad)
+        C = xp.zeros((n, n))
+        if absolute is not None:
+            C = C + xp.diag(xp.asarray(absolute))
         if self.relative_damping_Nms_per_rad is not None:
             C = C + _chain_matrix(self.relative_damping_Nms_per_rad, n)
         return C
@@ -302,9 +306,13 @@ class TorsionalChain(eqx.Module):
 
 
 def _chain_matrix(k: Array, n: int) -> Array:
-    """The (n, n) matrix of springs (or dashpots) k between neighbours."""
-    diag = jnp.zeros(n).at[:-1].add(k).at[1:].add(k)
-    return jnp.diag(diag) - jnp.diag(k, 1) - jnp.diag(k, -1)
+    """The (n, n) matrix of springs (or dashpots) k between neighbours (NumPy for a concrete
+    ``k``: no program of its own)."""
+    xp = array_module(k)
+    k = xp.broadcast_to(xp.asarray(k, dtype=xp.float64), (n - 1,))
+    zero = xp.zeros(1)
+    diag = xp.concatenate([k, zero]) + xp.concatenate([zero, k])
+    return xp.diag(diag) - xp.diag(k, 1) - xp.diag(k, -1)
 
 
 # ---------------------------------------------------------------------- stiffness from geometry
@@ -425,7 +433,7 @@ def throw_inertias(engine: Engine, theta: ArrayLike) -> Float[Array, "... n"]:
     Evaluated at one common crank angle: the chain's twist (a few milliradians) changes
     each throw's own angle by far less than the inertia's variation needs to be felt."""
     _table(engine, "throw_inertias(engine)")
-    return _throw_inertias(engine, jnp.asarray(theta, dtype=jnp.float64))
+    return _throw_inertias(engine, array_module(theta).asarray(theta, dtype=np.float64))
 
 
 @engine_jit
@@ -445,7 +453,9 @@ def mass_inertias(engine: Engine, theta: ArrayLike) -> Float[Array, "... n"]:
     :func:`throw_inertias` [kg·m²], shape ``theta.shape + (n,)``. Their sum is the rigid
     model's I(θ) when the table is consistent with ``[crankshaft] inertia_kgm2``."""
     t = _table(engine, "mass_inertias(engine)")
-    return t.inertias_kgm2 + throw_inertias(engine, theta)
+    extra = throw_inertias(engine, theta)
+    xp = array_module(t.inertias_kgm2, extra)
+    return xp.asarray(t.inertias_kgm2) + xp.asarray(extra)
 
 
 def torsional_chain(engine: Engine) -> TorsionalChain:
@@ -460,12 +470,14 @@ def torsional_chain(engine: Engine) -> TorsionalChain:
     **Raises:** :class:`rotor.EngineError` if the engine has no ``[torsion]`` table.
     """
     t = _table(engine, "torsional_chain(engine)")
-    theta = jnp.linspace(0.0, 2 * jnp.pi, _MEAN_POINTS, endpoint=False)
-    mean_extra = jnp.mean(throw_inertias(engine, theta), axis=0)
+    theta = np.linspace(0.0, 2 * np.pi, _MEAN_POINTS, endpoint=False)
+    extra = throw_inertias(engine, theta)
+    xp = array_module(t.inertias_kgm2, extra)
+    mean_extra = xp.mean(xp.asarray(extra), axis=0)
     n = int(np.size(t.inertias_kgm2))
     names = tuple(t.names) if t.names else tuple(_default_names(n, tuple(m - 1 for m in t.throw_masses)))
     return TorsionalChain(
-        inertias_kgm2=t.inertias_kgm2 + mean_extra,
+        inertias_kgm2=xp.asarray(t.inertias_kgm2) + mean_extra,
         stiffnesses_Nm_per_rad=t.stiffnesses_Nm_per_rad,
         absolute_damping_Nms_per_rad=t.absolute_damping_Nms_per_rad,
         relative_damping_Nms_per_rad=t.relative_damping_Nms_per_rad,

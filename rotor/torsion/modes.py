@@ -52,6 +52,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from ..cycles import array_module
 from ..engine.model import Engine
 from ..engine.plausible import check_speed_rpm, require_whole, what_it_is
 from ..errors import EngineError, SolverError
@@ -155,7 +156,7 @@ def modal_damping_matrix(chain: TorsionalChain) -> Float[Array, "n n"]:
     """
     n = chain.size
     if chain.modal_damping_ratio is None:
-        return jnp.zeros((n, n))
+        return array_module(chain.inertias_kgm2).zeros((n, n))
     lam, phi = _eigh(chain.inertias_kgm2, chain.stiffness_matrix())
     omega = jnp.sqrt(jnp.clip(lam[1:], 0.0))
     zeta = jnp.broadcast_to(chain.modal_damping_ratio, (n - 1,))
@@ -613,7 +614,7 @@ def frequency_spread(engine: Engine, points: int = 360) -> tuple[np.ndarray, np.
     if n > EXACT_SPREAD_MASSES:
         check_mode_size(n, "frequency_spread(engine)")
         return _tridiagonal_spread(engine, spread_points(n, points))
-    theta = jnp.linspace(0.0, 2 * jnp.pi, points, endpoint=False)
+    theta = np.linspace(0.0, 2 * np.pi, points, endpoint=False)
     J = mass_inertias(engine, theta)
     f = np.asarray(_spread(J, engine.torsion.stiffnesses_Nm_per_rad))  # type: ignore[union-attr]
     return f.min(axis=0), f.max(axis=0)

@@ -176,19 +176,43 @@ def test_compiling_programs_in_threads_leaves_jaxs_cache_on(kept_here):
     assert asked, "JAX's persistent cache is no longer asked"
 
 
+EIGEN_CHILD = """
+import json, sys
+import jax, jax.numpy as jnp, numpy as np
+traced = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, secs, **kw: traced.append(kw.get("fun_name")) if event.endswith("jaxpr_trace_duration") else None
+)
+import rotor
+from rotor import programs
+rotor.enable_compilation_cache()
+
 @programs.kept_program()
 @jax.jit
-def _eigenvalues(a):
+def eigenvalues(a):
     return jnp.linalg.eigvalsh(a)
 
+a = np.array([[2.0, 1.0, 0.0], [1.0, 3.0, 0.5], [0.0, 0.5, 4.0]])
+print(json.dumps({"values": np.asarray(eigenvalues(a)).tolist(), "traced": "eigenvalues" in traced}))
+"""
 
-def test_a_program_that_calls_a_library_function_is_not_kept(kept_here):
-    """LAPACK's functions are readied by JAX while it lowers a program: a process that loaded
-    such a program without lowering any would call an unreadied function."""
-    a = np.array([[2.0, 1.0], [1.0, 3.0]])
-    np.testing.assert_allclose(_eigenvalues(a), np.linalg.eigvalsh(a), rtol=1e-14)
-    (path,) = kept_here.glob("rotor-program-*.bin")
-    assert path.stat().st_size == 0
+
+def test_a_program_that_calls_lapack_is_kept_and_runs_in_the_next_process(tmp_path):
+    """LAPACK's functions are readied by JAX while it lowers a program: a process that loads
+    such a program lowers none, and readies them itself before it runs it (unreadied, the
+    process would crash)."""
+    env = dict(os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "jax"), ROTOR_PROGRAM_CACHE=str(tmp_path / "p"))
+    runs = []
+    for _ in range(2):
+        out = subprocess.run([sys.executable, "-c", EIGEN_CHILD], env=env, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr[-2000:]
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    a = np.array([[2.0, 1.0, 0.0], [1.0, 3.0, 0.5], [0.0, 0.5, 4.0]])
+    assert runs[0]["traced"] and not runs[1]["traced"]  # the second process loaded it
+    assert runs[1]["values"] == runs[0]["values"]
+    np.testing.assert_allclose(runs[1]["values"], np.linalg.eigvalsh(a), rtol=1e-14)
+    (path,) = (tmp_path / "p").glob("rotor-program-*.bin")
+    assert path.stat().st_size > 0
 
 
 class _Tagged:
