@@ -245,8 +245,9 @@ def _operating_point(engine: Any, args: argparse.Namespace) -> tuple[Any, float,
     fuel scale is given (default 1) unless ``--balance`` solves it for the load at the start
     speed; without ``--load`` the constant load balancing the mean engine torque at the start
     speed (at the governor's speed if one is set) is solved."""
-    import jax.numpy as jnp
+    import numpy as np
 
+    from ..checks import as_f64
     from ..dynamics.loads import ConstantLoad, parse_load
     from ..dynamics.steady import steady_state
     from ..errors import EngineError
@@ -260,7 +261,7 @@ def _operating_point(engine: Any, args: argparse.Namespace) -> tuple[Any, float,
     fuel = 1.0 if args.fuel_scale is None else args.fuel_scale
     if args.balance:
         st = steady_state(engine, rpm=rpm, load=load, fidelity=args.fidelity)
-        fuel = float(jnp.asarray(st.fuel_scale))
+        fuel = float(np.asarray(st.fuel_scale))
         return load, fuel, "fuel_scale", f"--balance: the fuel scale {fuel:.4f} carries the load at {rpm:g} rpm"
     if args.load is not None:
         if args.fuel_scale is not None:
@@ -271,9 +272,9 @@ def _operating_point(engine: Any, args: argparse.Namespace) -> tuple[Any, float,
             _check_given_fuel(engine, fuel)
         return None, fuel, None, "no --load given: a start from rest, no load"
     st = steady_state(engine, rpm=rpm, fidelity=args.fidelity, imep_scale=fuel)
-    torque = float(jnp.asarray(st.load_torque_Nm))
+    torque = float(np.asarray(st.load_torque_Nm))
     note = f"no --load given: the constant load balancing the mean engine torque at {rpm:g} rpm, {torque:.2f} N·m"
-    return ConstantLoad(jnp.asarray(torque)), fuel, "load", note
+    return ConstantLoad(as_f64(torque)), fuel, "load", note
 
 
 def _check_given_fuel(engine: Any, fuel: float) -> None:

@@ -99,6 +99,7 @@ from ..dynamics.equation import friction_coefficients, hermite_cumulative, node_
 from ..dynamics.loads import ConstantLoad, Load
 from ..dynamics.prepared import PreparedEngine, resolve_engine
 from ..errors import EngineError
+from ..programs import kept_program
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR
 from .misfire import FLOOR_SCALE, MISFIRE_THRESHOLD, contribution_index
@@ -397,6 +398,7 @@ class _Bases(eqx.Module):
     offset_L: jnp.ndarray  # (n,) int: window offset of the cycle's left part
 
 
+@kept_program(static_argnames=("stride",))
 @eqx.filter_jit
 def _make_bases(train, c_loss, stride: int):
     v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
@@ -516,6 +518,7 @@ def _normal_solve(A, y):
     return jax.scipy.linalg.cho_solve(chol, As.T @ y) / d
 
 
+@kept_program(static_argnames=("rtol", "nscale", "na", "max_steps"))
 @eqx.filter_jit
 def _fit_blocks(bases, omega, pos, offset_L, a_ref, rtol, nscale: int, na: int, max_steps: int):
     """Fit every block of omega (B, L, P): returns the parameters, covariances, residuals."""

@@ -367,11 +367,13 @@ class SpeedResult(Result):
         """Time-mean speed over the whole run, angle travelled / time taken [rad/s]."""
         if self.kind == "steady":
             return self.cycle_rad / array_module(self.period_s).asarray(self.period_s)
+        xp = array_module(self.theta, self.t)  # NumPy for a concrete run: no program for a difference
+        theta, t = xp.asarray(self.theta), xp.asarray(self.t)
         if self._streamed:
             cs = self.cycle_summary
             assert cs is not None
-            return (self.theta[-1] - cs.theta_first_rad) / (self.t[-1] - cs.t_first_s)
-        return (self.theta[-1] - self.theta[0]) / (self.t[-1] - self.t[0])
+            return (theta[-1] - cs.theta_first_rad) / (t[-1] - cs.t_first_s)
+        return (theta[-1] - theta[0]) / (t[-1] - t[0])
 
     @property
     def mean_rpm(self) -> Array:

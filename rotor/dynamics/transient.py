@@ -705,6 +705,7 @@ def _start(train, rpm):
     return omega0, 0.5 * inertia0 * omega0**2, 0.5 * train.mean_inertia * (STALL_HANDOVER * omega0) ** 2
 
 
+@kept_program()
 @jax.jit
 def _prepend(first, rest):
     """Each array of ``rest`` shifted one place on, its first place taken by ``first``."""
@@ -1006,6 +1007,7 @@ def _assemble(engine, train, scene, sink, time_domain, method, fidelity, P, stal
     )
 
 
+@kept_program()
 @eqx.filter_jit
 def _imep(train, scales):
     """IMEP [Pa] per cycle and cylinder."""
