@@ -174,7 +174,7 @@ def _tooth_errors(track: ToothTrack, name: str, plan: ToothErrorPlan) -> tuple[T
     if isinstance(tooth_errors, str) and tooth_errors == "estimate":
         if plan.engine is not None and plan.tdc_deg is None:
             raise LogError(
-                "engine given to take its inertia ripple out of the tooth-error estimate: give tdc_deg "
+                "engine given to take its inertia ripple out of the tooth-error estimate: give tdc_deg=… "
                 "as well (the angle from the gap to cylinder 1's TDC [deg])"
             )
         te = estimate_tooth_errors(

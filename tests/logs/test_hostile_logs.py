@@ -281,6 +281,16 @@ def test_byte_order_mark_does_not_break_the_header(tmp_path):
 
 
 # ----------------------------------------------------------------------------- 6. sizes
+def test_an_engine_without_its_tdc_is_refused_in_each_callers_words(tmp_path, capsys):
+    """The library names the argument, the command line the flag."""
+    p = tmp_path / "teeth.csv"
+    np.savetxt(p, tooth_times(), fmt="%.12g")
+    err = one_line_error(capsys, "analyze", p, "--wheel", "60-2", "--engine", "4chn15")
+    assert "give --tdc-deg … as well" in err and "tdc_deg" not in err
+    with pytest.raises(LogError, match="give tdc_deg=… as well"):
+        rotor.analyze_log(p, "60-2", engine=rotor.load_engine("4chn15"))
+
+
 def test_points_per_cycle_checked_before_allocating(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("ROTOR_MEMORY_LIMIT_GB", "1")
     p = tmp_path / "teeth.csv"
