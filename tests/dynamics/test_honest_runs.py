@@ -127,7 +127,8 @@ def test_cli_simulate_without_load_balances_at_the_start_speed(capsys):
 
 # ----------------------------------------------------------------------------- 3. progress costs nothing
 @pytest.mark.parametrize("method", ["closed", "grid", "angle"])
-def test_progress_bar_compiles_nothing_more(diesel, method):
+def test_progress_bar_compiles_nothing_more(diesel, method, monkeypatch):
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")  # traced as jit traces: a kept program would trace nothing
     load = rotor.PropellerLoad(1100.0, 1250.0)
     counts = {}
     for progress, cycles in ((False, 41), (True, 43)):  # new cycle counts: each compiles afresh

@@ -42,6 +42,7 @@ def _worst(a, b):
 
 @pytest.mark.parametrize("method", ["closed", "grid"])
 def test_a_run_of_another_length_reuses_the_program_and_padding_changes_nothing(diesel, method, monkeypatch):
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")  # traced as jit traces: a kept program would trace nothing
     load = rotor.ConstantLoad(rotor.steady_state(diesel, rpm=1250).load_torque_Nm)
     rotor.simulate(diesel, cycles=6, rpm=1250, load=load, method=method)
     _TRACES.clear()
