@@ -106,6 +106,35 @@ def test_analysing_a_log_imports_no_jax(tmp_path):
     assert r["status"] in (0, None) and "jax" in r["heavy"]  # the check can fail
 
 
+TRACING_CHILD = r"""
+import json, sys
+import jax
+traced = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, secs, **kw: traced.append(kw.get("fun_name")) if event.endswith("jaxpr_trace_duration") else None
+)
+from rotor.cli.app import main
+status = main(sys.argv[1:])
+print(json.dumps({"status": status, "traced": traced}))
+"""
+
+
+@pytest.mark.parametrize("argv", [["steady", "4chn15"], ["loads", "4chn15"], ["modes", "mwm6"]], ids=" ".join)
+def test_a_warm_command_traces_nothing(argv):
+    """A second call of a command (its programs kept by the first, its tables kept) traces no
+    JAX function: neither a kernel nor an operation on a concrete array, each of which
+    would trace and lower a program of its own in every process."""
+    runs = []
+    for _ in range(2):
+        out = subprocess.run(
+            [sys.executable, "-c", TRACING_CHILD, *argv], capture_output=True, text=True, cwd=ROOT, timeout=300
+        )
+        assert out.returncode == 0, out.stderr[-2000:]
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    assert runs[1]["status"] in (0, None)
+    assert runs[1]["traced"] == [], f"rotor {' '.join(argv)} traced {runs[1]['traced']} on a warm call"
+
+
 def test_a_steady_state_imports_no_adaptive_solver():
     """A steady state, ``closed`` and ``grid`` need no diffrax (the adaptive methods' solver,
     0.7 s to import): the modules of ``rotor steady`` leave it out, and so does the adaptive
