@@ -21,11 +21,12 @@ program of its own for every new shape); base layer: imports nothing from rotor 
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from .checks import is_tracer
 
 __all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "cycle_delta"]
 
@@ -33,8 +34,7 @@ __all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "
 def array_module(*arrays: Any) -> Any:
     """jax.numpy when any argument is a tracer (inside ``jit``, ``grad``, ``vmap``), else numpy.
     A process that has not imported JAX has no tracer (a log's figures import no JAX)."""
-    jax = sys.modules.get("jax")
-    if jax is None or not any(isinstance(a, jax.core.Tracer) for a in arrays):
+    if not any(is_tracer(a) for a in arrays):
         return np
     from .jaxconfig import jax
 
