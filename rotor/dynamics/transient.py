@@ -23,7 +23,7 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..cache import padded_size
-from ..checks import arrays_only, check_size, concrete
+from ..checks import arrays_only, check_size, concrete, is_tracer
 from ..cycles import cycle_delta, cycle_slopes
 from ..engine.friction import Friction
 from ..engine.model import Engine
@@ -748,6 +748,10 @@ def _cycle_samples(scene, first, t, E, omega, z, P: int):
     return tuple(jnp.reshape(a, (-1,)) for a in (omega, m_eng, m_loss, accel, fuel))
 
 
+def _concatenate(arrays: list[Any]) -> Any:
+    return (jnp if any(is_tracer(a) for a in arrays) else np).concatenate(arrays)
+
+
 @kept_program(static_argnames=("P",))
 @eqx.filter_jit
 def _gather(scene, pieces, P: int):
@@ -767,7 +771,33 @@ def _gather(scene, pieces, P: int):
 
 
 def _flat(a):
-    return None if a is None else jnp.reshape(jnp.asarray(a, dtype=jnp.float64), (-1,))
+    """``a`` flat in float64: on the host for concrete values (no program per length)."""
+    if a is None:
+        return None
+    if is_tracer(a):
+        return jnp.reshape(jnp.asarray(a, dtype=jnp.float64), (-1,))
+    return np.asarray(a, dtype=np.float64).reshape(-1)
+
+
+def _padded_piece(piece: tuple[Any, ...], P: int) -> tuple[tuple[Any, ...], int]:
+    """A concrete piece of the samples (:func:`_gather`) padded to a standard length
+    (:func:`rotor.cache.padded_size`: whole cycles for a piece of them, samples else) by
+    repeating its last cycle or sample, so that a run of another length reuses the compiled
+    gather; and its length before."""
+    n = piece[1].shape[0]
+    per = P if piece[0] is not None else 1
+    units = n // per
+    extra = (padded_size(max(units, 1)) - units) * per
+    if not extra:
+        return piece, n
+
+    def pad(a):
+        if a is None:
+            return None
+        tail = a[n - per :]
+        return np.concatenate([a, np.tile(tail, extra // per)])
+
+    return (piece[0],) + tuple(pad(a) for a in piece[1:]), n
 
 
 @kept_program(static_argnames=("P",))
@@ -820,13 +850,31 @@ class _AllSamples:
         pieces = tuple(
             g[0]
             if len(g) == 1
-            else (g[0][0],)
-            + tuple(None if g[0][i] is None else jnp.concatenate([p[i] for p in g]) for i in range(1, 6))
+            else (g[0][0],) + tuple(None if g[0][i] is None else _concatenate([p[i] for p in g]) for i in range(1, 6))
             for g in groups
         )
+        concrete_pieces = not any(is_tracer(a) for p in pieces for a in p[1:])
+        lengths = None
+        if concrete_pieces:  # each piece padded to a standard length, cut back on the host
+            padded = [_padded_piece(p, self.P) for p in pieces]
+            pieces, lengths = tuple(q for q, _ in padded), [n for _, n in padded]
         # the first cycle as an array: a new first cycle compiles nothing
-        pieces = tuple((None if p[0] is None else jnp.asarray(p[0], dtype=jnp.int32),) + p[1:] for p in pieces)
-        return _gather(self.scene, pieces, self.P), self.uniform, 0, None
+        pieces = tuple((None if p[0] is None else np.asarray(p[0], dtype=np.int32),) + p[1:] for p in pieces)
+        scene = self.scene
+        if concrete_pieces and not is_tracer(scene.scales):
+            # the scales of each cycle likewise: the rows past the run copies of its last
+            scales = np.asarray(scene.scales)
+            rows = padded_size(max(scales.shape[0], 1)) - scales.shape[0]
+            if rows:
+                scene = eqx.tree_at(
+                    lambda s: s.scales, scene, np.concatenate([scales, np.repeat(scales[-1:], rows, 0)])
+                )
+        arrays = _gather(scene, pieces, self.P)
+        if lengths is not None:
+            starts = np.cumsum([0] + [p[1].shape[0] for p in pieces])
+            keep = np.concatenate([np.arange(a, a + n) for a, n in zip(starts[:-1], lengths)])
+            arrays = tuple(jax.device_put(np.asarray(a)[keep]) for a in arrays)
+        return arrays, self.uniform, 0, None
 
 
 class _LastCycles:

@@ -12,6 +12,7 @@ With r₁ = 0 the slave is an ordinary crank mechanism at its bank angle.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 from ..jaxconfig import jax, jnp
@@ -67,6 +68,7 @@ def _derivs(f, alpha):
     return value, first, second
 
 
+@jax.jit  # one compiled call per shape, not dozens of eager operations
 def slave_piston_motion(alpha_master, g: SlaveGeometry) -> PistonMotion:
     """Slave piston displacement from its TDC and its derivatives, against the master's angle.
 
@@ -85,6 +87,7 @@ def slave_piston_motion(alpha_master, g: SlaveGeometry) -> PistonMotion:
     return PistonMotion(slave_tdc_distance(g) - t, -dt, -d2t)
 
 
+@functools.partial(jax.jit, static_argnames="samples")
 def slave_tdc_distance(g: SlaveGeometry, samples: int = 1024):
     """Largest distance of the slave piston pin from the crank centre [m] (its TDC).
 
@@ -101,6 +104,7 @@ def slave_tdc_distance(g: SlaveGeometry, samples: int = 1024):
     return _slave_pin_distance(grid[i] + shift * h, g)
 
 
+@jax.jit  # one compiled call per shape, not dozens of eager operations
 def knuckle_velocity_sq(alpha_master, g: SlaveGeometry):
     """|d(knuckle pin)/dα|² [m²/rad²]: the knuckle pin's speed squared per unit crank speed."""
     alpha = jnp.asarray(alpha_master, dtype=jnp.float64)

@@ -83,6 +83,7 @@ def gas_torque(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     return jnp.sum(cylinder_gas_torques(engine, theta, model), axis=-1)
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def reciprocating_inertia_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str = "exact") -> Array:
     """Textbook inertia torque of the reciprocating masses at constant speed [N·m].
 
@@ -98,6 +99,7 @@ def reciprocating_inertia_torque(engine: Engine, theta: ArrayLike, omega: ArrayL
     return jnp.sum(-m_rec * omega**2 * pm.d2s * pm.ds, axis=-1)
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def total_torque(engine: Engine, theta: ArrayLike, omega: ArrayLike, model: str = "exact") -> Array:
     """Textbook total torque of the engine at constant speed [N·m]: gas torque plus the
     reciprocating inertia torque, summed over the cylinders at their phases (Shishkov
@@ -131,6 +133,11 @@ def crank_forces(
     i = cylinder - 1
     if i in engine.slave_index():
         raise ValueError(f"cylinder {cylinder} is driven by a slave rod: the textbook table is for ordinary rods")
+    return _crank_forces(engine, theta, omega, i, model)
+
+
+@engine_jit  # one compiled call per shape, not dozens of eager operations
+def _crank_forces(engine: Engine, theta: ArrayLike, omega: ArrayLike, i: int, model: str) -> dict[str, Array]:
     g = engine.geometry
     theta = jnp.asarray(theta, dtype=jnp.float64)
     alpha = engine.mechanical_angles(theta)[..., i]

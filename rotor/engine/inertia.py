@@ -39,7 +39,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .articulated import knuckle_velocity_sq, slave_piston_motion
 from .kinematics import piston_motion, rod_motion
 from .mechanism import slave_geometry
-from .model import require_engine
+from .model import engine_jit, require_engine
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -74,6 +74,7 @@ def ordinary_cylinder_inertia(alpha, geometry, masses):
     )
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def cylinder_inertia(engine: Engine, theta: ArrayLike) -> Float[Array, "... cylinders"]:
     """Each cylinder's contribution to I(θ) [kg·m²], shape ``theta.shape + (cylinders,)``.
 
@@ -93,6 +94,7 @@ def cylinder_inertia(engine: Engine, theta: ArrayLike) -> Float[Array, "... cyli
     return out
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def inertia_coefficients(engine: Engine) -> tuple[Array, Array, Array]:
     """The coefficients of each cylinder in the form of Anisimov, Yelenich & Melnyk:
     I_cyl(α) ≈ A·cos²α + B·cosα + C.
@@ -118,6 +120,7 @@ def _check_model(model):
         raise ValueError(f"inertia model must be one of {_MODELS}, got {model!r}")
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def reduced_inertia(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     """Reduced moment of inertia of the whole engine I(θ) [kg·m²].
 
@@ -142,6 +145,7 @@ def reduced_inertia(engine: Engine, theta: ArrayLike, model: str = "exact") -> A
     return J + jnp.sum(A * c**2 + B * c + C, axis=-1)
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def reduced_inertia_derivative(engine: Engine, theta: ArrayLike, model: str = "exact") -> Array:
     """dI/dθ [kg·m²/rad] by automatic differentiation of :func:`reduced_inertia`.
 
@@ -151,6 +155,7 @@ def reduced_inertia_derivative(engine: Engine, theta: ArrayLike, model: str = "e
     return jax.jvp(lambda t: reduced_inertia(engine, t, model), (theta,), (jnp.ones_like(theta),))[1]
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def mean_reduced_inertia(engine: Engine) -> Array:
     """Mean of I(θ) over a revolution [kg·m²] (exact, by spectral quadrature).
 

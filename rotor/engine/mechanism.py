@@ -8,11 +8,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
+from ..cycles import array_module
 from .articulated import SlaveGeometry, slave_piston_motion
 from .kinematics import PistonMotion, piston_motion
+from .model import engine_jit
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -23,18 +24,20 @@ __all__ = ["slave_geometry", "engine_piston_motion"]
 def slave_geometry(engine, slave: int, master: int) -> SlaveGeometry:
     """The :class:`rotor.engine.articulated.SlaveGeometry` of 0-based cylinder ``slave`` on ``master``."""
     g, art = engine.geometry, engine.articulated
-    banks = engine.layout.banks_deg
+    xp = array_module(engine.layout.banks_deg, art.knuckle_angle_deg)  # NumPy for a concrete engine
+    banks = xp.asarray(engine.layout.banks_deg)
     return SlaveGeometry(
         g.crank_radius_m,
         g.rod_length_m,
         g.pin_offset_m,
         art.knuckle_radius_m,
-        jnp.deg2rad(art.knuckle_angle_deg),
+        xp.deg2rad(xp.asarray(art.knuckle_angle_deg)),
         art.rod_length_m,
-        jnp.deg2rad(banks[slave] - banks[master]),
+        xp.deg2rad(banks[slave] - banks[master]),
     )
 
 
+@engine_jit  # one compiled call per shape, not dozens of eager operations
 def engine_piston_motion(engine: Engine, theta: ArrayLike, model: str = "exact") -> PistonMotion:
     """Piston displacement and its crank-angle derivatives for every cylinder.
 

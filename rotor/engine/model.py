@@ -114,12 +114,14 @@ class Geometry(eqx.Module):
     @property
     def piston_area_m2(self):
         """π·bore²/4 [m²]."""
-        return jnp.pi * self.bore_m**2 / 4
+        (bore,) = _alike(self.bore_m)
+        return np.pi * bore**2 / 4
 
     @property
     def displacement_m3(self):
         """Swept volume of one cylinder [m³]."""
-        return self.piston_area_m2 * self.stroke_m
+        (stroke,) = _alike(self.stroke_m)
+        return self.piston_area_m2 * stroke
 
 
 class Masses(eqx.Module):
@@ -811,7 +813,8 @@ class Engine(eqx.Module):
     @property
     def tdc_angles_deg(self):
         """Engine crank angle at which each cylinder's piston is at TDC [deg] (mod 360)."""
-        return self.layout.throw_angles_deg + self.layout.banks_deg
+        throws, banks = _alike(self.layout.throw_angles_deg, self.layout.banks_deg)
+        return throws + banks
 
     @property
     def firing_angles_rad(self):
@@ -820,16 +823,20 @@ class Engine(eqx.Module):
         From the throw and bank angles and the firing order; cylinder 1 fires at 2π
         (four-stroke, where θ = 0 is its TDC at the start of intake) or at 0 (two-stroke).
         """
-        angles, _, _ = _firing_tdc_deg(jnp, self.tdc_angles_deg, self.layout.firing_order, self.strokes)
-        return jnp.deg2rad(jnp.stack([jnp.asarray(a, dtype=jnp.float64) for a in angles]))
+        tdc = self.tdc_angles_deg
+        xp = array_module(tdc)
+        angles, _, _ = _firing_tdc_deg(xp, tdc, self.layout.firing_order, self.strokes)
+        return xp.deg2rad(xp.stack([xp.asarray(a, dtype=xp.float64) for a in angles]))
 
     def mechanical_angles(self, theta: ArrayLike) -> Float[Array, "... cylinders"]:
         """Each cylinder's crank angle from its own axis [rad], shape ``theta.shape + (cylinders,)``.
 
         **Arguments:** ``theta``: engine crank angle [rad].
         """
-        theta = jnp.asarray(theta, dtype=jnp.float64)
-        return theta[..., None] - jnp.deg2rad(self.tdc_angles_deg)
+        tdc = self.tdc_angles_deg
+        xp = array_module(theta, tdc)
+        angle = xp.asarray(theta, dtype=xp.float64)
+        return angle[..., None] - xp.deg2rad(tdc)
 
     def cycle_angles(self, theta: ArrayLike) -> Float[Array, "... cylinders"]:
         """Each cylinder's cycle angle (0 = TDC before intake) [rad], in [0, cycle), shape
@@ -837,9 +844,11 @@ class Engine(eqx.Module):
 
         **Arguments:** ``theta``: engine crank angle [rad].
         """
-        theta = jnp.asarray(theta, dtype=jnp.float64)
+        fire = self.firing_angles_rad
+        xp = array_module(theta, fire)
+        angle = xp.asarray(theta, dtype=xp.float64)
         firing_cycle_angle = np.pi * 2 if self.strokes == 4 else 0.0
-        return jnp.mod(theta[..., None] - self.firing_angles_rad + firing_cycle_angle, self.cycle_rad)
+        return xp.mod(angle[..., None] - fire + firing_cycle_angle, self.cycle_rad)
 
     def slave_index(self) -> dict:
         """{slave cylinder index: master cylinder index}, 0-based."""

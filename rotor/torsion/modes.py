@@ -108,6 +108,7 @@ def _modal(inertias: Array, stiffnesses: Array) -> tuple[Array, Array]:
 
 
 _modal_jit = kept_program()(jax.jit(_modal))
+_eigh_jit = kept_program()(jax.jit(_eigh))  # one compiled call, not a dozen eager operations
 
 natural_frequencies_of = kept_program()(jax.jit(_natural_frequencies_hz))
 """``natural_frequencies_of(inertias_kgm2, stiffnesses_Nm_per_rad)``: the elastic natural
@@ -123,7 +124,7 @@ def natural_frequencies(chain: TorsionalChain) -> Float[Array, " n-1"]:
 
     **Arguments:** ``chain``: a :class:`rotor.TorsionalChain`.
     """
-    return _natural_frequencies_hz(chain.inertias_kgm2, chain.stiffnesses_Nm_per_rad)
+    return natural_frequencies_of(chain.inertias_kgm2, chain.stiffnesses_Nm_per_rad)
 
 
 def _normalise_shapes(phi: np.ndarray) -> np.ndarray:
@@ -142,7 +143,7 @@ def mode_shapes(chain: TorsionalChain) -> np.ndarray:
 
     **Arguments:** ``chain``: a :class:`rotor.TorsionalChain`.
     """
-    _, phi = _eigh(chain.inertias_kgm2, chain.stiffness_matrix())
+    _, phi = _eigh_jit(chain.inertias_kgm2, chain.stiffness_matrix())
     return _normalise_shapes(np.asarray(phi).T[1:])
 
 
@@ -157,11 +158,17 @@ def modal_damping_matrix(chain: TorsionalChain) -> Float[Array, "n n"]:
     n = chain.size
     if chain.modal_damping_ratio is None:
         return array_module(chain.inertias_kgm2).zeros((n, n))
-    lam, phi = _eigh(chain.inertias_kgm2, chain.stiffness_matrix())
+    return _modal_damping(chain.inertias_kgm2, chain.stiffness_matrix(), chain.modal_damping_ratio)
+
+
+@kept_program()
+@jax.jit  # one compiled call, not a dozen eager operations
+def _modal_damping(inertias: Array, stiffness_matrix: Array, zeta: ArrayLike) -> Array:
+    n = inertias.shape[0]
+    lam, phi = _eigh(inertias, stiffness_matrix)
     omega = jnp.sqrt(jnp.clip(lam[1:], 0.0))
-    zeta = jnp.broadcast_to(chain.modal_damping_ratio, (n - 1,))
-    c = jnp.concatenate([jnp.zeros(1), 2 * zeta * omega])
-    MPhi = chain.inertias_kgm2[:, None] * phi
+    c = jnp.concatenate([jnp.zeros(1), 2 * jnp.broadcast_to(zeta, (n - 1,)) * omega])
+    MPhi = inertias[:, None] * phi
     return (MPhi * c[None, :]) @ MPhi.T
 
 

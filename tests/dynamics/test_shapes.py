@@ -49,6 +49,7 @@ def test_a_run_of_another_length_reuses_the_program_and_padding_changes_nothing(
     padded = rotor.simulate(diesel, cycles=5, rpm=1250, load=load, method=method)  # one chunk of 6 cycles, cut to 5
     kernel = f"{method}_run"
     assert kernel not in _TRACES, _TRACES
+    assert "_gather" not in _TRACES, _TRACES  # the samples gathered at the padded length too
     assert padded.uniform_cycles == 5 and padded.theta.shape == (5 * padded.points_per_cycle + 1,)
     monkeypatch.setattr(transient, "padded_size", lambda n: n)  # a chunk of exactly the run
     exact = rotor.simulate(diesel, cycles=5, rpm=1250, load=load, method=method)
