@@ -41,6 +41,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from ..cache import keep_tables, kept_tables
 from ..checks import arrays_only, check_size, concrete
+from ..cycles import array_module
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
@@ -162,14 +163,16 @@ class CrankTrain(eqx.Module):
 
     def at(self, theta: ArrayLike) -> tuple[Float[Array, "... K"], Float[Array, "... K"]]:
         """Hermite-interpolated (values, slopes) at engine angle(s) ``theta`` [rad]: shape θ.shape + (K,)."""
-        theta = jnp.asarray(theta, dtype=jnp.float64)
+        xp = array_module(theta, self.values, self.slopes)  # NumPy for a concrete table
+        values, slopes = (np.asarray(self.values), np.asarray(self.slopes)) if xp is np else (self.values, self.slopes)
+        angle = xp.asarray(theta, dtype=xp.float64)
         h = self.step_rad
-        u = theta / h
-        j = jnp.floor(u)
+        u = angle / h
+        j = xp.floor(u)
         tau = (u - j)[..., None]
-        j0 = jnp.mod(j, self.points).astype(jnp.int32)
-        j1 = jnp.mod(j0 + 1, self.points)
-        return _hermite(self.values[j0], self.values[j1], self.slopes[j0], self.slopes[j1], tau, h)
+        j0 = xp.mod(j, self.points).astype(xp.int32)
+        j1 = xp.mod(j0 + 1, self.points)
+        return _hermite(values[j0], values[j1], slopes[j0], slopes[j1], tau, h)
 
     def nodes(self) -> Float[Array, " N"]:  # noqa: F722
         """Node angles over one cycle [rad], shape (N,)."""

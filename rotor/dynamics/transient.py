@@ -441,7 +441,16 @@ class _Chunks:
         if self.size >= plan.cycles and plan.method == "angle":
             return plan.scene, done * cyc, done
         rows = np.clip(np.arange(done - 1, done + self.size + 1), 0, plan.cycles - 1)
-        return eqx.tree_at(lambda s: s.scales, plan.scene, plan.scene.scales[rows]), cyc, 1
+        scales = plan.scene.scales
+        picked = scales[rows] if self._host_scales is None else jax.device_put(self._host_scales[rows])
+        return eqx.tree_at(lambda s: s.scales, plan.scene, picked), cyc, 1
+
+    @functools.cached_property
+    def _host_scales(self) -> np.ndarray | None:
+        """The run's combustion scales on the host (picked there for each chunk: no program
+        per run length), or None while tracing."""
+        scales = self.plan.scene.scales
+        return None if is_tracer(scales) else np.asarray(scales)
 
     def valid(self, done: int) -> int:
         """The cycles of the chunk from cycle ``done`` that lie in the run."""
@@ -465,7 +474,7 @@ def _run_closed(chunks: _Chunks, E_now, t_now):
         if k == valid < chunks.size:  # the padding's first node is the state at the end of the run
             E_end, t_end = E[valid, 0], t[valid, 0]
         if k:
-            chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, None)
+            chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), *_first(k, t, E), None, None)
         done += k
         E_now, t_now = E_end, t_end
         chunks.bar.update(done)
@@ -490,7 +499,8 @@ def _run_grid(chunks: _Chunks, spc: int, e_switch, E_now, t_now, z_now):
         if k == valid < chunks.size:  # the padding's first state is the state at the end of the run
             y_end = (E[valid, 0], t[valid, 0], z[valid, 0])
         if k:
-            chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), t[:k], E[:k], None, z[:k])
+            t_k, E_k, z_k = _first(k, t, E, z)
+            chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), t_k, E_k, None, z_k)
         done += k
         E_now, t_now, z_now = y_end[0], y_end[1], y_end[2]
         chunks.bar.update(done)
@@ -559,7 +569,8 @@ def _run_angle(chunks: _Chunks, e_switch, E_now, t_now, z_now):
             whole = min(reached // P, valid)
             keep = whole * P
             if keep:
-                chunks.sink.add_cycles(done, th[:keep], ts[:keep], Es[:keep], None, zs[:keep])
+                th_k, ts_k, Es_k, zs_k = _first(keep, th, ts, Es, zs)
+                chunks.sink.add_cycles(done, th_k, ts_k, Es_k, None, zs_k)
             done += whole
             if keep > 0:
                 E_h, t_h, z_h = E[keep - 1], t[keep - 1], z[keep - 1]
@@ -567,7 +578,8 @@ def _run_angle(chunks: _Chunks, e_switch, E_now, t_now, z_now):
                 E_h, t_h, z_h = E_now, t_now, z_now
             th_h = done * cyc
             return (th_h, t_h, _omega_at(plan.train, th_h, E_h), z_h), steps
-        chunks.sink.add_cycles(done, th[:need], ts[:need], Es[:need], None, zs[:need])
+        th_k, ts_k, Es_k, zs_k = _first(need, th, ts, Es, zs)
+        chunks.sink.add_cycles(done, th_k, ts_k, Es_k, None, zs_k)
         E_now, t_now, z_now = E[need - 1], t[need - 1], z[need - 1]
         done += valid
         chunks.bar.update(done)
@@ -768,6 +780,12 @@ def _gather(scene, pieces, P: int):
     if len(parts) == 1:
         return parts[0]
     return tuple(jnp.concatenate(a) for a in zip(*parts))
+
+
+def _first(n: int, *arrays: Any) -> tuple[Any, ...]:
+    """The first ``n`` rows of each array: cut on the host for concrete values (a cut of a
+    JAX array compiles a program for every ``n``)."""
+    return tuple(a[:n] if is_tracer(a) else np.asarray(a)[:n] for a in arrays)
 
 
 def _flat(a):
