@@ -24,7 +24,7 @@ from jaxtyping import ArrayLike
 
 from ..cache import padded_size
 from ..checks import arrays_only, check_size, concrete, is_tracer
-from ..cycles import cycle_delta, cycle_slopes
+from ..cycles import array_module, cycle_delta, cycle_slopes
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..errors import EngineError
@@ -760,10 +760,6 @@ def _cycle_samples(scene, first, t, E, omega, z, P: int):
     return tuple(jnp.reshape(a, (-1,)) for a in (omega, m_eng, m_loss, accel, fuel))
 
 
-def _concatenate(arrays: list[Any]) -> Any:
-    return (jnp if any(is_tracer(a) for a in arrays) else np).concatenate(arrays)
-
-
 @kept_program(static_argnames=("P",))
 @eqx.filter_jit
 def _gather(scene, pieces, P: int):
@@ -868,7 +864,11 @@ class _AllSamples:
         pieces = tuple(
             g[0]
             if len(g) == 1
-            else (g[0][0],) + tuple(None if g[0][i] is None else _concatenate([p[i] for p in g]) for i in range(1, 6))
+            else (g[0][0],)
+            + tuple(
+                None if g[0][i] is None else array_module(*(p[i] for p in g)).concatenate([p[i] for p in g])
+                for i in range(1, 6)
+            )
             for g in groups
         )
         concrete_pieces = not any(is_tracer(a) for p in pieces for a in p[1:])
