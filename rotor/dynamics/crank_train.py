@@ -181,9 +181,24 @@ class CrankTrain(eqx.Module):
     def scale_index(self, theta: ArrayLike, cycles: int) -> Array:
         """Index k of each cylinder's firing whose half-cycle window holds the engine angle
         ``theta`` [rad], clipped to the run's ``cycles``: shape θ.shape + (cylinders,)."""
-        theta = jnp.asarray(theta, dtype=jnp.float64)
-        k = jnp.floor((theta[..., None] - self.firing_rad) / self.cycle_rad + 0.5)
-        return jnp.clip(k, 0, cycles - 1).astype(jnp.int32)
+        k = firing_window(jnp.asarray(theta, dtype=jnp.float64)[..., None], self.firing_rad, self.cycle_rad)
+        return jnp.clip(k, 0, cycles - 1)
+
+
+WINDOW_TIE = 1e-9
+"""Share of a cycle by which an angle on the border of two firing windows is moved into the
+later one before rounding (:func:`firing_window`)."""
+
+
+def firing_window(theta, firing_rad, cycle_rad) -> Array:
+    """Index k of the firing whose window, half a cycle on either side of its TDC, holds the
+    angle ``theta`` [rad]: k·Θ − Θ/2 ≤ θ − θ_fire < k·Θ + Θ/2 (int32, broadcast over the
+    arguments). The borders lie on table nodes in every usual engine (a firing TDC on a
+    node, half a cycle on a node), where the rounding of (θ − θ_fire)/Θ + ½ would decide
+    the window, and XLA may round the same expression differently in two places of one
+    program: an angle within :data:`WINDOW_TIE` of a cycle below a border counts as on it,
+    so that every evaluation gives the window of exact arithmetic, the later one."""
+    return jnp.floor((theta - firing_rad) / cycle_rad + (0.5 + WINDOW_TIE)).astype(jnp.int32)
 
 
 def _columns(engine, fidelity, theta):

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..programs import kept_program
 from ..progress import report
-from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain
+from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain, firing_window
 from .loads import Governor, Load
 
 
@@ -152,7 +152,7 @@ def wrap_periodic(x):
 def node_offsets(train: CrankTrain):
     """Firing-window offset of each node (0…N) and cylinder relative to the engine cycle."""
     theta = jnp.arange(train.points + 1) * train.step_rad
-    return jnp.floor((theta[:, None] - train.firing_rad) / train.cycle_rad + 0.5).astype(jnp.int32)
+    return firing_window(theta[:, None], train.firing_rad, train.cycle_rad)
 
 
 def linear_parts(train: CrankTrain, s_nodes, a, c):
