@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo lint docs docs-build test fuzz wheel-check notebooks bench bench-quick clean
+.PHONY: install demo lint lint-quick docs docs-build test fuzz wheel-check notebooks bench bench-quick clean
 
 # uv installs the same versions as pip, several times faster (its downloads in parallel);
 # pip does it where uv cannot be installed. Where Python is told not to write bytecode
@@ -28,11 +28,13 @@ demo: $(STAMP)
 	$(VENV)/bin/rotor demo --plot out
 
 # the static checks first (seconds), then the suite
-lint: $(STAMP)
+lint: lint-quick
+	$(VENV)/bin/mypy
+
+lint-quick: $(STAMP)
 	$(VENV)/bin/ruff check rotor tests benchmarks
 	$(VENV)/bin/ruff format --check rotor tests benchmarks
 	$(VENV)/bin/lint-imports --no-cache
-	$(VENV)/bin/mypy
 
 # the documentation site: `make docs` serves it on http://127.0.0.1:8000 and rebuilds on
 # every change; `make test` builds it strictly (a broken reference fails) into build/site
@@ -46,9 +48,19 @@ docs-build: $(STAMP)
 # a file's fixtures are computed once, in the order of the folders (a worker's next file is
 # usually its last one's neighbour and reuses what that compiled; the documentation and
 # notebook tests come late and read what the rest put into the compilation cache; taking the
-# longest files first was no faster); property tests draw the same examples on every run
-test: lint docs-build
-	$(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
+# longest files first was no faster); property tests draw the same examples on every run.
+# ruff and the import contracts first (a second); mypy and the strict site build (about
+# 100 s on one core) run beside the suite, their output after it: the pytest workers start
+# at once instead of waiting for them, and the run fails if any of the three fails
+test: lint-quick
+	@mkdir -p build
+	@{ $(VENV)/bin/mypy && NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet; } \
+	  > build/static-checks.log 2>&1 & checks=$$!; \
+	$(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30; suite=$$?; \
+	wait $$checks; static=$$?; \
+	echo "mypy and mkdocs build --strict:"; cat build/static-checks.log; \
+	if [ $$static -ne 0 ]; then echo "make test: mypy or the site build failed (above)"; fi; \
+	exit $$(( suite || static ))
 
 # the property and fuzz tests with new random draws (tests/conftest.py); what they find
 # becomes an explicit example in the test

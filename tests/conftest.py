@@ -33,6 +33,18 @@ settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("fuzz", derandomize=False)
 settings.load_profile("fuzz" if os.environ.get("ROTOR_FUZZ", "").strip() not in ("", "0") else "deterministic")
 
+# The suite compiles with LLVM's optimisation off (level 0; the CLI subprocesses and
+# notebook kernels inherit it): most of its time is XLA compiling programs that then run
+# for milliseconds, and a cold run's pytest phase took 710 s at level 0 against 884 s at
+# the default here. Users' programs are compiled at XLA's default level, which
+# tests/project/test_code_generation.py runs in a process of its own and compares with this
+# one. ROTOR_SUITE_XLA_DEFAULT=1 runs the whole suite at the default level; XLA_FLAGS that
+# names the option keeps the caller's.
+if os.environ.get("ROTOR_SUITE_XLA_DEFAULT", "").strip() in ("", "0") and "xla_backend_optimization_level" not in (
+    os.environ.get("XLA_FLAGS", "")
+):
+    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
+
 # The kept outputs of `rotor table` and `rotor info` (rotor/cli/kept.py) are off: every CLI
 # test computes what it checks; tests/cli/test_cli_latency.py switches them on in a folder of its own.
 os.environ.setdefault("ROTOR_OUTPUT_CACHE", "off")
