@@ -35,8 +35,8 @@ settings.load_profile("fuzz" if os.environ.get("ROTOR_FUZZ", "").strip() not in 
 
 # The suite compiles with LLVM's optimisation off (level 0; the CLI subprocesses and
 # notebook kernels inherit it): most of its time is XLA compiling programs that then run
-# for milliseconds, and a cold run's pytest phase took 710 s at level 0 against 884 s at
-# the default here. Users' programs are compiled at XLA's default level, which
+# for milliseconds: a cold run's pytest phase took 752 s at level 0 against 925 s at the
+# default here, the same tree (benchmarks/README.md, "Test suite time"). Users' programs are compiled at XLA's default level, which
 # tests/project/test_code_generation.py runs in a process of its own and compares with this
 # one. ROTOR_SUITE_XLA_DEFAULT=1 runs the whole suite at the default level; XLA_FLAGS that
 # names the option keeps the caller's.
