@@ -54,7 +54,7 @@ docs-build: $(STAMP)
 # at once instead of waiting for them, and the run fails if any of the three fails
 test: lint-quick
 	@mkdir -p build
-	@{ $(VENV)/bin/mypy && NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet; } \
+	@{ $(VENV)/bin/mypy && $(MAKE) --no-print-directory docs-build; } \
 	  > build/static-checks.log 2>&1 & checks=$$!; \
 	$(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30; suite=$$?; \
 	wait $$checks; static=$$?; \
