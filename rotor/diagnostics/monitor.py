@@ -130,9 +130,10 @@ it (dropped once more than two revolutions are held; a chunk longer than
 **Speed.** A chunk costs a few numpy operations on all its edges at once (the wheel's
 pattern checked on every tooth period, one interpolation for every time its firings need)
 and a few lines of Python per firing: a V8 at 8000 rpm on a 60-2 wheel, fed a revolution at
-a time, runs about 120× faster than real time on one core, about 66× with an engine file
-(the model's IMEP of every firing: a few more whole-chunk products)
-(``benchmarks/misfire_detection.py --throughput-only``).
+a time, runs 120–175× faster than real time on one core, 110× with an engine file (the
+model's IMEP of every firing: one more whole-chunk product and a few lines of Python a
+firing), by ``benchmarks/misfire_detection.py --throughput-only``; the margin moves with
+the machine's speed.
 
 Hand-written, not borrowed: no library follows a trigger wheel edge by edge.
 """
@@ -1158,7 +1159,7 @@ class _ModelIndex:
         # others·scales; s = pinv₁·y; the residual r = M·y (M = 1 − A·pinv), its square
         # |M·y₀|² − 2·g·scales + scalesᵀ·H·scales with y₀ the part without the others
         # (g = (M·O)ᵀ·M·y₀, H = (M·O)ᵀ·(M·O)); only the cylinders whose combustion reaches
-        # a slot's segment (``near``) enter its sums
+        # a slot's segment (near) enter its sums
         self.span_list = [[float(x) for x in sp] for sp in self.span]
         proj = [np.eye(K) - self.design[j] @ self.pinv[j] for j in range(nf)]
         mo = [proj[j] @ self.others[j] for j in range(nf)]
@@ -1172,55 +1173,66 @@ class _ModelIndex:
             consts.append(lin @ self.known[j])
         self.op = np.stack(ops)
         self.const = np.stack(consts)
-        self.cov11 = [float(c[1, 1]) for c in self.cov]
-        self.near: list[list[int]] = []
-        self.b: list[list[float]] = []
-        self.h: list[list[list[float]]] = []
+        # the operator doubled over the slots, so that a chunk's consecutive slots are a view
+        self.op2 = np.concatenate([self.op, self.op])
+        self.const2 = np.concatenate([self.const, self.const])
+        # a slot's plan: its near cylinders with b and g's place in the row, and the
+        # quadratic's terms (c, c', H_cc' counted twice off the diagonal), cov₁₁/(K − 3)
+        self.plan: list[tuple[tuple[tuple[int, float, int], ...], tuple[tuple[int, int, float], ...], float]] = []
         for j in range(nf):
             o = self.others[j]
             size = np.abs(o).max(axis=0)
             near = [c for c in range(n) if size[c] > 1e-9 * max(float(size.max()), 1e-300)]
-            self.near.append(near)
-            self.b.append([float(self.pinv[j][1] @ o[:, c]) for c in near])
             hj = mo[j].T @ mo[j]
-            self.h.append([[float(hj[a, c]) for c in near] for a in near])
+            linear = tuple((c, float(self.pinv[j][1] @ o[:, c]), K + 1 + c) for c in near)
+            quad = tuple(
+                (c, c2, float(hj[c, c2]) * (1.0 if a == q else 2.0))
+                for a, c in enumerate(near)
+                for q, c2 in enumerate(near)
+                if q >= a
+            )
+            self.plan.append((linear, quad, float(self.cov[j][1, 1]) / (K - 3)))
+        self.figures = [
+            (float(m), float(c), abs(float(c))) for m, c in zip(self.imep_motored, self.imep_combustion, strict=True)
+        ]
 
     def estimate(self, slots: list[int], cyls: list[int], times: np.ndarray) -> list[tuple[float, float]]:
         """(IMEP, its standard deviation) [Pa] of each firing, in slots ``slots`` of
         cylinders ``cyls`` (from 0), from the log times at its windows' edges (one row a
         firing; NaN where they are not all measured), in firing order: each takes the
         scales of the firings before it."""
-        J = np.asarray(slots)
         dt = times[:, 1:] - times[:, :-1]
-        ok = (dt > 0).all(axis=1).tolist()
+        ok = [True] * len(slots) if dt.min() > 0.0 else (dt > 0).all(axis=1).tolist()
         if not all(ok):
             dt[~np.asarray(ok)] = 1.0
-        R = ((self.op[J] @ (1.0 / (dt * dt))[:, :, None])[..., 0] - self.const[J]).tolist()
-        K = self.windows
+        j0, m = slots[0], len(slots)
+        if m <= len(self.plan) and slots[-1] == (j0 + m - 1) % len(self.plan):  # consecutive: a view
+            op, const = self.op2[j0 : j0 + m], self.const2[j0 : j0 + m]
+        else:
+            op, const = self.op[slots], self.const[slots]
+        R = (np.matmul(op, (1.0 / (dt * dt))[:, :, None])[..., 0] - const).tolist()
+        K1 = self.windows + 1
         sc = self.scales
+        plan, figures = self.plan, self.figures
         out = []
-        for i, (j, c0) in enumerate(zip(slots, cyls)):
-            if not ok[i]:
+        for row, j, c0, good in zip(R, slots, cyls, ok, strict=True):
+            if not good:
                 out.append((math.nan, math.nan))
                 continue
-            row = R[i]
             s = row[0]
             rss = 0.0
-            for x in row[1 : K + 1]:
+            for x in row[1:K1]:
                 rss += x * x
-            near, b, h = self.near[j], self.b[j], self.h[j]
-            g = row[K + 1 :]
-            for a, c in enumerate(near):
+            linear, quad, cov = plan[j]
+            for c, b, g in linear:
                 x = sc[c]
-                s -= b[a] * x
-                rss -= 2.0 * g[c] * x
-                hr = h[a]
-                for q, c2 in enumerate(near):
-                    rss += hr[q] * x * sc[c2]
+                s -= b * x
+                rss -= 2.0 * row[g] * x
+            for c, c2, h in quad:
+                rss += h * sc[c] * sc[c2]
             sc[c0] = min(max(s, 0.0), 2.0)
-            comb = float(self.imep_combustion[c0])
-            std = math.sqrt(max(rss, 0.0) / (K - 3) * self.cov11[j]) * abs(comb)
-            out.append((float(self.imep_motored[c0]) + s * comb, std))
+            motored, comb, size = figures[c0]
+            out.append((motored + s * comb, math.sqrt(max(rss, 0.0) * cov) * size))
         return out
 
 
