@@ -34,11 +34,10 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import Float
 
 from ..dynamics.loads import Load, parse_load
-from ..dynamics.prepared import PreparedEngine, prepare, resolve_engine
+from ..dynamics.prepared import PreparedEngine, checked_on_host, prepare, resolve_engine
 from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
@@ -46,6 +45,7 @@ from ..engine.model import Engine, require_engine
 from ..engine.plausible import PLAUSIBLE, check_results_finite, check_speed_rpm, require_number
 from ..errors import EngineError, NoSteadyStateError, SolverError
 from ..plotting.design import plot_disc_flywheel, plot_flywheel_design, plot_textbook_flywheel
+from ..programs import kept_program
 from ..results import Result, json_safe
 from ..units import rpm_to_rad_s
 
@@ -295,12 +295,15 @@ def with_crankshaft_inertia(engine: Engine, inertia_kgm2: float | Float[jax.Arra
     return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, jnp.asarray(inertia_kgm2, dtype=jnp.float64))
 
 
+@kept_program()
 @eqx.filter_jit
 def _state(
     prepared: PreparedEngine, inertia: Any, rpm: Any, scale: Any, load: Load | None, friction: FrictionArg
 ) -> tuple[Any, Any]:
     """δ (NaN where the crankshaft nearly stops) and the textbook excess work [J] of the
-    steady state with ``[crankshaft] inertia_kgm2 = inertia``, from the prepared tables."""
+    steady state with ``[crankshaft] inertia_kgm2 = inertia``, from the prepared tables
+    (:class:`DeltaOfInertia`'s own, made by :func:`rotor.prepare` and never changed)."""
+    prepared = checked_on_host(prepared)
     r = steady_state(prepared.with_inertia(inertia), rpm, load, friction=friction, imep_scale=scale)
     ok = jnp.min(r.omega) > 0.01 * r.mean_omega
     return jnp.where(ok, r.delta, jnp.nan), r.excess_work_J
@@ -317,6 +320,8 @@ def _root(
     friction: FrictionArg,
     rtol: float,
 ) -> tuple[Any, Any, Any]:
+    import optimistix as optx  # here: a flywheel's state alone (the report's) needs no root finder
+
     def fn(u, _):
         d, _ = _state(prepared, jnp.exp(u), rpm, scale, load, friction)
         return jnp.log(d) - log_target

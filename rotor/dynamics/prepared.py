@@ -150,6 +150,16 @@ def checked_reference(prepared: PreparedEngine) -> Any:
     return ref
 
 
+def checked_on_host(prepared: PreparedEngine) -> PreparedEngine:
+    """``prepared`` inside a compiled call whose caller checked it before the call
+    (:func:`checked_reference` on the host, or made it there with :func:`prepare`): its
+    record of the table inputs replaced by its engine's own, so that the check for stale
+    tables finds nothing to compare in the trace. Left there, that check is an
+    ``eqx.error_if`` host callback, and a program holding one is not stored in JAX's
+    persistent compilation cache: it would be compiled again in every process."""
+    return eqx.tree_at(lambda p: p.source, prepared, table_inputs(prepared.engine))
+
+
 def resolve_engine(engine: Engine | PreparedEngine) -> Engine:
     """The :class:`rotor.Engine` of ``engine`` (an engine, returned as it is, or a prepared
     one, checked first: :func:`checked_reference`). A solver then finds the prepared

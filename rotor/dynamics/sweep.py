@@ -47,7 +47,7 @@ from ..units import RPM_PER_RAD_S
 from .crank_train import COL_I
 from .equation import friction_coefficients
 from .loads import ConstantLoad
-from .prepared import PreparedEngine, checked_reference, prepare
+from .prepared import PreparedEngine, checked_on_host, checked_reference, prepare
 from .result import parabola_peak
 from .steady import STOP_FRACTION, coarse_stride, flat_balance, flat_energy, steady_state, textbook_excess
 
@@ -261,7 +261,9 @@ def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies):
     """Every item of one chunk by whole :func:`rotor.steady_state` calls (losses that grow
     with ω): the figures of :class:`SteadySweep` per item. ``varies`` (static): which of
     (rpm, inertia, scale, load) hold one value per item; the others hold one value for
-    all, so that what depends on them alone is computed once per chunk."""
+    all, so that what depends on them alone is computed once per chunk. The caller checks
+    the prepared engine first (:func:`rotor.dynamics.prepared.checked_reference`)."""
+    prepared = checked_on_host(prepared)
 
     def one(rpm_i, inertia_i, scale_i, load_i):
         s = jnp.broadcast_to(scale_i, (prepared.train.cylinders,))
@@ -401,6 +403,7 @@ def steady_sweep(
         fixed: tuple = (prepared.train, np.float64(checked_reference(prepared)), jnp.asarray(fr[0]))
         kernel = solve_flat_chunk.lower(*fixed, *chunk_args(0), varies).compile()
     else:
+        checked_reference(prepared)
         fixed = (prepared,)
         kernel = solve_chunk.lower(prepared, *chunk_args(0), friction, varies).compile()  # type: ignore[attr-defined]
     compile_s = time.perf_counter() - t0

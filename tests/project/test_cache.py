@@ -6,6 +6,15 @@ import os
 import subprocess
 import sys
 
+import conftest
+import jax
+import pytest
+
+import rotor
+
+sys.path.insert(0, str(conftest.ROOT / "benchmarks"))
+from cache_hits import twice  # noqa: E402
+
 CODE = """
 import json, jax, rotor
 before = jax.config.jax_compilation_cache_dir
@@ -71,39 +80,13 @@ def test_a_compiled_kernel_is_reused_by_the_next_process(tmp_path):
     assert {name: again[name] for name in written} == written
 
 
-COUNT_PROGRAMS = """
-import json, sys
-import jax.monitoring
-counts = {"requests": 0, "hits": 0}
-def seen(event, **_):
-    if event == "/jax/compilation_cache/compile_requests_use_cache":
-        counts["requests"] += 1
-    elif event == "/jax/compilation_cache/cache_hits":
-        counts["hits"] += 1
-jax.monitoring.register_event_listener(seen)
-from rotor.cli.app import main
-sys.argv[0] = "rotor"
-code = main()  # as the command runs: every program written to the cache, however quick to compile
-print(json.dumps(counts), file=sys.stderr)
-sys.exit(code)
-"""
-
-
-def test_a_second_process_finds_every_program_of_a_command_in_the_cache(tmp_path):
+def test_a_second_process_finds_every_program_of_a_command_in_the_cache():
     """The adaptive angle-domain run holds no host callback (diffrax's checks of its save
     points are made when it traces), so the persistent cache stores every program it
     compiles: a second process compiles nothing. Both build the engine's tables (none kept
-    on disk), so that both run the same programs whatever the suite kept before."""
-    env = dict(
-        os.environ, ROTOR_COMPILATION_CACHE=str(tmp_path / "c"), ROTOR_TABLE_CACHE="off", ROTOR_PROGRAM_CACHE="off"
-    )
-    argv = [sys.executable, "-c", COUNT_PROGRAMS, "simulate", "4chn15", "--cycles", "3", "--method", "angle", "--quiet"]
-    counts = []
-    for _ in range(2):
-        run = subprocess.run(argv, env=env, capture_output=True, text=True)
-        assert run.returncode == 0, run.stderr
-        counts.append(json.loads(run.stderr.strip().splitlines()[-1]))
-    first, second = counts
+    on disk), so that both run the same programs whatever the suite kept before
+    (``benchmarks/cache_hits.py`` runs every command so)."""
+    first, second = twice(["simulate", "4chn15", "--cycles", "3", "--method", "angle", "--quiet"])
     assert first["requests"] > 0 and first["hits"] < first["requests"]
     assert second["requests"] == first["requests"]
     assert second["hits"] == second["requests"], f"programs compiled again in the second process: {second}"
@@ -237,3 +220,51 @@ def test_rotor_chooses_xla_elemental_emitters_unless_the_user_chose():
     assert _xla_flags_after_import(None, "rotor.jaxconfig") == XLA_CPU_FLAG
     assert _xla_flags_after_import("--xla_dump_to=/tmp/x").split() == ["--xla_dump_to=/tmp/x", XLA_CPU_FLAG]
     assert _xla_flags_after_import("--xla_cpu_use_fusion_emitters=true") == "--xla_cpu_use_fusion_emitters=true"
+
+
+# ---------------------------------------------------------------------- no host callback in a program
+_SEEN = {"on": False, "requests": 0, "hits": 0}
+
+
+def _seen(event, **_):
+    if _SEEN["on"]:
+        if event == "/jax/compilation_cache/compile_requests_use_cache":
+            _SEEN["requests"] += 1
+        elif event == "/jax/compilation_cache/cache_hits":
+            _SEEN["hits"] += 1
+
+
+jax.monitoring.register_event_listener(_seen)
+
+
+def _textbook_flywheel():
+    rotor.textbook_flywheel(rotor.load_engine("4chn15"), 0.01, 1250)
+
+
+def _inertia_for_delta():
+    rotor.inertia_for_delta(rotor.load_engine("4chn15"), 0.01, 1250)
+
+
+def _sweep_with_speed_dependent_friction():
+    fr = rotor.Friction(fmep_pa=40e3, fmep_per_speed_pa_s_per_m=2000.0)
+    rotor.steady_sweep(rotor.prepare(rotor.load_engine("4chn15"), grid_deg=2.0), rpm=[900.0, 1400.0], friction=fr)
+
+
+@pytest.mark.parametrize("call", [_textbook_flywheel, _inertia_for_delta, _sweep_with_speed_dependent_friction])
+def test_a_public_functions_programs_are_all_stored_in_the_cache(call, monkeypatch):
+    """Every program a public function compiles is stored by the persistent cache: run a
+    second time with every compiled program dropped from the process, it reads each one
+    back. A program holding a host callback (an ``eqx.error_if`` check left in the trace)
+    is never stored, and would be compiled again in every process."""
+    if conftest.COMPILATION_CACHE is None:
+        pytest.skip("the suite runs without the compilation cache (ROTOR_COMPILATION_CACHE=off)")
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")  # JAX's cache itself, not rotor's kept programs
+    call()
+    jax.clear_caches()
+    _SEEN.update(on=True, requests=0, hits=0)
+    try:
+        call()
+    finally:
+        _SEEN["on"] = False
+    assert _SEEN["requests"] > 0
+    assert _SEEN["hits"] == _SEEN["requests"], f"{_SEEN['requests'] - _SEEN['hits']} programs compiled again"
