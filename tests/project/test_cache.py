@@ -247,7 +247,9 @@ def _inertia_for_delta():
 
 def _sweep_with_speed_dependent_friction():
     fr = rotor.Friction(fmep_pa=40e3, fmep_per_speed_pa_s_per_m=2000.0)
-    rotor.steady_sweep(rotor.prepare(rotor.load_engine("4chn15"), grid_deg=2.0), rpm=[900.0, 1400.0], friction=fr)
+    rotor.steady_sweep(
+        rotor.prepare(rotor.load_engine("4chn15"), grid_deg=2.0), rpm=[900.0, 1400.0], friction=fr, progress=False
+    )
 
 
 @pytest.mark.parametrize("call", [_textbook_flywheel, _inertia_for_delta, _sweep_with_speed_dependent_friction])
