@@ -94,30 +94,36 @@ def check_speed_result(result: SpeedResult) -> None:
     arrays = (result.t, result.theta, result.omega, result.accel, result.torque, result.load_torque)
     if _traced(arrays) or _traced((result.period_s, result.load_torque_Nm, result.fuel_scale)):
         return
-    t, theta, omega, accel, torque, load = (np.asarray(a, dtype=np.float64) for a in jax.device_get(arrays))
-    kind = "steady state" if result.kind == "steady" else f"run (method {result.method!r})"
-    remedy = _remedy(result)
+    # one array at a time: jax.device_get's own bookkeeping costs more than the copies
+    t, theta, omega, accel, torque, load = (np.asarray(a, dtype=np.float64) for a in arrays)
 
     def fail(what: str) -> NoReturn:
-        raise SolverError(f"the {kind} breaks an invariant: {what}; the result cannot be trusted: {remedy}")
+        kind = "steady state" if result.kind == "steady" else f"run (method {result.method!r})"
+        raise SolverError(f"the {kind} breaks an invariant: {what}; the result cannot be trusted: {_remedy(result)}")
 
     n = t.shape[-1]
     if n == 0 or any(a.shape[-1] != n for a in (theta, omega, accel, torque, load)):
         fail("its sample arrays are empty or of different lengths")
-    for name, a in (("time", t), ("crank angle", theta)):
-        if not np.all(np.isfinite(a)):
-            fail(f"the {name} is not finite at {_where(result, theta, _first(~np.isfinite(a)))}")
-    for name, a in (
-        ("the speed", omega),
-        ("the engine torque", torque),
-        ("the friction and load torque", load),
-        ("the acceleration", accel),
-    ):
-        if not np.all(np.isfinite(a)):
-            fail(f"{name} is not finite at {_where(result, theta, _first(~np.isfinite(a)))}")
-    with np.errstate(over="ignore"):
-        if not np.all(np.isfinite(0.5 * omega * omega)):
-            fail("the kinetic energy overflows (the speed is beyond what float64 can square)")
+    # every value finite, ω² too, in one pass (a NaN or an infinity anywhere makes the sum one);
+    # where it is not, the checks one by one name the first sample (a sum of finite values
+    # that overflows passes them all)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = sum(float(a.sum()) for a in (t, theta, omega, torque, load, accel)) + float((0.5 * omega * omega).sum())
+    if not np.isfinite(total):
+        for name, a in (("time", t), ("crank angle", theta)):
+            if not np.isfinite(a).all():
+                fail(f"the {name} is not finite at {_where(result, theta, _first(~np.isfinite(a)))}")
+        for name, a in (
+            ("the speed", omega),
+            ("the engine torque", torque),
+            ("the friction and load torque", load),
+            ("the acceleration", accel),
+        ):
+            if not np.isfinite(a).all():
+                fail(f"{name} is not finite at {_where(result, theta, _first(~np.isfinite(a)))}")
+        with np.errstate(over="ignore"):
+            if not np.isfinite(0.5 * omega * omega).all():
+                fail("the kinetic energy overflows (the speed is beyond what float64 can square)")
     if n > 1:
         dt = np.diff(t, axis=-1)
         if not np.all(dt > 0):

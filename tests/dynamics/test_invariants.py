@@ -70,6 +70,17 @@ def test_each_broken_invariant_is_a_one_line_solver_error(run, case):
     assert "cycle 1 at crank angle" in msg or "mean" in msg or "kinetic" in msg
 
 
+def test_finite_values_whose_sum_overflows_keep_the_invariants(run):
+    """Every value finite, though their sum is not: nothing is refused (the one-pass check
+    of the values hands over to the checks one by one, which pass); one infinity among
+    them is still named."""
+    huge = jnp.full_like(run.torque, 1e308)
+    check_speed_result(dataclasses.replace(run, torque=huge, load_torque=huge))
+    _one_line_error(
+        dataclasses.replace(run, torque=huge, load_torque=_set(huge, 9, jnp.inf)), "load torque is not finite"
+    )
+
+
 def test_a_stalled_run_may_end_at_zero_speed(run):
     check_speed_result(dataclasses.replace(run, omega=_set(run.omega, 13, 0.0), stalled=True))
     _one_line_error(dataclasses.replace(run, omega=_set(run.omega, 13, -1.0), stalled=True), "speed is negative")

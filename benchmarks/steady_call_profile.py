@@ -1,0 +1,90 @@
+"""Where the time of a repeated default ``rotor.steady_state(engine, rpm=…)`` goes.
+
+One process, 4chn15 at 1250 rpm, the engine object's tables found (warm-up calls first),
+then ``--repeats`` calls: the median of the whole call and of its parts, each timed by
+wrapping the function that does it: the compiled program's dispatch (the kept program's
+call, which returns before the program has run), ``_finish`` (waiting for the program,
+copying its results to NumPy, the invariant checks and building the result) and, inside it,
+the invariant checks (``check_speed_result``); and, in a second round, the whole call with
+the invariant checks replaced by a no-op (what they cost, measured rather than added up).
+``benchmarks/steady_limit.py`` compares the call with the compiled one and with scipy.
+
+    .venv/bin/python benchmarks/steady_call_profile.py [--repeats 400]   # about 5 s
+
+Writes ``benchmarks/results/steady_call_profile.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import statistics
+import time
+from pathlib import Path
+
+import rotor
+from rotor.dynamics import steady
+from rotor.fileio import write_text_atomic
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeats", type=int, default=400)
+    args = ap.parse_args()
+    engine = rotor.load_engine("4chn15")
+    parts: dict[str, list[float]] = collections.defaultdict(list)
+
+    def timed(name: str, label: str) -> None:
+        f = getattr(steady, name)
+
+        def wrapper(*a, **k):
+            t = time.perf_counter()
+            out = f(*a, **k)
+            parts[label].append(time.perf_counter() - t)
+            return out
+
+        setattr(steady, name, wrapper)
+
+    def whole() -> float:
+        for _ in range(50):
+            rotor.steady_state(engine, rpm=1250.0)
+        parts.clear()
+        runs = []
+        for _ in range(args.repeats):
+            t = time.perf_counter()
+            rotor.steady_state(engine, rpm=1250.0)
+            runs.append(time.perf_counter() - t)
+        return 1e6 * statistics.median(runs)
+
+    check = steady.check_speed_result
+    total = whole()
+    timed("_closed_steady", "compiled program's dispatch")
+    timed("_finish", "_finish (waiting, copies, checks, result)")
+    timed("check_speed_result", "invariant checks")
+    with_parts = whole()
+    medians = {k: 1e6 * statistics.median(v) for k, v in parts.items()}
+    steady.check_speed_result = lambda result: None
+    without_checks = whole()
+    steady.check_speed_result = check
+    out = {
+        "measured": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "case": "4chn15, rpm=1250.0, the same engine object every call",
+        "repeats": args.repeats,
+        "call_us": total,
+        "call_with_parts_timed_us": with_parts,
+        "parts_us": medians,
+        "call_without_invariant_checks_us": without_checks,
+    }
+    print(f"steady_state(engine, rpm=1250.0): {total:.0f} µs a call (median of {args.repeats})")
+    for k, v in medians.items():
+        print(f"  {k:45s} {v:7.0f} µs")
+    print(f"  the whole call with the invariant checks a no-op: {without_checks:.0f} µs")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(RESULTS / "steady_call_profile.json", json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
