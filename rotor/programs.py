@@ -82,11 +82,13 @@ def program_folder() -> Path | None:
     return Path(folder) / "rotor-programs" if folder else None
 
 
-def _spec(leaf: Any) -> jax.ShapeDtypeStruct:
+def _spec(leaf: Any) -> tuple[tuple[int, ...], np.dtype, bool]:
+    """(shape, dtype, weak type) of an argument: its part of a program's key (a plain tuple:
+    a ``jax.ShapeDtypeStruct`` a call costs more than the rest of the key)."""
     if isinstance(leaf, jax.Array):
-        return jax.ShapeDtypeStruct(leaf.shape, leaf.dtype, weak_type=leaf.weak_type)
+        return leaf.shape, leaf.dtype, leaf.weak_type
     a = np.asarray(leaf)
-    return jax.ShapeDtypeStruct(a.shape, a.dtype)
+    return a.shape, a.dtype, False
 
 
 class _Kept:
@@ -138,7 +140,7 @@ class _Kept:
         """The kept program, read from disk or compiled now and kept, or None where the
         kernel cannot be kept."""
         text = repr(
-            (self.name, str(key[0]), str(key[1]), key[2], [(s.shape, str(s.dtype), s.weak_type) for s in specs])
+            (self.name, str(key[0]), str(key[1]), key[2], [(shape, str(dtype), weak) for shape, dtype, weak in specs])
         )
         digest = hashlib.blake2b(text.encode() + b"\0" + _machine(), digest_size=20).hexdigest()
         path = folder / f"{_ENTRY}{digest}.bin"
@@ -164,7 +166,7 @@ class _Kept:
         flat.__name__, flat.__qualname__ = self.fn.__name__, self.fn.__qualname__  # JAX's events name the kernel
 
         try:
-            lowered = jax.jit(flat).lower(*specs)
+            lowered = jax.jit(flat).lower(*(jax.ShapeDtypeStruct(sh, dt, weak_type=w) for sh, dt, w in specs))
             calls = _library_calls(lowered.as_text())
             if not _self_contained(lowered, calls):  # marked, and left to the jitted kernel: compiled once, not twice
                 _write(folder, path, b"")
