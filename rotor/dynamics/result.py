@@ -136,30 +136,30 @@ def _plural(n: int, noun: str) -> str:
 
 def parabola_peak(y0, y1, y2, sign):
     """Extreme value of the parabola through three equally spaced samples (y1 the extreme sample)."""
+    xp = array_module(y0, y1, y2)
     curv = y0 - 2 * y1 + y2
     ok = sign * curv < 0
-    safe = jnp.where(ok, curv, -sign)
-    return jnp.where(ok, y1 - (y0 - y2) ** 2 / (8 * safe), y1)
+    safe = xp.where(ok, curv, -sign)
+    return xp.where(ok, y1 - (y0 - y2) ** 2 / (8 * safe), y1)
 
 
-@kept_program(static_argnames=("periodic",))
-@functools.partial(jax.jit, static_argnums=3)
-def _extremes(x, slopes, cycle_rad, periodic: bool):
+def _row_extremes(xp, x, slopes, cycle_rad, periodic: bool):
     """(max, min) of each row of x (rows: consecutive cycles sampled uniformly in angle)
     with the row's linear trend ``slopes`` [per rad] removed (:func:`rotor.cycles.cycle_ramp`),
     refined by a parabola through the extreme sample and its neighbours (the neighbours in
-    the next and previous rows detrended by the same row's line)."""
+    the next and previous rows detrended by the same row's line); ``xp``: numpy or
+    jax.numpy."""
     C, P = x.shape
     h = cycle_rad / P
     xd = x - cycle_ramp(slopes, P, cycle_rad)
     flat = x.reshape(-1)
-    rows = jnp.arange(C)
+    rows = xp.arange(C)
 
     def line(j):  # the row's trend at sample j of the row (j may be −1 or P)
         return slopes * (j * h - cycle_rad / 2)
 
     out = []
-    for sign, arg in ((1.0, jnp.argmax), (-1.0, jnp.argmin)):
+    for sign, arg in ((1.0, xp.argmax), (-1.0, xp.argmin)):
         j = arg(xd, axis=1)
         y1 = xd[rows, j]
         if periodic:
@@ -167,10 +167,25 @@ def _extremes(x, slopes, cycle_rad, periodic: bool):
         else:
             i = j + rows * P
             interior = (i > 0) & (i < flat.size - 1)
-            left = flat[jnp.clip(i - 1, 0, flat.size - 1)] - line(j - 1)
-            right = flat[jnp.clip(i + 1, 0, flat.size - 1)] - line(j + 1)
-            out.append(jnp.where(interior, parabola_peak(left, y1, right, sign), y1))
+            left = flat[xp.clip(i - 1, 0, flat.size - 1)] - line(j - 1)
+            right = flat[xp.clip(i + 1, 0, flat.size - 1)] - line(j + 1)
+            out.append(xp.where(interior, parabola_peak(left, y1, right, sign), y1))
     return out[0], out[1]
+
+
+@kept_program(static_argnames=("periodic",))
+@functools.partial(jax.jit, static_argnums=3)
+def _compiled_extremes(x, slopes, cycle_rad, periodic: bool):
+    return _row_extremes(jnp, x, slopes, cycle_rad, periodic)
+
+
+def _extremes(x, slopes, cycle_rad, periodic: bool):
+    """:func:`_row_extremes` compiled where ``x`` or ``slopes`` is traced, in NumPy for
+    concrete values (a compiled call and the copies back cost more than the arithmetic)."""
+    if array_module(x, slopes) is np:
+        x, slopes = np.asarray(x, dtype=np.float64), np.asarray(slopes, dtype=np.float64)
+        return _row_extremes(np, x, slopes, float(cycle_rad), periodic)
+    return _compiled_extremes(x, slopes, cycle_rad, periodic)
 
 
 @kept_program(static_argnames=("periodic",))

@@ -36,6 +36,28 @@ def test_delta_matches_sample_extremes(steady):
     assert float(steady.delta) >= raw
 
 
+def test_the_extremes_of_concrete_cycles_are_the_compiled_ones_to_the_bit(steady, diesel):
+    """A finished result's δ takes its cycles' refined extremes in NumPy, a traced one in the
+    compiled program: the same numbers to the bit for the same cycles, and δ per cycle the
+    same to rounding (the cycles' means are summed in a different order)."""
+    import dataclasses
+
+    from rotor.cycles import cycle_slopes
+    from rotor.dynamics.result import cycle_extremes
+
+    run = rotor.simulate(diesel, cycles=3, load=rotor.ConstantLoad(1131.95), progress=False)
+    x = np.asarray(run.omega)[: 3 * run.points_per_cycle].reshape(3, -1)
+    slopes = cycle_slopes(np.asarray(run.cycle_mean_omega), run.cycle_rad)
+    concrete = cycle_extremes(x, slopes, run.cycle_rad)
+    traced = jax.jit(cycle_extremes, static_argnums=2)(x, slopes, run.cycle_rad)
+    assert all(isinstance(c, np.ndarray) for c in concrete)
+    for c, t in zip(concrete, traced, strict=True):
+        np.testing.assert_array_equal(c, np.asarray(t))
+    for r in (steady, run):
+        traced_delta = jax.jit(lambda w, r=r: dataclasses.replace(r, omega=w).delta_per_cycle)(jnp.asarray(r.omega))
+        np.testing.assert_allclose(np.asarray(r.delta_per_cycle), np.asarray(traced_delta), rtol=1e-14, atol=0)
+
+
 def test_to_pandas_and_plots(steady, tmp_path):
     df = steady.to_pandas()
     assert list(df.columns)[:4] == ["t_s", "theta_rad", "angle_deg", "cycle"]
