@@ -5,8 +5,10 @@ then ``--repeats`` calls: the median of the whole call and of its parts, each ti
 wrapping the function that does it: the compiled program's dispatch (the kept program's
 call, which returns before the program has run), ``_finish`` (waiting for the program,
 copying its results to NumPy, the invariant checks and building the result) and, inside it,
-the invariant checks (``check_speed_result``); and, in a second round, the whole call with
-the invariant checks replaced by a no-op (what they cost, measured rather than added up).
+the invariant checks (``check_speed_result``); in a second round, the whole call with
+the invariant checks replaced by a no-op (what they cost, measured rather than added up);
+and δ read off a finished result (``float(result.delta)``, which ``steady_limit.py``'s
+default call includes).
 ``benchmarks/steady_limit.py`` compares the call with the compiled one and with scipy.
 
     .venv/bin/python benchmarks/steady_call_profile.py [--repeats 400]   # about 5 s
@@ -69,6 +71,13 @@ def main() -> None:
     steady.check_speed_result = lambda result: None
     without_checks = whole()
     steady.check_speed_result = check
+    finished = rotor.steady_state(engine, rpm=1250.0)
+    delta_runs = []
+    for _ in range(args.repeats):
+        t = time.perf_counter()
+        float(finished.delta)
+        delta_runs.append(time.perf_counter() - t)
+    delta_us = 1e6 * statistics.median(delta_runs)
     out = {
         "measured": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
         "case": "4chn15, rpm=1250.0, the same engine object every call",
@@ -77,11 +86,13 @@ def main() -> None:
         "call_with_parts_timed_us": with_parts,
         "parts_us": medians,
         "call_without_invariant_checks_us": without_checks,
+        "delta_of_a_finished_result_us": delta_us,
     }
     print(f"steady_state(engine, rpm=1250.0): {total:.0f} µs a call (median of {args.repeats})")
     for k, v in medians.items():
         print(f"  {k:45s} {v:7.0f} µs")
     print(f"  the whole call with the invariant checks a no-op: {without_checks:.0f} µs")
+    print(f"float(result.delta) of a finished result: {delta_us:.0f} µs")
     RESULTS.mkdir(parents=True, exist_ok=True)
     write_text_atomic(RESULTS / "steady_call_profile.json", json.dumps(out, indent=1))
 
