@@ -14,7 +14,9 @@ splits its wall time into:
 - ``compile_or_load_s``: XLA compiling a program or reading it back from the persistent cache
   (JAX's ``backend_compile_duration`` covers both; ``from_cache`` of them were read back);
 - ``rest_s``: the rest of the call: reading the cached programs, running them, rotor's own
-  Python, writing the output.
+  Python, writing the output;
+- ``again_s``: the same command run a second time in the same process (its modules
+  imported, its programs loaded, nothing traced): the command's own work, a floor of its own.
 
 The programs traced most are listed per command (``top``). Medians of ``--repeats`` fresh
 processes after one untimed call that fills a new cache folder.
@@ -67,8 +69,12 @@ t1 = time.perf_counter()
 with contextlib.redirect_stdout(io.StringIO()):
     rc = main()
 t_call = time.perf_counter() - t1
+t2 = time.perf_counter()
+with contextlib.redirect_stdout(io.StringIO()):
+    main()
+t_again = time.perf_counter() - t2
 top = sorted(names.items(), key=lambda kv: -kv[1])[:8]
-print(json.dumps({"rc": rc, "import_s": t_import, "call_s": t_call, "events": dict(events),
+print(json.dumps({"rc": rc, "import_s": t_import, "call_s": t_call, "again_s": t_again, "events": dict(events),
                   "from_cache": hits[0], "top": top}))
 """
 
@@ -112,6 +118,7 @@ def main() -> None:
                 "command": name,
                 "import_s": med(lambda r: r["import_s"]),
                 "call_s": med(lambda r: r["call_s"]),
+                "again_s": med(lambda r: r["again_s"]),
                 "tracing_s": med(lambda r: r["events"].get("jaxpr_trace_duration", 0.0)),
                 "lowering_s": med(lambda r: r["events"].get("jaxpr_to_mlir_module_duration", 0.0)),
                 "compile_or_load_s": med(lambda r: r["events"].get("backend_compile_duration", 0.0)),
@@ -124,7 +131,8 @@ def main() -> None:
                 f"{name:46s} import {row['import_s']:.2f} s, call {row['call_s']:.2f} s: tracing "
                 f"{row['tracing_s']:.2f}, lowering {row['lowering_s']:.2f}, compiling or loading "
                 f"{row['compile_or_load_s']:.2f}, "
-                f"rest {row['rest_s']:.2f} ({row['from_cache']:.0f} programs from the cache)",
+                f"rest {row['rest_s']:.2f} ({row['from_cache']:.0f} programs from the cache); "
+                f"again in the process {row['again_s']:.2f} s",
                 flush=True,
             )
     import jax

@@ -83,8 +83,8 @@ def program_folder() -> Path | None:
 
 
 def _spec(leaf: Any) -> tuple[tuple[int, ...], np.dtype, bool]:
-    """(shape, dtype, weak type) of an argument: its part of a program's key (a plain tuple:
-    a ``jax.ShapeDtypeStruct`` a call costs more than the rest of the key)."""
+    """(shape, dtype, weak type) of an argument: its part of a program's key, a plain tuple
+    (a ``jax.ShapeDtypeStruct`` per argument and call cost more than the rest of the key)."""
     if isinstance(leaf, jax.Array):
         return leaf.shape, leaf.dtype, leaf.weak_type
     a = np.asarray(leaf)

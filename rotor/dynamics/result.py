@@ -217,9 +217,10 @@ def cycle_extremes(x: ArrayLike, slopes: ArrayLike, cycle_rad: float) -> tuple[A
 
     The first and last rows of a window of a longer run serve as context: the rows between
     get the figures that :class:`SpeedResult` computes over the whole run."""
-    x = jnp.asarray(x, dtype=jnp.float64)
-    dmax, dmin = _extremes(x, jnp.asarray(slopes, dtype=jnp.float64), cycle_rad, False)
-    rmax, rmin = _extremes(x, jnp.zeros(x.shape[0]), cycle_rad, False)
+    xp = array_module(x, slopes)  # NumPy for concrete rows: no JAX operation on them
+    rows = xp.asarray(x, dtype=xp.float64)
+    dmax, dmin = _extremes(rows, xp.asarray(slopes, dtype=xp.float64), cycle_rad, False)
+    rmax, rmin = _extremes(rows, xp.zeros(rows.shape[0]), cycle_rad, False)
     return dmax, dmin, rmax, rmin
 
 
