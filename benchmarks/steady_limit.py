@@ -16,7 +16,9 @@ Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
      constants of the call and only the speed crosses into it), the whole ω(θ);
    - the same for δ alone;
    and δ of each (or ω, for the rows that return it) against the default
-   ``steady_state(engine)``.
+   ``steady_state(engine)``; then the default, the two whole-ω(θ) compiled calls and the
+   δ-only one taken in turn, a thousand rounds: each one's median and the default's time
+   over each other's, the median of the rounds' ratios (the machine's load cancels).
 3. The plain route: ``jax.jit(jax.vmap(lambda J: steady_state(eqx.tree_at(…, engine, J),
    rpm).delta))`` over 10⁴ crankshaft inertias at once, per item.
 4. Throughput: ``rotor.steady_sweep`` over speed × flywheel inertia for 1 … 10⁵ items
@@ -135,7 +137,42 @@ def bench_single(engine, repeats):
         t["speedup_over_rk45_one_cycle"] = rk45["median_s"] / t["median_s"]
         t[checks[name][0]] = checks[name][1]
         out["rotor"][name] = t
+    out["paired"] = paired(
+        {
+            "default": warm,
+            "argument": compiled_argument,
+            "closed": compiled_closed,
+            "delta only": compiled_delta,
+        },
+        PAIRED_ROUNDS,
+    )
     return out
+
+
+PAIRED_ROUNDS = 1000
+
+
+def paired(fns, rounds):
+    """The calls of ``fns`` taken in turn, ``rounds`` times (after a warm-up round): the
+    median time of each [s] and the median over the rounds of the default call's time over
+    each other's (a round's calls see the same state of the machine, so that its load
+    cancels in the ratio)."""
+    for fn in fns.values():
+        fn()
+    times = {name: [] for name in fns}
+    for _ in range(rounds):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    base = np.asarray(times["default"])
+    return {
+        "rounds": rounds,
+        "median_s": {name: statistics.median(v) for name, v in times.items()},
+        "default_over": {
+            name: float(np.median(base / np.asarray(v))) for name, v in times.items() if name != "default"
+        },
+    }
 
 
 def bench_batches(engine, sizes, repeats):
@@ -257,6 +294,13 @@ def main():
             )
             + f"  (first call {t['first_call_s']:.2f} s)"
         )
+    pair = res["single"]["paired"]
+    print(
+        f"  in turn, {pair['rounds']} rounds: "
+        + ", ".join(f"{k} {v * 1e6:.1f} µs" for k, v in pair["median_s"].items())
+        + "; the default call over each (median of the rounds' ratios): "
+        + ", ".join(f"{k} {v:.2f}×" for k, v in pair["default_over"].items())
+    )
     print(
         "  compiling the closed-over calls ahead of time: "
         + ", ".join(f"{k} {v:.2f} s" for k, v in res["single"]["compile_s"].items())

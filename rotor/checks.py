@@ -82,6 +82,8 @@ def arrays_only(tree):
     would treat it as a constant and compile again for every new value.
     """
 
+    if tree is None:
+        return None
     from .jaxconfig import jax
 
     def leaf(x):

@@ -28,6 +28,7 @@ Fidelity (``fidelity=``):
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import weakref
 from collections import OrderedDict
@@ -105,6 +106,17 @@ def grid_points(strokes: int, grid_deg: float, cylinders: int = 1) -> int:
     """Nodes of the cycle grid at ``grid_deg`` [deg] for a ``strokes``-stroke engine of
     ``cylinders`` cylinders; refuses a step that does not divide the cycle, or a grid whose
     tables would not fit in memory (:func:`rotor.checks.check_size`)."""
+    if type(strokes) is int and type(grid_deg) is float and type(cylinders) is int:
+        return _grid_points_of(strokes, grid_deg, cylinders)  # a repeated call: its answer kept
+    return _grid_points(strokes, grid_deg, cylinders)
+
+
+@functools.lru_cache(maxsize=64)
+def _grid_points_of(strokes: int, grid_deg: float, cylinders: int) -> int:
+    return _grid_points(strokes, grid_deg, cylinders)
+
+
+def _grid_points(strokes: int, grid_deg: Any, cylinders: int) -> int:
     grid_deg = require_number(grid_deg, "grid_deg", "deg")
     cycle = 180.0 * strokes
     ok = np.isfinite(grid_deg) and grid_deg > 0

@@ -126,7 +126,7 @@ def check_speed_result(result: SpeedResult) -> None:
                 fail("the kinetic energy overflows (the speed is beyond what float64 can square)")
     if n > 1:
         dt = np.diff(t, axis=-1)
-        if not np.all(dt > 0):
+        if not (dt > 0).all():
             fail(f"time does not increase from one sample to the next at {_where(result, theta, _first(dt <= 0))}")
     # the samples sampled uniformly in angle (the periodic cycle of a steady state)
     kept = int(getattr(result, "kept_cycles", result.uniform_cycles))
@@ -136,18 +136,18 @@ def check_speed_result(result: SpeedResult) -> None:
         # a start from rest (the time domain) begins at ω = 0; the angle domain never reaches it
         strict = not result.stalled and str(result.method) in ("closed", "grid", "angle", "shooting")
         low = (wu <= 0) if strict else (wu < 0)
-        if np.any(low):
+        if low.any():
             sign = "not positive" if strict else "negative"
             fail(f"the speed is {sign} at {_where(result, theta, _first(low))}, in the angle domain")
     if n > 1:
         dth = np.diff(theta, axis=-1)
         forward = (omega[..., :-1] >= 0) & (omega[..., 1:] >= 0)
         back = (dth < -(ANGLE_SLACK_RAD + 1e-12 * np.abs(theta[..., 1:]))) & forward
-        if np.any(back):
+        if back.any():
             fail(f"the crank angle decreases while the speed is positive at {_where(result, theta, _first(back))}")
     if result.kind == "steady":
         period = _number(result.period_s)
-        if period is None or not (np.all(np.isfinite(period)) and np.all(period > 0)):
+        if period is None or not (np.isfinite(period).all() and (period > 0).all()):
             fail("the period of the cycle is not positive and finite")
         for key, what in (
             ("load_torque_Nm", "the balancing load torque"),
@@ -157,17 +157,17 @@ def check_speed_result(result: SpeedResult) -> None:
             ("periodicity_error", "the periodicity error"),
         ):
             v = _number(getattr(result, key, None))
-            if v is not None and not np.all(np.isfinite(v)):
+            if v is not None and not np.isfinite(v).all():
                 fail(f"{what} is not finite")
     if getattr(result, "cycle_summary", None) is None:  # the extremes of the samples at hand
         lo, hi = (np.asarray(f(omega, axis=-1) * RPM_PER_RAD_S) if omega.size else np.nan for f in (np.min, np.max))
     else:  # of every sample, kept or not
         lo, hi = np.asarray(result.min_rpm, dtype=np.float64), np.asarray(result.max_rpm, dtype=np.float64)
     mean = np.asarray(result.mean_rpm, dtype=np.float64)
-    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(mean)) and np.all(np.isfinite(hi))):
+    if not (np.isfinite(lo).all() and np.isfinite(mean).all() and np.isfinite(hi).all()):
         fail("the mean, lowest or highest speed is not finite")
     slack = MEAN_SLACK * np.maximum(np.abs(lo), np.abs(hi)) + 1e-300
-    if not (np.all(lo <= mean + slack) and np.all(mean <= hi + slack)):
+    if not ((lo <= mean + slack).all() and (mean <= hi + slack).all()):
         fail("the time-mean speed (angle travelled / time taken) lies outside the lowest and highest sampled speed")
     summary = getattr(result, "cycle_summary", None)
     if summary is not None:

@@ -335,11 +335,56 @@ def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
 @kept_program(static_argnames=("balance", "flat"))
 @functools.partial(jax.jit, static_argnames=("balance", "flat"))
 def _closed_steady(train, d_inertia, s, fr, load, a, c, omega_m, balance, flat):
-    """The whole closed-form steady state in one compiled call: solution and arrays
-    (``jax.jit``: its dispatch is a quarter of ``eqx.filter_jit``'s on these arguments)."""
+    """The whole closed-form steady state in one compiled call, solution and arrays packed
+    in one vector (:func:`_pack`; ``jax.jit``: its dispatch is a quarter of
+    ``eqx.filter_jit``'s on these arguments)."""
     E, t, x, ok = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
-    return E[:-1], t[:-1], x, ok, _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
+    return _pack(E[:-1], t[:-1], x, ok, _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia))
+
+
+# the closed form's outputs in its packed vector: the rows on the nodes, then the numbers,
+# then the IMEP per cylinder
+_ROWS = (
+    "E",
+    "t",
+    "theta",
+    "omega",
+    "accel",
+    "torque",
+    "load_torque",
+    "gas_torque",
+    "reciprocating_torque",
+    "inertia_term_torque",
+    "total_torque",
+)
+_NUMBERS = ("x", "ok", "fuel_scale", "carried_load", "period_s", "excess_work_J", "textbook_delta", "e_ratio", "i_min")
+
+
+def _pack(E, t, x, ok, arrays):
+    """E, t, x, ok and the result's arrays as one float64 vector: the host copies it once
+    (a program's every output is a device array of its own, each with its own dispatch,
+    wait and copy: 21 of them cost more than the program runs)."""
+    parts = {**arrays, "E": E, "t": t, "x": x, "ok": ok}
+    rows = jnp.stack([parts[k] for k in _ROWS])
+    numbers = jnp.stack([jnp.asarray(parts[k], dtype=jnp.float64).reshape(()) for k in _NUMBERS])
+    return jnp.concatenate([rows.ravel(), numbers, arrays["imep_pa"].ravel()])
+
+
+def _unpack(pack, points, cylinders):
+    """:func:`_pack`'s vector back to E, t, x, ok and the arrays: NumPy views of one copy
+    where it is concrete, slices of it where it is traced."""
+    if not isinstance(pack, jax.core.Tracer):
+        pack = np.asarray(pack)
+    k, m = len(_ROWS), len(_NUMBERS)
+    rows = pack[: k * points].reshape(k, points)
+    numbers = pack[k * points : k * points + m]
+    out = {name: rows[i] for i, name in enumerate(_ROWS)}
+    out.update((name, numbers[i]) for i, name in enumerate(_NUMBERS))
+    out["imep_pa"] = pack[k * points + m :].reshape(1, cylinders)
+    out["ok"] = out["ok"] > 0.5
+    out["i_min"] = out["i_min"].astype(np.int64)
+    return out.pop("E"), out.pop("t"), out.pop("x"), out.pop("ok"), out
 
 
 def _balanced_scene(scene, x, balance):
@@ -443,7 +488,9 @@ def steady_state(
     solved), the torque's parts (``gas_torque``, ``reciprocating_torque``,
     ``inertia_term_torque``, ``total_torque``) [N·m], ``period_s`` [s], ``excess_work_J``
     [J], ``textbook_delta`` [-], ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting)
-    and ``converged``.
+    and ``converged``. Where the closed form solved concrete values, the arrays are
+    read-only NumPy arrays (copied from the compiled program in one piece); JAX arrays
+    otherwise.
 
     **Raises:** :class:`rotor.NoSteadyStateError` (a :class:`rotor.SolverError`) where the
     kinetic energy would reach zero, when the values are concrete; under ``jit``/``vmap``
@@ -475,8 +522,7 @@ def steady_state(
     else:
         train = checked_train(engine, fidelity, points)  # checked and kept once per engine object
         d_inertia = np.float64(0.0)
-    engine, load = arrays_only(engine), arrays_only(load)
-    assert isinstance(engine, Engine)
+    load = arrays_only(load)  # the engine itself enters no compiled call: its tables and numbers do
     n = engine.cylinders
     xp = jnp if any(isinstance(v, jax.core.Tracer) for v in (rpm, imep_scale)) else np  # numpy: no dispatch
     s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
@@ -499,7 +545,8 @@ def steady_state(
     if lin is not None and method != "shooting":
         a_lin, c_lin = lin
         flat = is_zero(c_lin) and fidelity != "constant"  # G ≡ 0: E = E0 + β(θ)
-        E, t, x, ok, arrays = _closed_steady(train, d_inertia, s, fr, speed_load, a_lin, c_lin, omega_m, balance, flat)
+        pack = _closed_steady(train, d_inertia, s, fr, speed_load, a_lin, c_lin, omega_m, balance, flat)
+        E, t, x, ok, arrays = _unpack(pack, train.points, n)
         _check_combustion(train, balance)
         return _finish(engine, train, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
     _check_combustion(train, balance)
@@ -582,8 +629,10 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
 def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
     a = arrays
     checkable = not isinstance(a["e_ratio"], jax.core.Tracer)
-    if checkable:  # one transfer from the device for the checks
-        ok, e_ratio, i_min, x_found = jax.device_get((ok, a["e_ratio"], a["i_min"], x))
+    if checkable:  # NumPy where the closed form's packed vector came back; else one transfer
+        ok, e_ratio, i_min, x_found = (ok, a["e_ratio"], a["i_min"], x)
+        if any(isinstance(v, jax.Array) for v in (ok, e_ratio, i_min, x_found)):
+            ok, e_ratio, i_min, x_found = jax.device_get((ok, e_ratio, i_min, x_found))
         converged = good = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION))
         # a fuel scale of a million or more and no steady state: a load in the wrong units
         absurd = balance == "fuel" and not np.all(good) and np.all(np.abs(x_found) >= 1e6)
