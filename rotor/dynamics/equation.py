@@ -257,9 +257,10 @@ def linear_losses(load, friction_abc):
     poly = load.polynomial()
     if poly is None or not is_zero(poly[1]):
         return None
-    a = fa + (0.0 if poly[0] is None else poly[0])
-    c = fc + (0.0 if poly[2] is None else poly[2])
-    return a, c
+    parts = (fa, fc, 0.0 if poly[0] is None else poly[0], 0.0 if poly[2] is None else poly[2])
+    if not any(isinstance(v, jax.core.Tracer) for v in parts):  # NumPy: no JAX operation
+        parts = tuple(np.asarray(v, dtype=np.float64) for v in parts)
+    return parts[0] + parts[2], parts[1] + parts[3]
 
 
 # ----------------------------------------------------------------------------- fixed steps on the grid

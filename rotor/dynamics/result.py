@@ -188,25 +188,37 @@ def _extremes(x, slopes, cycle_rad, periodic: bool):
     return _compiled_extremes(x, slopes, cycle_rad, periodic)
 
 
-@kept_program(static_argnames=("periodic",))
-@functools.partial(jax.jit, static_argnums=1)
-def _range(x, periodic: bool):
-    """(max, min) over all of x (rows: cycles) with parabolic refinement at the sample."""
+def _flat_range(xp, x, periodic: bool):
+    """(max, min) over all of x (rows: cycles) with parabolic refinement at the sample;
+    ``xp``: numpy or jax.numpy."""
     C, P = x.shape
     flat = x.reshape(-1)
     out = []
-    for sign, arg in ((1.0, jnp.argmax), (-1.0, jnp.argmin)):
+    for sign, arg in ((1.0, xp.argmax), (-1.0, xp.argmin)):
         i = arg(flat)
         if periodic:
-            left = flat[jnp.where(i % P == 0, i + P - 1, i - 1)]
-            right = flat[jnp.where(i % P == P - 1, i - P + 1, i + 1)]
+            left = flat[xp.where(i % P == 0, i + P - 1, i - 1)]
+            right = flat[xp.where(i % P == P - 1, i - P + 1, i + 1)]
             out.append(parabola_peak(left, flat[i], right, sign))
         else:
             interior = (i > 0) & (i < flat.size - 1)
-            left = flat[jnp.clip(i - 1, 0, flat.size - 1)]
-            right = flat[jnp.clip(i + 1, 0, flat.size - 1)]
-            out.append(jnp.where(interior, parabola_peak(left, flat[i], right, sign), flat[i]))
+            left = flat[xp.clip(i - 1, 0, flat.size - 1)]
+            right = flat[xp.clip(i + 1, 0, flat.size - 1)]
+            out.append(xp.where(interior, parabola_peak(left, flat[i], right, sign), flat[i]))
     return out[0], out[1]
+
+
+@kept_program(static_argnames=("periodic",))
+@functools.partial(jax.jit, static_argnums=1)
+def _compiled_range(x, periodic: bool):
+    return _flat_range(jnp, x, periodic)
+
+
+def _range(x, periodic: bool):
+    """:func:`_flat_range` compiled where ``x`` is traced, in NumPy for concrete values."""
+    if array_module(x) is np:
+        return _flat_range(np, np.asarray(x, dtype=np.float64), periodic)
+    return _compiled_range(x, periodic)
 
 
 def cycle_extremes(x: ArrayLike, slopes: ArrayLike, cycle_rad: float) -> tuple[Array, Array, Array, Array]:

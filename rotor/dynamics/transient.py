@@ -89,6 +89,12 @@ def _whole(name, value):
     return int(value)
 
 
+def _sample(x, i: int):
+    """Sample ``i`` of ``x``: a NumPy number where ``x`` is concrete (no JAX operation to
+    dispatch, or to compile in a new process), else the traced element."""
+    return x[i] if is_tracer(x) else np.asarray(x)[i]
+
+
 def _known(x, default):
     """``x`` as a number, or ``default`` while tracing (jax.grad / jax.vmap over a run)."""
     c = concrete(x)
@@ -366,7 +372,7 @@ def plan_run(
     at_rest = r is not None and r == 0
     losses = linear_losses(load, fr) if governor is None else None
     method = _pick_method(method, at_rest, losses)
-    rtol_a = jnp.asarray(rtol, dtype=jnp.float64)
+    rtol_a = (jnp if is_tracer(rtol) else np).asarray(rtol, dtype=np.float64)  # NumPy: no JAX operation
     if load is None and governor is None:
         _warn_runaway(train, scales, fr, rpm)
     return RunPlan(
@@ -393,7 +399,10 @@ def plan_run(
     )
 
 
-_f64 = functools.partial(jnp.asarray, dtype=jnp.float64)  # strong types: one trace for every chunk
+def _f64(x):
+    """``x`` as a float64 array of strong type (one trace for every chunk): a NumPy array
+    where it is concrete (no JAX operation to dispatch, or to compile in a new process)."""
+    return jnp.asarray(x, dtype=jnp.float64) if is_tracer(x) else np.asarray(x, dtype=np.float64)
 
 
 def _grid_steps(plan: RunPlan) -> int:
@@ -573,14 +582,14 @@ def _run_angle(chunks: _Chunks, e_switch, E_now, t_now, z_now):
                 chunks.sink.add_cycles(done, th_k, ts_k, Es_k, None, zs_k)
             done += whole
             if keep > 0:
-                E_h, t_h, z_h = E[keep - 1], t[keep - 1], z[keep - 1]
+                E_h, t_h, z_h = (_sample(a, keep - 1) for a in (E, t, z))
             else:
                 E_h, t_h, z_h = E_now, t_now, z_now
             th_h = done * cyc
             return (th_h, t_h, _omega_at(plan.train, th_h, E_h), z_h), steps
         th_k, ts_k, Es_k, zs_k = _first(need, th, ts, Es, zs)
         chunks.sink.add_cycles(done, th_k, ts_k, Es_k, None, zs_k)
-        E_now, t_now, z_now = E[need - 1], t[need - 1], z[need - 1]
+        E_now, t_now, z_now = (_sample(a, need - 1) for a in (E, t, z))
         done += valid
         chunks.bar.update(done)
     chunks.sink.add_extra(theta_out[need - 1 : need], t_now, E_now, None, z_now)
@@ -638,7 +647,7 @@ def run_plan(plan: RunPlan, bar: Progress) -> SpeedResult:
     cycle; after a stall, or for ``method="time"``, the time domain."""
     train, P, cycles, method = plan.train, plan.points_per_cycle, plan.cycles, plan.method
     # the speed as an array: a Python float would be a constant of the compiled program, one per speed
-    omega0, E0, e_switch = _start(train, jnp.asarray(plan.rpm, dtype=jnp.float64))
+    omega0, E0, e_switch = _start(train, _f64(plan.rpm))
     streaming = plan.keep_cycles is not None and plan.keep_cycles < cycles
     sink: _AllSamples | _LastCycles = (
         _LastCycles(plan.scene, P, train.cycle_rad, plan.keep_cycles, cycles)

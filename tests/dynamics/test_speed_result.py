@@ -58,6 +58,21 @@ def test_the_extremes_of_concrete_cycles_are_the_compiled_ones_to_the_bit(steady
         np.testing.assert_allclose(np.asarray(r.delta_per_cycle), np.asarray(traced_delta), rtol=1e-14, atol=0)
 
 
+def test_the_speed_range_of_a_finished_result_is_the_traced_one(steady, diesel):
+    """The range of the speed over a run, (ω_max − ω_min)/ω_mean: in NumPy for a finished
+    result, compiled where the speed is traced; the same to rounding, for the periodic
+    cycle of a steady state and for a transient's cycles."""
+    import dataclasses
+
+    run = rotor.simulate(diesel, cycles=3, load=rotor.ConstantLoad(1131.95), progress=False)
+    for r in (steady, run):
+        concrete = r.speed_range_ratio
+        traced = jax.jit(lambda w, r=r: dataclasses.replace(r, omega=w).speed_range_ratio)(jnp.asarray(r.omega))
+        assert isinstance(concrete, np.generic | np.ndarray)
+        np.testing.assert_allclose(float(concrete), float(traced), rtol=1e-14, atol=0)
+    assert float(steady.speed_range_ratio) == pytest.approx(float(steady.delta), rel=1e-12)
+
+
 def test_to_pandas_and_plots(steady, tmp_path):
     df = steady.to_pandas()
     assert list(df.columns)[:4] == ["t_s", "theta_rad", "angle_deg", "cycle"]
