@@ -133,11 +133,12 @@ def crank_forces(
     i = cylinder - 1
     if i in engine.slave_index():
         raise ValueError(f"cylinder {cylinder} is driven by a slave rod: the textbook table is for ordinary rods")
-    return _crank_forces(engine, theta, omega, i, model)
+    # the cylinder as an array: one program for every cylinder, not one per cylinder
+    return _crank_forces(engine, theta, omega, np.asarray(i), model)
 
 
 @engine_jit  # one compiled call per shape, not dozens of eager operations
-def _crank_forces(engine: Engine, theta: ArrayLike, omega: ArrayLike, i: int, model: str) -> dict[str, Array]:
+def _crank_forces(engine: Engine, theta: ArrayLike, omega: ArrayLike, i: ArrayLike, model: str) -> dict[str, Array]:
     g = engine.geometry
     theta = jnp.asarray(theta, dtype=jnp.float64)
     alpha = engine.mechanical_angles(theta)[..., i]
