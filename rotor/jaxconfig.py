@@ -28,7 +28,7 @@ set, rotor runs compiled programs on the CPU inline, in the calling thread (the 
 False), where JAX would hand each to a worker thread and wait for it: rotor's calls need
 their results at once, and the hand-over costs more than a small program runs (the
 closed-form steady state compiled with its engine closed over 63–107 → 20 µs on a 2-core
-machine, ``benchmarks/steady_limit.py --quick``). It applies where JAX's CPU backend starts
+machine, ``benchmarks/steady_limit.py``). It applies where JAX's CPU backend starts
 after rotor is imported."""
 
 jax.config.update("jax_enable_x64", True)
