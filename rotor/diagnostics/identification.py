@@ -398,9 +398,16 @@ class _Bases(eqx.Module):
     offset_L: jnp.ndarray  # (n,) int: window offset of the cycle's left part
 
 
+def _make_bases(train, c_loss, stride: int) -> _Bases:
+    """The identification's bases (:class:`_Bases`) on every ``stride``-th node."""
+    return _Bases(*_basis_arrays(train, c_loss, stride))
+
+
 @kept_program(static_argnames=("stride",))
 @eqx.filter_jit
-def _make_bases(train, c_loss, stride: int):
+def _basis_arrays(train, c_loss, stride: int):
+    """:func:`_make_bases`'s arrays in one compiled call: a tuple, so that the program can be
+    kept on disk (a module's structure does not come back from another process)."""
     v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
     h = train.step_rad
     inertia, dinertia, k, dk = v[:, COL_I], d[:, COL_I], v[:, COL_K], d[:, COL_K]
@@ -419,7 +426,7 @@ def _make_bases(train, c_loss, stride: int):
     BR = cols(jnp.where(left, 0.0, dm), jnp.where(left, 0.0, ddm))
     absw = jnp.abs(dm[:-1]) * h
     s = slice(None, None, stride)
-    return _Bases(
+    return (
         phi[s],
         basis(v[:, COL_MOTORED], d[:, COL_MOTORED])[s],
         basis(jnp.ones_like(G), jnp.zeros_like(G))[s],

@@ -240,3 +240,18 @@ def test_a_program_whose_structure_would_not_come_back_is_not_kept(kept_here):
         np.testing.assert_array_equal(_tagged(x).x, 3.0 * x)
     (path,) = kept_here.glob("rotor-program-*.bin")
     assert path.stat().st_size == 0
+
+
+def test_every_kernel_of_an_identification_is_kept(kept_here):
+    """A steady state, a closed-form run and the identification of its speed: every kernel
+    they compile is kept on disk (none marked as one that cannot be kept), so that a new
+    process traces none of them."""
+    import rotor
+
+    engine = rotor.load_engine("4chn15")
+    load = rotor.ConstantLoad(rotor.steady_state(engine, rpm=1250).load_torque_Nm)
+    run = rotor.simulate(engine, cycles=4, rpm=1250, load=load, method="closed", progress=False)
+    rotor.identify(engine, run, block_cycles=2)
+    kept = sorted(kept_here.glob("rotor-program-*.bin"))
+    assert len(kept) >= 4
+    assert [p.name for p in kept if p.stat().st_size == 0] == []
