@@ -106,7 +106,12 @@ def grid_points(strokes: int, grid_deg: float, cylinders: int = 1) -> int:
     """Nodes of the cycle grid at ``grid_deg`` [deg] for a ``strokes``-stroke engine of
     ``cylinders`` cylinders; refuses a step that does not divide the cycle, or a grid whose
     tables would not fit in memory (:func:`rotor.checks.check_size`)."""
-    if type(strokes) is int and type(grid_deg) is float and type(cylinders) is int:
+    if (
+        type(strokes) is int
+        and type(grid_deg) is float
+        and type(cylinders) is int
+        and 180.0 * strokes <= 1e6 * grid_deg  # no memory check, which reads the machine's state
+    ):
         return _grid_points_of(strokes, grid_deg, cylinders)  # a repeated call: its answer kept
     return _grid_points(strokes, grid_deg, cylinders)
 

@@ -373,10 +373,12 @@ def _pack(E, t, x, ok, arrays):
 
 def _unpack(pack, points, cylinders):
     """:func:`_pack`'s vector back to E, t, x, ok and the arrays: NumPy views of one copy
-    where it is concrete, slices of it where it is traced."""
+    where it is concrete, slices of it where it is traced. ``points`` and ``cylinders``:
+    those of the tables the program solved with."""
     if not isinstance(pack, jax.core.Tracer):
         pack = np.asarray(pack)
     k, m = len(_ROWS), len(_NUMBERS)
+    assert pack.shape == (k * points + m + cylinders,), "the packed steady state's layout"
     rows = pack[: k * points].reshape(k, points)
     numbers = pack[k * points : k * points + m]
     out = {name: rows[i] for i, name in enumerate(_ROWS)}
@@ -489,8 +491,8 @@ def steady_state(
     ``inertia_term_torque``, ``total_torque``) [N·m], ``period_s`` [s], ``excess_work_J``
     [J], ``textbook_delta`` [-], ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting)
     and ``converged``. Where the closed form solved concrete values, the arrays are
-    read-only NumPy arrays (copied from the compiled program in one piece); JAX arrays
-    otherwise.
+    read-only NumPy arrays and the numbers NumPy scalars (copied from the compiled program
+    in one piece); JAX arrays otherwise (the shooting method, or under ``jit``/``vmap``/``grad``).
 
     **Raises:** :class:`rotor.NoSteadyStateError` (a :class:`rotor.SolverError`) where the
     kinetic energy would reach zero, when the values are concrete; under ``jit``/``vmap``
@@ -546,7 +548,7 @@ def steady_state(
         a_lin, c_lin = lin
         flat = is_zero(c_lin) and fidelity != "constant"  # G ≡ 0: E = E0 + β(θ)
         pack = _closed_steady(train, d_inertia, s, fr, speed_load, a_lin, c_lin, omega_m, balance, flat)
-        E, t, x, ok, arrays = _unpack(pack, train.points, n)
+        E, t, x, ok, arrays = _unpack(pack, train.points, train.cylinders)
         _check_combustion(train, balance)
         return _finish(engine, train, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
     _check_combustion(train, balance)

@@ -89,10 +89,10 @@ def _whole(name, value):
     return int(value)
 
 
-def _sample(x, i: int):
-    """Sample ``i`` of ``x``: a NumPy number where ``x`` is concrete (no JAX operation to
-    dispatch, or to compile in a new process), else the traced element."""
-    return x[i] if is_tracer(x) else np.asarray(x)[i]
+def _sample(x, *index: int):
+    """The element of ``x`` at ``index``: a NumPy number where ``x`` is concrete (no JAX
+    operation to dispatch, or to compile in a new process), else the traced element."""
+    return x[index] if is_tracer(x) else np.asarray(x)[index]
 
 
 def _known(x, default):
@@ -257,8 +257,10 @@ def simulate(
     try:
         result = run_plan(plan, bar)
     except KeyboardInterrupt:
-        # Ctrl-C between two chunks: let the chunk already sent to XLA finish (well under a
-        # second) before the interpreter goes down, which it would otherwise do under it
+        # Ctrl-C between two chunks: let any chunk still running in XLA (one dispatched
+        # asynchronously, where the user switched JAX's asynchronous CPU dispatch back on:
+        # rotor.jaxconfig) finish before the interpreter goes down, which it would otherwise
+        # do under it
         for x in jax.live_arrays():
             x.block_until_ready()
         raise
@@ -481,7 +483,7 @@ def _run_closed(chunks: _Chunks, E_now, t_now):
         )
         k = min(int(_known(stalled_at, chunks.size)), valid)  # a stall in the padding is past the end
         if k == valid < chunks.size:  # the padding's first node is the state at the end of the run
-            E_end, t_end = E[valid, 0], t[valid, 0]
+            E_end, t_end = _sample(E, valid, 0), _sample(t, valid, 0)
         if k:
             chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), *_first(k, t, E), None, None)
         done += k
@@ -506,7 +508,7 @@ def _run_grid(chunks: _Chunks, spc: int, e_switch, E_now, t_now, z_now):
         )
         k = min(int(_known(stalled_at, chunks.size)), valid)
         if k == valid < chunks.size:  # the padding's first state is the state at the end of the run
-            y_end = (E[valid, 0], t[valid, 0], z[valid, 0])
+            y_end = (_sample(E, valid, 0), _sample(t, valid, 0), _sample(z, valid, 0))
         if k:
             t_k, E_k, z_k = _first(k, t, E, z)
             chunks.sink.add_cycles(done, _theta_grid(done, k, P, cyc), t_k, E_k, None, z_k)

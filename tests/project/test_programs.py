@@ -244,14 +244,31 @@ def test_a_program_whose_structure_would_not_come_back_is_not_kept(kept_here):
 
 def test_every_kernel_of_an_identification_is_kept(kept_here):
     """A steady state, a closed-form run and the identification of its speed: every kernel
-    they compile is kept on disk (none marked as one that cannot be kept), so that a new
-    process traces none of them."""
+    they compile is kept on disk (none marked as one that cannot be kept), and done again
+    with the programs read back from disk (as a new process would), nothing is traced."""
     import rotor
 
-    engine = rotor.load_engine("4chn15")
-    load = rotor.ConstantLoad(rotor.steady_state(engine, rpm=1250).load_torque_Nm)
-    run = rotor.simulate(engine, cycles=4, rpm=1250, load=load, method="closed", progress=False)
-    rotor.identify(engine, run, block_cycles=2)
+    def work():
+        engine = rotor.load_engine("4chn15")
+        load = rotor.ConstantLoad(rotor.steady_state(engine, rpm=1250).load_torque_Nm)
+        run = rotor.simulate(engine, cycles=4, rpm=1250, load=load, method="closed", progress=False)
+        return rotor.identify(engine, run, block_cycles=2)
+
+    first = work()
     kept = sorted(kept_here.glob("rotor-program-*.bin"))
     assert len(kept) >= 4
     assert [p.name for p in kept if p.stat().st_size == 0] == []
+    programs.clear_programs()  # forgotten in this process: read back from the folder
+    traced: list[str] = []
+
+    def listen(event, duration, **kw):
+        if event.endswith("jaxpr_trace_duration"):
+            traced.append(str(kw.get("fun_name")))
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    try:
+        again = work()
+    finally:
+        jax.monitoring.unregister_event_duration_listener(listen)
+    assert traced == []
+    np.testing.assert_array_equal(np.asarray(first.imep_pa), np.asarray(again.imep_pa))
