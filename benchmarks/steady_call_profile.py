@@ -2,11 +2,9 @@
 
 One process, 4chn15 at 1250 rpm, the engine object's tables found (warm-up calls first),
 then ``--repeats`` calls: the median of the whole call and of its parts, each timed by
-wrapping the function that does it: the compiled program's call (which runs it: rotor
-runs JAX's programs on the CPU in the calling thread, :mod:`rotor.jaxconfig`; with
-``JAX_CPU_ENABLE_ASYNC_DISPATCH=true`` it returns before the program has run),
-``_finish`` (copying what has not come back, the invariant checks and building the
-result) and, inside it,
+wrapping the function that does it: the compiled program's dispatch (the kept program's
+call, which returns before the program has run), the copy of its packed result (which
+waits for it), ``_finish`` (the invariant checks and building the result) and, inside it,
 the invariant checks (``check_speed_result``); in a second round, the whole call with
 the invariant checks replaced by a no-op (what they cost, measured rather than added up);
 and δ read off a finished result (``float(result.delta)``, which ``steady_limit.py``'s
@@ -65,8 +63,9 @@ def main() -> None:
 
     check = steady.check_speed_result
     total = whole()
-    timed("_closed_steady", "compiled program's call")
-    timed("_finish", "_finish (copies, checks, result)")
+    timed("_closed_steady", "compiled program's dispatch")
+    timed("_unpack", "the packed result's copy (waits for the program)")
+    timed("_finish", "_finish (checks, result)")
     timed("check_speed_result", "invariant checks")
     with_parts = whole()
     medians = {k: 1e6 * statistics.median(v) for k, v in parts.items()}

@@ -27,6 +27,8 @@ Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
    size.
 
 Compile time is kept apart (the first call); every time is the median of repeats after it.
+``--sync-dispatch`` runs it with JAX's asynchronous CPU dispatch off (each compiled program
+runs in the thread that calls it instead of a worker thread the caller waits for).
 Writes ``results/steady_limit.json`` and ``results/steady_limit.png``.
 """
 
@@ -276,11 +278,24 @@ def main():
     ap.add_argument("--engine", default="4chn15")
     ap.add_argument("--quick", action="store_true", help="fewer repeats, batches up to 10⁴")
     ap.add_argument("--full", action="store_true", help="batches up to 10⁶ items")
+    ap.add_argument(
+        "--sync-dispatch",
+        action="store_true",
+        help="run JAX's programs in the calling thread (jax_cpu_enable_async_dispatch off)",
+    )
     args = ap.parse_args()
+    if args.sync_dispatch:  # before JAX's CPU backend starts
+        jax.config.update("jax_cpu_enable_async_dispatch", False)
     repeats = 21 if args.quick else 101
     sizes = [1, 10, 100, 1000, 10**4] + ([] if args.quick else [10**5]) + ([10**6] if args.full else [])
     engine = rotor.load_engine(args.engine)
-    res = {"engine": args.engine, "quick": args.quick, "versions": versions(), "notes": __doc__}
+    res = {
+        "engine": args.engine,
+        "quick": args.quick,
+        "async_dispatch": jax.config.values["jax_cpu_enable_async_dispatch"],
+        "versions": versions(),
+        "notes": __doc__,
+    }
     res["single"] = bench_single(engine, repeats)
     rk = res["single"]["scipy_rk45_one_cycle"]["median_s"]
     print(f"{args.engine} at {res['single']['rpm']:g} rpm; one cycle of scipy RK45 (rtol 1e-8): {rk * 1e3:.2f} ms")

@@ -13,25 +13,12 @@ fast. Base layer: imports nothing from rotor but :mod:`rotor.cache`.
 
 from __future__ import annotations
 
-import os
-
 import jax
 import jax.numpy as jnp
 
 from .cache import apply_compilation_cache
 
-__all__ = ["ASYNC_DISPATCH_ENV", "jax", "jnp"]
-
-ASYNC_DISPATCH_ENV = "JAX_CPU_ENABLE_ASYNC_DISPATCH"
-"""JAX's environment variable for its ``jax_cpu_enable_async_dispatch`` option. Unless it is
-set, rotor runs compiled programs on the CPU inline, in the calling thread (the option
-False), where JAX would hand each to a worker thread and wait for it: rotor's calls need
-their results at once, and the hand-over costs more than a small program runs (the
-closed-form steady state compiled with its engine closed over 63–107 → 20 µs on a 2-core
-machine, ``benchmarks/steady_limit.py``). It applies where JAX's CPU backend starts
-after rotor is imported."""
+__all__ = ["jax", "jnp"]
 
 jax.config.update("jax_enable_x64", True)
-if ASYNC_DISPATCH_ENV not in os.environ:
-    jax.config.update("jax_cpu_enable_async_dispatch", False)
 apply_compilation_cache(jax)

@@ -222,26 +222,6 @@ def test_rotor_chooses_xla_elemental_emitters_unless_the_user_chose():
     assert _xla_flags_after_import("--xla_cpu_use_fusion_emitters=true") == "--xla_cpu_use_fusion_emitters=true"
 
 
-ASYNC_CHILD = "import rotor.jaxconfig, jax; print(jax.config.values['jax_cpu_enable_async_dispatch'])"
-
-
-def _async_dispatch_after_import(value):
-    from rotor.jaxconfig import ASYNC_DISPATCH_ENV
-
-    env = {k: v for k, v in os.environ.items() if k != ASYNC_DISPATCH_ENV}
-    if value is not None:
-        env[ASYNC_DISPATCH_ENV] = value
-    out = subprocess.run([sys.executable, "-c", ASYNC_CHILD], env=env, capture_output=True, text=True, check=True)
-    return out.stdout.strip()
-
-
-def test_rotor_runs_cpu_programs_in_the_calling_thread_unless_the_user_chose():
-    """Where rotor imports JAX it switches JAX's asynchronous CPU dispatch off, unless the
-    user's environment names that option (either way)."""
-    assert _async_dispatch_after_import(None) == "False"
-    assert _async_dispatch_after_import("true") == "True"
-
-
 # ---------------------------------------------------------------------- no host callback in a program
 _SEEN = {"on": False, "requests": 0, "hits": 0}
 
