@@ -257,10 +257,9 @@ def simulate(
     try:
         result = run_plan(plan, bar)
     except KeyboardInterrupt:
-        # Ctrl-C between two chunks: let any chunk still running in XLA (one dispatched
-        # asynchronously, where the user switched JAX's asynchronous CPU dispatch back on:
-        # rotor.jaxconfig) finish before the interpreter goes down, which it would otherwise
-        # do under it
+        # Ctrl-C between two chunks: let the chunk already sent to XLA finish (well under a
+        # second; none is left where the user switched JAX's asynchronous CPU dispatch off)
+        # before the interpreter goes down, which it would otherwise do under it
         for x in jax.live_arrays():
             x.block_until_ready()
         raise
