@@ -39,6 +39,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..cycles import array_module
 from ..programs import kept_program
 from ..progress import report
 from .crank_train import COL_COMBUSTION, COL_I, COL_K, COL_MOTORED, CrankTrain, firing_window
@@ -258,9 +259,9 @@ def linear_losses(load, friction_abc):
     if poly is None or not is_zero(poly[1]):
         return None
     parts = (fa, fc, 0.0 if poly[0] is None else poly[0], 0.0 if poly[2] is None else poly[2])
-    if not any(isinstance(v, jax.core.Tracer) for v in parts):  # NumPy: no JAX operation
-        parts = tuple(np.asarray(v, dtype=np.float64) for v in parts)
-    return parts[0] + parts[2], parts[1] + parts[3]
+    xp = array_module(*parts)  # NumPy where concrete: no JAX operation
+    fa, fc, la, lc = (xp.asarray(v, dtype=xp.float64) for v in parts)
+    return fa + la, fc + lc
 
 
 # ----------------------------------------------------------------------------- fixed steps on the grid

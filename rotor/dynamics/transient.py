@@ -92,7 +92,7 @@ def _whole(name, value):
 def _sample(x, *index: int):
     """The element of ``x`` at ``index``: a NumPy number where ``x`` is concrete (no JAX
     operation to dispatch, or to compile in a new process), else the traced element."""
-    return x[index] if is_tracer(x) else np.asarray(x)[index]
+    return array_module(x).asarray(x)[index]
 
 
 def _known(x, default):
@@ -373,7 +373,7 @@ def plan_run(
     at_rest = r is not None and r == 0
     losses = linear_losses(load, fr) if governor is None else None
     method = _pick_method(method, at_rest, losses)
-    rtol_a = (jnp if is_tracer(rtol) else np).asarray(rtol, dtype=np.float64)  # NumPy: no JAX operation
+    rtol_a = _f64(rtol)
     if load is None and governor is None:
         _warn_runaway(train, scales, fr, rpm)
     return RunPlan(
@@ -403,7 +403,8 @@ def plan_run(
 def _f64(x):
     """``x`` as a float64 array of strong type (one trace for every chunk): a NumPy array
     where it is concrete (no JAX operation to dispatch, or to compile in a new process)."""
-    return jnp.asarray(x, dtype=jnp.float64) if is_tracer(x) else np.asarray(x, dtype=np.float64)
+    xp = array_module(x)
+    return xp.asarray(x, dtype=xp.float64)
 
 
 def _grid_steps(plan: RunPlan) -> int:
