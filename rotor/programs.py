@@ -104,6 +104,7 @@ class _Kept:
         self.is_dynamic = eqx.is_array if isinstance(traced, eqx.Module) else _array_or_number
         self.name = f"{self.fn.__module__}.{self.fn.__qualname__}"
         self.calls: dict[Any, Any] = {}
+        self.named: dict[Any, frozenset[int]] = {}  # per argument structure: the leaves named static
         _KERNELS.append(self)
         self.positions = {
             i: name for i, name in enumerate(inspect.signature(self.fn).parameters) if name in static_argnames
@@ -116,32 +117,44 @@ class _Kept:
         folder = program_folder()
         if folder is None:
             return self.traced(*args, **kwargs)
-        named = {self.positions[i]: a for i, a in enumerate(args) if i in self.positions}
-        named.update((k, kwargs[k]) for k in self.static_argnames if k in kwargs)
-        dynamic, static = eqx.partition((args, kwargs), self.is_dynamic)
-        for name in named:  # an argument named static stays so, whatever its type
-            dynamic, static = _static_argument(dynamic, static, args, kwargs, self.positions, name)
-        leaves, tree = jax.tree_util.tree_flatten(dynamic)
-        fixed, fixed_tree = jax.tree_util.tree_flatten(static)
-        if any(isinstance(x, jax.core.Tracer) for x in leaves) or not all(type(x) in _PLAIN for x in fixed):
+        # one flattening of the arguments (an equinox partition and combine per call cost
+        # more than the program's dispatch); which leaves are traced: as the kernel's jit
+        # decides, except those of the arguments named static
+        leaves, tree = jax.tree_util.tree_flatten((args, kwargs))
+        named = self.named.get(tree)
+        if named is None:
+            named = self.named[tree] = self._named_leaves(tree, len(args), kwargs)
+        is_dynamic = self.is_dynamic
+        mask = tuple(i not in named and is_dynamic(x) for i, x in enumerate(leaves))
+        dynamic = [x for x, m in zip(leaves, mask, strict=True) if m]
+        fixed = tuple((type(x), x) for x, m in zip(leaves, mask, strict=True) if not m)
+        if any(isinstance(x, jax.core.Tracer) for x in dynamic) or not all(t in _PLAIN for t, _ in fixed):
             return self.traced(*args, **kwargs)
-        specs = tuple(_spec(x) for x in leaves)
-        key = (tree, fixed_tree, tuple((type(x), x) for x in fixed), specs)
+        specs = tuple(_spec(x) for x in dynamic)
+        key = (tree, mask, fixed, specs)
         call = self.calls.get(key, _MISSING)
         if call is _MISSING:
             if len(self.calls) >= PROGRAMS_PER_KERNEL:  # a loop over static values: traced as it would be
                 return self.traced(*args, **kwargs)
-            call = self.calls[key] = self._program(folder, tree, static, specs, key)
+            call = self.calls[key] = self._program(folder, key)
         if call is None:
             return self.traced(*args, **kwargs)
-        return call(*leaves)
+        return call(*dynamic)
 
-    def _program(self, folder: Path, tree: Any, static: Any, specs: tuple, key: Any) -> Callable[..., Any] | None:
-        """The kept program, read from disk or compiled now and kept, or None where the
-        kernel cannot be kept."""
-        text = repr(
-            (self.name, str(key[0]), str(key[1]), key[2], [(shape, str(dtype), weak) for shape, dtype, weak in specs])
-        )
+    def _named_leaves(self, tree: Any, positional: int, kwargs: dict) -> frozenset[int]:
+        """The indices of the leaves of the arguments named static in a flattening of
+        ``(args, kwargs)`` of structure ``tree`` (``positional`` arguments)."""
+        args_at, kwargs_at = jax.tree_util.tree_unflatten(tree, range(tree.num_leaves))
+        parts = [args_at[i] for i in self.positions if i < positional]
+        parts += [kwargs_at[k] for k in self.static_argnames if k in kwargs]
+        return frozenset(jax.tree_util.tree_leaves(parts))
+
+    def _program(self, folder: Path, key: tuple) -> Callable[..., Any] | None:
+        """The kept program for ``key`` (the arguments' structure, which leaves are traced,
+        the others' values and the traced ones' specs), read from disk or compiled now and
+        kept, or None where the kernel cannot be kept."""
+        tree, mask, fixed, specs = key
+        text = repr((self.name, str(tree), mask, fixed, [(shape, str(dtype), weak) for shape, dtype, weak in specs]))
         digest = hashlib.blake2b(text.encode() + b"\0" + _machine(), digest_size=20).hexdigest()
         path = folder / f"{_ENTRY}{digest}.bin"
         try:
@@ -159,8 +172,10 @@ class _Kept:
             except Exception:  # noqa: BLE001 - a partial or foreign file is a miss, whatever it raises
                 pass
 
-        def flat(*leaves: Any) -> Any:
-            args, kwargs = eqx.combine(jax.tree_util.tree_unflatten(tree, leaves), static)
+        def flat(*traced: Any) -> Any:
+            values, given = iter(traced), iter(fixed)
+            leaves = [next(values) if m else next(given)[1] for m in mask]
+            args, kwargs = jax.tree_util.tree_unflatten(tree, leaves)
             return self.fn(*args, **kwargs)
 
         flat.__name__, flat.__qualname__ = self.fn.__name__, self.fn.__qualname__  # JAX's events name the kernel
@@ -307,21 +322,11 @@ def clear_programs() -> None:
     JAX's): their compiled code is freed, and a later call reads it from disk again."""
     for kernel in _KERNELS:
         kernel.calls.clear()
+        kernel.named.clear()
 
 
 def _array_or_number(x: Any) -> bool:
     return eqx.is_array(x) or isinstance(x, (bool, int, float, complex))
-
-
-def _static_argument(dynamic: Any, static: Any, args: tuple, kwargs: dict, positions: dict, name: str) -> tuple:
-    """``dynamic`` and ``static`` with the argument ``name`` moved whole to ``static``."""
-    where = [i for i, n in positions.items() if n == name and i < len(args)]
-    if where:
-        i = where[0]
-        dyn_args, stat_args = list(dynamic[0]), list(static[0])
-        dyn_args[i], stat_args[i] = None, args[i]
-        return (tuple(dyn_args), dynamic[1]), (tuple(stat_args), static[1])
-    return (dynamic[0], {**dynamic[1], name: None}), (static[0], {**static[1], name: kwargs[name]})
 
 
 def kept_program(*, static_argnames: tuple[str, ...] = ()) -> Callable[[F], F]:

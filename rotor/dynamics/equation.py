@@ -34,6 +34,9 @@ change; the hand-over starts at the beginning of that cycle.
 
 from __future__ import annotations
 
+import functools
+import operator
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -61,6 +64,14 @@ def _report_every(meter, k, cycles: int):
     """Report cycle ``k`` (from 0) of ``cycles`` done to ``meter``, about a hundred times a run."""
     every = max(1, cycles // 100)
     jax.lax.cond((k + 1) % every == 0, lambda: report_progress(meter, (k + 1) / cycles), lambda: None)
+
+
+def sum_columns(x):
+    """The sum over the last axis of ``x``, a few columns (one per cylinder), written out
+    column by column: XLA's CPU backend hands a reduction over a short last axis to a
+    library call that costs ten times the additions (``benchmarks/steady_call_profile.py``)."""
+    columns = [x[..., i] for i in range(x.shape[-1])]
+    return functools.reduce(operator.add, columns) if columns else jnp.zeros(x.shape[:-1], x.dtype)
 
 
 class Scene(eqx.Module):
@@ -105,7 +116,7 @@ class Scene(eqx.Module):
         return val, der, self.scale_at(theta)
 
     def engine_torque(self, val, s, omega, z):
-        comb = jnp.sum(s * val[..., COL_COMBUSTION:], axis=-1)
+        comb = sum_columns(s * val[..., COL_COMBUSTION:])
         return val[..., COL_MOTORED] + self.fuel(omega, z) * comb + val[..., COL_K] * omega**2
 
 
