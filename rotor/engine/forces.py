@@ -128,17 +128,24 @@ def crank_forces(
     ``psum_N``, ``n_N``, ``k_N``, ``z_N``, ``t_N``, ``m_Nm`` (SI units as named).
     """
     require_engine(engine, "crank_forces(engine)")
+    return cylinder_forces(engine, theta, omega, table_cylinder(engine, cylinder), model)
+
+
+def table_cylinder(engine: Engine, cylinder: int) -> np.ndarray:
+    """The index (0…n−1) of ``cylinder`` (1…n) as an array, so that one program serves every
+    cylinder; :class:`rotor.EngineError` where the engine has no such cylinder or a slave
+    rod drives it (the textbook table is for ordinary rods)."""
     if not 1 <= cylinder <= engine.cylinders:
-        raise ValueError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
-    i = cylinder - 1
-    if i in engine.slave_index():
-        raise ValueError(f"cylinder {cylinder} is driven by a slave rod: the textbook table is for ordinary rods")
-    # the cylinder as an array: one program for every cylinder, not one per cylinder
-    return _crank_forces(engine, theta, omega, np.asarray(i), model)
+        raise EngineError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
+    if cylinder - 1 in engine.slave_index():
+        raise EngineError(f"cylinder {cylinder} is driven by a slave rod: the textbook table is for ordinary rods")
+    return np.asarray(cylinder - 1)
 
 
 @engine_jit  # one compiled call per shape, not dozens of eager operations
-def _crank_forces(engine: Engine, theta: ArrayLike, omega: ArrayLike, i: ArrayLike, model: str) -> dict[str, Array]:
+def cylinder_forces(engine: Engine, theta: ArrayLike, omega: ArrayLike, i: ArrayLike, model: str) -> dict[str, Array]:
+    """:func:`crank_forces` of the cylinder of index ``i`` (0…n−1, an integer array from
+    :func:`table_cylinder`, which checks it), compiled once for every cylinder."""
     g = engine.geometry
     theta = jnp.asarray(theta, dtype=jnp.float64)
     alpha = engine.mechanical_angles(theta)[..., i]

@@ -14,7 +14,7 @@ from ..errors import EngineError
 from ..fileio import csv_text
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
-from .forces import crank_forces, table_angles_deg
+from .forces import cylinder_forces, table_angles_deg, table_cylinder
 from .model import Engine, engine_jit, require_engine
 from .plausible import check_results_finite, check_speed_rpm, require_whole
 
@@ -172,10 +172,9 @@ def crank_table(
     if kinematics not in ("series", "exact"):
         raise EngineError(f"kinematics = {kinematics!r}: 'series' (the textbook's) or 'exact'")
     cylinder = require_whole(cylinder, "cylinder")
-    if not 1 <= cylinder <= engine.cylinders:
-        raise EngineError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
+    index = table_cylinder(engine, cylinder)
     angles = table_angles_deg(engine, step_deg)
-    cols, header = _table_columns(engine, angles, np.asarray(rpm * RAD_S_PER_RPM), cylinder, kinematics)
+    cols, header = _table_columns(engine, angles, np.asarray(rpm * RAD_S_PER_RPM), index, kinematics)
     cols = {"angle_deg": angles, **{k: np.asarray(v) for k, v in cols.items()}}
     header = {k: float(v) for k, v in header.items()}
     check_results_finite(f"the table of engine {engine.name!r} at {rpm:g} rpm", {**header, **cols})
@@ -183,14 +182,14 @@ def crank_table(
 
 
 @engine_jit  # one compiled call (kept by the persistent compilation cache), not dozens of eager ones
-def _table_columns(engine, angles_deg, omega, cylinder, kinematics):
-    """The forces of the table at ``angles_deg`` (the cylinder's own cycle angle [deg]) and
-    the inputs of its header."""
+def _table_columns(engine, angles_deg, omega, i, kinematics):
+    """The forces of the table of cylinder index ``i`` (an array: one program for every
+    cylinder) at ``angles_deg`` (the cylinder's own cycle angle [deg]) and the inputs of its
+    header."""
     # the table is for the cylinder's own cycle angle: shift by its firing angle
-    i = cylinder - 1
     offset = engine.firing_angles_rad[i] - (2 * np.pi if engine.strokes == 4 else 0.0)
     theta = jnp.deg2rad(angles_deg) + offset
-    cols = crank_forces(engine, theta, omega, cylinder, kinematics)
+    cols = cylinder_forces(engine, theta, omega, i, kinematics)
     g = engine.geometry
     m_rec, _ = engine.masses.two_mass_split(g.rod_length_m)
     header = {

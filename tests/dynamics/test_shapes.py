@@ -68,3 +68,22 @@ def test_identification_blocks_padded_change_nothing(diesel, monkeypatch):
         a, b = np.asarray(getattr(padded, f)), np.asarray(getattr(exact, f))
         assert a.shape == b.shape
         assert float(np.max(np.abs(a - b) / np.maximum(np.abs(b), 1e-300))) <= 1e-12, f
+
+
+def test_a_table_of_another_cylinder_reuses_the_program(diesel, monkeypatch):
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")  # traced as jit traces: a kept program would trace nothing
+    first = rotor.crank_table(diesel, cylinder=1)
+    _TRACES.clear()
+    other = rotor.crank_table(diesel, cylinder=3)
+    assert "_table_columns" not in _TRACES, _TRACES
+    # the textbook forces of that cylinder at its own cycle angle (the firing angle's shift)
+    table = other.to_pandas()
+    theta = (
+        np.deg2rad(table["angle_deg"].to_numpy())
+        + diesel.firing_angles_rad[2]
+        - (2 * np.pi if diesel.strokes == 4 else 0.0)
+    )
+    forces = rotor.crank_forces(diesel, theta, other.rpm * np.pi / 30, cylinder=3, model=other.kinematics)
+    for column in ("s_m", "pg_N", "t_N", "m_Nm"):
+        np.testing.assert_allclose(table[column], np.asarray(forces[column]), rtol=1e-12, atol=1e-9)
+    assert first.cylinder == 1 and other.cylinder == 3
