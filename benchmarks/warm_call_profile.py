@@ -13,8 +13,10 @@ splits its wall time into:
   the persistent cache needs for its key;
 - ``compile_or_load_s``: XLA compiling a program or reading it back from the persistent cache
   (JAX's ``backend_compile_duration`` covers both; ``from_cache`` of them were read back);
-- ``rest_s``: the rest of the call: reading the cached programs, running them, rotor's own
-  Python, writing the output;
+- ``kept_read_s``: reading the kernels' kept programs from disk (:mod:`rotor.programs`;
+  ``kept_slowest``: the three slowest kernels);
+- ``rest_s``: the rest of the call: running the programs, rotor's own Python, writing the
+  output;
 - ``again_s``: the same command run a second time in the same process (its modules
   imported, its programs loaded, nothing traced): the command's own work, a floor of its own.
 
@@ -64,18 +66,29 @@ def on_event(event, **_):
         hits[0] += 1
 jax.monitoring.register_event_duration_secs_listener(on_duration)
 jax.monitoring.register_event_listener(on_event)
+from rotor import programs
+find = programs._Kept._program
+kept = collections.defaultdict(float)
+def timed_find(self, folder, key):  # a kept program read from disk (or compiled where it is not there)
+    t = time.perf_counter()
+    try:
+        return find(self, folder, key)
+    finally:
+        kept[self.name.rsplit(".", 1)[-1]] += time.perf_counter() - t
+programs._Kept._program = timed_find
 sys.argv = ["rotor", *json.loads(sys.argv[1])]  # main() as the command runs it (argv None)
 t1 = time.perf_counter()
 with contextlib.redirect_stdout(io.StringIO()):
     rc = main()
 t_call = time.perf_counter() - t1
+kept_first = dict(kept)
 t2 = time.perf_counter()
 with contextlib.redirect_stdout(io.StringIO()):
     main()
 t_again = time.perf_counter() - t2
 top = sorted(names.items(), key=lambda kv: -kv[1])[:8]
 print(json.dumps({"rc": rc, "import_s": t_import, "call_s": t_call, "again_s": t_again, "events": dict(events),
-                  "from_cache": hits[0], "top": top}))
+                  "from_cache": hits[0], "top": top, "kept": kept_first}))
 """
 
 
@@ -123,15 +136,22 @@ def main() -> None:
                 "lowering_s": med(lambda r: r["events"].get("jaxpr_to_mlir_module_duration", 0.0)),
                 "compile_or_load_s": med(lambda r: r["events"].get("backend_compile_duration", 0.0)),
                 "from_cache": med(lambda r: r["from_cache"]),
+                "kept_programs": med(lambda r: len(r["kept"])),
+                "kept_read_s": med(lambda r: sum(r["kept"].values())),
+                "kept_slowest": sorted(runs[-1]["kept"].items(), key=lambda kv: -kv[1])[:3],
                 "top": runs[-1]["top"],
             }
-            row["rest_s"] = row["call_s"] - row["tracing_s"] - row["lowering_s"] - row["compile_or_load_s"]
+            row["rest_s"] = (
+                row["call_s"] - row["tracing_s"] - row["lowering_s"] - row["compile_or_load_s"] - row["kept_read_s"]
+            )
             rows.append(row)
             print(
                 f"{name:46s} import {row['import_s']:.2f} s, call {row['call_s']:.2f} s: tracing "
                 f"{row['tracing_s']:.2f}, lowering {row['lowering_s']:.2f}, compiling or loading "
-                f"{row['compile_or_load_s']:.2f}, "
-                f"rest {row['rest_s']:.2f} ({row['from_cache']:.0f} programs from the cache); "
+                f"{row['compile_or_load_s']:.2f}, kept programs read {row['kept_read_s']:.2f} "
+                f"({row['kept_programs']:.0f} kernels; slowest "
+                + ", ".join(f"{k} {v:.2f}" for k, v in row["kept_slowest"])
+                + f"), rest {row['rest_s']:.2f} ({row['from_cache']:.0f} programs from the cache); "
                 f"again in the process {row['again_s']:.2f} s",
                 flush=True,
             )

@@ -2,6 +2,7 @@
 which then neither traces it nor imports its solver's package; the results are the same to
 the last bit; a damaged file is a miss; a transformation of the caller's still traces."""
 
+import functools
 import json
 import os
 import subprocess
@@ -100,6 +101,24 @@ def test_arguments_of_a_new_structure_or_static_value_get_programs_of_their_own(
     np.testing.assert_array_equal(_cubic(x[:3], 2.0), 2.0 * x[:3] ** 3)  # a new shape
     np.testing.assert_array_equal(_cubic(x, 2.0, power=2), 2.0 * x**2)  # a new static value
     assert len(list(kept_here.glob("*.bin"))) == 3
+
+
+@programs.kept_program(static_argnames=("times",))
+@functools.partial(jax.jit, static_argnames=("times",))
+def _doubled(x, times):
+    for _ in range(times):  # a loop in Python: ``times`` must be static to trace at all
+        x = 2.0 * x
+    return x
+
+
+def test_an_argument_named_static_is_static_given_by_position_or_by_name(kept_here):
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_doubled(x, 3), 8.0 * x)
+    assert len(list(kept_here.glob("*.bin"))) == 1  # kept: traced with ``times`` a constant
+    np.testing.assert_array_equal(_doubled(x, times=2), 4.0 * x)
+    np.testing.assert_array_equal(_doubled(x, 2), 4.0 * x)
+    assert len(list(kept_here.glob("*.bin"))) == 3
+    assert all(path.stat().st_size > 0 for path in kept_here.glob("*.bin"))
 
 
 def test_a_callers_transformation_traces_the_kernel(kept_here):
