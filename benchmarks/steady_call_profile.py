@@ -10,7 +10,9 @@ the invariant checks replaced by a no-op (what they cost, measured rather than a
 δ read off a finished result (``float(result.delta)``, which ``steady_limit.py``'s
 default call includes); and last, the whole call with the compilation cache on (in a new
 folder), as the ``rotor`` command runs it: the kernel's program kept and called through
-:mod:`rotor.programs` instead of ``jax.jit``'s dispatch.
+:mod:`rotor.programs` instead of ``jax.jit``'s dispatch; and the closed form's compiled
+program alone, with the tables as arguments (as the default passes them) and with all
+but the speed closed over, in turn (the same numbers to 1e-12, asserted).
 ``benchmarks/steady_limit.py`` compares the call with the compiled one and with scipy.
 
     .venv/bin/python benchmarks/steady_call_profile.py [--repeats 400]   # about 5 s
@@ -30,6 +32,10 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import equinox as eqx  # noqa: E402
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
 from simulator_speed import versions  # noqa: E402
 
 import rotor  # noqa: E402
@@ -37,6 +43,44 @@ from rotor.dynamics import steady  # noqa: E402
 from rotor.fileio import write_text_atomic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
+KERNEL = "_closed_steady"  # the closed form's compiled program, wrapped by name as the parts below
+
+
+def program_alone(engine, repeats: int) -> dict[str, float]:
+    """The closed form's compiled program alone, called and its packed result copied to
+    NumPy: with the arguments the default call passes it (the tables among them), and with
+    everything but the speed closed over (the tables, fuelling and losses constants of the
+    program, which XLA folds); the two in turn, medians [µs]."""
+    seen = []
+    program = getattr(steady, KERNEL)
+
+    def record(*a, **k):
+        seen.append((a, k))
+        return program(*a, **k)
+
+    setattr(steady, KERNEL, record)
+    try:
+        rotor.steady_state(engine, rpm=1250.0)
+    finally:
+        setattr(steady, KERNEL, program)
+    (args, _), fn = seen[0], program.fn  # fn: the kernel's Python, before jax.jit
+    static = {"balance": args[8], "flat": args[9]}
+    dynamic = jax.tree_util.tree_map(lambda v: jnp.asarray(v) if eqx.is_array(v) else v, args[:8])
+    as_arguments = jax.jit(lambda *d: fn(*d, **static))
+    closed = jax.jit(lambda omega: fn(*dynamic[:7], omega, **static))
+    calls = {
+        "the tables as arguments": lambda: np.asarray(as_arguments(*args[:8])),
+        "all but the speed closed over": lambda: np.asarray(closed(dynamic[7])),
+    }
+    a, b = calls["the tables as arguments"](), calls["all but the speed closed over"]()
+    assert np.allclose(a, b, rtol=1e-12, atol=0.0), "the two programs disagree"  # XLA's folding rounds apart
+    times: dict[str, list[float]] = {name: [] for name in calls}
+    for _ in range(repeats):
+        for name, call in calls.items():
+            t = time.perf_counter()
+            call()
+            times[name].append(time.perf_counter() - t)
+    return {name: 1e6 * statistics.median(v) for name, v in times.items()}
 
 
 def main() -> None:
@@ -71,7 +115,7 @@ def main() -> None:
 
     check = steady.check_speed_result
     total = whole()
-    timed("_closed_steady", "compiled program's dispatch")
+    timed(KERNEL, "compiled program's dispatch")
     timed("_unpack", "the packed result's copy (waits for the program)")
     timed("_finish", "_finish (checks, result)")
     timed("check_speed_result", "invariant checks")
@@ -89,6 +133,7 @@ def main() -> None:
         float(finished.delta)
         delta_runs.append(time.perf_counter() - t)
     delta_us = 1e6 * statistics.median(delta_runs)
+    program = program_alone(engine, args.repeats)
     with tempfile.TemporaryDirectory() as folder:
         rotor.enable_compilation_cache(folder)
         kept = whole()
@@ -103,6 +148,7 @@ def main() -> None:
         "call_without_invariant_checks_us": without_checks,
         "delta_of_a_finished_result_us": delta_us,
         "call_with_kept_programs_us": kept,
+        "program_alone_us": program,
     }
     print(f"steady_state(engine, rpm=1250.0): {total:.0f} µs a call (median of {args.repeats})")
     for k, v in medians.items():
@@ -110,6 +156,8 @@ def main() -> None:
     print(f"  the whole call with the invariant checks a no-op: {without_checks:.0f} µs")
     print(f"float(result.delta) of a finished result: {delta_us:.0f} µs")
     print(f"the whole call with the compilation cache on (programs kept): {kept:.0f} µs")
+    for k, v in program.items():
+        print(f"the closed form's program alone, {k}: {v:.0f} µs")
     RESULTS.mkdir(parents=True, exist_ok=True)
     write_text_atomic(RESULTS / "steady_call_profile.json", json.dumps(out, indent=1))
 

@@ -53,7 +53,11 @@ def _diffrax() -> tuple[Any, Any, type]:
 
 
 # ----------------------------------------------------------------------------- diffrax
-def _angle_field(theta, y, args):
+def angle_field(theta, y, args):
+    """The equation of motion in the angle domain, as the ``"angle"`` method integrates it:
+    at engine angle ``theta`` [rad] the derivatives in θ of y = (E/E_ref, t·ω_ref, z) (the
+    kinetic energy over ``e_ref`` [J], time scaled by ``w_ref`` [rad/s], the governor's
+    state), ``args`` = (:class:`Scene`, e_ref, w_ref)."""
     scene, e_ref, w_ref = args
     e, tau, z = y
     E = e * e_ref
@@ -119,7 +123,7 @@ def angle_run(scene: Scene, theta0, y0, theta_out, rtol, e_switch, max_steps: in
     event = dfx.Event(lambda t, y, args, **kw: y[0] - e_switch / e_ref, optx.Newton(1e-12, 1e-12), direction=False)
     with save_points_checked_on_the_host():  # theta_out: increasing from past θ0, built by the caller
         sol = dfx.diffeqsolve(
-            dfx.ODETerm(_angle_field),
+            dfx.ODETerm(angle_field),
             _solver(),
             theta0,
             theta_out[-1],
