@@ -14,7 +14,8 @@ splits its wall time into:
 - ``compile_or_load_s``: XLA compiling a program or reading it back from the persistent cache
   (JAX's ``backend_compile_duration`` covers both; ``from_cache`` of them were read back);
 - ``kept_read_s``: reading the kernels' kept programs from disk (:mod:`rotor.programs`;
-  ``kept_slowest``: the three slowest kernels);
+  ``kept_slowest``: the three slowest kernels); a kernel whose program is not on disk is
+  compiled there, and that time is also in the three columns above (a warm call has none);
 - ``rest_s``: the rest of the call: running the programs, rotor's own Python, writing the
   output;
 - ``again_s``: the same command run a second time in the same process (its modules

@@ -117,13 +117,15 @@ class _Kept:
         folder = program_folder()
         if folder is None:
             return self.traced(*args, **kwargs)
-        # one flattening of the arguments (an equinox partition and combine per call cost
-        # more than the program's dispatch); which leaves are traced: as the kernel's jit
-        # decides, except those of the arguments named static
+        # one flattening of the arguments (not an equinox partition and combine on every
+        # call); which leaves are traced: as the kernel's jit decides, except those of the
+        # arguments named static
         leaves, tree = jax.tree_util.tree_flatten((args, kwargs))
         named = self.named.get(tree)
         if named is None:
-            named = self.named[tree] = self._named_leaves(tree, len(args), kwargs)
+            named = self._named_leaves(args, kwargs)
+            if len(self.named) < PROGRAMS_PER_KERNEL:
+                self.named[tree] = named
         is_dynamic = self.is_dynamic
         mask = tuple(i not in named and is_dynamic(x) for i, x in enumerate(leaves))
         dynamic = [x for x, m in zip(leaves, mask, strict=True) if m]
@@ -141,13 +143,21 @@ class _Kept:
             return self.traced(*args, **kwargs)
         return call(*dynamic)
 
-    def _named_leaves(self, tree: Any, positional: int, kwargs: dict) -> frozenset[int]:
-        """The indices of the leaves of the arguments named static in a flattening of
-        ``(args, kwargs)`` of structure ``tree`` (``positional`` arguments)."""
-        args_at, kwargs_at = jax.tree_util.tree_unflatten(tree, range(tree.num_leaves))
-        parts = [args_at[i] for i in self.positions if i < positional]
-        parts += [kwargs_at[k] for k in self.static_argnames if k in kwargs]
-        return frozenset(jax.tree_util.tree_leaves(parts))
+    def _named_leaves(self, args: tuple, kwargs: dict) -> frozenset[int]:
+        """The indices of the leaves of the arguments named static in the flattening of
+        ``(args, kwargs)`` (positional arguments first, then keyword arguments in sorted
+        order, as JAX flattens a dict)."""
+        parts = [(i, a) for i, a in enumerate(args)] + [(k, kwargs[k]) for k in sorted(kwargs)]
+        named: set[int] = set()
+        start = 0
+        for key, value in parts:
+            count = len(jax.tree_util.tree_leaves(value))
+            if (isinstance(key, int) and key in self.positions) or (
+                isinstance(key, str) and key in self.static_argnames
+            ):
+                named.update(range(start, start + count))
+            start += count
+        return frozenset(named)
 
     def _program(self, folder: Path, key: tuple) -> Callable[..., Any] | None:
         """The kept program for ``key`` (the arguments' structure, which leaves are traced,

@@ -31,7 +31,7 @@ from ..errors import EngineError
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
 from .model import engine_jit, require_engine
-from .plausible import require_number
+from .plausible import require_number, require_whole
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -134,7 +134,9 @@ def crank_forces(
 def table_cylinder(engine: Engine, cylinder: int) -> np.ndarray:
     """The index (0…n−1) of ``cylinder`` (1…n) as an array, so that one program serves every
     cylinder; :class:`rotor.EngineError` where the engine has no such cylinder or a slave
-    rod drives it (the textbook table is for ordinary rods)."""
+    rod drives it (the textbook table is for ordinary rods), or where it is not a whole
+    number."""
+    cylinder = require_whole(cylinder, "cylinder")
     if not 1 <= cylinder <= engine.cylinders:
         raise EngineError(f"cylinder {cylinder} does not exist: the engine has cylinders 1…{engine.cylinders}")
     if cylinder - 1 in engine.slave_index():

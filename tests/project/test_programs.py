@@ -121,6 +121,31 @@ def test_an_argument_named_static_is_static_given_by_position_or_by_name(kept_he
     assert all(path.stat().st_size > 0 for path in kept_here.glob("*.bin"))
 
 
+class _Pair:
+    """An argument type whose rebuilding turns its leaves into arrays (as some libraries' do)."""
+
+    def __init__(self, a, b):
+        self.a, self.b = jnp.asarray(a), jnp.asarray(b)
+
+
+jax.tree_util.register_pytree_node(_Pair, lambda p: ((p.a, p.b), None), lambda _, leaves: _Pair(*leaves))
+
+
+def test_an_argument_of_a_registered_pytree_type_is_kept(kept_here):
+    x = np.linspace(0.0, 1.0, 5)
+    pair = _Pair(x, 2.0 * x)
+    np.testing.assert_array_equal(_doubled(pair.a + pair.b, 1), 6.0 * x)
+
+    @programs.kept_program(static_argnames=("times",))
+    @functools.partial(jax.jit, static_argnames=("times",))
+    def summed(p, times):
+        return times * (p.a + p.b)
+
+    np.testing.assert_array_equal(summed(pair, 2), 6.0 * x)
+    np.testing.assert_array_equal(summed(pair, times=3), 9.0 * x)
+    assert len(list(kept_here.glob("*.bin"))) == 3
+
+
 def test_a_callers_transformation_traces_the_kernel(kept_here):
     x = jnp.linspace(0.0, 1.0, 5)
     grad = jax.grad(lambda s: jnp.sum(_cubic(x, s)))(2.0)
