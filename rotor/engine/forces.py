@@ -126,6 +126,9 @@ def crank_forces(
 
     **Returns:** a dict of arrays: ``s_m``, ``v_m_s``, ``j_m_s2``, ``pg_N``, ``pj_N``,
     ``psum_N``, ``n_N``, ``k_N``, ``z_N``, ``t_N``, ``m_Nm`` (SI units as named).
+
+    **Raises:** :class:`rotor.EngineError` for a cylinder the engine does not have or one a
+    slave rod drives; ``TypeError`` for a cylinder that is not a whole number.
     """
     require_engine(engine, "crank_forces(engine)")
     return cylinder_forces(engine, theta, omega, table_cylinder(engine, cylinder), model)
