@@ -69,7 +69,7 @@ def _report_every(meter, k, cycles: int):
 def sum_columns(x):
     """The sum over the last axis of ``x``, a few columns (one per cylinder), written out
     column by column: XLA's CPU backend hands a reduction over a short last axis to a
-    library call that costs ten times the additions (``benchmarks/steady_call_profile.py``)."""
+    library call (a YNNPACK fusion), where additions fused into their neighbours do."""
     columns = [x[..., i] for i in range(x.shape[-1])]
     return functools.reduce(operator.add, columns) if columns else jnp.zeros(x.shape[:-1], x.dtype)
 

@@ -42,6 +42,7 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..checks import arrays_only, concrete
+from ..cycles import array_module
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
@@ -526,7 +527,7 @@ def steady_state(
         d_inertia = np.float64(0.0)
     load = arrays_only(load)  # the engine itself enters no compiled call: its tables and numbers do
     n = engine.cylinders
-    xp = jnp if any(isinstance(v, jax.core.Tracer) for v in (rpm, imep_scale)) else np  # numpy: no dispatch
+    xp = array_module(rpm, imep_scale)  # numpy where concrete: no dispatch
     s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
     given = concrete(s)
     if given is not None and load is None and not np.all((given >= 0) & (given <= FUEL_SCALE_WARN)):

@@ -131,10 +131,10 @@ def crank_forces(
     slave rod drives; ``TypeError`` for a cylinder that is not a whole number.
     """
     require_engine(engine, "crank_forces(engine)")
-    return cylinder_forces(engine, theta, omega, table_cylinder(engine, cylinder), model)
+    return cylinder_forces(engine, theta, omega, cylinder_index(engine, cylinder), model)
 
 
-def table_cylinder(engine: Engine, cylinder: int) -> np.ndarray:
+def cylinder_index(engine: Engine, cylinder: int) -> np.ndarray:
     """The index (0…n−1) of ``cylinder`` (1…n) as an array, so that one program serves every
     cylinder; :class:`rotor.EngineError` where the engine has no such cylinder or a slave
     rod drives it (the textbook table is for ordinary rods), or where it is not a whole
@@ -150,7 +150,7 @@ def table_cylinder(engine: Engine, cylinder: int) -> np.ndarray:
 @engine_jit  # one compiled call per shape, not dozens of eager operations
 def cylinder_forces(engine: Engine, theta: ArrayLike, omega: ArrayLike, i: ArrayLike, model: str) -> dict[str, Array]:
     """:func:`crank_forces` of the cylinder of index ``i`` (0…n−1, an integer array from
-    :func:`table_cylinder`, which checks it), compiled once for every cylinder."""
+    :func:`cylinder_index`, which checks it), compiled once for every cylinder."""
     g = engine.geometry
     theta = jnp.asarray(theta, dtype=jnp.float64)
     alpha = engine.mechanical_angles(theta)[..., i]

@@ -14,7 +14,7 @@ from ..errors import EngineError
 from ..fileio import csv_text
 from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
-from .forces import cylinder_forces, table_angles_deg, table_cylinder
+from .forces import cylinder_forces, cylinder_index, table_angles_deg
 from .model import Engine, engine_jit, require_engine
 from .plausible import check_results_finite, check_speed_rpm, require_whole
 
@@ -172,7 +172,7 @@ def crank_table(
     if kinematics not in ("series", "exact"):
         raise EngineError(f"kinematics = {kinematics!r}: 'series' (the textbook's) or 'exact'")
     cylinder = require_whole(cylinder, "cylinder")
-    index = table_cylinder(engine, cylinder)
+    index = cylinder_index(engine, cylinder)
     angles = table_angles_deg(engine, step_deg)
     cols, header = _table_columns(engine, angles, np.asarray(rpm * RAD_S_PER_RPM), index, kinematics)
     cols = {"angle_deg": angles, **{k: np.asarray(v) for k, v in cols.items()}}
