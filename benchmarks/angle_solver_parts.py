@@ -5,8 +5,10 @@ the load that balances it, 20 cycles, rtol 1e-9, the chunk's own save points: on
 output step of 1°) solved by diffrax as rotor solves it, and again with one part changed at
 a time:
 
-- ``as rotor solves it``: Dopri8, steps of at most 4°, an event for a stall, the samples
-  saved at the output angles (diffrax interpolates its dense output at each);
+- ``as rotor solves it``: Dopri8 with its stages written out (:mod:`rotor.rungekutta`),
+  steps of at most 4°, an event for a stall, the samples saved at the output angles
+  (diffrax interpolates its dense output at each);
+- ``diffrax's Dopri8``: the same method with diffrax's loop over the stages;
 - ``no stall event``;
 - ``no save points`` (the end state alone): what saving the samples costs;
 - ``neither``;
@@ -48,6 +50,7 @@ from simulator_speed import versions  # noqa: E402
 import rotor  # noqa: E402
 from rotor.dynamics import adaptive, transient  # noqa: E402
 from rotor.fileio import write_text_atomic  # noqa: E402
+from rotor.rungekutta import UnrolledDopri8  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -71,7 +74,7 @@ def chunk_arguments(engine):
     return (scene, theta0, y0, theta_out, rtol, e_switch), max_steps
 
 
-def variant(max_steps, *, event=True, save=True, dtmax=adaptive.MAX_ANGLE_STEP, p=0.0, i=1.0, rtol=None):
+def variant(max_steps, *, event=True, save=True, dtmax=adaptive.MAX_ANGLE_STEP, p=0.0, i=1.0, rtol=None, looped=False):
     """The angle-domain solve of :func:`rotor.dynamics.adaptive.angle_run` with one part
     changed; returns the end state's normalised energy and the step counts."""
 
@@ -84,7 +87,7 @@ def variant(max_steps, *, event=True, save=True, dtmax=adaptive.MAX_ANGLE_STEP, 
         with adaptive.save_points_checked_on_the_host():
             sol = dfx.diffeqsolve(
                 dfx.ODETerm(adaptive.angle_field),
-                dfx.Dopri8(),
+                dfx.Dopri8() if looped else UnrolledDopri8(),
                 theta0,
                 theta_out[-1],
                 None,
@@ -111,6 +114,7 @@ def main() -> None:
     arguments, max_steps = chunk_arguments(engine)
     cases = {
         "as rotor solves it": {},
+        "diffrax's Dopri8": {"looped": True},
         "no stall event": {"event": False},
         "no save points": {"save": False},
         "neither": {"event": False, "save": False},

@@ -81,10 +81,12 @@ def _controller(rtol, dtmax=None):
 
 
 def _solver():
-    dfx, _, _ = _diffrax()
     # Dopri8: on these piecewise-cubic tables Tsit5's error estimate is too optimistic
-    # (rtol 1e-9 gave 1e-6 in ω over two cycles); Dopri8 stays near its tolerance
-    return dfx.Dopri8()
+    # (rtol 1e-9 gave 1e-6 in ω over two cycles); Dopri8 stays near its tolerance. Its
+    # stages written out (rotor.rungekutta): the same steps, in less time a step
+    from ..rungekutta import UnrolledDopri8
+
+    return UnrolledDopri8()
 
 
 @contextlib.contextmanager

@@ -261,3 +261,30 @@ def test_a_changed_engine_file_or_option_is_computed_afresh(tmp_path):
     assert "jax" in r["heavy"] and json.loads(changed)["rpm"] == 1350
     other, r = _run_kept(tmp_path, "info", str(engine), "--json", "--rpm", "900")
     assert "jax" in r["heavy"] and json.loads(other)["rpm"] == 900
+
+
+def test_the_rotor_command_exits_without_the_interpreters_teardown(tmp_path):
+    """Run as the ``rotor`` command, a finished command line ends the process once the exit
+    handlers have run, with its status and its whole output, without the teardown (an
+    object's finaliser at teardown does not run); called from Python, ``main`` leaves the
+    interpreter's exit alone."""
+    child = (
+        "import atexit, sys\n"
+        "from rotor.cli import main\n"
+        "class Finalised:\n"
+        "    def __del__(self):\n"
+        "        print('torn down', flush=True)\n"
+        "kept = Finalised()\n"
+        "atexit.register(lambda: print('exit handler ran', flush=True))\n"
+        "sys.argv = ['rotor', *sys.argv[1:]]\n"
+        "sys.exit(main() if sys.argv[1] != 'from-python' else main(['presets']))\n"
+    )
+    for argv, status in ((["presets"], 0), (["steady", "no-such-engine"], 2), (["from-python"], 0)):
+        out = subprocess.run([sys.executable, "-c", child, *argv], capture_output=True, text=True, timeout=120)
+        assert out.returncode == status, out.stderr
+        assert "exit handler ran" in out.stdout
+        assert ("torn down" in out.stdout) == (argv == ["from-python"]), out.stdout
+        if status == 0:
+            assert "4chn15" in out.stdout
+        else:
+            assert "rotor: error: no-such-engine" in out.stderr
