@@ -21,6 +21,7 @@ With the compilation cache, the engines' tables are kept between processes too
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib
 import os
 import re
@@ -31,16 +32,21 @@ from types import ModuleType
 
 __all__ = [
     "MAX_BYTES",
+    "RECENT_PROGRAMS",
     "TABLE_FILES",
     "XLA_CPU_FLAG",
     "apply_compilation_cache",
+    "ask_read_ahead",
+    "asked_read_ahead",
     "choose_xla_emitters",
     "compilation_cache_on",
     "enable_compilation_cache",
     "keep_tables",
+    "kept_program_folder",
     "kept_tables",
     "padded_size",
     "prune",
+    "recent_programs",
     "source_fingerprint",
     "submodules_on_demand",
     "switched_off",
@@ -64,6 +70,48 @@ def choose_xla_emitters() -> None:
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_cpu_use_fusion_emitters" not in flags:
         os.environ["XLA_FLAGS"] = f"{flags} {XLA_CPU_FLAG}".strip()
+
+
+def kept_program_folder(compilation_cache_dir: str | os.PathLike[str] | None) -> Path | None:
+    """Where kernels' programs are kept (:mod:`rotor.programs`) beside JAX's compilation
+    cache in ``compilation_cache_dir``: ``$ROTOR_PROGRAM_CACHE`` if set (``0``, ``off`` or
+    ``no``: None), else its subfolder ``rotor-programs``; None without a cache."""
+    env = os.environ.get("ROTOR_PROGRAM_CACHE")
+    if not compilation_cache_on() or (env is not None and switched_off(env)):
+        return None
+    if env is not None:
+        return Path(env).expanduser()
+    return Path(compilation_cache_dir) / "rotor-programs" if compilation_cache_dir else None
+
+
+RECENT_PROGRAMS = re.compile(r"^recent-[0-9a-f]{24}\.txt$")
+"""The names of the files that note the kept programs a task used (:func:`recent_programs`)."""
+
+
+def recent_programs(folder: Path, task: str) -> Path:
+    """The file in the kept programs' ``folder`` that notes which programs the last run of
+    ``task`` used (a string naming the work: the ``rotor`` command gives its command line),
+    one file name a line (:func:`rotor.programs.read_ahead`)."""
+    return folder / f"recent-{hashlib.blake2b(task.encode(), digest_size=12).hexdigest()}.txt"
+
+
+_READ_AHEAD: list[str] = []  # a task whose kept programs to read once rotor.programs is imported
+
+
+def ask_read_ahead(task: str | None) -> None:
+    """Have :func:`rotor.programs.read_ahead` begin for ``task`` as soon as
+    :mod:`rotor.programs` is imported, at once if it is: a command that needs no JAX (its
+    output kept, its work NumPy alone) never imports it. None withdraws the request."""
+    _READ_AHEAD[:] = [] if task is None else [task]
+    programs = sys.modules.get("rotor.programs")
+    if programs is not None and task is not None:
+        _READ_AHEAD.clear()
+        programs.read_ahead(task)
+
+
+def asked_read_ahead() -> str | None:
+    """The task :func:`ask_read_ahead` left for :mod:`rotor.programs` (taken), or None."""
+    return _READ_AHEAD.pop() if _READ_AHEAD else None
 
 
 _OFF = ("0", "off", "no", "false", "")
@@ -253,8 +301,6 @@ def source_fingerprint() -> bytes:
 
 
 def _table_entry(key: str) -> tuple[Path, str] | None:
-    import hashlib
-
     folder = table_folder()
     if folder is None:
         return None

@@ -19,6 +19,8 @@ recently written; 0.02–1.3 MB each). A program is found by the kernel's name, 
 dtypes of its array arguments, the values of its other arguments, rotor's source files, the
 versions of JAX and the numerical packages, XLA's options and the processor
 (:func:`rotor.cache.source_fingerprint`): a change to any of them compiles the kernel again.
+The ``rotor`` command loads the programs that its last run of the same command line used
+ahead of their first call, on a thread (:func:`read_ahead`).
 Delete the folder to clear them. As with JAX's own cache, a kept program is loaded by
 unpickling: keep the folder where only you can write.
 
@@ -42,6 +44,7 @@ import re
 import sys
 import threading
 from collections.abc import Callable, Iterator
+from concurrent.futures import Future
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -49,11 +52,19 @@ import equinox as eqx
 import numpy as np
 from jax.experimental import serialize_executable
 
-from .cache import compilation_cache_on, prune, source_fingerprint, switched_off
+from .cache import RECENT_PROGRAMS, asked_read_ahead, kept_program_folder, prune, recent_programs, source_fingerprint
 from .fileio import atomic_path
 from .jaxconfig import jax
 
-__all__ = ["PROGRAMS_PER_KERNEL", "PROGRAM_BYTES", "clear_programs", "kept_program", "program_folder"]
+__all__ = [
+    "PROGRAMS_PER_KERNEL",
+    "PROGRAM_BYTES",
+    "clear_programs",
+    "kept_program",
+    "program_folder",
+    "read_ahead",
+    "remember_programs",
+]
 
 PROGRAM_BYTES = 512 << 20
 """The size cap of the kept programs on disk [bytes] (half of JAX's compilation cache's):
@@ -73,13 +84,7 @@ F = TypeVar("F", bound=Callable[..., Any])
 def program_folder() -> Path | None:
     """Where kernels' programs are kept between processes, or None where they are not (see
     the module doc)."""
-    env = os.environ.get("ROTOR_PROGRAM_CACHE")
-    if not compilation_cache_on() or (env is not None and switched_off(env)):
-        return None
-    if env is not None:
-        return Path(env).expanduser()
-    folder = getattr(jax.config, "jax_compilation_cache_dir", None)
-    return Path(folder) / "rotor-programs" if folder else None
+    return kept_program_folder(getattr(jax.config, "jax_compilation_cache_dir", None))
 
 
 def _spec(leaf: Any) -> tuple[tuple[int, ...], np.dtype, bool]:
@@ -167,20 +172,11 @@ class _Kept:
         text = repr((self.name, str(tree), mask, fixed, [(shape, str(dtype), weak) for shape, dtype, weak in specs]))
         digest = hashlib.blake2b(text.encode() + b"\0" + _machine(), digest_size=20).hexdigest()
         path = folder / f"{_ENTRY}{digest}.bin"
-        try:
-            blob: bytes | None = path.read_bytes()
-        except OSError:
-            blob = None
-        if blob == b"":  # kept as a kernel that cannot be kept
-            return None
-        if blob is not None:
-            try:
-                serialized, in_tree, out_tree, lapack = pickle.loads(blob)
-                if lapack:
-                    _ready_lapack()
-                return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
-            except Exception:  # noqa: BLE001 - a partial or foreign file is a miss, whatever it raises
-                pass
+        _USED.setdefault(path.name, None)
+        early = _EARLY.pop(path.name, None)  # read ahead: wait for it, or read it here if not begun
+        found = early.result() if early is not None and not early.cancel() else _load(path)
+        if found is not _MISSING:
+            return found
 
         def flat(*traced: Any) -> Any:
             values, given = iter(traced), iter(fixed)
@@ -214,6 +210,91 @@ class _Kept:
             blob = b""
         _write(folder, path, blob)
         return compiled
+
+
+def _load(path: Path) -> Any:
+    """The program kept at ``path`` loaded, None where it is marked as a kernel that cannot
+    be kept, ``_MISSING`` where there is none (no file, a partial or a foreign one)."""
+    try:
+        blob = path.read_bytes()
+    except OSError:
+        return _MISSING
+    if blob == b"":
+        return None
+    try:
+        serialized, in_tree, out_tree, lapack = pickle.loads(blob)
+        if lapack:
+            _ready_lapack()
+        return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
+    except Exception:  # noqa: BLE001 - a partial or foreign file is a miss, whatever it raises
+        return _MISSING
+
+
+_USED: dict[str, None] = {}  # the program files looked up since the reading ahead began, in order
+_EARLY: dict[str, Future[Any]] = {}  # the programs being read ahead of their first call
+_READING: list[threading.Thread] = []
+_STOP = threading.Event()
+
+
+def read_ahead(task: str) -> None:
+    """Start loading, on a thread of its own, the kept programs that the last run of ``task``
+    used (:func:`rotor.cache.recent_programs`; the ``rotor`` command's task is its command
+    line), the largest first: a kernel's first call then takes its program from there
+    (waiting for it if it is being loaded, loading it itself if it is not begun) while the
+    process goes on with its imports and input, since loading a program releases the
+    interpreter's lock. Nothing where programs are not kept or ``task`` never ran;
+    :func:`remember_programs` ends it and notes the programs looked up since this call for
+    the next run."""
+    _USED.clear()
+    folder = program_folder()
+    if folder is None or _READING:
+        return
+    try:
+        names = recent_programs(folder, task).read_text().split()
+    except OSError:
+        return
+    sizes = {}
+    for name in names:
+        with contextlib.suppress(OSError):
+            if _NAME.match(name):
+                sizes[name] = (folder / name).stat().st_size
+    early: dict[str, Future[Any]] = {name: Future() for name in sorted(sizes, key=sizes.__getitem__, reverse=True)}
+    _EARLY.update(early)
+    _STOP.clear()
+
+    def load_them() -> None:
+        for name, future in early.items():
+            if future.set_running_or_notify_cancel():  # else a kernel's call loads it itself
+                future.set_result(_MISSING if _STOP.is_set() else _load(folder / name))
+
+    thread = threading.Thread(target=load_them, name="rotor-read-ahead", daemon=True)
+    _READING.append(thread)
+    thread.start()
+
+
+def remember_programs(task: str) -> None:
+    """Stop the reading ahead (:func:`read_ahead`), waiting for the program being loaded
+    (a thread still loading one as the interpreter exits could crash it), and note the
+    kept programs looked up since it began for the next run of ``task``."""
+    _STOP.set()
+    for thread in _READING:
+        thread.join()
+    _READING.clear()
+    _EARLY.clear()
+    text = "".join(f"{name}\n" for name in _USED)
+    _USED.clear()
+    folder = program_folder()
+    if folder is None or not text:
+        return
+    path = recent_programs(folder, task)
+    try:
+        if path.is_file() and path.read_text() == text:
+            return
+        with atomic_path(path) as tmp:
+            Path(tmp).write_text(text)
+        prune(folder, RECENT_PROGRAMS, keep=256)
+    except OSError:
+        pass
 
 
 def _write(folder: Path, path: Path, blob: bytes) -> None:
@@ -352,3 +433,8 @@ def kept_program(*, static_argnames: tuple[str, ...] = ()) -> Callable[[F], F]:
         return functools.wraps(kept.fn)(kept)  # type: ignore[return-value]
 
     return declare
+
+
+_TASK = asked_read_ahead()  # the command line asked before this module was imported
+if _TASK is not None:
+    read_ahead(_TASK)

@@ -323,18 +323,24 @@ def _main(argv: Sequence[str] | None) -> int:
     INTERRUPT.clear()
     MADE_FOLDERS.clear()
     previous = _catch_interrupts()
+    task = None
     try:
+        words = _join_columns(list(sys.argv[1:] if argv is None else argv))
         try:
-            args = build_parser().parse_args(_join_columns(list(sys.argv[1:] if argv is None else argv)))
+            args = build_parser().parse_args(words)
         except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
             return report_error(e)
         try:
-            from ..cache import enable_compilation_cache
+            from ..cache import ask_read_ahead, enable_compilation_cache
 
             # the command's compiled kernels are reused by its next run; from the command line
             # (argv None, a process of its own) its small eager kernels too, which a long
             # Python session calling main(argv) should not pile up in the cache
             enable_compilation_cache(min_compile_time_s=0.0 if argv is None else 0.1)
+            # the kept programs its last run used, loaded on a thread once the command
+            # imports JAX, while it goes on importing its modules and reading its input
+            task = "\0".join(["rotor", *words])
+            ask_read_ahead(task)
             check_outputs(args)
             with warnings.catch_warnings():
                 warnings.simplefilter("default")  # each distinct warning once
@@ -350,5 +356,12 @@ def _main(argv: Sequence[str] | None) -> int:
         return 0
     finally:
         INTERRUPT.clear()  # reported: a later call in this process starts afresh
+        if task is not None:
+            from ..cache import ask_read_ahead
+
+            ask_read_ahead(None)
+            programs = sys.modules.get("rotor.programs")  # imported where the command computed with JAX
+            if programs is not None:
+                programs.remember_programs(task)
         if previous is not None:
             signal.signal(signal.SIGINT, previous)  # type: ignore[arg-type]

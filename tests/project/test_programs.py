@@ -316,3 +316,53 @@ def test_every_kernel_of_an_identification_is_kept(kept_here):
         jax.monitoring.unregister_event_duration_listener(listen)
     assert traced == []
     np.testing.assert_array_equal(np.asarray(first.imep_pa), np.asarray(again.imep_pa))
+
+
+def _read_ahead_done():
+    import threading
+
+    for thread in threading.enumerate():
+        if thread.name == "rotor-read-ahead":
+            thread.join()
+
+
+def _calls(x):
+    return _cubic(x, 2.0), _cubic(x, 2.0, power=2), _doubled(x, times=3)
+
+
+def test_the_programs_of_a_task_are_read_ahead_on_its_next_run(kept_here):
+    """What a task used is noted; its next run loads those programs on a thread, and the
+    kernels' calls take them from there (their files gone, nothing is compiled again), with
+    the same results."""
+    x = np.linspace(0.0, 1.0, 5)
+    programs.read_ahead("a task")  # its first run: nothing noted yet
+    first = _calls(x)
+    programs.remember_programs("a task")
+    (noted,) = kept_here.glob("recent-*.txt")
+    assert len(noted.read_text().split()) == 3
+    programs.clear_programs()
+    programs.read_ahead("a task")
+    _read_ahead_done()
+    for path in kept_here.glob("rotor-program-*.bin"):
+        path.unlink()
+    again = _calls(x)
+    programs.remember_programs("a task")
+    assert list(kept_here.glob("rotor-program-*.bin")) == []
+    for a, b in zip(first, again, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_another_task_reads_nothing_ahead(kept_here):
+    x = np.linspace(0.0, 1.0, 5)
+    programs.read_ahead("a task")
+    _calls(x)
+    programs.remember_programs("a task")
+    programs.clear_programs()
+    programs.read_ahead("another task")
+    _read_ahead_done()
+    for path in kept_here.glob("rotor-program-*.bin"):
+        path.unlink()
+    _calls(x)  # compiled and kept again: nothing was loaded ahead
+    programs.remember_programs("another task")
+    assert len(list(kept_here.glob("rotor-program-*.bin"))) == 3
+    assert len(list(kept_here.glob("recent-*.txt"))) == 2
