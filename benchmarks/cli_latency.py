@@ -82,6 +82,9 @@ REFERENCES = {
     "python -c pass": "pass",
     "import jax": "import jax",
     "import jax, equinox": "import jax, equinox",
+    # the same, ended as the rotor command ends (no teardown of the modules): what the
+    # interpreter's teardown costs, which the floor above pays and a rotor command does not
+    "import jax, equinox; os._exit(0)": "import jax, equinox, os; os._exit(0)",
     "import rotor": "import rotor",
 }
 
