@@ -174,7 +174,9 @@ class _Kept:
         path = folder / f"{_ENTRY}{digest}.bin"
         _USED.setdefault(path.name, None)
         early = _EARLY.pop(path.name, None)  # read ahead: wait for it, or read it here if not begun
-        found = early.result() if early is not None and not early.cancel() else _load(path)
+        found: Any = early.result() if early is not None and not early.cancel() else _MISSING
+        if found is _MISSING:  # not read ahead, or the reading stopped before it
+            found = _load(path)
         if found is not _MISSING:
             return found
 
@@ -265,30 +267,37 @@ def read_ahead(task: str) -> None:
     def load_them() -> None:
         for name, future in early.items():
             if future.set_running_or_notify_cancel():  # else a kernel's call loads it itself
-                future.set_result(_MISSING if _STOP.is_set() else _load(folder / name))
+                try:
+                    future.set_result(_MISSING if _STOP.is_set() else _load(folder / name))
+                except BaseException:  # noqa: BLE001 - whatever stops it, the call waiting loads it itself
+                    future.set_result(_MISSING)
 
     thread = threading.Thread(target=load_them, name="rotor-read-ahead", daemon=True)
     _READING.append(thread)
     thread.start()
 
 
-def remember_programs(task: str) -> None:
+def remember_programs(task: str | None) -> None:
     """Stop the reading ahead (:func:`read_ahead`), waiting for the program being loaded
-    (a thread still loading one as the interpreter exits could crash it), and note the
-    kept programs looked up since it began for the next run of ``task``."""
+    (a fraction of a second, Ctrl-C or not: a thread still loading one as the interpreter
+    exits could crash it), and note the kept programs looked up since it began for the
+    next run of ``task`` (None: note nothing)."""
     _STOP.set()
     for thread in _READING:
-        thread.join()
+        while thread.is_alive():
+            with contextlib.suppress(KeyboardInterrupt):
+                thread.join()
     _READING.clear()
     _EARLY.clear()
     text = "".join(f"{name}\n" for name in _USED)
     _USED.clear()
     folder = program_folder()
-    if folder is None or not text:
+    if folder is None or not text or task is None:
         return
     path = recent_programs(folder, task)
     try:
         if path.is_file() and path.read_text() == text:
+            os.utime(path)  # used again: the last of the notes to be pruned
             return
         with atomic_path(path) as tmp:
             Path(tmp).write_text(text)

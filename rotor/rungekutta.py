@@ -50,6 +50,8 @@ class UnrolledDopri8(dfx.Dopri8):
     :func:`diffrax.diffeqsolve`."""
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        if solver_state is None:  # diffrax reuses no stage here (an expensive vector field): its own step
+            return super().step(terms, t0, t1, y0, args, solver_state, made_jump)
         first_step, f_last = solver_state
         dt = t1 - t0
         control = terms.contr(t0, t1)

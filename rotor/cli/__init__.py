@@ -12,9 +12,9 @@ May import: everything (the top layer). Import lazily inside the commands, so th
 ``rotor --help`` stays fast.
 """
 
-from .app import main
+from .app import command, main
 
-__all__ = ["main"]
+__all__ = ["command", "main"]
 
 from ..cache import submodules_on_demand
 

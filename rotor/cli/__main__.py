@@ -2,6 +2,6 @@
 
 import sys
 
-from .app import main
+from .app import command
 
-sys.exit(main())
+sys.exit(command())

@@ -35,7 +35,7 @@ from ..fileio import INTERRUPT
 from . import demo, design, diagnostics, engine, logs, monitor, report, run, torsion
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
 
-__all__ = ["COMMAND_GROUPS", "build_parser", "check_outputs", "main", "report_error", "warning_line"]
+__all__ = ["COMMAND_GROUPS", "build_parser", "check_outputs", "command", "main", "report_error", "warning_line"]
 
 COMMAND_GROUPS = (engine, run, logs, diagnostics, monitor, design, torsion, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
@@ -58,18 +58,17 @@ in rotor (please report it); 130 interrupted (Ctrl-C). Each error is one line on
 `rotor COMMAND --help` for a command's options."""
 
 
-_EXIT: list[int] = []  # the status of a finished command line run by the ``rotor`` command
+_EXIT: list[int] = []  # the status of the command line that :func:`command` ran
 
 
 def _exit_without_teardown() -> None:
     """At the ``rotor`` command's exit, once every other exit handler has run (this one is
-    registered as the command line is imported, before JAX or anything a command imports
-    registers one, so it runs last): flush the
+    registered by :func:`command` only where none was before it, so it runs last): flush the
     output and end the process with the command's status, skipping the interpreter's
     teardown of its modules, which takes a sixth of a second once JAX is imported
-    (``benchmarks/cli_latency.py`` times ``import jax, equinox`` ended both ways) and does nothing
-    a finished command needs (its files are written and closed, its threads joined, the
-    exit handlers run). Nothing where ``main`` was called from Python."""
+    (``benchmarks/cli_latency.py`` times ``import jax, equinox`` ended both ways) and does
+    nothing a finished command needs (its files are written and closed, its threads joined,
+    the exit handlers run)."""
     if not _EXIT:
         return
     logging = sys.modules.get("logging")
@@ -83,7 +82,18 @@ def _exit_without_teardown() -> None:
     os._exit(_EXIT[-1])
 
 
-atexit.register(_exit_without_teardown)
+def command() -> int:
+    """The ``rotor`` command (``python -m rotor.cli`` too): :func:`main` on ``sys.argv``, the
+    process then ended without the interpreter's teardown (:func:`_exit_without_teardown`)
+    where no exit handler was registered before it (one registered earlier would run after
+    it, so it would be skipped: the process then ends as usual)."""
+    fast = getattr(atexit, "_ncallbacks", lambda: 1)() == 0
+    if fast:
+        atexit.register(_exit_without_teardown)
+    status = main()
+    if fast:
+        _EXIT[:] = [status]
+    return status
 
 
 def _version() -> str:
@@ -309,22 +319,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Ctrl-C is noted as a flag as well as raised (:func:`_on_interrupt`): a command whose
     interrupt was dropped on the way still ends with exit status 130, its files not put in
-    place. A command that fails removes the folders it made for its output. Run as the
-    ``rotor`` command (``argv`` None), the process ends without the interpreter's teardown
-    (:func:`_exit_without_teardown`)."""
-    status = _main(argv)
-    if argv is None:
-        _EXIT[:] = [status]
-    return status
-
-
-def _main(argv: Sequence[str] | None) -> int:
+    place. A command that fails removes the folders it made for its output. The ``rotor``
+    command calls it through :func:`command`."""
     from .output import MADE_FOLDERS, remove_made_folders
 
     INTERRUPT.clear()
     MADE_FOLDERS.clear()
     previous = _catch_interrupts()
-    task = None
+    task, finished = None, False
     try:
         words = _join_columns(list(sys.argv[1:] if argv is None else argv))
         try:
@@ -354,6 +356,7 @@ def _main(argv: Sequence[str] | None) -> int:
         except BaseException as e:  # noqa: BLE001 - every exception is reported, none as a raw traceback
             remove_made_folders()
             return report_error(e, debug=args.debug, sizes=size_flags(args))
+        finished = True
         return 0
     finally:
         INTERRUPT.clear()  # reported: a later call in this process starts afresh
@@ -362,7 +365,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
             ask_read_ahead(None)
             programs = sys.modules.get("rotor.programs")  # imported where the command computed with JAX
-            if programs is not None:
-                programs.remember_programs(task)
+            if programs is not None:  # the reading ahead stopped; a finished run's programs noted
+                programs.remember_programs(task if finished else None)
         if previous is not None:
             signal.signal(signal.SIGINT, previous)  # type: ignore[arg-type]

@@ -264,27 +264,68 @@ def test_a_changed_engine_file_or_option_is_computed_afresh(tmp_path):
 
 
 def test_the_rotor_command_exits_without_the_interpreters_teardown(tmp_path):
-    """Run as the ``rotor`` command, a finished command line ends the process once the exit
+    """The ``rotor`` command (:func:`rotor.cli.command`) ends the process once the exit
     handlers have run, with its status and its whole output, without the teardown (an
-    object's finaliser at teardown does not run); called from Python, ``main`` leaves the
-    interpreter's exit alone."""
+    object's finaliser at teardown does not run). Where an exit handler was registered
+    before it (it would be skipped), and where ``main`` is called from Python, the process
+    ends as usual."""
     child = (
         "import atexit, sys\n"
-        "from rotor.cli import main\n"
+        "import rotor.cli.app as app\n"
         "class Finalised:\n"
         "    def __del__(self):\n"
         "        print('torn down', flush=True)\n"
         "kept = Finalised()\n"
-        "atexit.register(lambda: print('exit handler ran', flush=True))\n"
+        "how = sys.argv.pop(1)\n"
         "sys.argv = ['rotor', *sys.argv[1:]]\n"
-        "sys.exit(main() if sys.argv[1] != 'from-python' else main(['presets']))\n"
+        "def later(argv=None, real=app.main):\n"
+        "    atexit.register(lambda: print('exit handler ran', flush=True))\n"
+        "    return real(argv)\n"
+        "if how == 'handler first':\n"
+        "    atexit.register(lambda: print('early handler ran', flush=True))\n"
+        "app.main = later\n"
+        "sys.exit(app.main() if how == 'main' else app.command())\n"
     )
-    for argv, status in ((["presets"], 0), (["steady", "no-such-engine"], 2), (["from-python"], 0)):
-        out = subprocess.run([sys.executable, "-c", child, *argv], capture_output=True, text=True, timeout=120)
-        assert out.returncode == status, out.stderr
-        assert "exit handler ran" in out.stdout
-        assert ("torn down" in out.stdout) == (argv == ["from-python"]), out.stdout
+    cases = (
+        ("command", ["presets"], 0),
+        ("command", ["steady", "no-such-engine"], 2),
+        ("handler first", ["presets"], 0),
+        ("main", ["presets"], 0),
+    )
+    for how, argv, status in cases:
+        out = subprocess.run([sys.executable, "-c", child, how, *argv], capture_output=True, text=True, timeout=120)
+        assert out.returncode == status, (how, out.stderr)
+        assert "exit handler ran" in out.stdout, how
+        assert ("torn down" in out.stdout) == (how != "command"), (how, out.stdout)
+        assert ("early handler ran" in out.stdout) == (how == "handler first"), how
         if status == 0:
             assert "4chn15" in out.stdout
         else:
             assert "rotor: error: no-such-engine" in out.stderr
+
+
+def test_the_command_notes_its_programs_and_reads_them_ahead_next_time(tmp_path):
+    """A command that computes notes the kept programs it used (one file per command line,
+    naming programs that exist); its next run, which reads them ahead, prints the same; a
+    command that needs no JAX notes nothing."""
+    env = dict(
+        os.environ,
+        ROTOR_COMPILATION_CACHE=str(tmp_path / "jax"),
+        ROTOR_TABLE_CACHE=str(tmp_path / "tables"),
+        ROTOR_OUTPUT_CACHE="off",
+    )
+
+    def rotor_command(*argv):
+        out = subprocess.run([sys.executable, "-m", "rotor.cli", *argv], env=env, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        return out.stdout
+
+    folder = tmp_path / "jax" / "rotor-programs"
+    first = rotor_command("steady", "4chn15")
+    (noted,) = folder.glob("recent-*.txt")
+    names = noted.read_text().split()
+    assert names and all((folder / name).is_file() for name in names)
+    again = rotor_command("steady", "4chn15")
+    assert again.split("wall time")[0] == first.split("wall time")[0] and len(first) > 500
+    rotor_command("presets")
+    assert list(folder.glob("recent-*.txt")) == [noted]

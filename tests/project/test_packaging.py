@@ -31,7 +31,7 @@ DIST = "crank-rotor"
 def test_distribution_name_is_not_the_taken_one():
     # `rotor` on the package index is another project; the import name stays rotor
     assert PROJECT["name"] == DIST
-    assert PROJECT["scripts"] == {"rotor": "rotor.cli:main"}
+    assert PROJECT["scripts"] == {"rotor": "rotor.cli:command"}
 
 
 def test_version_is_one():
@@ -124,7 +124,7 @@ def test_wheel_metadata(wheel):
     assert zf.read(f"{info}/licenses/LICENSE").decode().startswith("MIT License")
     entry_points = zf.read(f"{info}/entry_points.txt").decode()
     assert "[console_scripts]" in entry_points
-    assert "rotor = rotor.cli:main" in entry_points
+    assert "rotor = rotor.cli:command" in entry_points
 
 
 @pytest.mark.skipif(
