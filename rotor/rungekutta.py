@@ -2,9 +2,8 @@
 
 diffrax's :class:`diffrax.Dopri8` computes the 13 new stages of a step in a loop (a
 ``while`` loop in the compiled program, which serves every Runge–Kutta method diffrax has,
-implicit ones included). On XLA's CPU backend each turn of that loop costs about a
-microsecond whatever it computes, several times what rotor's right-hand sides cost (a
-table look-up and a few products). :class:`UnrolledDopri8` is the same method (the same
+implicit ones included). On XLA's CPU backend each turn of that loop costs more than
+what rotor's right-hand sides compute in it (a table look-up and a few products). :class:`UnrolledDopri8` is the same method (the same
 Butcher tableau, error estimate, first-same-as-last stage and dense output, all taken from
 diffrax's class) with the stages written out one after the other, so that XLA compiles one
 straight-line step. With fixed steps it gives diffrax's values to rounding; with adaptive
