@@ -3,10 +3,10 @@
 diffrax's :class:`diffrax.Dopri8` computes the 13 new stages of a step in a loop (a
 ``while`` loop in the compiled program, which serves every Runge–Kutta method diffrax has,
 implicit ones included). On XLA's CPU backend each turn of that loop costs more than
-what rotor's right-hand sides compute in it (a table look-up and a few products). :class:`UnrolledDopri8` is the same method (the same
-Butcher tableau, error estimate, first-same-as-last stage and dense output, all taken from
-diffrax's class) with the stages written out one after the other, so that XLA compiles one
-straight-line step. With fixed steps it gives diffrax's values to rounding; with adaptive
+what rotor's right-hand sides compute in it (a table look-up and a few products).
+:class:`UnrolledDopri8` is the same method (the same Butcher tableau, error estimate,
+first-same-as-last stage and dense output, all taken from diffrax's class) with the stages
+written out one after the other, so that XLA compiles one straight-line step. With fixed steps it gives diffrax's values to rounding; with adaptive
 steps the same steps, except that the error estimate (a sum of large terms that cancel) is
 rounded differently in its last digits, which moves the solution by a small part of the
 tolerance. ``benchmarks/angle_solver_parts.py`` measures what it saves.
@@ -62,8 +62,6 @@ class UnrolledDopri8(dfx.Dopri8):
             lambda: f_last,
         )
         ks = [terms.prod(f0, control)]
-        fi = f0
-        yi = y0
         for a_row, c in zip(_TABLEAU.a_lower, _TABLEAU.c, strict=True):
             yi = _combine(y0, a_row, ks)
             ti = t1 if c == 1 else t0 + float(c) * dt

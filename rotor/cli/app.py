@@ -28,6 +28,7 @@ import traceback
 import warnings
 from collections.abc import Sequence
 
+from ..cache import ask_read_ahead, enable_compilation_cache
 from ..errors import InternalError, RotorError, SolverError
 from ..fileio import INTERRUPT
 
@@ -71,9 +72,6 @@ def _exit_without_teardown() -> None:
     the exit handlers run)."""
     if not _EXIT:
         return
-    logging = sys.modules.get("logging")
-    if logging is not None:
-        logging.shutdown()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
@@ -334,8 +332,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
             return report_error(e)
         try:
-            from ..cache import ask_read_ahead, enable_compilation_cache
-
             # the command's compiled kernels are reused by its next run; from the command line
             # (argv None, a process of its own) its small eager kernels too, which a long
             # Python session calling main(argv) should not pile up in the cache
@@ -361,8 +357,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         INTERRUPT.clear()  # reported: a later call in this process starts afresh
         if task is not None:
-            from ..cache import ask_read_ahead
-
             ask_read_ahead(None)
             programs = sys.modules.get("rotor.programs")  # imported where the command computed with JAX
             if programs is not None:  # the reading ahead stopped; a finished run's programs noted
