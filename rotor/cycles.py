@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 
 from .checks import is_tracer
 
-__all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "cycle_delta"]
+__all__ = ["cycle_slopes", "cycle_ramp", "detrended_cycles", "cycle_spectrum", "cycle_delta", "extreme_index"]
 
 
 def array_module(*arrays: Any) -> Any:
@@ -39,6 +39,20 @@ def array_module(*arrays: Any) -> Any:
     from .jaxconfig import jax
 
     return jax.numpy
+
+
+def extreme_index(xp: Any, x: Any, largest: bool) -> Any:
+    """Index along the last axis of the first largest (``largest``) or smallest value of
+    ``x``, or of its first NaN where it has one: ``argmax``/``argmin``, as NumPy and JAX
+    define them. Under JAX it is two plain reductions, the extreme and then the first index
+    that holds it (XLA's arg-reduction, which carries the index along, takes about twice as
+    long on the CPU). ``xp``: numpy or jax.numpy."""
+    if xp is np:
+        return np.argmax(x, axis=-1) if largest else np.argmin(x, axis=-1)
+    extreme = (xp.max if largest else xp.min)(x, axis=-1, keepdims=True)  # NaN where x has one
+    hit = (x == extreme) | xp.isnan(x)
+    n = x.shape[-1]
+    return xp.min(xp.where(hit, xp.arange(n), n), axis=-1)
 
 
 def cycle_slopes(mean_omega: ArrayLike, cycle_rad: float) -> Any:

@@ -470,10 +470,14 @@ def train_from_engine(engine: Engine, fidelity: str, points: int) -> CrankTrain:
     d = concrete(d_inertia)
     if d is not None:
         check_inertia(kept.low + d, kept.mean + d, engine)
-    train = kept.train if d is not None and d.ndim == 0 and d == 0 else shift_inertia(kept.train, d_inertia)
     if d is not None and d.ndim == 0:
+        # concrete: shifted now, also where the caller is being traced (the train is kept for
+        # the engine object, and a value of a trace must not outlive it)
+        with jax.ensure_compile_time_eval():
+            train = kept.train if d == 0 else shift_inertia(kept.train, d_inertia)
         remember_object(key, given, train)
-    return train
+        return train
+    return shift_inertia(kept.train, d_inertia)
 
 
 def _find_tables(key: str, engine: Engine, fidelity: str, points: int) -> KeptTables:

@@ -147,7 +147,9 @@ def speed_from_energy(E, inertia):
 def hermite_cumulative(f, df, h):
     """∫ from node 0 to each node by the Hermite rule: h/2·(f₀+f₁) + h²/12·(f₀′−f₁′)."""
     seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
-    return jnp.concatenate([jnp.zeros(1), jnp.cumsum(seg)])
+    # the running sum as a scan of pairwise sums (log₂N passes): XLA's CPU lowering of
+    # jnp.cumsum takes about twice as long on a cycle's nodes
+    return jnp.concatenate([jnp.zeros(1), jax.lax.associative_scan(jnp.add, seg)])
 
 
 def hermite_sum(f, df, h):
@@ -245,7 +247,9 @@ def friction_coefficients(engine, friction):
     fr = engine.friction if friction is None else friction
     if fr is None or fr is False:
         return np.zeros(3)
-    return jnp.stack(fr.torque_coefficients(engine))
+    abc = fr.torque_coefficients(engine)
+    xp = array_module(*abc)  # NumPy where concrete: no JAX operation on every call
+    return xp.stack([xp.asarray(v, dtype=xp.float64) for v in abc])
 
 
 def is_zero(x):
@@ -253,6 +257,8 @@ def is_zero(x):
         return True
     if isinstance(x, jax.core.Tracer):
         return False
+    if isinstance(x, (float, np.float64)):  # the usual case, without an array's round trip
+        return bool(x == 0)
     return bool(np.all(np.asarray(x) == 0))  # numpy: under a jit trace jnp would give a tracer
 
 

@@ -20,6 +20,11 @@ naming the invariant and what to tighten (a smaller ``step_deg``/``grid_deg``, m
 
 Only the result's public fields and properties are read. Under ``jit``/``vmap``/``grad``
 (the arrays are tracers) nothing is checked: no error can be raised on a traced value.
+
+The closed-form steady state's compiled program evaluates the same invariants on its
+arrays (:func:`steady_invariants_hold`) and hands back one flag with them: where it is
+set, the host has nothing left to check; where it is not, :func:`check_speed_result`
+runs and names what is broken.
 """
 
 from __future__ import annotations
@@ -27,13 +32,14 @@ from __future__ import annotations
 from typing import Any, NoReturn
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from ..errors import SolverError
 from ..units import RPM_PER_RAD_S
 from .result import SpeedResult
 
-__all__ = ["check_speed_result"]
+__all__ = ["check_speed_result", "steady_invariants_hold"]
 
 #: relative slack of min ≤ mean ≤ max (rounding of the time-mean speed against the samples)
 MEAN_SLACK = 1e-6
@@ -183,3 +189,34 @@ def check_speed_result(result: SpeedResult) -> None:
         means = _number(getattr(summary, "mean_omega", None))
         if means is not None and means.size and not (np.all(np.isfinite(means)) and np.all(means > 0)):
             fail("a cycle's mean speed is not finite and positive (per-cycle figures)")
+
+
+def steady_invariants_hold(
+    t: Any, theta: Any, omega: Any, accel: Any, torque: Any, load: Any, period_s: Any, numbers: Any, cycle_rad: float
+) -> jax.Array:
+    """Whether a steady state of the angle domain (one periodic cycle, not stalled) surely
+    keeps every invariant :func:`check_speed_result` checks, as a JAX bool: computed inside
+    the steady state's compiled program, so that the host reads one flag instead of
+    checking the arrays again. Where it is False, :func:`check_speed_result` runs on the
+    result and names the invariant that is broken.
+
+    **Arguments:** the cycle's samples ``t`` [s], ``theta`` [rad], ``omega`` [rad/s],
+    ``accel`` [rad/s²], ``torque`` and ``load`` [N·m] (equal lengths, at least one sample);
+    ``period_s`` [s]; ``numbers``: the steady state's balancing load [N·m], fuel scale [-],
+    textbook excess work [J] and textbook δ [-]; ``cycle_rad``: the cycle [rad].
+
+    Never looser than the host's checks, stricter where that is cheaper: every value finite
+    (ω² too; their sum finite), time strictly increasing, ω > 0, the crank angle never back
+    by more than :data:`ANGLE_SLACK_RAD`, the period positive, and min ≤ mean ≤ max with
+    half the host's slack (rounding that differs between the program and NumPy cannot let a
+    result through that the host would refuse)."""
+    # every value finite, ω² too: their sum is finite only where each is (a sum of finite
+    # values that overflows fails the screen, and the host's checks decide); few reductions,
+    # each a pass over the samples
+    total = jnp.sum(t + theta + omega + accel + torque + load + 0.5 * omega * omega) + period_s + sum(numbers)
+    steps = (t[1:] > t[:-1]) & (theta[1:] - theta[:-1] >= -ANGLE_SLACK_RAD) & (omega[1:] > 0)
+    ok = jnp.isfinite(total) & jnp.all(steps) & (omega[0] > 0) & (period_s > 0)
+    lo, hi = jnp.min(omega) * RPM_PER_RAD_S, jnp.max(omega) * RPM_PER_RAD_S
+    mean = cycle_rad / period_s * RPM_PER_RAD_S
+    slack = 0.5 * MEAN_SLACK * jnp.maximum(jnp.abs(lo), jnp.abs(hi))
+    return ok & (lo <= mean + slack) & (mean <= hi + slack)

@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..cycles import array_module, cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum
+from ..cycles import array_module, cycle_delta, cycle_ramp, cycle_slopes, cycle_spectrum, extreme_index
 from ..programs import kept_program
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
@@ -159,8 +159,8 @@ def _row_extremes(xp, x, slopes, cycle_rad, periodic: bool):
         return slopes * (j * h - cycle_rad / 2)
 
     out = []
-    for sign, arg in ((1.0, xp.argmax), (-1.0, xp.argmin)):
-        j = arg(xd, axis=1)
+    for sign in (1.0, -1.0):
+        j = extreme_index(xp, xd, sign > 0)
         y1 = xd[rows, j]
         if periodic:
             out.append(parabola_peak(xd[rows, (j - 1) % P], y1, xd[rows, (j + 1) % P], sign))
@@ -179,6 +179,18 @@ def _compiled_extremes(x, slopes, cycle_rad, periodic: bool):
     return _row_extremes(jnp, x, slopes, cycle_rad, periodic)
 
 
+def periodic_delta(xp, omega, mean_omega, cycle_rad):
+    """δ of one periodic cycle (a steady state) [-]: (ω_max − ω_min)/ω_mean, the extremes
+    of ``omega`` (the cycle's speed on its uniform grid [rad/s]) refined by a parabola
+    through the extreme sample and its neighbours across the cycle's ends;
+    ``mean_omega``: its time-mean speed [rad/s]; ``cycle_rad``: the cycle [rad]; ``xp``:
+    numpy or jax.numpy. One cycle has no trend to remove: what :attr:`SpeedResult.delta`
+    computes for a steady state, here for the steady state's compiled program, which hands
+    it back with the result."""
+    hi, lo = _row_extremes(xp, omega[None, :], xp.zeros(1), cycle_rad, True)
+    return cycle_delta(hi, lo, xp.reshape(mean_omega, (1,)))
+
+
 def _extremes(x, slopes, cycle_rad, periodic: bool):
     """:func:`_row_extremes` compiled where ``x`` or ``slopes`` is traced, in NumPy for
     concrete values (a compiled call and the copies back cost more than the arithmetic)."""
@@ -194,8 +206,8 @@ def _flat_range(xp, x, periodic: bool):
     C, P = x.shape
     flat = x.reshape(-1)
     out = []
-    for sign, arg in ((1.0, xp.argmax), (-1.0, xp.argmin)):
-        i = arg(flat)
+    for sign in (1.0, -1.0):
+        i = extreme_index(xp, flat, sign > 0)
         if periodic:
             left = flat[xp.where(i % P == 0, i + P - 1, i - 1)]
             right = flat[xp.where(i % P == P - 1, i - P + 1, i + 1)]
@@ -360,6 +372,9 @@ class SpeedResult(Result):
     # a long run that kept only its last cycles' samples (simulate(..., keep_cycles=N))
     first_kept_cycle_index: int = 0
     cycle_summary: CycleSummary | None = None
+    # a steady state's δ computed with its arrays (:func:`periodic_delta`), with the ω and
+    # period it belongs to: (omega, period_s, delta), used while those fields are the same objects
+    _known_delta: tuple[Any, Any, Any] | None = dataclasses.field(default=None, compare=False)
 
     # ------------------------------------------------------------------ cycles
     @property
@@ -438,6 +453,9 @@ class SpeedResult(Result):
         self._need_cycles()
         if self.cycle_summary is not None and self._streamed:
             return array_module(self.omega).asarray(self.cycle_summary.delta)
+        known = self._steady_delta()
+        if known is not None:
+            return array_module(known).reshape(known, (1,))
         mean = self.cycle_mean_omega
         slopes = cycle_slopes(mean, self.cycle_rad)
         hi, lo = _extremes(self._cycle_matrix(self.omega), slopes, self.cycle_rad, self.kind == "steady")
@@ -448,7 +466,16 @@ class SpeedResult(Result):
         """Speed irregularity δ of the last complete cycle, its linear trend removed [-]
         (``delta_per_cycle[-1]``; for a steady state its one periodic cycle). The range of
         the speed over the whole run is :attr:`speed_range_ratio`."""
-        return self.delta_per_cycle[-1]
+        known = self._steady_delta()
+        return self.delta_per_cycle[-1] if known is None else known
+
+    def _steady_delta(self) -> Array | None:
+        """A steady state's δ computed with its arrays (:func:`periodic_delta`), while ω and
+        the period are the ones it was computed from; else None."""
+        known = self._known_delta
+        if known is None or self.kind != "steady" or known[0] is not self.omega or known[1] is not self.period_s:
+            return None
+        return known[2]
 
     @property
     def speed_range_ratio(self) -> Array:

@@ -42,7 +42,7 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..checks import arrays_only, concrete
-from ..cycles import array_module
+from ..cycles import array_module, extreme_index
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
@@ -70,11 +70,11 @@ from .equation import (
     linear_parts,
     wrap_periodic,
 )
-from .invariants import check_speed_result
+from .invariants import check_speed_result, steady_invariants_hold
 from .loads import Load
 from .operating import FUEL_SCALE_WARN, check_fuel_scale
 from .prepared import PreparedEngine, checked_reference
-from .result import SpeedResult
+from .result import SpeedResult, periodic_delta
 
 __all__ = ["steady_state"]
 
@@ -178,8 +178,6 @@ def flat_balance(train, s, a, balance):
     """The parts of the flat closed form (:func:`_flat_solution`) that depend on the
     tables, the fuelling ``s`` and the losses ``a`` alone: β(θ) and dE/dθ on the nodes
     0…N, and x (the balancing load [N·m] or the fuel scale [-])."""
-    v = wrap_periodic(train.values)
-    cols = jnp.concatenate([v[:, COL_MOTORED : COL_MOTORED + 1], v[:, COL_COMBUSTION:]], axis=1)
     means, B = train.torque_means, train.work
     mot_mean, comb_mean = means[0], means[1:]
     if balance == "load":
@@ -188,8 +186,12 @@ def flat_balance(train, s, a, balance):
     else:
         x = (a - mot_mean) / (comb_mean @ s)  # the fuelling that carries the load
         w = x * s
-    beta = B[:, 0] + B[:, 1:] @ w
-    dE = cols[:, 0] - mot_mean + (cols[:, 1:] - comb_mean) @ w
+    # every product with the whole tables, never a copy of their columns: the motored column
+    # and the combustion columns weighted (1, w), the rest by zero
+    w1 = jnp.concatenate([jnp.ones(1), w])
+    column_weights = jnp.concatenate([jnp.zeros(COL_MOTORED), w1[:1], jnp.zeros(COL_COMBUSTION - COL_MOTORED - 1), w])
+    beta = B @ w1
+    dE = wrap_periodic(train.values @ column_weights - means @ w1)
     return beta, dE, x
 
 
@@ -221,9 +223,9 @@ def energy_moments(train, beta):
     d = train.values[:, COL_I] - train.mean_inertia  # the node mean (with the tables)
     beta_mean = jnp.mean(beta[:-1])
     b = beta[:-1] - beta_mean
-    powers_d = jnp.stack([d**j for j in range(_SERIES_ORDER + 1)], axis=1)
+    powers_d = jnp.stack([d**j for j in range(_SERIES_ORDER + 1)])  # (5, N) times (N, 5): no transposed product
     powers_b = jnp.stack([b**k for k in range(_SERIES_ORDER + 1)], axis=1)
-    return powers_d.T @ powers_b / d.shape[0], beta_mean
+    return powers_d @ powers_b / d.shape[0], beta_mean
 
 
 def mean_energy_estimate(moments, mean_inertia, omega_m):
@@ -274,7 +276,7 @@ def flat_energy(train, d_inertia, beta, omega_m):
         r = jnp.sqrt(q)
         T, dT = h * jnp.sum(r), -0.5 * h * jnp.sum(r * inv_e)
         blocks = q.reshape(-1, k)  # where ω is largest and smallest, to a block of k nodes
-        extremes = jnp.argmin(jnp.min(blocks, axis=1)), jnp.argmax(jnp.max(blocks, axis=1))
+        extremes = extreme_index(jnp, jnp.min(blocks, axis=1), False), extreme_index(jnp, jnp.max(blocks, axis=1), True)
         return jnp.log(T / period), dT * e_ref * jnp.exp(eta) / T, extremes
 
     def cond(state):
@@ -313,8 +315,8 @@ def _flat_solution(train, d_inertia, s, a, omega_m, balance):
     or fuel scale [-]) and whether Newton converged."""
     beta, dE, x = flat_balance(train, s, a, balance)
     E0, ok, _ = flat_energy(train, d_inertia, beta, omega_m)
-    v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
-    inertia, dinertia = v[:, COL_I] + d_inertia, d[:, COL_I]
+    inertia = wrap_periodic(train.values[:, COL_I]) + d_inertia  # the column alone, not the tables, wrapped
+    dinertia = wrap_periodic(train.slopes[:, COL_I])
     E = E0 + beta
     omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
     r = 1.0 / omega
@@ -335,19 +337,30 @@ def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
 
 @kept_program(static_argnames=("balance", "flat"))
 @functools.partial(jax.jit, static_argnames=("balance", "flat"))
-def _closed_steady(train, d_inertia, s, fr, load, a, c, omega_m, balance, flat):
+def _closed_steady(train, numbers, load, balance, flat):
     """The whole closed-form steady state in one compiled call, solution and arrays packed
     in one vector (:func:`_pack`; ``jax.jit``: its dispatch is a quarter of
-    ``eqx.filter_jit``'s on these arguments)."""
+    ``eqx.filter_jit``'s on these arguments). ``numbers``: the crankshaft inertia's change
+    [kg·m²], the fuelling per cylinder [-], the friction's (a, b, c), the losses' a [N·m]
+    and c [N·m·s²] and the mean speed [rad/s] in one vector (one transfer, not six)."""
+    n = train.cylinders
+    d_inertia, s, fr, (a, c, omega_m) = numbers[0], numbers[1 : 1 + n], numbers[1 + n : 4 + n], numbers[4 + n :]
     E, t, x, ok = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
-    return _pack(E[:-1], t[:-1], x, ok, _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia))
+    arrays = _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
+    # δ and the invariants of every run, with the arrays: the host reads two numbers
+    cycle, period = train.cycle_rad, arrays["period_s"]
+    arrays["delta"] = periodic_delta(jnp, arrays["omega"], cycle / period, cycle)
+    carried = x if balance == "load" else arrays["carried_load"]
+    numbers = (carried, arrays["fuel_scale"], arrays["excess_work_J"], arrays["textbook_delta"])
+    keys = ("theta", "omega", "accel", "torque", "load_torque")
+    arrays["invariants_hold"] = steady_invariants_hold(t[:-1], *(arrays[k] for k in keys), period, numbers, cycle)
+    return _pack(t[:-1], x, ok, arrays)
 
 
 # the closed form's outputs in its packed vector: the rows on the nodes, then the numbers,
 # then the IMEP per cylinder
 _ROWS = (
-    "E",
     "t",
     "theta",
     "omega",
@@ -359,35 +372,47 @@ _ROWS = (
     "inertia_term_torque",
     "total_torque",
 )
-_NUMBERS = ("x", "ok", "fuel_scale", "carried_load", "period_s", "excess_work_J", "textbook_delta", "e_ratio", "i_min")
+_NUMBERS = (
+    "x",
+    "ok",
+    "fuel_scale",
+    "carried_load",
+    "period_s",
+    "excess_work_J",
+    "textbook_delta",
+    "e_ratio",
+    "i_min",
+    "delta",
+    "invariants_hold",
+)
 
 
-def _pack(E, t, x, ok, arrays):
-    """E, t, x, ok and the result's arrays as one float64 vector: the host copies it once
+def _pack(t, x, ok, arrays):
+    """t, x, ok and the result's arrays as one float64 vector: the host copies it once
     (a program's every output is a device array of its own, each with its own dispatch,
-    wait and copy: 21 of them cost more than the program runs)."""
-    parts = {**arrays, "E": E, "t": t, "x": x, "ok": ok}
-    rows = jnp.stack([parts[k] for k in _ROWS])
+    wait and copy: 21 of them cost more than the program runs). One concatenation of the
+    rows and numbers: the rows are written into it once."""
+    parts = {**arrays, "t": t, "x": x, "ok": ok}
     numbers = jnp.stack([jnp.asarray(parts[k], dtype=jnp.float64).reshape(()) for k in _NUMBERS])
-    return jnp.concatenate([rows.ravel(), numbers, arrays["imep_pa"].ravel()])
+    return jnp.concatenate([parts[k] for k in _ROWS] + [numbers, arrays["imep_pa"].ravel()])
 
 
 def _unpack(pack, points, cylinders):
-    """:func:`_pack`'s vector back to E, t, x, ok and the arrays: NumPy views of one copy
+    """:func:`_pack`'s vector back to t, x, ok and the arrays: NumPy views of one copy
     where it is concrete, slices of it where it is traced. ``points`` and ``cylinders``:
     those of the tables the program solved with."""
     if not isinstance(pack, jax.core.Tracer):
         pack = np.asarray(pack)
     k, m = len(_ROWS), len(_NUMBERS)
     assert pack.shape == (k * points + m + cylinders,), "the packed steady state's layout"
-    rows = pack[: k * points].reshape(k, points)
-    numbers = pack[k * points : k * points + m]
-    out = {name: rows[i] for i, name in enumerate(_ROWS)}
-    out.update((name, numbers[i]) for i, name in enumerate(_NUMBERS))
+    # one slice per part (under a trace XLA then drops what the caller does not use)
+    out = {name: pack[i * points : (i + 1) * points] for i, name in enumerate(_ROWS)}
+    out.update((name, pack[k * points + i]) for i, name in enumerate(_NUMBERS))
     out["imep_pa"] = pack[k * points + m :].reshape(1, cylinders)
     out["ok"] = out["ok"] > 0.5
+    out["invariants_hold"] = out["invariants_hold"] > 0.5
     out["i_min"] = out["i_min"].astype(np.int64)
-    return out.pop("E"), out.pop("t"), out.pop("x"), out.pop("ok"), out
+    return out.pop("t"), out.pop("x"), out.pop("ok"), out
 
 
 def _balanced_scene(scene, x, balance):
@@ -548,10 +573,15 @@ def steady_state(
     if lin is not None and method != "shooting":
         a_lin, c_lin = lin
         flat = is_zero(c_lin) and fidelity != "constant"  # G ≡ 0: E = E0 + β(θ)
-        pack = _closed_steady(train, d_inertia, s, fr, speed_load, a_lin, c_lin, omega_m, balance, flat)
-        E, t, x, ok, arrays = _unpack(pack, train.points, train.cylinders)
+        numbers: Any
+        if array_module(d_inertia, s, fr, a_lin, c_lin, omega_m) is np:
+            numbers = np.concatenate(((d_inertia,), s, fr, (a_lin, c_lin, omega_m)), dtype=np.float64)
+        else:
+            numbers = jnp.concatenate([jnp.reshape(v, (-1,)) for v in (d_inertia, s, fr, a_lin, c_lin, omega_m)])
+        pack = _closed_steady(train, numbers, speed_load, balance, flat)
+        t, x, ok, arrays = _unpack(pack, train.points, train.cylinders)
         _check_combustion(train, balance)
-        return _finish(engine, train, E, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
+        return _finish(engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
     _check_combustion(train, balance)
     train = shift_inertia(train, d_inertia)
     # start from the closed form with the losses linearised about ω_m
@@ -588,8 +618,29 @@ def textbook_excess(train, scales, omega_m):
     the fuelling and in ω²: its two parts depend on the tables and the fuelling alone, so
     that a sweep over speed or inertia sums them once."""
     w = train.textbook_work  # (textbook_k, motored, combustion…) summed once with the tables
-    work = w[:, 1] + w[:, 2:] @ scales + w[:, 0] * omega_m**2
+    work = w @ jnp.concatenate([jnp.reshape(omega_m**2, (1,)), jnp.ones(1), scales])
     return jnp.max(work) - jnp.min(work)
+
+
+def _no_steady_state(train, balance, omega_m, converged, i_min, x_found):
+    """Raise :class:`rotor.NoSteadyStateError` for a solution that did not converge or whose
+    balancing load or fuel scale is not finite (concrete values)."""
+    # a fuel scale of a million or more and no steady state: a load in the wrong units
+    absurd = balance == "fuel" and not np.all(converged) and np.all(np.abs(x_found) >= 1e6)
+    if not np.all(np.isfinite(x_found)) or absurd:
+        what = "load torque" if balance == "load" else "fuel scale"
+        trouble = f"gives no finite speed (it is {float(x_found):.3g})" if absurd else "is not a finite number"
+        raise NoSteadyStateError(
+            f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the periodic solution's balancing "
+            f"{what} {trouble}; check that the "
+            "load and the fuelling are in units the engine can carry (N·m, a torque of the engine's size)"
+        )
+    raise NoSteadyStateError(
+        f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "
+        f"crank angle {float(np.rad2deg(i_min * train.cycle_rad / train.points)):.1f}° of the cycle (the "
+        "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
+        "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
+    )
 
 
 @eqx.filter_jit
@@ -625,7 +676,7 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
         "excess_work_J": excess,
         "textbook_delta": excess / ((train.mean_inertia + d_inertia) * omega_m**2),
         "e_ratio": jnp.min(E) / jnp.mean(E),
-        "i_min": jnp.argmin(E),
+        "i_min": extreme_index(jnp, E, False),
     }
 
 
@@ -636,30 +687,15 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         ok, e_ratio, i_min, x_found = (ok, a["e_ratio"], a["i_min"], x)
         if any(isinstance(v, jax.Array) for v in (ok, e_ratio, i_min, x_found)):
             ok, e_ratio, i_min, x_found = jax.device_get((ok, e_ratio, i_min, x_found))
-        converged = good = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION))
-        # a fuel scale of a million or more and no steady state: a load in the wrong units
-        absurd = balance == "fuel" and not np.all(good) and np.all(np.abs(x_found) >= 1e6)
-        if not np.all(np.isfinite(x_found)) or absurd:
-            what = "load torque" if balance == "load" else "fuel scale"
-            trouble = f"gives no finite speed (it is {float(x_found):.3g})" if absurd else "is not a finite number"
-            raise NoSteadyStateError(
-                f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the periodic solution's balancing "
-                f"{what} {trouble}; check that the "
-                "load and the fuelling are in units the engine can carry (N·m, a torque of the engine's size)"
-            )
-        if not good:
-            raise NoSteadyStateError(
-                f"no steady state at {float(omega_m * RPM_PER_RAD_S):g} rpm: the kinetic energy would reach zero at "
-                f"crank angle {float(np.rad2deg(i_min * train.cycle_rad / train.points)):.1f}° of the cycle (the "
-                "crankshaft stops once a cycle). Raise the speed or the crankshaft/flywheel inertia ([crankshaft] "
-                "inertia_kgm2), or simulate the run with rotor.simulate to see it stall"
-            )
+        converged = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION))
+        if not (np.all(converged) and np.all(np.isfinite(x_found))):
+            _no_steady_state(train, balance, omega_m, converged, i_min, x_found)
     else:
         converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
     load_carried = x if balance == "load" else a["carried_load"]
-    if checkable:
+    if checkable and balance == "fuel":
         fuel, carried = np.asarray(a["fuel_scale"]), np.asarray(load_carried)
-        if balance == "fuel" and fuel.ndim == 0:
+        if fuel.ndim == 0:
             imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
             check_fuel_scale(float(fuel), imep_m, imep_c, solved=True, load_Nm=float(carried))
     result = SpeedResult(
@@ -691,6 +727,10 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         textbook_delta=a["textbook_delta"],
         periodicity_error=None if E_end is None else jnp.abs(E_end - E[0]) / E[0],
         converged=converged,
+        _known_delta=(a["omega"], a["period_s"], a["delta"]) if "delta" in a else None,
     )
-    check_speed_result(result)  # concrete values only: under jit/vmap ``converged`` says it
+    # concrete values only (under jit/vmap ``converged`` says it); the closed form's program
+    # has checked the invariants already where its flag is set
+    if not (checkable and a.get("invariants_hold", False)):
+        check_speed_result(result)
     return result

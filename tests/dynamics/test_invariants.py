@@ -5,6 +5,7 @@ tighten, never a printed number. And the case that was silently wrong: a starter
 10¹² N·m, whose time quadrature stepped backwards (mean_rpm −5194.5)."""
 
 import dataclasses
+import functools
 import json
 
 import equinox as eqx
@@ -12,11 +13,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import rotor
 from rotor import cli
 from rotor.dynamics import equation
-from rotor.dynamics.invariants import check_speed_result
+from rotor.dynamics.invariants import check_speed_result, steady_invariants_hold
 
 STARTER = rotor.ConstantLoad(-1e12)  # a starter torque of 10¹² N·m driving the crankshaft
 
@@ -106,6 +109,80 @@ def test_a_steady_state_with_a_bad_period_or_balance_is_refused(steady, case):
     change, words = STEADY_BROKEN[case]
     check_speed_result(steady)
     _one_line_error(dataclasses.replace(steady, **change), words, "steady state", "grid_deg")
+
+
+@functools.partial(jax.jit, static_argnums=8)
+def _screen(t, theta, omega, accel, torque, load, period, numbers, cycle_rad):
+    return steady_invariants_hold(t, theta, omega, accel, torque, load, period, numbers, cycle_rad)
+
+
+def _screened(r):
+    """Whether the compiled screen of a steady state's invariants lets ``r`` through."""
+    numbers = [0.0 if v is None else v for v in (r.load_torque_Nm, r.fuel_scale, r.excess_work_J, r.textbook_delta)]
+    arrays = (r.t, r.theta, r.omega, r.accel, r.torque, r.load_torque)
+    return bool(_screen(*(jnp.asarray(a) for a in arrays), r.period_s, numbers, r.cycle_rad))
+
+
+def _refused(r):
+    try:
+        check_speed_result(r)
+    except rotor.SolverError:
+        return True
+    return False
+
+
+def test_the_steady_states_compiled_screen_is_never_looser_than_the_checks(steady):
+    """The closed form's program screens its own arrays and the host checks them only where
+    the screen fails: every broken steady state the checks refuse, the screen stops too,
+    and a sound one passes it."""
+    assert _screened(steady) and not _refused(steady)
+    cases = [change(steady) for change, _ in BROKEN.values()] + [change for change, _ in STEADY_BROKEN.values()]
+    refused = 0
+    for change in cases:
+        broken = dataclasses.replace(steady, **change)
+        if _refused(broken):
+            refused += 1
+            assert not _screened(broken), change
+    assert refused >= len(cases) - 2  # a steady state's mean speed is its period's: scaling t breaks nothing
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    field=st.sampled_from(["t", "theta", "omega", "accel", "torque", "load_torque"]),
+    at=st.integers(0, 2879),
+    value=st.sampled_from([np.nan, np.inf, -np.inf, 0.0, -1.0, 1e200, -1e-300]),
+)
+def test_the_screen_stops_every_broken_sample_the_checks_refuse(steady, field, at, value):
+    broken = dataclasses.replace(steady, **{field: _set(getattr(steady, field), at, value)})
+    assert not (_refused(broken) and _screened(broken))
+
+
+@settings(max_examples=30, deadline=None)
+@given(margin=st.floats(-3e-6, 3e-6))
+def test_the_screens_mean_speed_slack_is_within_the_checks(steady, margin):
+    """A period that puts the mean speed just outside the highest or lowest speed, around
+    the checks' slack: the screen never lets through what the checks refuse."""
+    for edge in (np.max(np.asarray(steady.omega)), np.min(np.asarray(steady.omega))):
+        broken = dataclasses.replace(steady, period_s=steady.cycle_rad / (edge * (1.0 + margin)))
+        assert not (_refused(broken) and _screened(broken))
+
+
+def test_the_host_checks_a_steady_state_where_the_screen_stops_it(diesel, monkeypatch):
+    """A steady state whose program's screen passes is not checked again on the host; one
+    whose screen fails is (traced again without kept programs: the screen is in the program)."""
+    from rotor.dynamics import steady as steady_module
+
+    checked = []
+    monkeypatch.setattr(steady_module, "check_speed_result", checked.append)
+    rotor.steady_state(diesel, rpm=1100.0)
+    assert not checked
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")
+    jax.clear_caches()
+    monkeypatch.setattr(steady_module, "steady_invariants_hold", lambda *args: jnp.asarray(False))
+    result = rotor.steady_state(diesel, rpm=1100.0)
+    assert checked == [result]
+    monkeypatch.undo()
+    jax.clear_caches()
 
 
 def test_nothing_is_checked_on_tracers(run):

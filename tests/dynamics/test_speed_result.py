@@ -58,6 +58,40 @@ def test_the_extremes_of_concrete_cycles_are_the_compiled_ones_to_the_bit(steady
         np.testing.assert_allclose(np.asarray(r.delta_per_cycle), np.asarray(traced_delta), rtol=1e-14, atol=0)
 
 
+def test_a_steady_states_delta_is_the_one_of_its_arrays(diesel):
+    """The closed form hands δ back with its arrays (its compiled program computes it with the
+    code the result uses): the δ the result computes from its own ω and period, at several
+    speeds and balances; a result whose ω is replaced computes its own."""
+    import dataclasses
+
+    for rpm, load in ((700.0, None), (1250.0, None), (2100.0, rotor.ConstantLoad(600.0))):
+        r = rotor.steady_state(diesel, rpm=rpm, load=load)
+        again = dataclasses.replace(r, omega=np.array(r.omega))  # the same speeds in another array
+        np.testing.assert_allclose(float(r.delta), float(again.delta), rtol=1e-14, atol=0)
+        np.testing.assert_allclose(np.asarray(r.delta_per_cycle), np.asarray(again.delta_per_cycle), rtol=1e-14)
+    ramp = np.linspace(1.0, 1.01, r.omega.shape[0])
+    changed = dataclasses.replace(r, omega=np.asarray(r.omega) * ramp)
+    assert float(changed.delta) > float(r.delta) + 5e-3
+
+
+def test_extreme_index_is_argmax_and_argmin_in_numpy_and_jax():
+    """The first largest or smallest value's index, the first NaN's where there is one: as
+    NumPy's and JAX's argmax and argmin, ties and NaNs included, compiled or not."""
+    from rotor.cycles import extreme_index
+
+    rng = np.random.default_rng(7)
+    x = rng.integers(0, 5, size=(6, 40)).astype(float)  # many ties
+    x[2, 17] = np.nan
+    x[4, 3] = x[4, 30] = np.nan
+    x[5] = -np.inf
+    compiled = jax.jit(extreme_index, static_argnums=(0, 2))
+    for largest, ref in ((True, np.argmax), (False, np.argmin)):
+        for rows in (x, x[0], x[4]):
+            want = ref(rows, axis=-1)
+            np.testing.assert_array_equal(extreme_index(np, rows, largest), want)
+            np.testing.assert_array_equal(np.asarray(compiled(jnp, jnp.asarray(rows), largest)), want)
+
+
 def test_the_speed_range_of_a_finished_result_is_the_traced_one(steady, diesel):
     """The range of the speed over a run, (ω_max − ω_min)/ω_mean: in NumPy for a finished
     result, compiled where the speed is traced; the same to rounding, for the periodic
