@@ -26,7 +26,8 @@ Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
    after compiling, the chunk size and the process's peak resident memory after each
    size.
 
-Compile time is kept apart (the first call); every time is the median of repeats after it.
+Compile time is kept apart (the first call); every time is the median of repeats after it,
+at least as many as fill half a second for each call timed alone.
 ``--sync-dispatch`` runs it with JAX's asynchronous CPU dispatch off (each compiled program
 runs in the thread that calls it instead of a worker thread the caller waits for).
 Writes ``results/steady_limit.json`` and ``results/steady_limit.png``.
@@ -135,7 +136,7 @@ def bench_single(engine, repeats):
     }
     out["rotor"] = {}
     for name, (fn, n) in rows.items():
-        t = time_it(fn, n)
+        t = time_it(fn, enough_repeats(fn, n))
         t["speedup_over_rk45_one_cycle"] = rk45["median_s"] / t["median_s"]
         t[checks[name][0]] = checks[name][1]
         out["rotor"][name] = t
@@ -152,6 +153,17 @@ def bench_single(engine, repeats):
 
 
 PAIRED_ROUNDS = 1000
+TIMED_S = 0.5  # at least this long in all for each call timed alone
+
+
+def enough_repeats(fn, repeats):
+    """At least ``repeats`` calls of ``fn`` and as many as fill :data:`TIMED_S`: the median of
+    a few calls of tens of µs is the machine's moment rather than the call's (the estimate
+    from one call after a first)."""
+    fn()
+    t0 = time.perf_counter()
+    fn()
+    return max(repeats, min(20000, int(TIMED_S / max(time.perf_counter() - t0, 1e-6))))
 
 
 def paired(fns, rounds):

@@ -192,7 +192,16 @@ def check_speed_result(result: SpeedResult) -> None:
 
 
 def steady_invariants_hold(
-    t: Any, theta: Any, omega: Any, accel: Any, torque: Any, load: Any, period_s: Any, numbers: Any, cycle_rad: float
+    t: Any,
+    theta: Any,
+    omega: Any,
+    accel: Any,
+    torque: Any,
+    load: Any,
+    period_s: Any,
+    numbers: Any,
+    cycle_rad: float,
+    omega_range: tuple[Any, Any] | None = None,
 ) -> jax.Array:
     """Whether a steady state of the angle domain (one periodic cycle, not stalled) surely
     keeps every invariant :func:`check_speed_result` checks, as a JAX bool: computed inside
@@ -203,7 +212,9 @@ def steady_invariants_hold(
     **Arguments:** the cycle's samples ``t`` [s], ``theta`` [rad], ``omega`` [rad/s],
     ``accel`` [rad/s²], ``torque`` and ``load`` [N·m] (equal lengths, at least one sample);
     ``period_s`` [s]; ``numbers``: the steady state's balancing load [N·m], fuel scale [-],
-    textbook excess work [J] and textbook δ [-]; ``cycle_rad``: the cycle [rad].
+    textbook excess work [J] and textbook δ [-]; ``cycle_rad``: the cycle [rad];
+    ``omega_range``: the lowest and highest sample of ``omega`` where the caller has them
+    [rad/s] (else found here).
 
     Never looser than the host's checks, stricter where that is cheaper: every value finite
     (ω² too; their sum finite), time strictly increasing, ω > 0, the crank angle never back
@@ -216,7 +227,8 @@ def steady_invariants_hold(
     total = jnp.sum(t + theta + omega + accel + torque + load + 0.5 * omega * omega) + period_s + sum(numbers)
     steps = (t[1:] > t[:-1]) & (theta[1:] - theta[:-1] >= -ANGLE_SLACK_RAD) & (omega[1:] > 0)
     ok = jnp.isfinite(total) & jnp.all(steps) & (omega[0] > 0) & (period_s > 0)
-    lo, hi = jnp.min(omega) * RPM_PER_RAD_S, jnp.max(omega) * RPM_PER_RAD_S
+    lowest, highest = (jnp.min(omega), jnp.max(omega)) if omega_range is None else omega_range
+    lo, hi = lowest * RPM_PER_RAD_S, highest * RPM_PER_RAD_S
     mean = cycle_rad / period_s * RPM_PER_RAD_S
     slack = 0.5 * MEAN_SLACK * jnp.maximum(jnp.abs(lo), jnp.abs(hi))
     return ok & (lo <= mean + slack) & (mean <= hi + slack)

@@ -143,12 +143,12 @@ def parabola_peak(y0, y1, y2, sign):
     return xp.where(ok, y1 - (y0 - y2) ** 2 / (8 * safe), y1)
 
 
-def _row_extremes(xp, x, slopes, cycle_rad, periodic: bool):
+def _row_extremes(xp, x, slopes, cycle_rad):
     """(max, min) of each row of x (rows: consecutive cycles sampled uniformly in angle)
     with the row's linear trend ``slopes`` [per rad] removed (:func:`rotor.cycles.cycle_ramp`),
     refined by a parabola through the extreme sample and its neighbours (the neighbours in
-    the next and previous rows detrended by the same row's line); ``xp``: numpy or
-    jax.numpy."""
+    the next and previous rows detrended by the same row's line; none past the first and
+    last row); ``xp``: numpy or jax.numpy."""
     C, P = x.shape
     h = cycle_rad / P
     xd = x - cycle_ramp(slopes, P, cycle_rad)
@@ -162,42 +162,44 @@ def _row_extremes(xp, x, slopes, cycle_rad, periodic: bool):
     for sign in (1.0, -1.0):
         j = extreme_index(xp, xd, sign > 0)
         y1 = xd[rows, j]
-        if periodic:
-            out.append(parabola_peak(xd[rows, (j - 1) % P], y1, xd[rows, (j + 1) % P], sign))
-        else:
-            i = j + rows * P
-            interior = (i > 0) & (i < flat.size - 1)
-            left = flat[xp.clip(i - 1, 0, flat.size - 1)] - line(j - 1)
-            right = flat[xp.clip(i + 1, 0, flat.size - 1)] - line(j + 1)
-            out.append(xp.where(interior, parabola_peak(left, y1, right, sign), y1))
+        i = j + rows * P
+        interior = (i > 0) & (i < flat.size - 1)
+        left = flat[xp.clip(i - 1, 0, flat.size - 1)] - line(j - 1)
+        right = flat[xp.clip(i + 1, 0, flat.size - 1)] - line(j + 1)
+        out.append(xp.where(interior, parabola_peak(left, y1, right, sign), y1))
     return out[0], out[1]
 
 
-@kept_program(static_argnames=("periodic",))
-@functools.partial(jax.jit, static_argnums=3)
-def _compiled_extremes(x, slopes, cycle_rad, periodic: bool):
-    return _row_extremes(jnp, x, slopes, cycle_rad, periodic)
+@kept_program()
+@jax.jit
+def _compiled_extremes(x, slopes, cycle_rad):
+    return _row_extremes(jnp, x, slopes, cycle_rad)
 
 
-def periodic_delta(xp, omega, mean_omega, cycle_rad):
-    """δ of one periodic cycle (a steady state) [-]: (ω_max − ω_min)/ω_mean, the extremes
-    of ``omega`` (the cycle's speed on its uniform grid [rad/s]) refined by a parabola
-    through the extreme sample and its neighbours across the cycle's ends;
-    ``mean_omega``: its time-mean speed [rad/s]; ``cycle_rad``: the cycle [rad]; ``xp``:
-    numpy or jax.numpy. One cycle has no trend to remove: what :attr:`SpeedResult.delta`
-    computes for a steady state, here for the steady state's compiled program, which hands
-    it back with the result."""
-    hi, lo = _row_extremes(xp, omega[None, :], xp.zeros(1), cycle_rad, True)
-    return cycle_delta(hi, lo, xp.reshape(mean_omega, (1,)))
+def periodic_extremes(xp, omega):
+    """The highest and lowest speed of one periodic cycle (a steady state), each refined by
+    a parabola through the extreme sample and its neighbours across the cycle's ends, and
+    the extreme samples themselves: (high, low, highest sample, lowest sample) [rad/s].
+    ``omega``: the cycle's speed on its uniform grid [rad/s]; ``xp``: numpy or jax.numpy.
+    One cycle has no trend to remove. :attr:`SpeedResult.delta` of a steady state, and the
+    steady state's compiled program (which hands δ back with the result), compute here."""
+    P = omega.shape[-1]
+    out = []
+    for sign in (1.0, -1.0):
+        j = extreme_index(xp, omega, sign > 0)
+        sample = omega[j]
+        out.append((parabola_peak(omega[(j - 1) % P], sample, omega[(j + 1) % P], sign), sample))
+    (high, highest), (low, lowest) = out
+    return high, low, highest, lowest
 
 
-def _extremes(x, slopes, cycle_rad, periodic: bool):
+def _extremes(x, slopes, cycle_rad):
     """:func:`_row_extremes` compiled where ``x`` or ``slopes`` is traced, in NumPy for
     concrete values (a compiled call and the copies back cost more than the arithmetic)."""
     if array_module(x, slopes) is np:
         x, slopes = np.asarray(x, dtype=np.float64), np.asarray(slopes, dtype=np.float64)
-        return _row_extremes(np, x, slopes, float(cycle_rad), periodic)
-    return _compiled_extremes(x, slopes, cycle_rad, periodic)
+        return _row_extremes(np, x, slopes, float(cycle_rad))
+    return _compiled_extremes(x, slopes, cycle_rad)
 
 
 def _flat_range(xp, x, periodic: bool):
@@ -243,8 +245,8 @@ def cycle_extremes(x: ArrayLike, slopes: ArrayLike, cycle_rad: float) -> tuple[A
     get the figures that :class:`SpeedResult` computes over the whole run."""
     xp = array_module(x, slopes)  # NumPy for concrete rows: no JAX operation on them
     rows = xp.asarray(x, dtype=xp.float64)
-    dmax, dmin = _extremes(rows, xp.asarray(slopes, dtype=xp.float64), cycle_rad, False)
-    rmax, rmin = _extremes(rows, xp.zeros(rows.shape[0]), cycle_rad, False)
+    dmax, dmin = _extremes(rows, xp.asarray(slopes, dtype=xp.float64), cycle_rad)
+    rmax, rmin = _extremes(rows, xp.zeros(rows.shape[0]), cycle_rad)
     return dmax, dmin, rmax, rmin
 
 
@@ -453,12 +455,16 @@ class SpeedResult(Result):
         self._need_cycles()
         if self.cycle_summary is not None and self._streamed:
             return array_module(self.omega).asarray(self.cycle_summary.delta)
-        known = self._steady_delta()
-        if known is not None:
-            return array_module(known).reshape(known, (1,))
+        if self.kind == "steady":  # one periodic cycle
+            known = self._steady_delta()
+            if known is not None:
+                return array_module(known).reshape(known, (1,))
+            xp = array_module(self.omega)
+            high, low, _, _ = periodic_extremes(xp, xp.asarray(self.omega, dtype=xp.float64))
+            return cycle_delta(xp.reshape(high, (1,)), xp.reshape(low, (1,)), self.cycle_mean_omega)
         mean = self.cycle_mean_omega
         slopes = cycle_slopes(mean, self.cycle_rad)
-        hi, lo = _extremes(self._cycle_matrix(self.omega), slopes, self.cycle_rad, self.kind == "steady")
+        hi, lo = _extremes(self._cycle_matrix(self.omega), slopes, self.cycle_rad)
         return cycle_delta(hi, lo, mean)
 
     @property
@@ -470,7 +476,7 @@ class SpeedResult(Result):
         return self.delta_per_cycle[-1] if known is None else known
 
     def _steady_delta(self) -> Array | None:
-        """A steady state's δ computed with its arrays (:func:`periodic_delta`), while ω and
+        """A steady state's δ computed with its arrays (:func:`periodic_extremes`), while ω and
         the period are the ones it was computed from; else None."""
         known = self._known_delta
         if known is None or self.kind != "steady" or known[0] is not self.omega or known[1] is not self.period_s:

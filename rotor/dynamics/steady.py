@@ -42,7 +42,7 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..checks import arrays_only, concrete
-from ..cycles import array_module, extreme_index
+from ..cycles import array_module, cycle_delta, extreme_index
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE
@@ -74,16 +74,21 @@ from .invariants import check_speed_result, steady_invariants_hold
 from .loads import Load
 from .operating import FUEL_SCALE_WARN, check_fuel_scale
 from .prepared import PreparedEngine, checked_reference
-from .result import SpeedResult, periodic_delta
+from .result import SpeedResult, periodic_extremes
 
 __all__ = ["steady_state"]
 
 STOP_FRACTION = 1e-4  # E_min / E_mean below which the crankshaft is taken to stop
 
 
+_RPM_RANGE = PLAUSIBLE[("operating", "rpm")][:2]
+
+
 def _check_rpm(rpm, what="rpm"):
+    lo, hi = _RPM_RANGE
+    if type(rpm) in (float, int, np.float64) and lo <= rpm <= hi:  # the usual number (NaN fails here)
+        return
     r = concrete(rpm)
-    lo, hi, _, _ = PLAUSIBLE[("operating", "rpm")]
     if r is not None and not (r.ndim == 0 and np.isfinite(r) and lo <= r <= hi):
         raise EngineError(f"{what} = {rpm!r}: must be a positive, finite speed between {lo:g} and {hi:g} rpm")
 
@@ -350,11 +355,14 @@ def _closed_steady(train, numbers, load, balance, flat):
     arrays = _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
     # δ and the invariants of every run, with the arrays: the host reads two numbers
     cycle, period = train.cycle_rad, arrays["period_s"]
-    arrays["delta"] = periodic_delta(jnp, arrays["omega"], cycle / period, cycle)
+    high, low, highest, lowest = periodic_extremes(jnp, arrays["omega"])
+    arrays["delta"] = cycle_delta(high, low, cycle / period)
     carried = x if balance == "load" else arrays["carried_load"]
     numbers = (carried, arrays["fuel_scale"], arrays["excess_work_J"], arrays["textbook_delta"])
     keys = ("theta", "omega", "accel", "torque", "load_torque")
-    arrays["invariants_hold"] = steady_invariants_hold(t[:-1], *(arrays[k] for k in keys), period, numbers, cycle)
+    arrays["invariants_hold"] = steady_invariants_hold(
+        t[:-1], *(arrays[k] for k in keys), period, numbers, cycle, omega_range=(lowest, highest)
+    )
     return _pack(t[:-1], x, ok, arrays)
 
 
@@ -401,13 +409,18 @@ def _unpack(pack, points, cylinders):
     """:func:`_pack`'s vector back to t, x, ok and the arrays: NumPy views of one copy
     where it is concrete, slices of it where it is traced. ``points`` and ``cylinders``:
     those of the tables the program solved with."""
-    if not isinstance(pack, jax.core.Tracer):
-        pack = np.asarray(pack)
     k, m = len(_ROWS), len(_NUMBERS)
     assert pack.shape == (k * points + m + cylinders,), "the packed steady state's layout"
-    # one slice per part (under a trace XLA then drops what the caller does not use)
-    out = {name: pack[i * points : (i + 1) * points] for i, name in enumerate(_ROWS)}
-    out.update((name, pack[k * points + i]) for i, name in enumerate(_NUMBERS))
+    rows: Any
+    numbers: Any
+    if isinstance(pack, jax.core.Tracer):  # one slice per part: XLA then drops what the caller does not use
+        rows = [pack[i * points : (i + 1) * points] for i in range(k)]
+        numbers = [pack[k * points + i] for i in range(m)]
+    else:
+        pack = np.asarray(pack)
+        rows, numbers = pack[: k * points].reshape(k, points), pack[k * points : k * points + m]
+    out = dict(zip(_ROWS, rows, strict=True))
+    out.update(zip(_NUMBERS, numbers, strict=True))
     out["imep_pa"] = pack[k * points + m :].reshape(1, cylinders)
     out["ok"] = out["ok"] > 0.5
     out["invariants_hold"] = out["invariants_hold"] > 0.5
@@ -553,15 +566,22 @@ def steady_state(
     load = arrays_only(load)  # the engine itself enters no compiled call: its tables and numbers do
     n = engine.cylinders
     xp = array_module(rpm, imep_scale)  # numpy where concrete: no dispatch
-    s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
-    given = concrete(s)
-    if given is not None and load is None and not np.all((given >= 0) & (given <= FUEL_SCALE_WARN)):
+    s: Any
+    if isinstance(imep_scale, (float, int)) and not isinstance(imep_scale, bool) and xp is np:  # one number: no array
+        s, given = np.full(n, float(imep_scale)), None
+        if load is None and not 0.0 <= imep_scale <= FUEL_SCALE_WARN:
+            given = s[:1]
+    else:
+        s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
+        given = concrete(s)
+        given = None if given is None or np.all((given >= 0) & (given <= FUEL_SCALE_WARN)) else given
+    if given is not None and load is None:
         # the fuel scale given: refused or warned about here (the IMEP named where the tables are concrete)
         imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
         for value in np.unique(given):
             check_fuel_scale(float(value), imep_m, imep_c, solved=False)
     fr = friction_coefficients(engine, friction)
-    omega_m = xp.asarray(rpm, dtype=xp.float64) / RPM_PER_RAD_S
+    omega_m = (np.float64(rpm) if isinstance(rpm, (float, int)) else xp.asarray(rpm, dtype=xp.float64)) / RPM_PER_RAD_S
     balance = "load" if load is None else "fuel"  # a given load is carried, never replaced
     speed_load = None if balance == "load" else load
     lin = linear_losses(speed_load, fr)
@@ -579,7 +599,7 @@ def steady_state(
         else:
             numbers = jnp.concatenate([jnp.reshape(v, (-1,)) for v in (d_inertia, s, fr, a_lin, c_lin, omega_m)])
         pack = _closed_steady(train, numbers, speed_load, balance, flat)
-        t, x, ok, arrays = _unpack(pack, train.points, train.cylinders)
+        t, x, ok, arrays = _unpack(pack, points, n)
         _check_combustion(train, balance)
         return _finish(engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
     _check_combustion(train, balance)
@@ -659,6 +679,7 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
     excess = textbook_excess(train, sc, omega_m)
     dwell = 1.0 / omega  # the time-mean of the load carried (friction apart), where it is a model
     carried = 0.0 if scene.load is None else jnp.sum(scene.load.torque(omega, t) * dwell) / jnp.sum(dwell)
+    i_min = extreme_index(jnp, E, False)  # the lowest energy (its first NaN where there is one)
     return {
         "theta": theta,
         "fuel_scale": jnp.mean(sc),
@@ -675,8 +696,8 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
         "period_s": train.cycle_rad / omega_m,
         "excess_work_J": excess,
         "textbook_delta": excess / ((train.mean_inertia + d_inertia) * omega_m**2),
-        "e_ratio": jnp.min(E) / jnp.mean(E),
-        "i_min": extreme_index(jnp, E, False),
+        "e_ratio": E[i_min] / jnp.mean(E),
+        "i_min": i_min,
     }
 
 
@@ -688,7 +709,7 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         if any(isinstance(v, jax.Array) for v in (ok, e_ratio, i_min, x_found)):
             ok, e_ratio, i_min, x_found = jax.device_get((ok, e_ratio, i_min, x_found))
         converged = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION))
-        if not (np.all(converged) and np.all(np.isfinite(x_found))):
+        if not (converged.all() and np.isfinite(x_found).all()):
             _no_steady_state(train, balance, omega_m, converged, i_min, x_found)
     else:
         converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)

@@ -178,7 +178,7 @@ def test_the_host_checks_a_steady_state_where_the_screen_stops_it(diesel, monkey
     assert not checked
     monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")
     jax.clear_caches()
-    monkeypatch.setattr(steady_module, "steady_invariants_hold", lambda *args: jnp.asarray(False))
+    monkeypatch.setattr(steady_module, "steady_invariants_hold", lambda *args, **kwargs: jnp.asarray(False))
     result = rotor.steady_state(diesel, rpm=1100.0)
     assert checked == [result]
     monkeypatch.undo()
