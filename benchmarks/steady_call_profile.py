@@ -168,7 +168,7 @@ def main() -> None:
     print(
         f"  the whole call with the program's invariant flag ignored (the host checks the arrays): {host_checked:.0f} µs"
     )
-    print(f"float(result.delta) of a finished result: {delta_us:.0f} µs")
+    print(f"float(result.delta) of a finished result: {delta_us:.1f} µs")
     print(f"the whole call with the compilation cache on (programs kept): {kept:.0f} µs")
     for k, v in program.items():
         print(f"the closed form's program alone, {k}: {v:.0f} µs")
