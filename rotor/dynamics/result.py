@@ -374,7 +374,7 @@ class SpeedResult(Result):
     # a long run that kept only its last cycles' samples (simulate(..., keep_cycles=N))
     first_kept_cycle_index: int = 0
     cycle_summary: CycleSummary | None = None
-    # a steady state's δ computed with its arrays (:func:`periodic_delta`), with the ω and
+    # a steady state's δ computed with its arrays (:func:`periodic_extremes`), with the ω and
     # period it belongs to: (omega, period_s, delta), used while those fields are the same objects
     _known_delta: tuple[Any, Any, Any] | None = dataclasses.field(default=None, compare=False)
 

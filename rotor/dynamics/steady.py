@@ -192,9 +192,9 @@ def flat_balance(train, s, a, balance):
         x = (a - mot_mean) / (comb_mean @ s)  # the fuelling that carries the load
         w = x * s
     # every product with the whole tables, never a copy of their columns: the motored column
-    # and the combustion columns weighted (1, w), the rest by zero
+    # and the combustion columns weighted (1, w), the others by zero
     w1 = jnp.concatenate([jnp.ones(1), w])
-    column_weights = jnp.concatenate([jnp.zeros(COL_MOTORED), w1[:1], jnp.zeros(COL_COMBUSTION - COL_MOTORED - 1), w])
+    column_weights = jnp.concatenate([jnp.zeros(COL_COMBUSTION).at[COL_MOTORED].set(1.0), w])
     beta = B @ w1
     dE = wrap_periodic(train.values @ column_weights - means @ w1)
     return beta, dE, x
@@ -358,10 +358,10 @@ def _closed_steady(train, numbers, load, balance, flat):
     high, low, highest, lowest = periodic_extremes(jnp, arrays["omega"])
     arrays["delta"] = cycle_delta(high, low, cycle / period)
     carried = x if balance == "load" else arrays["carried_load"]
-    numbers = (carried, arrays["fuel_scale"], arrays["excess_work_J"], arrays["textbook_delta"])
+    figures = (carried, arrays["fuel_scale"], arrays["excess_work_J"], arrays["textbook_delta"])
     keys = ("theta", "omega", "accel", "torque", "load_torque")
     arrays["invariants_hold"] = steady_invariants_hold(
-        t[:-1], *(arrays[k] for k in keys), period, numbers, cycle, omega_range=(lowest, highest)
+        t[:-1], *(arrays[k] for k in keys), period, figures, cycle, omega_range=(lowest, highest)
     )
     return _pack(t[:-1], x, ok, arrays)
 
@@ -411,8 +411,6 @@ def _unpack(pack, points, cylinders):
     those of the tables the program solved with."""
     k, m = len(_ROWS), len(_NUMBERS)
     assert pack.shape == (k * points + m + cylinders,), "the packed steady state's layout"
-    rows: Any
-    numbers: Any
     if isinstance(pack, jax.core.Tracer):  # one slice per part: XLA then drops what the caller does not use
         rows = [pack[i * points : (i + 1) * points] for i in range(k)]
         numbers = [pack[k * points + i] for i in range(m)]
