@@ -147,9 +147,7 @@ def speed_from_energy(E, inertia):
 def hermite_cumulative(f, df, h):
     """∫ from node 0 to each node by the Hermite rule: h/2·(f₀+f₁) + h²/12·(f₀′−f₁′)."""
     seg = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12.0 * (df[:-1] - df[1:])
-    # the running sum as a scan of pairwise sums (log₂N passes): XLA's CPU lowering of
-    # jnp.cumsum takes about twice as long on a cycle's nodes
-    return jnp.concatenate([jnp.zeros(1), jax.lax.associative_scan(jnp.add, seg)])
+    return jnp.concatenate([jnp.zeros(1), jnp.cumsum(seg)])
 
 
 def hermite_sum(f, df, h):
