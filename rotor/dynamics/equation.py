@@ -255,7 +255,7 @@ def is_zero(x):
         return True
     if isinstance(x, jax.core.Tracer):
         return False
-    if isinstance(x, (float, np.float64)):  # the usual case, without an array's round trip
+    if isinstance(x, float):  # the usual case (NumPy's float64 too), without an array's round trip
         return bool(x == 0)
     return bool(np.all(np.asarray(x) == 0))  # numpy: under a jit trace jnp would give a tracer
 

@@ -374,9 +374,10 @@ class SpeedResult(Result):
     # a long run that kept only its last cycles' samples (simulate(..., keep_cycles=N))
     first_kept_cycle_index: int = 0
     cycle_summary: CycleSummary | None = None
-    # a steady state's δ computed with its arrays (:func:`periodic_extremes`), with the ω and
-    # period it belongs to: (omega, period_s, delta), used while those fields are the same objects
-    _known_delta: tuple[Any, Any, Any] | None = dataclasses.field(default=None, compare=False)
+    # a steady state's δ computed with its arrays (:func:`periodic_extremes`), with the ω,
+    # period and cycle it belongs to: (omega, period_s, cycle_rad, delta), used while ω and the
+    # period are the same objects and the cycle the same number
+    _known_delta: tuple[Any, Any, float, Any] | None = dataclasses.field(default=None, compare=False)
 
     # ------------------------------------------------------------------ cycles
     @property
@@ -476,12 +477,15 @@ class SpeedResult(Result):
         return self.delta_per_cycle[-1] if known is None else known
 
     def _steady_delta(self) -> Array | None:
-        """A steady state's δ computed with its arrays (:func:`periodic_extremes`), while ω and
-        the period are the ones it was computed from; else None."""
+        """A steady state's δ computed with its arrays (:func:`periodic_extremes`), while ω,
+        the period and the cycle are the ones it was computed from; else None."""
         known = self._known_delta
         if known is None or self.kind != "steady" or known[0] is not self.omega or known[1] is not self.period_s:
             return None
-        return known[2]
+        if known[2] != self.cycle_rad:
+            return None
+        self._need_cycles()
+        return known[3]
 
     @property
     def speed_range_ratio(self) -> Array:

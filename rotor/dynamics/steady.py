@@ -591,11 +591,14 @@ def steady_state(
     if lin is not None and method != "shooting":
         a_lin, c_lin = lin
         flat = is_zero(c_lin) and fidelity != "constant"  # G ≡ 0: E = E0 + β(θ)
-        numbers: Any
-        if array_module(d_inertia, s, fr, a_lin, c_lin, omega_m) is np:
-            numbers = np.concatenate(((d_inertia,), s, fr, (a_lin, c_lin, omega_m)), dtype=np.float64)
+        # one number each (a load's one-element array too), the fuelling and friction whole
+        xq = array_module(d_inertia, s, fr, a_lin, c_lin, omega_m)
+        scalars = (d_inertia, a_lin, c_lin, omega_m)
+        if xq is np and all(np.ndim(v) == 0 for v in scalars):  # the usual numbers: no reshaping
+            numbers = np.concatenate(((d_inertia,), s, fr, scalars[1:]), dtype=np.float64)
         else:
-            numbers = jnp.concatenate([jnp.reshape(v, (-1,)) for v in (d_inertia, s, fr, a_lin, c_lin, omega_m)])
+            parts = ((d_inertia, 1), (s, n), (fr, 3), (a_lin, 1), (c_lin, 1), (omega_m, 1))
+            numbers = xq.concatenate([xq.reshape(xq.asarray(v, dtype=xq.float64), (size,)) for v, size in parts])
         pack = _closed_steady(train, numbers, speed_load, balance, flat)
         t, x, ok, arrays = _unpack(pack, points, n)
         _check_combustion(train, balance)
@@ -746,7 +749,7 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         textbook_delta=a["textbook_delta"],
         periodicity_error=None if E_end is None else jnp.abs(E_end - E[0]) / E[0],
         converged=converged,
-        _known_delta=(a["omega"], a["period_s"], a["delta"]) if "delta" in a else None,
+        _known_delta=(a["omega"], a["period_s"], train.cycle_rad, a["delta"]) if "delta" in a else None,
     )
     # concrete values only (under jit/vmap ``converged`` says it); the closed form's program
     # has checked the invariants already where its flag is set

@@ -113,14 +113,21 @@ def test_a_steady_state_with_a_bad_period_or_balance_is_refused(steady, case):
 
 @functools.partial(jax.jit, static_argnums=8)
 def _screen(t, theta, omega, accel, torque, load, period, numbers, cycle_rad):
-    return steady_invariants_hold(t, theta, omega, accel, torque, load, period, numbers, cycle_rad)
+    """The screen as it finds the speed's range itself, and as the program calls it with the
+    lowest and highest samples it has found (both must agree)."""
+    arrays = (t, theta, omega, accel, torque, load)
+    own = steady_invariants_hold(*arrays, period, numbers, cycle_rad)
+    given = steady_invariants_hold(*arrays, period, numbers, cycle_rad, omega_range=(jnp.min(omega), jnp.max(omega)))
+    return own, given
 
 
 def _screened(r):
     """Whether the compiled screen of a steady state's invariants lets ``r`` through."""
     numbers = [0.0 if v is None else v for v in (r.load_torque_Nm, r.fuel_scale, r.excess_work_J, r.textbook_delta)]
     arrays = (r.t, r.theta, r.omega, r.accel, r.torque, r.load_torque)
-    return bool(_screen(*(jnp.asarray(a) for a in arrays), r.period_s, numbers, r.cycle_rad))
+    own, given = _screen(*(jnp.asarray(a) for a in arrays), r.period_s, numbers, r.cycle_rad)
+    assert bool(own) == bool(given)
+    return bool(own)
 
 
 def _refused(r):

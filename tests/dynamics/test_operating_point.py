@@ -101,6 +101,18 @@ def test_steady_orders_give_the_total_torque_beside_the_gas_torque(capsys):
     assert "gas [N·m]" in out and "total [N·m]" in out and "the torque that drives the speed" in out
 
 
+def test_a_load_given_as_a_one_element_array_is_the_number(diesel):
+    """A load's torque or coefficient given as a NumPy array of one element (as a load's
+    own checks accept): the steady state of the plain number, the same figures."""
+    for one, plain in (
+        (rotor.ConstantLoad(np.array([900.0])), rotor.ConstantLoad(900.0)),
+        (rotor.PropellerLoad(np.array([900.0]), 1250.0), rotor.PropellerLoad(900.0, 1250.0)),
+    ):
+        a, b = rotor.steady_state(diesel, rpm=1400.0, load=one), rotor.steady_state(diesel, rpm=1400.0, load=plain)
+        assert float(a.delta) == pytest.approx(float(b.delta), rel=1e-12)
+        assert float(a.fuel_scale) == pytest.approx(float(b.fuel_scale), rel=1e-12)
+
+
 def test_total_torque_drives_the_speed(diesel):
     ss = rotor.steady_state(diesel)
     total = np.asarray(ss.total_torque)

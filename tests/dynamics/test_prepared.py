@@ -236,17 +236,21 @@ def test_a_jitted_function_may_close_over_an_engine_not_seen_before(diesel, monk
     assert jitted == pytest.approx(float(rotor.steady_state(engine, 1250.0).delta), rel=1e-12)
 
 
-def test_an_engine_object_used_first_inside_a_batched_trace_is_kept_as_values(diesel, monkeypatch):
-    """An engine object's tables found first inside ``jax.jit(jax.vmap(...))`` (its crankshaft
-    inertia added to the kept tables there), with no kept programs (whose compiled calls run
-    eagerly inside a trace anyway): what is kept for the object are values, so that its next
-    plain call finds them instead of a value of the finished trace."""
+@pytest.mark.parametrize("batched", [False, True])
+def test_an_engine_object_used_first_inside_a_trace_is_kept_as_values(diesel, monkeypatch, batched):
+    """An engine object's tables found first inside ``jax.jit`` or ``jax.jit(jax.vmap(...))``
+    (its crankshaft inertia added to the kept tables there), with no kept programs (whose
+    compiled calls run eagerly inside a trace anyway): what is kept for the object are
+    values, so that its next plain call finds them instead of a value of the finished trace."""
     monkeypatch.setenv("ROTOR_PROGRAM_CACHE", "off")
-    engine = eqx.tree_at(lambda e: e.geometry.bore_m, diesel, diesel.geometry.bore_m * 1.0213)
+    engine = eqx.tree_at(lambda e: e.geometry.bore_m, diesel, diesel.geometry.bore_m * (1.0213 + 0.01 * batched))
     rpm = jnp.array([1000.0, 1250.0])
-    batched = jax.jit(jax.vmap(lambda r: rotor.steady_state(engine, r).delta))(rpm)
+    delta = jax.vmap(lambda r: rotor.steady_state(engine, r).delta) if batched else None
+    traced = (
+        jax.jit(delta)(rpm) if batched else [jax.jit(lambda r: rotor.steady_state(engine, r).delta)(r) for r in rpm]
+    )
     plain = [float(rotor.steady_state(engine, float(r)).delta) for r in rpm]
-    np.testing.assert_allclose(np.asarray(batched), plain, rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(traced), plain, rtol=1e-12)
 
 
 def test_engines_that_differ_only_in_name_share_their_compiled_programs(diesel, monkeypatch):

@@ -72,6 +72,10 @@ def test_a_steady_states_delta_is_the_one_of_its_arrays(diesel):
     ramp = np.linspace(1.0, 1.01, r.omega.shape[0])
     changed = dataclasses.replace(r, omega=np.asarray(r.omega) * ramp)
     assert float(changed.delta) > float(r.delta) + 5e-3
+    longer = dataclasses.replace(r, cycle_rad=2 * r.cycle_rad)  # twice the mean speed: half the δ
+    assert float(longer.delta) == pytest.approx(0.5 * float(r.delta), rel=1e-12)
+    with pytest.raises(ValueError, match="no complete cycle"):
+        _ = dataclasses.replace(r, uniform_cycles=0).delta
 
 
 def test_extreme_index_is_argmax_and_argmin_in_numpy_and_jax():
