@@ -7,9 +7,9 @@ each called on its own with the result waited for, the cases taken in turn for
 ``--rounds`` rounds after one call that compiles (compile time kept apart):
 
 - the running sum: ``jax.lax.associative_scan(jnp.add, x)`` against ``jnp.cumsum`` (what
-  ``rotor.dynamics.equation.hermite_cumulative`` uses: the scan, faster when called alone
-  back to back, was not when taken in turn with other programs, and was not kept), and the
-  largest difference between the two relative to the total;
+  ``rotor.dynamics.equation.hermite_cumulative`` uses: the scan was tried in the steady
+  state's program and not kept, its gain taken in turn small and not steady from run to
+  run), and the largest difference between the two relative to the total;
 - the index of the largest and of the smallest value: ``jnp.argmax`` and ``jnp.argmin``
   against ``rotor.cycles.extreme_index`` (the extreme, then the first index that holds
   it), the indices asserted equal;

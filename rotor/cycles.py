@@ -45,9 +45,9 @@ def extreme_index(xp: Any, x: Any, largest: bool) -> Any:
     """Index along the last axis of the first largest (``largest``) or smallest value of
     ``x``, or of its first NaN where it has one: ``argmax``/``argmin``, as NumPy and JAX
     define them. Under JAX it is two plain reductions, the extreme and then the first index
-    that holds it: XLA's arg-reduction, which carries the index along, took about 1.6 times
-    as long on the CPU for a cycle's nodes (``benchmarks/xla_reductions.py``). ``xp``: numpy
-    or jax.numpy."""
+    that holds it: XLA's arg-reduction, which carries the index along, took 1.2–1.6 times as
+    long on the CPU for a cycle's nodes (``benchmarks/xla_reductions.py``). ``xp``: numpy or
+    jax.numpy."""
     if xp is np:
         return np.argmax(x, axis=-1) if largest else np.argmin(x, axis=-1)
     extreme = (xp.max if largest else xp.min)(x, axis=-1, keepdims=True)  # NaN where x has one
