@@ -8,7 +8,6 @@ for people (the result protocol of :mod:`rotor.results`).
 from __future__ import annotations
 
 import dataclasses
-import functools
 from typing import Any
 
 import jax
@@ -177,18 +176,24 @@ def _compiled_extremes(x, slopes, cycle_rad):
 
 
 def periodic_extremes(xp, omega):
-    """The highest and lowest speed of one periodic cycle (a steady state), each refined by
-    a parabola through the extreme sample and its neighbours across the cycle's ends, and
-    the extreme samples themselves: (high, low, highest sample, lowest sample) [rad/s].
-    ``omega``: the cycle's speed on its uniform grid [rad/s]; ``xp``: numpy or jax.numpy.
-    One cycle has no trend to remove. :attr:`SpeedResult.delta` of a steady state, and the
-    steady state's compiled program (which hands δ back with the result), compute here."""
+    """The highest and lowest value of each periodic row of ``omega`` (one period sampled
+    uniformly along the last axis: a steady state's speed [rad/s], a shaft's in a forced
+    response), each refined by a parabola through the extreme sample and its neighbours
+    across the period's ends, and the extreme samples themselves: (high, low, highest
+    sample, lowest sample), shape ``omega.shape[:-1]``; ``xp``: numpy or jax.numpy. One
+    period has no trend to remove. :attr:`SpeedResult.delta` of a steady state, the steady
+    state's compiled program (which hands δ back with the result) and the torsional forced
+    response's range compute here."""
     P = omega.shape[-1]
+
+    def at(j):
+        return xp.take_along_axis(omega, j % P, axis=-1)[..., 0]
+
     out = []
     for sign in (1.0, -1.0):
-        j = extreme_index(xp, omega, sign > 0)
-        sample = omega[j]
-        out.append((parabola_peak(omega[(j - 1) % P], sample, omega[(j + 1) % P], sign), sample))
+        j = extreme_index(xp, omega, sign > 0)[..., None]
+        sample = at(j)
+        out.append((parabola_peak(at(j - 1), sample, at(j + 1), sign), sample))
     (high, highest), (low, lowest) = out
     return high, low, highest, lowest
 
@@ -202,37 +207,31 @@ def _extremes(x, slopes, cycle_rad):
     return _compiled_extremes(x, slopes, cycle_rad)
 
 
-def _flat_range(xp, x, periodic: bool):
-    """(max, min) over all of x (rows: cycles) with parabolic refinement at the sample;
-    ``xp``: numpy or jax.numpy."""
-    C, P = x.shape
+def _flat_range(xp, x):
+    """(max, min) over all of x (rows: consecutive cycles) with parabolic refinement at the
+    sample (none past the first and last sample); ``xp``: numpy or jax.numpy."""
     flat = x.reshape(-1)
     out = []
     for sign in (1.0, -1.0):
         i = extreme_index(xp, flat, sign > 0)
-        if periodic:
-            left = flat[xp.where(i % P == 0, i + P - 1, i - 1)]
-            right = flat[xp.where(i % P == P - 1, i - P + 1, i + 1)]
-            out.append(parabola_peak(left, flat[i], right, sign))
-        else:
-            interior = (i > 0) & (i < flat.size - 1)
-            left = flat[xp.clip(i - 1, 0, flat.size - 1)]
-            right = flat[xp.clip(i + 1, 0, flat.size - 1)]
-            out.append(xp.where(interior, parabola_peak(left, flat[i], right, sign), flat[i]))
+        interior = (i > 0) & (i < flat.size - 1)
+        left = flat[xp.clip(i - 1, 0, flat.size - 1)]
+        right = flat[xp.clip(i + 1, 0, flat.size - 1)]
+        out.append(xp.where(interior, parabola_peak(left, flat[i], right, sign), flat[i]))
     return out[0], out[1]
 
 
-@kept_program(static_argnames=("periodic",))
-@functools.partial(jax.jit, static_argnums=1)
-def _compiled_range(x, periodic: bool):
-    return _flat_range(jnp, x, periodic)
+@kept_program()
+@jax.jit
+def _compiled_range(x):
+    return _flat_range(jnp, x)
 
 
-def _range(x, periodic: bool):
+def _range(x):
     """:func:`_flat_range` compiled where ``x`` is traced, in NumPy for concrete values."""
     if array_module(x) is np:
-        return _flat_range(np, np.asarray(x, dtype=np.float64), periodic)
-    return _compiled_range(x, periodic)
+        return _flat_range(np, np.asarray(x, dtype=np.float64))
+    return _compiled_range(x)
 
 
 def cycle_extremes(x: ArrayLike, slopes: ArrayLike, cycle_rad: float) -> tuple[Array, Array, Array, Array]:
@@ -497,9 +496,10 @@ class SpeedResult(Result):
             hi = cs.range_max[int(np.argmax(cs.max_omega))]
             lo = cs.range_min[int(np.argmin(cs.min_omega))]
             return (hi - lo) / np.mean(cs.mean_omega)
-        hi, lo = _range(self._cycle_matrix(self.omega), self.kind == "steady")
-        mean = self.mean_omega if self.kind == "steady" else array_module(self.omega).mean(self.cycle_mean_omega)
-        return (hi - lo) / mean
+        if self.kind == "steady":  # one periodic cycle: its δ
+            return self.delta
+        hi, lo = _range(self._cycle_matrix(self.omega))
+        return (hi - lo) / array_module(self.omega).mean(self.cycle_mean_omega)
 
     @property
     def min_rpm(self) -> Array:

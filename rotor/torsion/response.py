@@ -76,7 +76,7 @@ from jaxtyping import Array, ArrayLike
 from ..checks import check_size, concrete
 from ..dynamics.crank_train import grid_points
 from ..dynamics.loads import ConstantLoad, Load
-from ..dynamics.result import Orders, SpeedResult
+from ..dynamics.result import Orders, SpeedResult, periodic_extremes
 from ..engine.friction import Friction
 from ..engine.model import Engine
 from ..engine.plausible import PLAUSIBLE, check_speed_rpm, require_number, require_whole, what_it_is
@@ -630,18 +630,10 @@ class TorsionalResponse(Result):
 
 def periodic_range(x: ArrayLike) -> np.ndarray:
     """max − min of each row of ``x`` (samples of one period, uniform), each extreme refined
-    by the parabola through it and its two (periodic) neighbours: shape ``x.shape[:-1]``."""
-    x = np.asarray(x, dtype=np.float64)
-    out = []
-    for sign in (1.0, -1.0):
-        i = np.argmax(sign * x, axis=-1)[..., None]
-        y1 = np.take_along_axis(x, i, -1)[..., 0]
-        y0 = np.take_along_axis(x, (i - 1) % x.shape[-1], -1)[..., 0]
-        y2 = np.take_along_axis(x, (i + 1) % x.shape[-1], -1)[..., 0]
-        curv = y0 - 2 * y1 + y2
-        ok = sign * curv < 0
-        out.append(np.where(ok, y1 - (y0 - y2) ** 2 / (8 * np.where(ok, curv, -sign)), y1))
-    return out[0] - out[1]
+    by the parabola through it and its two (periodic) neighbours
+    (:func:`rotor.dynamics.result.periodic_extremes`): shape ``x.shape[:-1]``."""
+    high, low, _, _ = periodic_extremes(np, np.asarray(x, dtype=np.float64))
+    return high - low
 
 
 def _orders_of(x: np.ndarray, strokes: int, max_order: float) -> tuple[np.ndarray, np.ndarray]:
