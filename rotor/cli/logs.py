@@ -30,6 +30,7 @@ __all__ = [
     "add_bulk",
     "add_parsers",
     "cmd_analyze",
+    "cmd_wheels",
     "cylinder_count",
     "for_each_log",
     "log_plot",
@@ -156,6 +157,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_plot(p, "the combined plot")
     add_bulk(p)
     p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("wheels", help="list the trigger patterns rotor knows (crank and cam wheels), or one's edges")
+    p.add_argument("name", metavar="NAME", nargs="?", help="a pattern's name or alias, or N-g1-g2… (e.g. 36-2-1)")
+    add_json(p)
+    p.set_defaults(func=cmd_wheels)
 
 
 def add_bulk(p: argparse.ArgumentParser) -> None:
@@ -421,3 +427,34 @@ def for_each_log(
     finally:
         if client is not None:
             client.close()
+
+
+def cmd_wheels(args: argparse.Namespace) -> None:
+    """The trigger-pattern catalogue, a line a pattern; with a name, that pattern's edges."""
+    from ..logs.catalogue import CATALOGUE, find_pattern
+
+    if args.name is not None:
+        pat = find_pattern(args.name)
+        if args.json:
+            print_json(pat.to_json_dict())
+            return
+        rows = [
+            pat.describe(),
+            f"  kind {pat.kind}, turn {pat.period_deg:g}° of crankshaft, position carried by {pat.read} edges",
+            "  rising edges [deg]:  " + (", ".join(f"{x:g}" for x in pat.rising_deg) or "not stated"),
+            "  falling edges [deg]: " + (", ".join(f"{x:g}" for x in pat.falling_deg) or "not stated"),
+        ]
+        if pat.aliases:
+            rows.append("  also known as: " + ", ".join(pat.aliases))
+        if pat.source:
+            rows.append(f"  geometry: {pat.source}")
+        print_text("\n".join(rows))
+        return
+    if args.json:
+        print_json({"patterns": [p.to_json_dict() for p in CATALOGUE.values()]})
+        return
+    lines = [
+        f"{p.name:24s} {p.kind:5s} {p.edges_per_turn:3d} edges/{p.period_deg:g}°  {p.title}" for p in CATALOGUE.values()
+    ]
+    lines.append("any N-g1-g2… wheel by its shorthand too (e.g. 60-2, 36-2-2-2); `rotor wheels NAME` shows one's edges")
+    print_text("\n".join(lines))

@@ -1,0 +1,312 @@
+"""The catalogue of production trigger patterns, by name, each an edge list
+(:class:`rotor.logs.patterns.TriggerPattern`) with its published source.
+
+Angles are crankshaft degrees over the pattern's turn (360° for a crank wheel, 720° for
+a cam wheel), counted from the angle the source counts from. The geometry of the named
+production patterns is that of the rusEFI project's trigger decoders (rusEFI, "trigger
+decoders", ``firmware/controllers/trigger/decoders/``: the file is named with each), the
+open-source engine controller whose unit tests decode real captures of these wheels.
+The missing-tooth wheels (``60-2``, ``36-1``, …) are the generic ``N-M`` form, also
+available by shorthand for any N and gaps (:func:`find_pattern`).
+
+``rotor wheels`` lists the catalogue; ``rotor wheels NAME`` shows one pattern's edges.
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..errors import LogError
+from .patterns import TriggerPattern, pattern_from_wheel
+
+__all__ = ["CATALOGUE", "find_pattern", "catalogue_names"]
+
+_MITSU = "rusEFI trigger decoders, trigger_mitsubishi.cpp"
+_MAZDA = "rusEFI trigger decoders, trigger_mazda.cpp"
+_CHRYSLER = "rusEFI trigger decoders, trigger_chrysler.cpp"
+_NISSAN = "rusEFI trigger decoders, trigger_nissan.cpp"
+_UNIVERSAL = "rusEFI trigger decoders, trigger_universal.cpp"
+_MISC = "rusEFI trigger decoders, trigger_misc.cpp"
+
+
+def _cam(x: float) -> float:
+    """Cam degrees as crankshaft degrees."""
+    return 2.0 * x
+
+
+def _nm(name: str, title: str, teeth: int, gaps: tuple, layout: tuple | None, source: str, aliases=()):
+    p = pattern_from_wheel(teeth, gaps, layout)
+    return TriggerPattern(name, title, 360.0, p.rising_deg, p.falling_deg, "rising", "crank", source, tuple(aliases))
+
+
+def _build() -> dict[str, TriggerPattern]:
+    pats = [
+        _nm("60-2", "60-2 missing-tooth crank wheel (Bosch; GM 58x read by its teeth)", 60, (2,), None, _UNIVERSAL),
+        _nm("36-1", "36-1 missing-tooth crank wheel (Ford EDIS)", 36, (1,), None, _UNIVERSAL),
+        _nm("36-2", "36-2 missing-tooth crank wheel (Toyota, Mazda)", 36, (2,), None, _UNIVERSAL),
+        _nm("24-1", "24-1 missing-tooth crank wheel", 24, (1,), None, _UNIVERSAL),
+        _nm("12-1", "12-1 missing-tooth crank wheel", 12, (1,), None, _UNIVERSAL),
+        _nm("8-1", "8-1 missing-tooth crank wheel (Kawasaki motorcycles)", 8, (1,), None, _UNIVERSAL),
+        _nm("4-1", "4-1 missing-tooth crank wheel", 4, (1,), None, _UNIVERSAL),
+        _nm(
+            "36-2-1",
+            "Mitsubishi 4B11 crank: 36 positions, 17 teeth, 2 missing, 16 teeth, 1 missing",
+            36,
+            (1, 2),
+            (17, 16),
+            _MITSU,
+            ("TT_36_2_1",),
+        ),
+        _nm(
+            "36-2-1-1",
+            "Mitsubishi 6G75 crank: 36 positions, 11 teeth, 1 missing, 11 teeth, 1 missing, 10 teeth, 2 missing",
+            36,
+            (2, 1, 1),
+            (11, 11, 10),
+            _MITSU,
+            ("TT_36_2_1_1",),
+        ),
+        _nm(
+            "36-2-2",
+            "Dodge Neon 2003 crank: 36 positions, two gaps of 2 missing teeth 180° apart",
+            36,
+            (2, 2),
+            (16, 16),
+            _CHRYSLER,
+            ("TT_DODGE_NEON_2003_CRANK",),
+        ),
+        TriggerPattern(
+            "arctic-cat",
+            "Arctic Cat two-stroke crank: 24 positions, 11 teeth, 1 missing, 10 teeth, 2 missing",
+            360.0,
+            tuple([x - 7.5 for x in range(45, 196, 15)] + [x - 7.5 for x in range(225, 361, 15)]),
+            tuple(list(range(45, 196, 15)) + list(range(225, 361, 15))),
+            "falling",
+            "crank",
+            _MISC,
+            ("TT_ARCTIC_CAT", "24-1-2"),
+        ),
+        TriggerPattern(
+            "mazda-nb-crank",
+            "Mazda Miata NB crank: two 4° teeth each half turn, rising edges 70° and 110° apart",
+            360.0,
+            (110.0, 180.0, 290.0, 0.0),
+            (114.0, 184.0, 294.0, 4.0),
+            "rising",
+            "crank",
+            _MAZDA,
+            ("TT_MIATA_VVT",),
+        ),
+        TriggerPattern(
+            "mazda-nb-cam",
+            "Mazda Miata NB cam: three rising edges a cycle, 319°, 41° and 360° apart",
+            720.0,
+            (0.0, 360.0, 679.0),
+            (),
+            "rising",
+            "cam",
+            _MAZDA,
+            ("VVT_MIATA_NB",),
+        ),
+        TriggerPattern(
+            "mazda-na-cas-1",
+            "Mazda Miata NA cam-angle sensor, first signal: windows of 72° and 143° a cycle",
+            720.0,
+            (216.9, 577.0),
+            (288.8, 0.0),
+            "both",
+            "cam",
+            _MAZDA,
+            ("TT_MAZDA_MIATA_NA",),
+        ),
+        TriggerPattern(
+            "mazda-na-cas-2",
+            "Mazda Miata NA cam-angle sensor, second signal: four windows of about 70° a cycle",
+            720.0,
+            (53.0, 232.6, 412.4, 592.9),
+            (122.6, 302.6, 482.8, 662.9),
+            "both",
+            "cam",
+            _MAZDA,
+        ),
+        TriggerPattern(
+            "mitsubishi-6g72-cam",
+            "Mitsubishi 6G72 cam: four lows of 30, 65, 55 and 67.5 cam° a cam turn",
+            720.0,
+            tuple(_cam(x) for x in (82.5, 177.5, 262.5, 0.0)),
+            tuple(_cam(x) for x in (52.5, 112.5, 207.5, 292.5)),
+            "both",
+            "cam",
+            _MITSU,
+            ("TT_VVT_MITSU_6G72",),
+        ),
+        TriggerPattern(
+            "mitsubishi-4g63-crank",
+            "Mitsubishi 4G63 crank: two teeth 180° apart, no gap",
+            360.0,
+            (0.0, 180.0),
+            (80.0, 260.0),
+            "rising",
+            "crank",
+            _MITSU,
+        ),
+        TriggerPattern(
+            "mitsubishi-4g63-cam",
+            "Mitsubishi 4G63 cam: a wide and a narrow tooth (135–225 and 315–360 cam°)",
+            720.0,
+            (_cam(135.0), _cam(315.0)),
+            (_cam(225.0), 0.0),
+            "both",
+            "cam",
+            _MITSU,
+            ("VVT_MITSUBISHI_4G63",),
+        ),
+        TriggerPattern(
+            "12-tooth",
+            "12 evenly spaced crank teeth (Nissan cam-angle disc of 24 slots at cam speed)",
+            360.0,
+            tuple(30.0 * k for k in range(12)),
+            tuple(30.0 * k + 15.0 for k in range(12)),
+            "rising",
+            "crank",
+            _UNIVERSAL,
+            ("TT_12_TOOTH_CRANK",),
+        ),
+        TriggerPattern(
+            "single-tooth-cam",
+            "one cam tooth a cycle (phase)",
+            720.0,
+            (0.0,),
+            (20.0,),
+            "rising",
+            "cam",
+            _UNIVERSAL,
+            ("VVT_SINGLE_TOOTH",),
+        ),
+        TriggerPattern(
+            "dodge-neon-2003-cam",
+            "Dodge Neon 2003 cam: seven windows rising at 144, 216, 288, 360, 540, 612 and 684°",
+            720.0,
+            (144.0, 216.0, 288.0, 360.0, 540.0, 612.0, 684.0),
+            (180.0, 252.0, 324.0, 504.0, 576.0, 648.0, 0.0),
+            "rising",
+            "cam",
+            _CHRYSLER,
+            ("TT_DODGE_NEON_2003_CAM",),
+        ),
+        TriggerPattern(
+            "bosch-quick-start-cam",
+            "Bosch quick-start cam: two wide and two narrow teeth (70, 20, 20, 70 cam°)",
+            720.0,
+            tuple(_cam(x) for x in (20.0, 110.0, 200.0, 290.0)),
+            tuple(_cam(x) for x in (90.0, 130.0, 220.0, 0.0)),
+            "falling",
+            "cam",
+            _UNIVERSAL,
+            ("TT_VVT_BOSCH_QUICK_START",),
+        ),
+        TriggerPattern(
+            "nissan-hr-cam-in",
+            "Nissan HR intake cam: four 10 cam° teeth ending at 120, 142, 240 and 360 cam°",
+            720.0,
+            tuple(_cam(x) for x in (110.0, 132.0, 230.0, 350.0)),
+            tuple(_cam(x) for x in (120.0, 142.0, 240.0, 0.0)),
+            "rising",
+            "cam",
+            _NISSAN,
+            ("TT_NISSAN_HR_CAM_IN",),
+        ),
+    ]
+    return {p.name: p for p in pats}
+
+
+CATALOGUE: dict[str, TriggerPattern] = _build()
+"""The named patterns, by name."""
+
+
+def catalogue_names() -> tuple[str, ...]:
+    """Every catalogue name, in the catalogue's order."""
+    return tuple(CATALOGUE)
+
+
+def find_pattern(name: str) -> TriggerPattern:
+    """The pattern named ``name``: a catalogue name or alias (any case, ``_`` for ``-``),
+    or an ``N-g1-g2-…`` shorthand (gaps spread as evenly as they go; a catalogue entry of
+    that shorthand first). A :class:`LogError` naming the closest names otherwise."""
+    if not isinstance(name, str):
+        raise TypeError(f"pattern = {name!r}: a catalogue name (a str)")
+    key = name.strip().lower().replace("_", "-")
+    for p in CATALOGUE.values():
+        if key == p.name or key in (a.lower().replace("_", "-") for a in p.aliases):
+            return p
+    m = re.fullmatch(r"(\d+)((?:-\d+)*)", key)
+    if m:
+        teeth = int(m.group(1))
+        gaps = tuple(int(g) for g in re.findall(r"\d+", m.group(2)))
+        if 3 <= teeth <= 1000 and sum(gaps) <= teeth - 2 * max(len(gaps), 1):
+            return pattern_from_wheel(teeth, gaps)
+    import difflib
+
+    close = difflib.get_close_matches(key, list(CATALOGUE), n=3, cutoff=0.4)
+    hint = f" (closest: {', '.join(close)})" if close else ""
+    raise LogError(f"pattern {name!r}: not in the catalogue{hint}; `rotor wheels` lists the names", argument="wheel")
+
+
+def edge_strip(pattern: TriggerPattern, width: int = 72) -> str:
+    """A picture of ``pattern``'s turn in ``width`` characters, of the edges that carry its
+    position: ``^`` where a rising edge falls, ``v`` a falling one, ``X`` both, ``.`` none
+    (left: angle 0)."""
+    cells = [" "] * width
+    marks = {"rising": "^", "falling": "v"}
+    shown = ("rising", "falling") if pattern.read == "both" else (pattern.read,)
+    for polarity, mark in ((q, marks[q]) for q in shown):
+        for a in pattern.angles_deg(polarity):
+            k = min(int(a / pattern.period_deg * width), width - 1)
+            cells[k] = "X" if cells[k] not in (" ", mark) else mark
+    return "".join(c if c != " " else "." for c in cells)
+
+
+def catalogue_markdown() -> str:
+    """The reference page of the catalogue (``docs/reference/trigger-patterns.md``): every
+    pattern with its edges and a picture of them."""
+    out = [
+        "# Trigger patterns",
+        "",
+        "<!-- generated by rotor.logs.catalogue.catalogue_markdown(); tests/logs/test_catalogue.py checks it -->",
+        "",
+        "Every pattern rotor knows by name (`rotor wheels` lists them, `rotor wheels NAME` shows one; in Python",
+        "`rotor.logs.catalogue.find_pattern(NAME)`). Angles are crankshaft degrees over the pattern's turn:",
+        "360° for a wheel on the crankshaft, 720° for one on the camshaft. Any `N-g1-g2…` missing-tooth wheel",
+        "is also named by its shorthand. The geometry of the production patterns is that of the rusEFI",
+        "project's trigger decoders (the source file is named with each).",
+        "",
+        "In the pictures each character is 1/72 of the turn, angle 0 at the left, and shows the edges that",
+        "carry the position: `^` a rising edge, `v` a falling one, `X` both in one character.",
+        "",
+    ]
+    for p in CATALOGUE.values():
+        rep = p.repeats()
+        out += [
+            f"## `{p.name}`",
+            "",
+            f"{p.title}. {p.kind.capitalize()} wheel, turn {p.period_deg:g}°, {p.edges_per_turn} {p.read} edges a turn"
+            + (
+                f"; its spacing repeats {rep}× a turn, so timing alone gives its angle modulo {p.period_deg / rep:g}°"
+                if rep > 1
+                else ""
+            )
+            + ".",
+            "",
+            "```text",
+            edge_strip(p),
+            "```",
+            "",
+            "- rising edges [deg]: " + (", ".join(f"{x:g}" for x in p.rising_deg) or "not stated"),
+            "- falling edges [deg]: " + (", ".join(f"{x:g}" for x in p.falling_deg) or "not stated"),
+        ]
+        if p.aliases:
+            out.append("- also known as: " + ", ".join(f"`{a}`" for a in p.aliases))
+        if p.source:
+            out.append(f"- geometry: {p.source}")
+        out.append("")
+    return "\n".join(out)
