@@ -41,6 +41,7 @@ def test_every_command_is_there():
         "info",
         "plot",
         "presets",
+        "wheels",
         "steady",
         "simulate",
         "analyze",
