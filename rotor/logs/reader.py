@@ -116,6 +116,10 @@ their columns stand (``Time[s], Channel 1, Channel 0``: the second column is the
 further channels are skipped."""
 
 
+_TIME_NAME = re.compile(r"(time|timestamp|t)\s*(\[\s*[mµu]?s\s*\]|\(\s*[mµu]?s\s*\))?", re.IGNORECASE)
+"""A first column's name that makes its line a header, whatever the other columns are named."""
+
+
 def _known_header(tokens: list) -> tuple[str, list] | None:
     """(format name, column spec) of a known export's header, or None."""
     for fmt, (first, rest, names) in KNOWN_HEADERS.items():
@@ -428,6 +432,8 @@ def read_log(
     tokens = [t.strip() for t in (first[1].split(sep) if sep else first[1].split())]
     numeric = [_is_number(t) for t in tokens if t != ""]
     header = not any(numeric)
+    if not header and not all(numeric) and tokens and _TIME_NAME.fullmatch(tokens[0]):
+        header = True  # a time column's name, then channels named by numbers (e.g. ``Time[s], 0, 1``)
     if not header and not all(numeric):
         bad = next(t for t in tokens if t != "" and not _is_number(t))
         raise LogError(

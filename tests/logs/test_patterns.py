@@ -134,3 +134,14 @@ def test_real_captures_read_as_their_documented_pattern(name, columns, pattern, 
     # the median speed of the turns inside the documented range, ±2 %; no turn far outside it
     assert 0.98 * lo <= np.median(rpm) <= 1.02 * hi
     assert np.all((rpm > 0.5 * lo) & (rpm < 1.5 * hi))
+
+
+def test_a_header_of_a_time_name_and_channel_numbers_is_a_header(tmp_path):
+    f = tmp_path / "capture.csv"
+    f.write_text("Time[s], 0, 1\n0.0, 1, 0\n0.001, 0, 0\n0.002, 1, 1\n")
+    log = read_log(f, "time,encoder_d,cam_d")
+    np.testing.assert_array_equal(log["encoder_d"], [1.0, 0.0, 1.0])
+    bad = tmp_path / "mixed.csv"
+    bad.write_text("0,001;x\n1;2\n")
+    with pytest.raises(LogError, match="mixes numbers and text"):
+        read_log(bad, "time,encoder_v")
