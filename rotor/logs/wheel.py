@@ -676,13 +676,90 @@ def order_fit_matrix(phi: ArrayLike, orders: Sequence[float]) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
+FIT_MATRIX_CELLS = 4_000_000
+"""The largest design matrix of the engine's orders fitted directly [cells]; a larger fit (a
+wheel of thousands of teeth) runs matrix-free by FFTs (:func:`_fitted_orders`)."""
+
+
+def _fitted_orders(phi: np.ndarray, a: np.ndarray, clean: np.ndarray, keep: Sequence[int], teeth: int) -> np.ndarray:
+    """The least-squares fit of a constant and the orders ``keep`` to ``a`` at the teeth
+    ``clean`` (angles ``phi`` [rad] on the wheel's grid of ``teeth`` positions), evaluated
+    at every tooth. Directly where the design matrix is small; else by LSQR with the
+    matrix applied by FFTs over the grid (the same minimum to the solver's tolerance)."""
+    cols = 1 + 2 * len(keep)
+    if phi.size * cols <= FIT_MATRIX_CELLS:
+        X = order_fit_matrix(phi, keep)
+        beta, *_ = np.linalg.lstsq(X[clean], a[clean], rcond=None)
+        return X @ beta
+    from scipy.sparse.linalg import LinearOperator, lsqr
+
+    pos = np.round(phi * teeth / TWO_PI).astype(np.int64) % teeth
+    ks = np.asarray(keep, dtype=np.int64)
+    used = pos[clean]
+
+    def on_grid(beta: np.ndarray) -> np.ndarray:
+        z = np.zeros(teeth, complex)
+        z[0] = beta[0]
+        z[ks] = 0.5 * (beta[1::2] - 1j * beta[2::2])
+        z[(-ks) % teeth] += np.conj(z[ks])
+        return np.fft.ifft(z).real * teeth
+
+    def matvec(beta):
+        return on_grid(np.ravel(beta))[used]
+
+    def rmatvec(y):
+        g = np.zeros(teeth)
+        g[used] = np.ravel(y)
+        f = np.fft.fft(g)
+        out = np.empty(cols)
+        out[0] = f[0].real
+        out[1::2] = f[ks].real
+        out[2::2] = -f[ks].imag
+        return out
+
+    op = LinearOperator((used.size, cols), matvec=matvec, rmatvec=rmatvec, dtype=np.float64)
+    beta = lsqr(op, a[clean], atol=1e-14, btol=1e-14, iter_lim=500)[0]
+    return on_grid(beta)[pos]
+
+
 def _order_amplitudes(phi, values, kmax):
-    """(orders 1 … kmax, amplitude of each) of values at angles phi, single-order least squares."""
+    """(orders 1 … kmax, amplitude of each) of values at angles phi [rad], each order fitted
+    alone by least squares (a cosine and a sine). Where the angles sit on a grid of
+    2π/(2·kmax + 2) or finer (a wheel's tooth positions), the sums of the normal equations
+    come from FFTs of the grid, in O(N log N) for any number of orders; else order by order."""
     orders = np.arange(1, kmax + 1)
+    phi = np.asarray(phi, dtype=np.float64)
     x = values - values.mean()
+    n = max(2 * kmax + 2, 4)
+    for grid in (n, n + 1):
+        pos = phi * grid / TWO_PI
+        k = np.round(pos).astype(np.int64)
+        if np.allclose(pos, k, atol=1e-9) and np.unique(k % grid).size == k.size:
+            break
+    else:
+        grid = 0
+    if grid:
+        m = np.zeros(grid)
+        y = np.zeros(grid)
+        m[k % grid] = 1.0
+        y[k % grid] = x
+        Fm = np.fft.fft(m)
+        Fy = np.fft.fft(y)
+        c2 = Fm[(2 * orders) % grid]
+        cc = 0.5 * (k.size + c2.real)  # Σ cos²
+        ss = 0.5 * (k.size - c2.real)  # Σ sin²
+        cs = -0.5 * c2.imag  # Σ cos·sin
+        yc, ys = Fy[orders].real, -Fy[orders].imag
+        det = cc * ss - cs * cs
+        with np.errstate(invalid="ignore", divide="ignore"):
+            a = (ss * yc - cs * ys) / det
+            b = (cc * ys - cs * yc) / det
+        ok = det > 1e-9 * k.size**2
+        amp = np.where(ok, np.hypot(a, b), 0.0)
+        return orders, amp
     amp = np.empty(orders.size)
-    for i, k in enumerate(orders):
-        A = np.stack([np.cos(k * phi), np.sin(k * phi)], axis=1)
+    for i, kk in enumerate(orders):
+        A = np.stack([np.cos(kk * phi), np.sin(kk * phi)], axis=1)
         c, *_ = np.linalg.lstsq(A, x, rcond=None)
         amp[i] = np.hypot(*c)
     return orders, amp
@@ -827,11 +904,9 @@ def estimate_tooth_errors(
         keep = tuple(int(k) for k in engine_orders)
         if any(k < 1 or k >= w.teeth // 2 for k in keep):
             raise LogError(f"engine_orders = {engine_orders!r}: whole orders from 1 to {w.teeth // 2 - 1}")
-    X = order_fit_matrix(phi, keep)
-    beta, *_ = np.linalg.lstsq(X[clean], a[clean], rcond=None)
-    e = a - X @ beta
+    e = a - _fitted_orders(phi, a, clean, keep, w.teeth)
     # the wheel's errors per order at the orders estimated (flat for independent tooth errors): what the
     # orders left to the engine probably hold of the wheel's
-    free = max((int(np.count_nonzero(clean)) - X.shape[1]) / 2, 1.0)
+    free = max((int(np.count_nonzero(clean)) - (1 + 2 * len(keep))) / 2, 1.0)
     order_rms = float(np.sqrt(2 * np.mean(e[clean] ** 2) / free))
     return ToothErrors(w.spec, e, method, R, keep, se, source, order_rms)

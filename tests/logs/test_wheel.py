@@ -6,7 +6,7 @@ import pytest
 
 import rotor
 from rotor import LogError
-from rotor.logs.wheel import TWO_PI
+from rotor.logs.wheel import TWO_PI, ToothTrack
 
 
 def coastdown_t_of_theta(w0=3000 / 30 * np.pi, w1=500 / 30 * np.pi, revs=200, fluct=0.15):
@@ -192,3 +192,43 @@ def test_tooth_errors_save_names_the_target(tmp_path):
     with pytest.raises(LogError, match=rf"^{target}: cannot write the tooth errors: no folder"):
         te.save(target)
     assert not (tmp_path / "no").exists()
+
+
+def test_tooth_errors_fitted_matrix_free_equal_the_direct_fit():
+    from rotor.logs import wheel as W
+
+    w = rotor.parse_wheel("60-2")
+    rng = np.random.default_rng(2)
+    err = np.deg2rad(rng.normal(0.0, 0.2, w.edges_per_rev))
+    R = 8
+    tooth = np.tile(np.arange(w.edges_per_rev), R + 1)
+    rev = np.repeat(np.arange(R + 1), w.edges_per_rev)
+    phi = 2 * np.pi * rev + w.tooth_angles_rad[tooth] + err[tooth]
+    t = (phi + 0.02 * np.sin(2 * phi)) / (2 * np.pi * 25)  # an engine's order 2 on top
+    track = ToothTrack(t, tooth, rev, w)
+    direct = rotor.estimate_tooth_errors(track, engine_orders=(1, 2, 3))
+    old_cells = W.FIT_MATRIX_CELLS
+    try:
+        W.FIT_MATRIX_CELLS = 0  # every fit by FFTs
+        by_fft = rotor.estimate_tooth_errors(track, engine_orders=(1, 2, 3))
+        auto_fft = rotor.estimate_tooth_errors(track)
+    finally:
+        W.FIT_MATRIX_CELLS = old_cells
+    np.testing.assert_allclose(by_fft.errors_rad, direct.errors_rad, atol=1e-12)
+    auto = rotor.estimate_tooth_errors(track)
+    assert auto_fft.engine_orders == auto.engine_orders
+    np.testing.assert_allclose(auto_fft.errors_rad, auto.errors_rad, atol=1e-12)
+
+
+def test_tooth_errors_of_a_wheel_of_100000_positions_in_seconds():
+    import time
+
+    w = rotor.parse_wheel("100000-2")
+    E, R = w.edges_per_rev, 4
+    tooth = np.tile(np.arange(E), R + 1)
+    rev = np.repeat(np.arange(R + 1), E)
+    t = (2 * np.pi * rev + w.tooth_angles_rad[tooth]) / (2 * np.pi * 50)
+    t0 = time.perf_counter()
+    te = rotor.estimate_tooth_errors(ToothTrack(t, tooth, rev, w))
+    assert time.perf_counter() - t0 < 20  # about a second here; the direct fit took minutes
+    assert np.max(np.abs(te.errors_rad)) < 1e-9  # a perfect wheel
