@@ -1,6 +1,13 @@
 """Writing files whole or not at all, JSON files saved and loaded one way, and the one
 CSV writer (no NaN or infinity written).
 
+**Where a file is written.** Every file rotor writes goes through :func:`atomic_path`
+(or :func:`atomic_paths`, several files put in place together, all or none), which
+checks the target first (:func:`check_writable_file`): a file is written onto a new name
+or onto an existing regular file, never onto a folder, a device (``/dev/null``), a named
+pipe, a socket or a symbolic link (the link is neither replaced nor written through; the
+error names where it points).
+
 Base layer: imports nothing from rotor but :mod:`rotor.errors`.
 """
 
@@ -22,15 +29,18 @@ from .errors import InternalError
 __all__ = [
     "INTERRUPT",
     "atomic_path",
+    "atomic_paths",
     "check_folder_writable",
     "check_writable_file",
     "csv_text",
     "find_nonfinite",
+    "json_file_text",
     "key_path_text",
     "load_json",
     "made_folders",
     "save_json",
     "write_text_atomic",
+    "write_texts_atomic",
 ]
 
 PathArg = str | os.PathLike
@@ -213,13 +223,58 @@ def _new_file_beside(path: str) -> str:
     raise FileExistsError(errno.EEXIST, "no free temporary name in the folder", path)
 
 
+def _not_a_file_kind(mode: int) -> str | None:
+    """What an existing entry of ``mode`` (``st_mode`` of ``os.lstat``) is, where a file
+    cannot be written onto it: ``"a device"``, ``"a named pipe (FIFO)"``, …; ``None`` for a
+    regular file."""
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def _check_target(path: str) -> None:
+    """A one-line ``OSError`` naming ``path`` where what is there now is not a regular file
+    a write may replace: a symbolic link (named with where it points), a folder, a device,
+    a named pipe or a socket. Nothing there is fine."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError:
+        return  # a parent that cannot be searched: the folder's own check names it
+    if stat.S_ISLNK(mode):
+        try:
+            where = os.readlink(path)
+        except OSError:
+            where = "another file"
+        raise OSError(
+            errno.EEXIST,
+            f"is a link to {where}: rotor writes no file through a link; give a file name of its own",
+            path,
+        )
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(errno.EISDIR, "is a folder: give a file name", path)
+    kind = _not_a_file_kind(mode)
+    if kind is not None:
+        raise OSError(errno.EEXIST, f"is {kind}, not a regular file: give a file name", path)
+
+
 def check_writable_file(path: PathArg) -> None:
     """A one-line ``OSError`` naming ``path`` when no file can be written there: a folder's
-    name, a folder that does not exist, a "folder" that is a file, or a folder this user
-    cannot write. Nothing is made: a check before the work starts."""
+    name, a folder that does not exist, a "folder" that is a file, a folder this user
+    cannot write, or something that exists and is not a regular file (a symbolic link,
+    named with where it points; a device, a named pipe, a socket). Nothing is made: a check
+    before the work starts."""
     path = _check_path(path)
-    if path.endswith(("/", os.sep)) or os.path.isdir(path):
+    if path.endswith(("/", os.sep)):
         raise IsADirectoryError(errno.EISDIR, "is a folder: give a file name", path)
+    _check_target(path)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         parent = folder
@@ -232,6 +287,25 @@ def check_writable_file(path: PathArg) -> None:
         raise PermissionError(errno.EACCES, f"cannot write into the folder {folder} (permission denied)", path)
 
 
+def _user_error(e: OSError, path: str, tmp: str | None) -> OSError | None:
+    """``e`` renamed to name ``path`` where it names the temporary file ``tmp``, the folder
+    or nothing; ``None`` where it names another file (then raised as it is)."""
+    names_tmp = tmp is not None and (str(e.filename).startswith(tmp) or e.filename2 == tmp)
+    if e.filename is None or names_tmp or e.filename == os.path.dirname(os.path.abspath(path)):
+        return type(e)(e.errno or errno.EIO, e.strerror or str(e), path)
+    return None
+
+
+def _keep_mode(path: str, tmp: str) -> None:
+    """Give ``tmp`` the mode of the regular file ``path`` it will replace, if any."""
+    try:
+        old_mode = stat.S_IMODE(os.stat(path).st_mode) if os.path.isfile(path) else None
+        if old_mode is not None:
+            os.chmod(tmp, old_mode)
+    except OSError:
+        pass  # keeping the old mode is a courtesy; the write goes on with the umask's
+
+
 @contextmanager
 def atomic_path(path: PathArg) -> Iterator[str]:
     """Yield a temporary path beside ``path`` (a file's path); rename it onto ``path`` if
@@ -241,31 +315,130 @@ def atomic_path(path: PathArg) -> Iterator[str]:
     **Mode:** the file ends with the mode a plain ``open(path, "w")`` gives it: a new file
     gets ``0o666 & ~umask``; a file that is replaced keeps its mode.
     **Errors:** an ``OSError`` raised while writing or renaming names ``path``, never the
-    temporary file: a folder's name, a missing folder or a "folder" that is a file are
-    refused before anything is written. A ``path`` that is not a ``str`` or path-like
-    object raises ``TypeError``."""
+    temporary file: a folder's name, a missing folder, a "folder" that is a file, and a
+    ``path`` that exists and is not a regular file (a symbolic link, a device, a named
+    pipe, a socket) are refused before anything is written, and checked again just before
+    the rename. A ``path`` that is not a ``str`` or path-like object raises ``TypeError``."""
     path = _check_path(path)
     check_writable_file(path)
     tmp = None
     try:
         tmp = _new_file_beside(path)
-        try:
-            old_mode = stat.S_IMODE(os.stat(path).st_mode) if os.path.isfile(path) else None
-            if old_mode is not None:
-                os.chmod(tmp, old_mode)
-        except OSError:
-            pass  # keeping the old mode is a courtesy; the write goes on with the umask's
+        _keep_mode(path, tmp)
         yield tmp
         INTERRUPT.check()  # an interrupt that was dropped still stops the file being put in place
+        _check_target(path)  # still a regular file or nothing
         os.replace(tmp, path)
     except OSError as e:
-        names_tmp = tmp is not None and (str(e.filename).startswith(tmp) or e.filename2 == tmp)
-        if e.filename is None or names_tmp or e.filename == os.path.dirname(os.path.abspath(path)):
-            raise type(e)(e.errno or errno.EIO, e.strerror or str(e), path) from None
+        renamed = _user_error(e, path, tmp)
+        if renamed is not None:
+            raise renamed from None
         raise
     finally:
         if tmp is not None and os.path.exists(tmp):
             os.remove(tmp)
+
+
+def _same_target(a: str, b: str) -> bool:
+    """Whether the paths ``a`` and ``b`` name one file (the same name, or one existing file)."""
+    if os.path.abspath(a) == os.path.abspath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _set_aside(path: str) -> str | None:
+    """A second name (a hard link, else a copy) beside the existing regular file ``path``,
+    so that it can be put back; ``None`` where ``path`` does not exist."""
+    if not os.path.lexists(path):
+        return None
+    for _ in range(100):
+        aside = os.path.join(os.path.dirname(os.path.abspath(path)), f".rotor-{secrets.token_hex(4)}.old")
+        if os.path.lexists(aside):
+            continue
+        try:
+            os.link(path, aside)
+        except FileExistsError:
+            continue
+        except OSError:  # a file system without hard links: a copy
+            import shutil
+
+            shutil.copy2(path, aside)
+        return aside
+    raise FileExistsError(errno.EEXIST, "no free temporary name in the folder", path)
+
+
+@contextmanager
+def atomic_paths(paths: Sequence[PathArg]) -> Iterator[list[str]]:
+    """:func:`atomic_path` for several files that belong together (a log and the file
+    beside it that describes it): yield a temporary path beside each of ``paths``; if the
+    block succeeds, put them all in place, else none. Every target is checked (as
+    :func:`check_writable_file` does) before anything is made; they are renamed in order,
+    and where a later rename fails the earlier ones are undone (the file each replaced is
+    put back, a new one removed), so that a reader finds all the old files or all the new.
+    Two of ``paths`` naming one file are refused (``ValueError``). An ``OSError`` names the
+    user's path that failed."""
+    targets = [_check_path(p) for p in paths]
+    for i, a in enumerate(targets):
+        for b in targets[:i]:
+            if _same_target(a, b):
+                raise ValueError(f"{b} and {a}: one file given twice for two outputs")
+    for path in targets:
+        check_writable_file(path)
+    tmps: list[str] = []
+    try:
+        for path in targets:
+            tmps.append(_new_file_beside(path))
+            _keep_mode(path, tmps[-1])
+        yield list(tmps)
+        INTERRUPT.check()
+        for path in targets:
+            _check_target(path)  # still a regular file or nothing
+        _put_in_place(targets, tmps)
+    except OSError as e:
+        # an error that names a temporary file names its target instead
+        which = next((i for i, t in enumerate(tmps) if str(e.filename).startswith(t)), 0)
+        renamed = _user_error(e, targets[which], tmps[which] if tmps else None) if targets else None
+        if renamed is not None:
+            raise renamed from None
+        raise
+    finally:
+        for tmp in tmps:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+
+
+def _put_in_place(targets: list[str], tmps: list[str]) -> None:
+    """Rename each of ``tmps`` onto its target; where one fails, undo those done before it
+    and raise its ``OSError`` naming its target."""
+    done: list[tuple[str, str | None]] = []  # (target, its old file set aside)
+    asides: list[str] = []
+    try:
+        for path, tmp in zip(targets, tmps):
+            try:
+                aside = _set_aside(path) if len(targets) > 1 else None
+                if aside is not None:
+                    asides.append(aside)
+                os.replace(tmp, path)
+            except OSError as e:
+                raise type(e)(e.errno or errno.EIO, e.strerror or str(e), path) from None
+            done.append((path, aside))
+    except BaseException:
+        for path, aside in reversed(done):
+            try:
+                if aside is None:
+                    os.remove(path)
+                else:
+                    os.replace(aside, path)
+            except OSError:
+                pass  # undone as far as the file system lets it
+        raise
+    finally:
+        for aside in asides:
+            if os.path.lexists(aside):
+                os.remove(aside)
 
 
 def write_text_atomic(path: PathArg, text: str) -> None:
@@ -278,6 +451,18 @@ def write_text_atomic(path: PathArg, text: str) -> None:
             f.write(text)
 
 
+def write_texts_atomic(texts: Sequence[tuple[PathArg, str]]) -> None:
+    """Write each ``(path, text)`` of ``texts``, all whole or none at all
+    (:func:`atomic_paths`); an ``OSError`` names the path that failed."""
+    for _, text in texts:
+        if not isinstance(text, str):
+            raise TypeError(f"text: expected a str, got {type(text).__name__}")
+    with atomic_paths([p for p, _ in texts]) as tmps:
+        for tmp, (_, text) in zip(tmps, texts):
+            with open(tmp, "w", encoding="utf-8", newline="") as f:
+                f.write(text)
+
+
 def _check_what_error(what: object, error: object) -> None:
     if not isinstance(what, str):
         raise TypeError(f"what = {what!r}: expected words (a str) saying what the file holds")
@@ -285,15 +470,10 @@ def _check_what_error(what: object, error: object) -> None:
         raise TypeError(f"error = {error!r}: expected an exception class such as OSError")
 
 
-def save_json(path: PathArg, data: dict, *, what: str, error: type[Exception] = OSError) -> None:
-    """Write ``data`` as indented JSON (never NaN nor Infinity) to ``path``, whole or not at all.
-
-    **Arguments:** ``path``: the file (a ``str`` or ``pathlib.Path``); ``data``: plain JSON
-    data (a dict); ``what``: what the file holds, in words, for the error (e.g. ``"the
-    calibration"``); ``error``: the exception class raised, with a one-line message naming
-    the file, when the folder is missing, the file cannot be written, or ``data`` holds a
-    NaN or an infinity (named by its key path). Arguments of the wrong type raise
-    ``TypeError`` naming the argument."""
+def json_file_text(path: PathArg, data: dict, *, what: str, error: type[Exception] = OSError) -> str:
+    """The text :func:`save_json` writes to ``path`` for ``data`` (indented JSON, never NaN
+    nor Infinity), with its checks: ``error`` names ``path`` where ``data`` holds a NaN or
+    an infinity (by its key path); data that is not plain JSON raises ``TypeError``."""
     path = _check_path(path)
     _check_what_error(what, error)
     if not isinstance(data, dict):
@@ -302,9 +482,22 @@ def save_json(path: PathArg, data: dict, *, what: str, error: type[Exception] = 
     if found is not None:
         raise error(f"{path}: cannot write {what}: its {key_path_text(found[0])} is {found[1]}, not a number")
     try:
-        text = json.dumps(data, indent=1, allow_nan=False) + "\n"
+        return json.dumps(data, indent=1, allow_nan=False) + "\n"
     except TypeError as e:
         raise TypeError(f"data: not plain JSON data ({e})") from None
+
+
+def save_json(path: PathArg, data: dict, *, what: str, error: type[Exception] = OSError) -> None:
+    """Write ``data`` as indented JSON (never NaN nor Infinity) to ``path``, whole or not at all.
+
+    **Arguments:** ``path``: the file (a ``str`` or ``pathlib.Path``); ``data``: plain JSON
+    data (a dict); ``what``: what the file holds, in words, for the error (e.g. ``"the
+    calibration"``); ``error``: the exception class raised, with a one-line message naming
+    the file, when the folder is missing, the file cannot be written (a folder, a link, a
+    device, …: :func:`check_writable_file`), or ``data`` holds a NaN or an infinity (named
+    by its key path). Arguments of the wrong type raise ``TypeError`` naming the argument."""
+    path = _check_path(path)
+    text = json_file_text(path, data, what=what, error=error)
     try:
         write_text_atomic(path, text)
     except OSError as e:

@@ -36,7 +36,16 @@ from ..fileio import INTERRUPT
 from . import demo, design, diagnostics, engine, logs, monitor, report, run, torsion
 from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
 
-__all__ = ["COMMAND_GROUPS", "build_parser", "check_outputs", "command", "main", "report_error", "warning_line"]
+__all__ = [
+    "COMMAND_GROUPS",
+    "build_parser",
+    "check_outputs",
+    "command",
+    "main",
+    "option_names",
+    "report_error",
+    "warning_line",
+]
 
 COMMAND_GROUPS = (engine, run, logs, diagnostics, monitor, design, torsion, report, demo)
 """The command modules, in the order of ``rotor --help``; each has ``add_parsers(sub)``."""
@@ -266,19 +275,104 @@ OUTPUT_FILES = ("output", "save_calibration", "save_tooth_errors", "record")
 """The options (``args`` attributes) that name a file a command writes."""
 OUTPUT_FOLDERS = {"plot": "the plots", "out": "the report"}
 """The options that name a folder a command writes into, and what it writes there."""
+STANDARD_OUTPUT = frozenset({("table", "output")})
+"""The (command, option) pairs whose file may be ``-``: standard output, where the file is
+the command's whole result. Elsewhere ``-`` is refused: standard output already carries the
+command's result (``--save-calibration``, ``--save-tooth-errors``, ``calibrate --output``),
+the file has another beside it (``--record``'s truth), or the option names a folder."""
+INPUT_FILES = ("engine", "log", "calibration", "tooth_errors")
+"""The options (``args`` attributes) that may name a file a command reads (a value that is
+no existing file, a preset's name or ``estimate``, is not one; ``-`` is standard input)."""
 
 
-def check_outputs(args: argparse.Namespace) -> None:
-    """Refuse, before the work starts, an output the command could not write: a file option
-    (:data:`OUTPUT_FILES`) naming a folder, a missing folder or one this user cannot write;
-    a folder option (:data:`OUTPUT_FOLDERS`) naming a file, a link to nothing or a folder
-    that cannot be written or made. Each is a one-line ``OSError`` naming the user's path."""
+def option_names(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict[str, str]:
+    """{``args`` attribute: how the command line spells it} for the command of ``args``:
+    ``--save-tooth-errors`` for an option, ``LOG`` for a positional argument."""
+    names: dict[str, str] = {}
+    for action in parser._actions:  # argparse keeps a parser's options there
+        if isinstance(action, argparse._SubParsersAction):
+            sub = action.choices.get(str(getattr(args, "command", "")))
+            for a in [] if sub is None else sub._actions:
+                longs = [o for o in a.option_strings if o.startswith("--")]
+                names[a.dest] = longs[0] if longs else (a.option_strings or [str(a.metavar or a.dest.upper())])[0]
+    return names
+
+
+def _flag(names: dict[str, str], key: str) -> str:
+    return names.get(key, "--" + key.replace("_", "-"))
+
+
+def _values(value: object) -> list[str]:
+    """The paths an option's value names: a str, or each str of a list (several LOGs)."""
+    if isinstance(value, str):
+        return [value] if value else []
+    if isinstance(value, (list, tuple)):
+        return [v for v in value if isinstance(v, str) and v]
+    return []
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether the paths ``a`` and ``b`` are one existing file: one name spelt two ways, a
+    link to the other, or a hard link (``os.path.samefile``: the same device and inode)."""
+    try:
+        return os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
+
+
+def check_outputs(args: argparse.Namespace, names: dict[str, str] | None = None) -> None:
+    """Refuse, before the work starts, an output the command could not or must not write:
+
+    - ``-`` where it is not standard output (:data:`STANDARD_OUTPUT`): a ``ValueError``;
+    - an output file that is one of the files the command reads (:data:`INPUT_FILES`; the
+      same name, a link or a hard link): a ``ValueError`` naming both options;
+    - a file option (:data:`OUTPUT_FILES`, and ``--record``'s truth file beside it) naming a
+      folder, a missing folder, one this user cannot write, or something that is not a
+      regular file (a link, a device, a named pipe: :func:`rotor.fileio.check_writable_file`);
+    - a folder option (:data:`OUTPUT_FOLDERS`) naming a file, a link to nothing or a folder
+      that cannot be written or made.
+
+    Each is one line naming the user's path; ``names``: how the command line spells each
+    option (:func:`option_names`; default ``--`` and the attribute's name)."""
     from ..fileio import check_folder_writable, check_writable_file
 
+    names = names or {}
+    command = getattr(args, "command", None)
+    outputs: list[tuple[str, str]] = []  # (the option's words, the path)
     for key in OUTPUT_FILES:
         value = getattr(args, key, None)
-        if isinstance(value, str) and value:
-            check_writable_file(value)
+        if not (isinstance(value, str) and value):
+            continue
+        flag = _flag(names, key)
+        if value == "-":
+            if (command, key) in STANDARD_OUTPUT:
+                continue
+            why = (
+                "the log is written with its truth file beside it, so it needs a file's name"
+                if key == "record"
+                else "standard output carries the command's result"
+            )
+            raise ValueError(f"{flag} -: not standard output here ({why}): give a file name")
+        outputs.append((flag, value))
+        if key == "record":
+            from ..diagnostics.record import truth_path
+
+            outputs.append((f"the truth file of {flag}", os.fspath(truth_path(value))))
+    for key in OUTPUT_FOLDERS:
+        value = getattr(args, key, None)
+        if value == "-":
+            flag = _flag(names, key)
+            raise ValueError(f"{flag} -: {flag} names a folder, not standard output: give a folder")
+    inputs = [(_flag(names, k), v) for k in INPUT_FILES for v in _values(getattr(args, k, None)) if v != "-"]
+    for out_flag, out in outputs:
+        for in_flag, inp in inputs:
+            if _same_file(out, inp):
+                raise ValueError(
+                    f"{out_flag} {out} is the same file as {in_flag} {inp}, which this command reads: "
+                    f"give {out_flag} another file"
+                )
+    for _, path in outputs:
+        check_writable_file(path)
     for key, what in OUTPUT_FOLDERS.items():
         value = getattr(args, key, None)
         if isinstance(value, str) and value:
@@ -328,7 +422,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         words = _join_columns(list(sys.argv[1:] if argv is None else argv))
         try:
-            args = build_parser().parse_args(words)
+            parser = build_parser()
+            args = parser.parse_args(words)
         except KeyboardInterrupt as e:  # Ctrl-C while the command's modules load
             return report_error(e)
         try:
@@ -340,7 +435,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             # imports JAX, while it goes on importing its modules and reading its input
             task = "\0".join(["rotor", *words])
             ask_read_ahead(task)
-            check_outputs(args)
+            check_outputs(args, option_names(parser, args))
             with warnings.catch_warnings():
                 warnings.simplefilter("default")  # each distinct warning once
                 warnings.showwarning = warning_line

@@ -33,7 +33,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="piston kinematics: the textbook lambda series (default, as in Shishkov 2014) or exact",
     )
     p.add_argument("--cylinder", type=int, default=1, help="cylinder number (default 1)")
-    p.add_argument("--output", "-o", metavar="FILE", help="write to FILE instead of standard output")
+    p.add_argument(
+        "--output", "-o", metavar="FILE", help="write to FILE instead of standard output (- is standard output)"
+    )
     p.set_defaults(func=cmd_table)
 
     p = sub.add_parser("info", help="summary of an engine: geometry, IMEP, power, torque range, inertia")
@@ -53,7 +55,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def cmd_table(args: argparse.Namespace) -> None:
     """The textbook table of one cylinder (Shishkov 2014, appendix 5): text, CSV or JSON, to
-    standard output or ``--output``; the same call again reads its kept output
+    standard output or ``--output`` (``-``: standard output); the same call again reads its kept output
     (:mod:`rotor.cli.kept`) without importing JAX."""
     from ..fileio import write_text_atomic
     from .kept import keep_output, kept_output, output_key
@@ -76,7 +78,7 @@ def cmd_table(args: argparse.Namespace) -> None:
         else:
             text = table.to_text()
         keep_output(key, text)
-    if args.output:
+    if args.output and args.output != "-":
         write_text_atomic(args.output, text)
     else:
         print_text(text)

@@ -22,10 +22,22 @@ so that the polar diagrams are smooth.
 (``.rotor-report-…``) and put in place only when every file is in it, so that an error
 (or Ctrl-C) leaves no trace and the old report, if any, as it was. A new ``out_dir``: the
 hidden folder is made beside it and renamed onto it, at once. An existing ``out_dir``
-(empty, or a previous report's: a folder holding only ``index.html``, ``figures/`` and
-``tables/``) keeps its identity, since it may be the working directory or a mount point:
-the hidden folder is made inside it and its three entries replace the old ones by
-renames, the page last. A folder holding anything else is refused, never overwritten.
+(empty, or a previous report's, see below) keeps its identity, since it may be the
+working directory or a mount point: the hidden folder is made inside it and its entries
+replace the old ones by renames, the page last.
+
+**Only its own files.** Beside the page the report writes its record,
+``.rotor-report.json`` (:data:`RECORD_NAME`): every file it wrote (``index.html``,
+``figures/…``, ``tables/…``) with its SHA-256. An existing folder is replaced only where
+everything in it is the report's own: ``index.html``, ``figures/`` and ``tables/`` (real
+folders, not links), each file in them a regular file listed in the record with the
+content listed there, and nothing else (a hidden ``.rotor-report-…`` folder left by a
+killed run apart). Anything else — the user's ``figures/holiday.jpg``, their own
+``index.html``, a subfolder, a link, a report's file edited since, a folder without a
+record (a report of an older rotor included) — refuses the folder with a one-line
+``FileExistsError`` naming it and what is not the report's; nothing there is touched.
+While the entries are swapped the record lists the old files and the new, so that a run
+killed halfway leaves a folder the next report still recognises.
 
 Where the figures are drawn: the diagrams of the results (bearing loads, balance,
 flywheel, the crank table's kinematics) draw themselves in :mod:`rotor.plotting`; the
@@ -72,14 +84,22 @@ __all__ = [
     "report",
     "report_folder",
     "REPORT_ENTRIES",
+    "RECORD_NAME",
     "TEMPORARY_PREFIX",
     "FIGURE_STEP_DEG",
     "DEFAULT_DELTA",
 ]
 
 REPORT_ENTRIES = frozenset({"index.html", "figures", "tables"})
-"""What a report folder holds: a folder holding only these is a previous report, which
-:func:`report` may replace."""
+"""What a report folder holds besides its record (:data:`RECORD_NAME`)."""
+RECORD_NAME = ".rotor-report.json"
+"""The report's record of the files it wrote, in its folder: ``{"written_by": "rotor
+report", "files": {"figures/flywheel.png": ["<sha256>"], …}}`` (paths relative to the
+folder, with ``/``; each file's accepted SHA-256 digests, two while a report replaces
+another). A folder is a previous report, which :func:`report` may replace, only where
+every file in it is listed there with its content (see the module's doc)."""
+RECORD_WRITER = "rotor report"
+"""The record's ``written_by``."""
 TEMPORARY_PREFIX = ".rotor-report-"
 """The name of the hidden folder a report is built in before it is put in place (one left
 by a killed run is not counted as another file of a report's folder)."""
@@ -176,10 +196,107 @@ class Report:
 
 
 # ----------------------------------------------------------------------------- the folder
+def _sha256(path: str) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _read_record(folder: str) -> dict[str, list[str]] | None:
+    """The record (:data:`RECORD_NAME`) in ``folder``: {relative path: accepted SHA-256
+    digests}; ``None`` where there is none, or what is there is not a record rotor wrote."""
+    import json
+    import stat
+
+    path = os.path.join(folder, RECORD_NAME)
+    try:
+        if not stat.S_ISREG(os.lstat(path).st_mode):
+            return None
+        with open(path, encoding="utf-8") as f:
+            data = json.load(f)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("written_by") != RECORD_WRITER or not isinstance(data.get("files"), dict):
+        return None
+    files: dict[str, list[str]] = {}
+    for name, digests in data["files"].items():
+        if not (isinstance(name, str) and isinstance(digests, list) and all(isinstance(d, str) for d in digests)):
+            return None
+        files[name] = list(digests)
+    return files
+
+
+def _record_text(files: dict[str, list[str]]) -> str:
+    import json
+
+    return json.dumps({"written_by": RECORD_WRITER, "files": dict(sorted(files.items()))}, indent=1) + "\n"
+
+
+def _write_record(path: str, files: dict[str, list[str]]) -> None:
+    with open(path, "w", encoding="utf-8", newline="") as f:
+        f.write(_record_text(files))
+
+
+def _files_written(folder: str) -> dict[str, list[str]]:
+    """{relative path: [SHA-256]} of every file the report wrote into ``folder`` (its
+    hidden folder: the page and what is under ``figures/`` and ``tables/``)."""
+    files: dict[str, list[str]] = {}
+    for top, dirs, names in os.walk(folder):
+        dirs.sort()
+        for name in sorted(names):
+            path = os.path.join(top, name)
+            rel = os.path.relpath(path, folder).replace(os.sep, "/")
+            if rel != RECORD_NAME:
+                files[rel] = [_sha256(path)]
+    return files
+
+
+def _not_the_reports(folder: str) -> list[str]:
+    """What the existing folder ``folder`` holds that is not a report's own (see the
+    module's doc), as the names to show: empty for an empty folder or a previous report."""
+    import stat
+
+    record = _read_record(folder)
+    known: dict[str, list[str]] = {} if record is None else record
+    others: list[str] = []
+
+    def own_file(rel: str) -> None:
+        path = os.path.join(folder, *rel.split("/"))
+        try:
+            regular = stat.S_ISREG(os.lstat(path).st_mode)
+        except OSError:
+            regular = False
+        if not regular or rel not in known:
+            others.append(rel)
+        elif _sha256(path) not in known[rel]:
+            others.append(f"{rel}, changed since the report wrote it")
+
+    for name in sorted(os.listdir(folder)):
+        if name.startswith(TEMPORARY_PREFIX) or (name == RECORD_NAME and record is not None):
+            continue
+        path = os.path.join(folder, name)
+        if name in REPORT_ENTRIES - {"index.html"} and os.path.isdir(path) and not os.path.islink(path):
+            for inner in sorted(os.listdir(path)):
+                if os.path.isdir(os.path.join(path, inner)) and not os.path.islink(os.path.join(path, inner)):
+                    others.append(f"{name}/{inner}/")
+                else:
+                    own_file(f"{name}/{inner}")
+        elif name == "index.html":
+            own_file(name)
+        else:
+            others.append(name + ("/" if os.path.isdir(path) and not os.path.islink(path) else ""))
+    return others
+
+
 def _check_out_dir(out_dir: Any) -> str:
     """``out_dir`` as a ``str`` if a report can be written there, else a one-line
-    ``OSError`` naming it (a file, a folder with other files, a parent that is a file, a
-    link that points nowhere, a folder this user cannot write): checked before the work."""
+    ``OSError`` naming it (a file, a folder holding anything that is not a previous
+    report's own files, a parent that is a file, a link that points nowhere, a folder this
+    user cannot write): checked before the work."""
     if isinstance(out_dir, bytes) or not isinstance(out_dir, (str, os.PathLike)):
         raise TypeError(f"report(out_dir) = {out_dir!r}: expected a folder's path (a str or pathlib.Path)")
     path = os.fspath(out_dir)
@@ -190,12 +307,13 @@ def _check_out_dir(out_dir: Any) -> str:
     if os.path.exists(path):
         if not os.path.isdir(path):
             raise NotADirectoryError(errno.ENOTDIR, "is a file, not a folder for the report: give a folder", path)
-        extra = sorted(n for n in set(os.listdir(path)) - REPORT_ENTRIES if not n.startswith(TEMPORARY_PREFIX))
-        if extra:
-            shown = ", ".join(extra[:3]) + (", …" if len(extra) > 3 else "")
+        others = _not_the_reports(path)
+        if others:
+            shown = "; ".join(others[:3]) + ("; …" if len(others) > 3 else "")
             raise FileExistsError(
                 errno.EEXIST,
-                f"holds other files ({shown}): give a new or empty folder, or a previous report's, for the report",
+                f"holds other files ({shown}) than a report rotor wrote there: give an empty or new folder for "
+                "the report",
                 path,
             )
     check_folder_writable(path, "the report")
@@ -222,17 +340,19 @@ def _locked(folder: str) -> Iterator[None]:
 
 @contextmanager
 def report_folder(path: str) -> Iterator[str]:
-    """Yield a new hidden folder to write the report into; when the block succeeds, put its
-    entries in place at ``path``; when it fails (an error or Ctrl-C), delete it and every
-    parent folder made for it.
+    """Yield a new hidden folder to write the report into; when the block succeeds, write
+    the record of its files into it (:data:`RECORD_NAME`) and put its entries in place at
+    ``path``; when it fails (an error or Ctrl-C), delete it and every parent folder made
+    for it.
 
     A missing ``path``: the folder is made beside it and renamed onto it (where another
     report got there first, its entries are replaced as below). An existing folder (empty,
     or a previous report's; perhaps the working directory or a mount point, which must
     stay what they are): the folder is made inside it and its entries replace the old ones
-    one by one, ``index.html`` last, under a lock on the folder. An interrupt that arrived
-    while the report was written stops it before anything is put in place. An ``OSError``
-    names ``path``, never a temporary folder."""
+    one by one, ``index.html`` last, under a lock on the folder, where it holds nothing but
+    a report's own files (checked again under the lock). An interrupt that arrived while
+    the report was written stops it before anything is put in place. An ``OSError`` names
+    ``path``, never a temporary folder."""
     target = os.path.realpath(path) if os.path.isdir(path) else os.path.abspath(path)  # a link: where it points
     exists = os.path.isdir(target)
     where = target if exists else os.path.dirname(target)
@@ -252,6 +372,7 @@ def report_folder(path: str) -> Iterator[str]:
                     raise FileExistsError(errno.EEXIST, "no free temporary name for the report", path)
                 yield tmp
                 INTERRUPT.check()
+                _write_record(os.path.join(tmp, RECORD_NAME), _files_written(tmp))
                 if exists:
                     _swap_entries(tmp, target)
                 else:
@@ -274,21 +395,39 @@ def report_folder(path: str) -> Iterator[str]:
 
 def _swap_entries(tmp: str, target: str) -> None:
     """Replace the report's entries in the folder ``target`` by those of the folder
-    ``tmp`` (inside it), ``index.html`` last; the old ones are set aside and deleted (put
-    back where a rename fails)."""
+    ``tmp``, ``index.html`` last; the old ones are set aside and deleted. The record goes
+    first, listing the old files and the new while they are swapped, and is replaced by
+    the new report's at the end. Where a rename fails, what was moved is moved back."""
     with _locked(target):
         _check_out_dir(target)  # still only a report's files
+        old = _read_record(target) or {}
+        new = _read_record(tmp) or {}
+        both = {k: sorted(set(old.get(k, [])) | set(new.get(k, []))) for k in old.keys() | new.keys()}
+        both_file = os.path.join(tmp, f"{TEMPORARY_PREFIX}both.json")
+        _write_record(both_file, both)
         aside = f"{tmp}-old"
         os.mkdir(aside)
         set_aside: list[str] = []
+        moved_in: list[tuple[str, str]] = []  # (from, to)
         try:
-            for name in ("figures", "tables", "index.html"):
+            for name, source in (
+                (RECORD_NAME, both_file),
+                ("figures", os.path.join(tmp, "figures")),
+                ("tables", os.path.join(tmp, "tables")),
+                ("index.html", os.path.join(tmp, "index.html")),
+            ):
                 here = os.path.join(target, name)
                 if os.path.lexists(here):
                     os.rename(here, os.path.join(aside, name))
                     set_aside.append(name)
-                os.rename(os.path.join(tmp, name), here)
-        except OSError:
+                if os.path.lexists(source):
+                    os.rename(source, here)
+                    moved_in.append((source, here))
+            os.replace(os.path.join(tmp, RECORD_NAME), os.path.join(target, RECORD_NAME))
+        except BaseException:  # an error or Ctrl-C halfway: the previous report back as it was
+            for source, here in reversed(moved_in):
+                if os.path.lexists(here) and not os.path.lexists(source):
+                    os.rename(here, source)
             for name in set_aside:
                 if not os.path.lexists(os.path.join(target, name)):
                     os.rename(os.path.join(aside, name), os.path.join(target, name))
@@ -637,7 +776,8 @@ def report(
     **Arguments:**
     - ``engine``: a :class:`rotor.Engine`.
     - ``out_dir``: the report's folder (a ``str`` or ``pathlib.Path``): new, empty or a
-      previous report's (which is replaced); its parent folders are made.
+      previous report's (which is replaced; a folder holding anything else is refused, see
+      :mod:`rotor.design.report`); its parent folders are made.
     - ``rpm``: crank speed [rev/min]; default the engine's ``[operating] rpm``.
     - ``step_deg``: the tables' angle step [deg], dividing the cycle (720° or 360°);
       the figures are drawn at the largest step ≤ 1° that divides it.
@@ -650,8 +790,9 @@ def report(
 
     **Raises:** :class:`rotor.EngineError` for a bad argument (checked before anything is
     computed or written); an ``OSError`` naming ``out_dir`` where it cannot be written (a
-    file, a folder holding other files); :class:`rotor.NoSteadyStateError` where the
-    engine has no steady state for the flywheel's excess work.
+    file, a folder holding files that are not a previous report's own);
+    :class:`rotor.NoSteadyStateError` where the engine has no steady state for the
+    flywheel's excess work.
     """
     t0 = time.perf_counter()
     require_engine(engine, "report(engine)").check()

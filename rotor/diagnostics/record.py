@@ -82,12 +82,17 @@ def record_run(
     ``run.imep_pa``); ``engine_name``: for the truth (default the
     run's).
 
+    **Files:** the log and its truth are written together, each whole, both or neither
+    (:func:`rotor.fileio.write_texts_atomic`): both paths are checked before the work, and
+    a failure while they are put in place leaves the old files (or none) as they were.
+
     **Returns:** (the log's path, the truth's path). **Raises:** :class:`rotor.EngineError`
     for a run that cannot be recorded (no complete cycle, samples dropped by
-    ``keep_cycles``, a stall) or an argument that cannot be used.
+    ``keep_cycles``, a stall) or an argument that cannot be used; an ``OSError`` naming the
+    file that cannot be written (a missing folder, a folder's name, a link, a device, …).
     """
-    from ..fileio import atomic_path, save_json
-    from .synthetic import DEFAULT_GAP_DEG, simulated_tooth_times
+    from ..fileio import check_writable_file, json_file_text, write_texts_atomic
+    from .synthetic import DEFAULT_GAP_DEG, simulated_tooth_time_text
 
     if signal not in SIGNALS:
         raise EngineError(f"signal = {signal!r}: one of {', '.join(map(repr, SIGNALS))}")
@@ -97,6 +102,10 @@ def record_run(
         raise EngineError("run: its early cycles' samples were dropped (keep_cycles); record a run that keeps them")
     if run.stalled:
         raise EngineError("run: it stalled; a wheel log of a stopping crankshaft is not written")
+    path = pathlib.Path(path)
+    truth_file = truth_path(path)
+    for target in (path, truth_file):  # both writable before the work: the two are written together
+        check_writable_file(target)
     gap = DEFAULT_GAP_DEG if gap_deg is None else float(gap_deg)
     theta = np.asarray(run.theta, dtype=np.float64)
     t = np.asarray(run.t, dtype=np.float64)
@@ -118,9 +127,7 @@ def record_run(
     theta_all = np.concatenate([theta[first] - lead_in, theta, theta[last] + back])
     t_all = np.concatenate([t[first] - t_in, t, t[last] - t_back + t[-1]])
     padded = dataclasses.replace(run, theta=theta_all, t=t_all - t_all[0])
-    path = pathlib.Path(path)
-    simulated_tooth_times(
-        path,
+    body = simulated_tooth_time_text(
         padded,
         wheel=wheel,
         gap_deg=gap,
@@ -130,15 +137,13 @@ def record_run(
         start_deg=float(np.rad2deg(theta_all[0])),
     )
     name = run.engine_name if engine_name is None else engine_name
-    body = path.read_text()
-    with atomic_path(path) as tmp:
-        pathlib.Path(tmp).write_text(
-            f"# a run recorded by rotor (record_run): {name}, wheel {wheel}, cylinder 1's TDC {-gap:g}° after the gap; "
-            f"tooth edge times [s]; the truth in {truth_path(path).name}\n"
-            f"# tdc_after_gap_deg: {-gap:g}\n"
-            "# firing_parity: 0\n"
-            "tooth_time_s\n" + body
-        )
+    log_text = (
+        f"# a run recorded by rotor (record_run): {name}, wheel {wheel}, cylinder 1's TDC {-gap:g}° after the gap; "
+        f"tooth edge times [s]; the truth in {truth_file.name}\n"
+        f"# tdc_after_gap_deg: {-gap:g}\n"
+        "# firing_parity: 0\n"
+        "tooth_time_s\n" + body
+    )
     imep = np.asarray(run.imep_pa, dtype=np.float64)
     if misfires is None:
         misfires = _low_firings(imep)
@@ -166,8 +171,8 @@ def record_run(
         "imep_bar": (imep / PA_PER_BAR).round(6).tolist(),
         "imep_pa": imep.tolist(),
     }
-    truth_file = truth_path(path)
-    save_json(truth_file, truth, what="the truth of the recorded run", error=EngineError)
+    truth_text = json_file_text(truth_file, truth, what="the truth of the recorded run", error=EngineError)
+    write_texts_atomic([(path, log_text), (truth_file, truth_text)])  # both or neither
     return path, truth_file
 
 

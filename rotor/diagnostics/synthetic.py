@@ -42,6 +42,7 @@ as rotor counts them): 0.49–0.50 s, about 49,000 rows, for the default 12 cycl
 from __future__ import annotations
 
 import dataclasses
+import io
 import math
 import os
 import pathlib
@@ -64,6 +65,7 @@ if TYPE_CHECKING:
 __all__ = [
     "simulated_recording",
     "simulated_tooth_times",
+    "simulated_tooth_time_text",
     "simulated_tooth_errors",
     "BENCH_GAIN_PA_PER_V",
     "BENCH_OFFSET_V",
@@ -451,13 +453,40 @@ def simulated_tooth_times(
     **Returns:** the path written. Raises :class:`rotor.EngineError` naming an argument
     that cannot be used.
     """
-    from scipy.interpolate import CubicSpline
-
-    from ..fileio import atomic_path
+    from ..fileio import write_text_atomic
 
     path = pathlib.Path(path)
     if not path.parent.is_dir():
         raise EngineError(f"path = {os.fspath(path)!r}: the folder {os.fspath(path.parent)!r} does not exist")
+    text = simulated_tooth_time_text(
+        run,
+        wheel=wheel,
+        gap_deg=gap_deg,
+        tooth_error_deg=tooth_error_deg,
+        jitter_s=jitter_s,
+        start_deg=start_deg,
+        end_deg=end_deg,
+        seed=seed,
+    )
+    write_text_atomic(path, text)
+    return path
+
+
+def simulated_tooth_time_text(
+    run: SpeedResult,
+    *,
+    wheel: str | Wheel | None = None,
+    gap_deg: float = DEFAULT_GAP_DEG,
+    tooth_error_deg: float = 0.1,
+    jitter_s: float = 20e-9,
+    start_deg: float = 0.0,
+    end_deg: float | None = None,
+    seed: int = 0,
+) -> str:
+    """The lines :func:`simulated_tooth_times` writes (one tooth edge time [s] per line,
+    from 0), for a caller that writes them with more in one file; the arguments as there."""
+    from scipy.interpolate import CubicSpline
+
     try:
         w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
     except ValueError as e:
@@ -483,6 +512,6 @@ def simulated_tooth_times(
     ang = (gap + 2 * np.pi * rev[:, None] + w.pitch_rad * np.arange(w.edges_per_rev)[None, :] + err[None, :]).ravel()
     ang = ang[(ang >= lo) & (ang <= hi)]
     times = CubicSpline(th, t)(ang) + np.random.default_rng(seed).normal(0.0, jitter_s, ang.size)
-    with atomic_path(path) as tmp:
-        np.savetxt(tmp, times - times[0], fmt="%.10f")
-    return path
+    out = io.StringIO()
+    np.savetxt(out, times - times[0], fmt="%.10f")
+    return out.getvalue()

@@ -1,6 +1,9 @@
-"""The command line: table formats, info, plots, demo, presets."""
+"""The command line: table formats, info, plots, demo, presets; where a command may write
+(standard output for ``-``, never a link, a device or a file the command reads)."""
 
 import json
+import os
+import stat
 
 import numpy as np
 import pytest
@@ -144,3 +147,116 @@ def test_solver_error_exits_1_and_closed_pipe_0(monkeypatch, capsys):
 def test_bad_input_is_one_line_and_exit_2(argv, capsys):
     rc, out, err = run_cli(capsys, *argv)
     assert rc == 2 and out == "" and err.count("\n") == 1 and "error:" in err
+
+
+# ----------------------------------------------------------------------------- where outputs go
+def test_table_output_dash_is_standard_output(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = run_cli(capsys, "table", "4chn15", "--step", "90", "--format", "csv", "--output", "-")
+    assert rc == 0 and err == "" and out.startswith("angle_deg,s_m,") and len(out.splitlines()) == 1 + 9
+    assert list(tmp_path.iterdir()) == []  # no file named "-"
+
+
+@pytest.fixture
+def outputs(tmp_path):
+    """A log, a named pipe (standing in for a device such as /dev/null) and a link to a
+    user's file (standing in for /dev/stdout), in ``tmp_path``."""
+    (tmp_path / "rec.csv").write_text("0.1\n0.2\n")
+    os.mkfifo(tmp_path / "pipe")
+    (tmp_path / "mine.txt").write_text("the user's\n")
+    (tmp_path / "link").symlink_to(tmp_path / "mine.txt")
+    return tmp_path
+
+
+LOG_COMMANDS = {
+    "table --output": ["table", "4chn15", "--output"],
+    "analyze --save-tooth-errors": ["analyze", "{log}", "--wheel", "60-2", "--save-tooth-errors"],
+    "diagnose --save-calibration": ["diagnose", "{log}", "--engine", "4chn15", "--save-calibration"],
+    "calibrate --output": ["calibrate", "{log}", "--engine", "4chn15", "--output"],
+    "simulate --record": ["simulate", "4chn15", "--cycles", "2", "--record"],
+}
+
+
+def _argv(words, tmp_path, value):
+    return [w.format(log=tmp_path / "rec.csv") for w in words] + [str(value)]
+
+
+def _unchanged(tmp_path):
+    assert stat.S_ISFIFO(os.lstat(tmp_path / "pipe").st_mode) and (tmp_path / "link").is_symlink()
+    assert (tmp_path / "mine.txt").read_text() == "the user's\n" and (tmp_path / "rec.csv").read_text() == "0.1\n0.2\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "mine.txt", "pipe", "rec.csv"]
+
+
+@pytest.mark.parametrize("command", list(LOG_COMMANDS))
+def test_an_output_onto_a_pipe_or_a_link_is_refused_and_left_as_it_is(command, outputs, capsys):
+    for name, words in (("pipe", "is a named pipe (FIFO), not a regular file"), ("link", "is a link to")):
+        rc, out, err = run_cli(capsys, *_argv(LOG_COMMANDS[command], outputs, outputs / name))
+        assert rc == 2 and out == "" and err.count("\n") == 1, err
+        assert err.startswith(f"rotor: error: {outputs / name}: {words}"), err
+    _unchanged(outputs)
+
+
+@pytest.mark.parametrize(
+    "argv,words",
+    [
+        (["analyze", "{log}", "--wheel", "60-2", "--save-tooth-errors", "-"], "--save-tooth-errors -: "),
+        (["diagnose", "{log}", "--engine", "4chn15", "--save-calibration", "-"], "--save-calibration -: "),
+        (["calibrate", "{log}", "--engine", "4chn15", "--output", "-"], "--output -: "),
+        (["simulate", "4chn15", "--record", "-"], "--record -: "),
+        (["balance", "4chn15", "--plot", "-"], "--plot -: --plot names a folder, not standard output"),
+        (["report", "4chn15", "--out", "-"], "--out -: --out names a folder, not standard output"),
+    ],
+    ids=["--save-tooth-errors", "--save-calibration", "calibrate --output", "--record", "--plot", "--out"],
+)
+def test_dash_is_refused_where_it_is_not_standard_output(argv, words, outputs, capsys, monkeypatch):
+    monkeypatch.chdir(outputs)
+    rc, out, err = run_cli(capsys, *[w.format(log=outputs / "rec.csv") for w in argv])
+    assert rc == 2 and out == "" and err.count("\n") == 1 and err.startswith(f"rotor: error: {words}"), err
+    _unchanged(outputs)
+
+
+@pytest.mark.parametrize(
+    "argv,output,source",
+    [
+        (["analyze", "{rec}", "--wheel", "60-2", "--save-tooth-errors", "{rec}"], "--save-tooth-errors", "LOG"),
+        (["analyze", "{rec}", "--wheel", "60-2", "--save-tooth-errors", "{hard}"], "--save-tooth-errors", "LOG"),
+        (["analyze", "{rec}", "--wheel", "60-2", "--save-tooth-errors", "{dotted}"], "--save-tooth-errors", "LOG"),
+        (
+            ["analyze", "{rec}", "--tooth-errors", "{te}", "--save-tooth-errors", "{te}"],
+            "--save-tooth-errors",
+            "--tooth-errors",
+        ),
+        (["diagnose", "{rec}", "--engine", "4chn15", "--save-calibration", "{rec}"], "--save-calibration", "LOG"),
+        (
+            ["diagnose", "{rec}", "--engine", "4chn15", "--calibration", "{cal}", "--save-calibration", "{cal}"],
+            "--save-calibration",
+            "--calibration",
+        ),
+        (["calibrate", "{rec}", "--engine", "{eng}", "--output", "{eng}"], "--output", "--engine"),
+        (["simulate", "{eng}", "--record", "{eng}"], "--record", "ENGINE"),
+        (["table", "{eng}", "--output", "{eng}"], "--output", "ENGINE"),
+    ],
+    ids=[
+        "the log",
+        "a hard link",
+        "another spelling",
+        "--tooth-errors",
+        "diagnose",
+        "--calibration",
+        "calibrate",
+        "simulate",
+        "table",
+    ],
+)
+def test_an_output_that_is_a_file_the_command_reads_is_refused(argv, output, source, tmp_path, capsys):
+    files = {"rec": "rec.csv", "te": "te.json", "cal": "cal.json", "eng": "engine.toml"}
+    for name in files.values():
+        (tmp_path / name).write_text(f"{name}\n")
+    os.link(tmp_path / "rec.csv", tmp_path / "hard.csv")
+    paths = {k: str(tmp_path / v) for k, v in files.items()}
+    paths |= {"hard": str(tmp_path / "hard.csv"), "dotted": str(tmp_path / "." / "rec.csv")}
+    rc, out, err = run_cli(capsys, *[w.format(**paths) for w in argv])
+    assert rc == 2 and out == "" and err.count("\n") == 1, err
+    assert err.startswith(f"rotor: error: {output} ") and f"is the same file as {source} " in err, err
+    assert f"give {output} another file" in err
+    assert all((tmp_path / name).read_text() == f"{name}\n" for name in files.values())

@@ -354,7 +354,7 @@ def test_two_reports_put_in_place_at_once_end_as_one_whole_report(tmp_path: Path
     for t in threads:
         t.join(timeout=30)
     assert not errors, errors
-    assert sorted(p.name for p in out.iterdir()) == ["figures", "index.html", "tables"]
+    assert sorted(p.name for p in out.iterdir()) == [".rotor-report.json", "figures", "index.html", "tables"]
     texts = {(out / "index.html").read_text(), (out / "figures" / "figures.txt").read_text()}
     texts.add((out / "tables" / "tables.txt").read_text())
     assert len(texts) == 1, texts  # one run's report, whole

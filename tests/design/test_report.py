@@ -3,7 +3,8 @@ folder (one self-contained page, its figures as PNG, its tables as CSV), written
 not at all; its numbers are the library's; the page renders in a headless browser.
 
 One report is written for the module (4chn15, tables every 30°), through the command line,
-into a folder that holds a previous report, which it must replace."""
+into a folder that holds a previous report, which it must replace; a folder holding
+anything the report did not write is refused, and what is there kept."""
 
 from __future__ import annotations
 
@@ -46,15 +47,26 @@ def engine() -> rotor.Engine:
     return rotor.load_engine("4chn15")
 
 
+def previous_report(out: Path, figures: dict[str, bytes] | None = None) -> None:
+    """A report put in place at ``out`` by :func:`rotor.design.report.report_folder` (which
+    records its files): ``figures`` (name: bytes), a table and a page."""
+    from rotor.design.report import report_folder
+
+    with report_folder(str(out)) as tmp:
+        os.mkdir(os.path.join(tmp, "figures"))
+        os.mkdir(os.path.join(tmp, "tables"))
+        for name, data in (figures or {"old.png": b"old"}).items():
+            Path(tmp, "figures", name).write_bytes(data)
+        Path(tmp, "tables", "old.csv").write_text("a\n1\n")
+        Path(tmp, "index.html").write_text("<p>an older report</p>\n")
+
+
 @pytest.fixture(scope="module")
 def written(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """``rotor report 4chn15 --out DIR --step 30 --json`` over a previous report in DIR."""
     root = tmp_path_factory.mktemp("report")
     out = root / "r"
-    (out / "figures").mkdir(parents=True)
-    (out / "tables").mkdir()
-    (out / "index.html").write_text("<p>an older report</p>\n")
-    (out / "figures" / "stale.png").write_bytes(b"old")
+    previous_report(out, {"stale.png": b"old"})
     rc, text, _ = run_cli(None, "report", "4chn15", "--out", out, "--step", STEP, "--json")
     assert rc == 0, text
     data = json.loads(text)
@@ -69,7 +81,7 @@ def page(written: dict) -> str:
 
 def test_the_folder_holds_the_page_figures_and_tables_and_nothing_else(written: dict) -> None:
     out = Path(written["out_dir"])
-    assert sorted(os.listdir(out)) == ["figures", "index.html", "tables"]
+    assert sorted(os.listdir(out)) == [".rotor-report.json", "figures", "index.html", "tables"]
     figures = sorted(os.listdir(out / "figures"))
     tables = sorted(os.listdir(out / "tables"))
     assert figures == sorted(Path(p).name for p in written["figures"])
@@ -80,6 +92,19 @@ def test_the_folder_holds_the_page_figures_and_tables_and_nothing_else(written: 
     assert not [p for p in os.listdir(written["root"]) if p.startswith(".rotor")], "a temporary folder was left"
     assert written["step_deg"] == STEP and written["figure_step_deg"] == 1.0
     assert written["rpm"] == 1250.0 and written["kinematics"] == "exact"
+
+
+def test_the_record_lists_every_file_written_with_its_digest(written: dict) -> None:
+    import hashlib
+
+    out = Path(written["out_dir"])
+    record = json.loads((out / ".rotor-report.json").read_text(encoding="utf-8"))
+    assert record["written_by"] == "rotor report"
+    on_disk = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert sorted(record["files"]) == [n for n in on_disk if n != ".rotor-report.json"]
+    assert "figures/stale.png" not in record["files"] and "tables/old.csv" not in record["files"]
+    for name, digests in record["files"].items():
+        assert digests == [hashlib.sha256((out / name).read_bytes()).hexdigest()], name
 
 
 def test_every_diagram_of_the_course_project_is_there(written: dict) -> None:
@@ -173,12 +198,12 @@ def test_a_failed_report_leaves_nothing(tmp_path: Path, monkeypatch: pytest.Monk
         rotor.report(engine, tmp_path / "new" / "r", step_deg=STEP)
     assert os.listdir(tmp_path) == []  # the folder made for it is gone too
     old = tmp_path / "old"  # a previous report stays as it was
-    (old / "figures").mkdir(parents=True)
-    (old / "figures" / "a.png").write_bytes(b"png")
-    (old / "index.html").write_text("old\n")
+    previous_report(old, {"a.png": b"png"})
+    before = {p.relative_to(old).as_posix(): p.read_bytes() for p in old.rglob("*") if p.is_file()}
     with pytest.raises(RuntimeError, match="caught fire"):
         rotor.report(engine, old, step_deg=STEP)
-    assert sorted(os.listdir(old)) == ["figures", "index.html"] and os.listdir(old / "figures") == ["a.png"]
+    assert {p.relative_to(old).as_posix(): p.read_bytes() for p in old.rglob("*") if p.is_file()} == before
+    assert sorted(os.listdir(old)) == [".rotor-report.json", "figures", "index.html", "tables"]
 
 
 def test_bad_arguments_are_refused_before_anything_is_written(tmp_path: Path, engine: rotor.Engine) -> None:
@@ -275,3 +300,113 @@ def test_every_figure_renders_in_a_headless_browser(written: dict) -> None:
     figures, rendered = int(found.group(1)), found.group(2)
     assert figures == len(written["figures"])
     assert rendered == str(figures), f"{rendered or 'no'} of {figures} figures rendered"
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` (its links as where they point): relative path: bytes."""
+    out: dict[str, bytes] = {}
+    for p in sorted(folder.rglob("*")):
+        rel = p.relative_to(folder).as_posix()
+        if p.is_symlink():
+            out[rel] = b"-> " + os.fsencode(os.readlink(p))
+        elif p.is_file():
+            out[rel] = p.read_bytes()
+        else:
+            out[rel + "/"] = b""
+    return out
+
+
+def _users_photo(out: Path) -> str:
+    previous_report(out)
+    (out / "figures" / "holiday.jpg").write_bytes(b"\xff\xd8 a photo")
+    return "figures/holiday.jpg"
+
+
+def _users_page(out: Path) -> str:
+    out.mkdir()
+    (out / "index.html").write_text("<h1>my own page</h1>\n")
+    return "index.html"
+
+
+def _page_replaced(out: Path) -> str:
+    previous_report(out)
+    (out / "index.html").write_text("<h1>my own page</h1>\n")
+    return "index.html, changed since the report wrote it"
+
+
+def _users_subfolder(out: Path) -> str:
+    previous_report(out)
+    (out / "tables" / "mine").mkdir()
+    (out / "tables" / "mine" / "notes.csv").write_text("x\n")
+    return "tables/mine/"
+
+
+def _link_in_figures(out: Path) -> str:
+    previous_report(out)
+    (out / "figures" / "elsewhere.png").symlink_to(out.parent / "elsewhere.png")
+    return "figures/elsewhere.png"
+
+
+def _no_record(out: Path) -> str:
+    (out / "figures").mkdir(parents=True)
+    (out / "figures" / "plot.png").write_bytes(b"png")
+    (out / "index.html").write_text("<p>a report</p>\n")
+    return "figures/plot.png"
+
+
+@pytest.mark.parametrize(
+    "make",
+    [_users_photo, _users_page, _page_replaced, _users_subfolder, _link_in_figures, _no_record],
+    ids=["a photo in figures", "the user's page", "a page replaced", "a subfolder", "a link", "no record"],
+)
+def test_a_folder_holding_what_the_report_did_not_write_is_refused_and_kept(
+    make, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "d"
+    shown = make(out)
+    before = _files(out)
+    monkeypatch.setattr("rotor.design.report.crank_table", lambda *a, **k: pytest.fail("the work started"))
+    rc, _, err = run_cli(capsys, "report", "4chn15", "--out", out)
+    assert rc == 2 and err.count("\n") == 1, err
+    assert err.startswith(f"rotor: error: {out}: holds other files (") and shown in err, err
+    assert "give an empty or new folder" in err
+    assert _files(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d"]
+
+
+def test_a_swap_stopped_halfway_puts_the_previous_report_back(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from rotor.design.report import report_folder
+
+    out = tmp_path / "r"
+    previous_report(out, {"a.png": b"old"})
+    before = _files(out)
+    page = os.path.join(os.path.realpath(out), "index.html")
+    real_rename = os.rename
+    halfway = tmp_path / "halfway"
+
+    def stop_at_the_new_page(src, dst):
+        if os.fspath(dst) == page and not halfway.exists():  # the new page about to go in place
+            shutil.copytree(out, halfway, symlinks=True)  # what a run killed here would leave
+            raise KeyboardInterrupt
+        real_rename(src, dst)
+
+    monkeypatch.setattr(os, "rename", stop_at_the_new_page)
+    with pytest.raises(KeyboardInterrupt):
+        with report_folder(str(out)) as tmp:
+            os.mkdir(os.path.join(tmp, "figures"))
+            os.mkdir(os.path.join(tmp, "tables"))
+            Path(tmp, "figures", "b.png").write_bytes(b"new")
+            Path(tmp, "index.html").write_text("<p>new</p>\n")
+    monkeypatch.undo()
+    assert _files(out) == before  # the previous report whole, no temporary folder left
+    # the folder as a run killed halfway leaves it is still a report's: the next one replaces it
+    assert "figures/b.png" in _files(halfway) and "index.html" not in _files(halfway)
+    previous_report(halfway)
+    assert [n for n in _files(halfway) if not n.startswith(".rotor-report-")] == [
+        ".rotor-report.json",
+        "figures/",
+        "figures/old.png",
+        "index.html",
+        "tables/",
+        "tables/old.csv",
+    ]

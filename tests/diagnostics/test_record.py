@@ -79,3 +79,72 @@ def test_record_refuses_what_it_cannot_write(tmp_path, capsys):
     ):
         code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "3", *argv)
         assert code == 2 and needle in err and err.count("\n") == 1
+
+
+@pytest.fixture(scope="module")
+def short_run():
+    """A 3-cycle run of 4chn15 to record."""
+    engine = rotor.load_engine("4chn15")
+    return rotor.simulate(engine, cycles=3, load=rotor.ConstantLoad(300.0), progress=False)
+
+
+@pytest.mark.parametrize("stop", [KeyboardInterrupt, OSError], ids=["Ctrl-C", "a full disk"])
+@pytest.mark.parametrize("at", [1, 2], ids=["first rename", "second rename"])
+def test_the_log_and_its_truth_are_put_in_place_both_or_neither(tmp_path, monkeypatch, short_run, stop, at):
+    import errno
+    import os
+
+    log, truth = tmp_path / "rec.csv", tmp_path / "rec.truth.json"
+    log.write_text("old log\n")
+    truth.write_text("old truth\n")
+    real_replace = os.replace
+    calls = []
+
+    def stopped(src, dst):
+        calls.append(dst)
+        if len(calls) == at:
+            raise stop() if stop is KeyboardInterrupt else OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), dst)
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", stopped)
+    with pytest.raises(stop):
+        record_run(log, short_run)
+    monkeypatch.undo()
+    assert log.read_text() == "old log\n" and truth.read_text() == "old truth\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv", "rec.truth.json"]
+    record_run(log, short_run)
+    lines = log.read_text().splitlines()
+    assert lines[0].startswith("# a run recorded by rotor") and lines[3] == "tooth_time_s"
+    assert json.loads(truth.read_text())["log"] == "rec.csv"
+
+
+def test_a_truth_that_cannot_be_written_leaves_no_log(tmp_path, short_run, capsys):
+    import os
+
+    (tmp_path / "rec.truth.json").mkdir()  # a folder where the truth should go
+    with pytest.raises(OSError) as info:
+        record_run(tmp_path / "rec.csv", short_run)
+    assert info.value.filename == str(tmp_path / "rec.truth.json")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.truth.json"]
+    pipe = tmp_path / "two.truth.json"
+    os.mkfifo(pipe)
+    code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "2", "--record", tmp_path / "two.csv")
+    assert code == 2 and err == f"rotor: error: {pipe}: is a named pipe (FIFO), not a regular file: give a file name\n"
+    assert not (tmp_path / "two.csv").exists()
+
+
+def test_record_never_writes_onto_a_pipe_or_a_link(tmp_path, capsys):
+    import os
+    import stat
+
+    pipe, link, target = tmp_path / "pipe.csv", tmp_path / "link.csv", tmp_path / "target.csv"
+    os.mkfifo(pipe)  # stands in for a device
+    target.write_text("the user's\n")
+    link.symlink_to(target)
+    for path, words in ((pipe, "is a named pipe (FIFO)"), (link, f"is a link to {target}")):
+        code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "2", "--record", path)
+        assert code == 2 and err.startswith(f"rotor: error: {path}: {words}") and err.count("\n") == 1, err
+    assert stat.S_ISFIFO(os.lstat(pipe).st_mode) and link.is_symlink() and target.read_text() == "the user's\n"
+    code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "2", "--record", "-")
+    assert code == 2 and err.startswith("rotor: error: --record -: ") and "give a file name" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "pipe.csv", "target.csv"]

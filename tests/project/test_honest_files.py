@@ -1,11 +1,13 @@
-"""Files rotor writes get the mode a plain ``open(path, "w")`` gives them, and errors name
-the user's path, never the temporary file beside it."""
+"""Files rotor writes get the mode a plain ``open(path, "w")`` gives them, go only onto a
+new name or a regular file (never a link, a device or a named pipe), several that belong
+together all or none, and errors name the user's path, never the temporary file beside it."""
 
 from __future__ import annotations
 
 import errno
 import os
 import stat
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -142,3 +144,102 @@ def test_a_path_that_cannot_be_written_is_refused_by_name_before_writing(tmp_pat
         write_text_atomic(path, "text")
     assert info.value.filename == str(path) and words in info.value.strerror
     assert sorted(os.listdir(tmp_path)) == ["file", "plots"] and os.listdir(tmp_path / "plots") == []
+
+
+# ----------------------------------------------------------------------------- what a file is written onto
+def _through_atomic_path(path):
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text("x\n")
+
+
+def _fifo(tmp_path, name="pipe"):
+    path = tmp_path / name
+    os.mkfifo(path)  # stands in for a device such as /dev/null: not a regular file
+    return path
+
+
+@pytest.mark.parametrize(
+    "write",
+    [
+        lambda p: write_text_atomic(p, "x\n"),
+        lambda p: save_json(p, {"a": 1}, what="a test"),
+        _through_atomic_path,
+    ],
+    ids=["write_text_atomic", "save_json", "atomic_path"],
+)
+def test_a_named_pipe_is_refused_and_stays_a_named_pipe(tmp_path, write):
+    pipe = _fifo(tmp_path)
+    with pytest.raises(OSError, match="named pipe") as info:
+        write(pipe)
+    assert str(pipe) in str(info.value) and "give a file name" in str(info.value)
+    assert stat.S_ISFIFO(os.lstat(pipe).st_mode)
+    assert sorted(os.listdir(tmp_path)) == ["pipe"]
+
+
+def test_a_link_is_neither_replaced_nor_written_through(tmp_path):
+    target = tmp_path / "target.txt"
+    target.write_text("the user's\n")
+    link = tmp_path / "link.txt"
+    link.symlink_to(target)
+    with pytest.raises(OSError) as info:
+        write_text_atomic(link, "x\n")
+    assert info.value.filename == str(link) and f"is a link to {target}" in info.value.strerror
+    assert link.is_symlink() and target.read_text() == "the user's\n"
+    standard_output = tmp_path / "stdout"  # stands in for /dev/stdout: a link to a stream
+    standard_output.symlink_to(_fifo(tmp_path))
+    with pytest.raises(OSError, match=f"is a link to {tmp_path / 'pipe'}"):
+        write_text_atomic(standard_output, "x\n")
+    assert standard_output.is_symlink() and stat.S_ISFIFO(os.lstat(tmp_path / "pipe").st_mode)
+    dangling = tmp_path / "dangling"
+    dangling.symlink_to(tmp_path / "nowhere")
+    with pytest.raises(OSError, match="is a link to"):
+        save_json(dangling, {}, what="a test")
+    assert dangling.is_symlink() and not (tmp_path / "nowhere").exists()
+    assert not [n for n in os.listdir(tmp_path) if n.startswith(".rotor-")]
+
+
+def test_what_replaces_a_file_while_it_is_written_is_not_replaced(tmp_path):
+    path = tmp_path / "out.csv"
+    with pytest.raises(OSError, match="named pipe"):
+        with atomic_path(path) as tmp:
+            Path(tmp).write_text("x\n")
+            os.mkfifo(path)  # made by someone else meanwhile
+    assert stat.S_ISFIFO(os.lstat(path).st_mode) and sorted(os.listdir(tmp_path)) == ["out.csv"]
+
+
+def test_several_files_are_written_all_or_none(tmp_path, monkeypatch):
+    from rotor.fileio import write_texts_atomic
+
+    log, truth = tmp_path / "rec.csv", tmp_path / "rec.truth.json"
+    log.write_text("old log\n")
+    truth.write_text("old truth\n")
+    pipe = _fifo(tmp_path)
+    with pytest.raises(OSError, match="named pipe"):  # every target checked before anything is written
+        write_texts_atomic([(log, "new log\n"), (pipe, "x")])
+    assert log.read_text() == "old log\n"
+
+    real_replace = os.replace
+    calls = []
+
+    def second_fails(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), dst)  # a full disk
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", second_fails)
+    with pytest.raises(OSError) as info:
+        write_texts_atomic([(log, "new log\n"), (truth, "new truth\n")])
+    assert info.value.filename == str(truth) and ".rotor-" not in str(info.value)
+    assert log.read_text() == "old log\n" and truth.read_text() == "old truth\n"
+    new = tmp_path / "new.csv"
+    calls.clear()
+    with pytest.raises(OSError):
+        write_texts_atomic([(new, "new\n"), (tmp_path / "new.truth.json", "truth\n")])
+    assert not new.exists()  # a file made by the first rename is removed again
+    monkeypatch.undo()
+    assert sorted(os.listdir(tmp_path)) == ["pipe", "rec.csv", "rec.truth.json"]
+    write_texts_atomic([(log, "new log\n"), (truth, "new truth\n")])
+    assert log.read_text() == "new log\n" and truth.read_text() == "new truth\n"
+    with pytest.raises(ValueError, match="one file given twice"):
+        write_texts_atomic([(log, "a"), (tmp_path / "." / "rec.csv", "b")])
