@@ -70,8 +70,9 @@ def documented(path: Path, columns: str, pattern: str | None, polarity: str, lo,
     p = find_pattern(pattern)
     log = read_log(path, columns)
     try:
+        times, kinds = channel_edges(log["time"], log["encoder_d"], polarity)
         fit = decode_edges(
-            channel_edges(log["time"], log["encoder_d"], polarity), p, "both" if polarity == "both" else p.read
+            times, p, "both" if polarity == "both" else p.read, kinds=kinds if polarity == "both" else None
         )
     except Exception as e:
         return {"pattern": pattern, "polarity": polarity, "decoded": False, "why": str(e)[:300]}

@@ -40,7 +40,7 @@ from ..cycles import cycle_delta, cycle_spectrum
 from ..errors import LogError
 from ..results import Result, json_safe
 from ..units import RPM_PER_RAD_S
-from .angle import CrankAngle, ToothErrorPlan, firing_run_note, speed_angle, tooth_angle
+from .angle import CrankAngle, ToothErrorPlan, firing_run_note, pattern_angle, speed_angle, tooth_angle
 from .edges import Edges
 from .phasing import (
     PEAK_TO_NOISE_MIN,
@@ -52,7 +52,8 @@ from .phasing import (
     tdc_from_pressure,
 )
 from .reader import Log, read_log
-from .track import ChoiceSource, WheelReading, read_track
+from .recording import PatternReading, read_wheel
+from .track import ChoiceSource, WheelReading
 from .wheel import ToothErrors, ToothTrack, Wheel
 
 if TYPE_CHECKING:
@@ -87,7 +88,9 @@ class LogAnalysis(Result):
     ``firing_parity`` (which revolutions, counted from the first gap, hold firing TDC:
     0 or 1) and ``firing_method``; ``cycle_start_rad`` (wheel angle of each cycle's start).
 
-    **Wheel:** ``track`` (:class:`rotor.logs.wheel.ToothTrack`, ``None`` for a speed log),
+    **Wheel:** ``track`` (:class:`rotor.logs.wheel.ToothTrack`, ``None`` for a speed log
+    or a catalogue pattern), ``pattern`` (:class:`rotor.logs.recording.PatternReading`, where
+    the wheel is a catalogue pattern other than a missing-tooth wheel, else ``None``),
     ``tooth_errors`` (:class:`rotor.logs.wheel.ToothErrors` applied, or ``None``),
     ``edges`` (:class:`rotor.logs.edges.Edges` of an analog signal, or ``None``).
     ``pressure``: (cycle angle [rad], pressure signal) of the complete cycles when a
@@ -127,6 +130,7 @@ class LogAnalysis(Result):
     reading: WheelReading | None = None
     tdc_source: PhaseSource = PhaseSource.UNKNOWN
     firing_source: PhaseSource = PhaseSource.EVERY_REVOLUTION
+    pattern: PatternReading | None = None
 
     # ------------------------------------------------------------------ numbers
     @property
@@ -210,6 +214,8 @@ class LogAnalysis(Result):
             )  # cycles counted from 1
         ]
         wheel = self.track.to_json_dict() if self.track is not None else None
+        if self.pattern is not None:
+            wheel = self.pattern.to_json_dict()
         if wheel is not None and self.edges is not None:
             wheel["encoder"] = self.edges.to_json_dict()
         if wheel is not None and self.reading is not None:
@@ -242,6 +248,15 @@ class LogAnalysis(Result):
             lines.append(
                 f"  wheel {w['spec']}: {w['edges']} edges, {w['complete_revolutions']} complete revolutions, "
                 f"{w['edges_per_rev']} per revolution, gap period ratio {w['gap_period_ratio']:.2f}"
+            )
+        if self.pattern is not None:
+            pr = self.pattern
+            lines.append(
+                f"  wheel {pr.pattern.name} ({pr.pattern.title}): {pr.fit.t.size} edges of {pr.channel} "
+                f"({pr.edges}), {pr.fit.turns:.1f} turns, {pr.fit.kept:.0%} of the edges kept"
+            )
+            lines.append(
+                f"  read as {pr.pins()}" + (" (found from the signal; this option pins it)" if pr.found else "")
             )
         if self.reading is not None:
             found = [f"{c.name} {c.value}" for c in self.reading.choices if c.source is ChoiceSource.FOUND]
@@ -420,6 +435,7 @@ def analyze_log(
     _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise)
     _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle)
     reading: WheelReading | None = source if isinstance(source, WheelReading) else None
+    pattern_reading: PatternReading | None = None
     if reading is not None:
         log, name = reading.log, reading.source
     else:
@@ -430,11 +446,17 @@ def analyze_log(
         angle = speed_angle(log, name, revs)
     else:
         if reading is None:
-            if wheel is None:
-                raise LogError(f"{name}: a wheel is needed for tooth edges (e.g. wheel='60-2')")
-            reading = read_track(log, wheel, edge=edge, name=name)
-        plan = ToothErrorPlan(tooth_errors, engine_orders, strokes, cylinders, engine, tdc_deg)
-        angle = tooth_angle(reading, name, plan)
+            placed = read_wheel(log, wheel, edge=edge, name=name)
+            if isinstance(placed, PatternReading):
+                pattern_reading, log = placed, placed.log
+            else:
+                reading = placed
+        if pattern_reading is not None:
+            angle = pattern_angle(pattern_reading.fit, name, strokes, pattern_reading.notes())
+        else:
+            assert reading is not None
+            plan = ToothErrorPlan(tooth_errors, engine_orders, strokes, cylinders, engine, tdc_deg)
+            angle = tooth_angle(reading, name, plan)
     max_order = _max_order(angle, max_order)
     P = _points_per_cycle(name, angle, strokes, max_order, points_per_cycle)
     request = PhaseRequest(strokes, tdc_deg, firing, edge, compression_ratio, rod_ratio)
@@ -473,6 +495,7 @@ def analyze_log(
         cylinders=int(cylinders),
         delta_weight=speed.weight,
         reading=angle.reading,
+        pattern=pattern_reading,
     )
 
 

@@ -29,11 +29,15 @@ from .wheel import ToothErrors, ToothTrack, estimate_tooth_errors
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
+    from .patterns import PatternFit
 
-__all__ = ["CrankAngle", "ToothErrorPlan", "speed_angle", "tooth_angle", "firing_run_note"]
+__all__ = ["CrankAngle", "ToothErrorPlan", "speed_angle", "tooth_angle", "pattern_angle", "firing_run_note"]
 
 TWO_PI = 2.0 * np.pi
 SPEED_LOG_MAX_ORDER = 12.0  # the highest order reported of a speed log, by default
+MIN_ESTIMATE_TEETH = 12
+"""A wheel of fewer teeth a revolution has its tooth errors left alone by the default
+``tooth_errors="estimate"`` (too few orders to tell them from the engine's; a note says so)."""
 SPEED_LOG_TEETH = 60  # a speed log's grid by default as for a wheel of this many teeth
 
 
@@ -143,7 +147,46 @@ def tooth_angle(reading: WheelReading, name: str, plan: ToothErrorPlan) -> Crank
         reading=reading,
         tooth_errors=te,
         tooth_errors_asked=asked,
-        notes=_reading_notes(reading),
+        notes=_reading_notes(reading)
+        + (
+            (
+                f"tooth errors not estimated: a wheel of {track.wheel.edges_per_rev} teeth a revolution has "
+                f"too few to tell them from the engine's (at least {MIN_ESTIMATE_TEETH})",
+            )
+            if asked == "none" and plan.tooth_errors == "estimate"
+            else ()
+        ),
+    )
+
+
+def pattern_angle(fit: PatternFit, name: str, strokes: int, notes: Sequence[str] = ()) -> CrankAngle:
+    """The angle of edges read as a catalogue pattern (:func:`rotor.logs.patterns.decode_edges`):
+    t(φ) a cubic spline through the kept edges at their pattern angles; refused where they
+    span less than a cycle. No tooth-error correction: a pattern's edges sit where its
+    description puts them."""
+    from scipy.interpolate import CubicSpline, PchipInterpolator
+
+    revs = strokes // 2
+    if fit.revolutions < revs:
+        raise LogError(
+            f"{name}: the edges read as {fit.pattern.name} span {fit.revolutions:.2f} revolutions; a "
+            f"{strokes}-stroke cycle needs {revs} (a longer log)"
+        )
+    t_of = CubicSpline(fit.angle_rad, fit.t)
+    dt_dphi = t_of.derivative()
+
+    def omega_of(x):
+        return 1.0 / dt_dphi(x)
+
+    per_rev = fit.pattern.edges_per_turn * 360.0 / fit.pattern.period_deg
+    return CrankAngle(
+        t_of=t_of,
+        omega_of=omega_of,
+        phi_of=_Lazy(PchipInterpolator, fit.t, fit.angle_rad),
+        phi_lo=float(fit.angle_rad[0]),
+        phi_hi=float(fit.angle_rad[-1]),
+        teeth=max(2, int(round(per_rev))),
+        notes=tuple(notes),
     )
 
 
@@ -171,6 +214,8 @@ def _tooth_errors(track: ToothTrack, name: str, plan: ToothErrorPlan) -> tuple[T
     if isinstance(tooth_errors, str) and tooth_errors == "estimate" and w.angles_deg is not None:
         measured = np.deg2rad(np.asarray(w.angles_deg)) - w.tooth_angles_rad
         tooth_errors = ToothErrors(w.spec, measured, "measured (the wheel file's tooth angles)")
+    if isinstance(tooth_errors, str) and tooth_errors == "estimate" and w.edges_per_rev < MIN_ESTIMATE_TEETH:
+        return None, "none"  # too few teeth to tell their errors from the engine's: the note says so
     if isinstance(tooth_errors, str) and tooth_errors == "estimate":
         if plan.engine is not None and plan.tdc_deg is None:
             raise LogError(

@@ -19,7 +19,7 @@ import re
 from ..errors import LogError
 from .patterns import TriggerPattern, pattern_from_wheel
 
-__all__ = ["CATALOGUE", "find_pattern", "catalogue_names"]
+__all__ = ["CATALOGUE", "find_pattern", "catalogue_names", "pattern_ways", "rank_patterns", "best_pattern"]
 
 _MITSU = "rusEFI trigger decoders, trigger_mitsubishi.cpp"
 _MAZDA = "rusEFI trigger decoders, trigger_mazda.cpp"
@@ -39,188 +39,186 @@ def _nm(name: str, title: str, teeth: int, gaps: tuple, layout: tuple | None, so
     return TriggerPattern(name, title, 360.0, p.rising_deg, p.falling_deg, "rising", "crank", source, tuple(aliases))
 
 
-def _build() -> dict[str, TriggerPattern]:
-    pats = [
-        _nm("60-2", "60-2 missing-tooth crank wheel (Bosch; GM 58x read by its teeth)", 60, (2,), None, _UNIVERSAL),
-        _nm("36-1", "36-1 missing-tooth crank wheel (Ford EDIS)", 36, (1,), None, _UNIVERSAL),
-        _nm("36-2", "36-2 missing-tooth crank wheel (Toyota, Mazda)", 36, (2,), None, _UNIVERSAL),
-        _nm("24-1", "24-1 missing-tooth crank wheel", 24, (1,), None, _UNIVERSAL),
-        _nm("12-1", "12-1 missing-tooth crank wheel", 12, (1,), None, _UNIVERSAL),
-        _nm("8-1", "8-1 missing-tooth crank wheel (Kawasaki motorcycles)", 8, (1,), None, _UNIVERSAL),
-        _nm("4-1", "4-1 missing-tooth crank wheel", 4, (1,), None, _UNIVERSAL),
-        _nm(
-            "36-2-1",
-            "Mitsubishi 4B11 crank: 36 positions, 17 teeth, 2 missing, 16 teeth, 1 missing",
-            36,
-            (1, 2),
-            (17, 16),
-            _MITSU,
-            ("TT_36_2_1",),
-        ),
-        _nm(
-            "36-2-1-1",
-            "Mitsubishi 6G75 crank: 36 positions, 11 teeth, 1 missing, 11 teeth, 1 missing, 10 teeth, 2 missing",
-            36,
-            (2, 1, 1),
-            (11, 11, 10),
-            _MITSU,
-            ("TT_36_2_1_1",),
-        ),
-        _nm(
-            "36-2-2",
-            "Dodge Neon 2003 crank: 36 positions, two gaps of 2 missing teeth 180° apart",
-            36,
-            (2, 2),
-            (16, 16),
-            _CHRYSLER,
-            ("TT_DODGE_NEON_2003_CRANK",),
-        ),
-        TriggerPattern(
-            "arctic-cat",
-            "Arctic Cat two-stroke crank: 24 positions, 11 teeth, 1 missing, 10 teeth, 2 missing",
-            360.0,
-            tuple([x - 7.5 for x in range(45, 196, 15)] + [x - 7.5 for x in range(225, 361, 15)]),
-            tuple(list(range(45, 196, 15)) + list(range(225, 361, 15))),
-            "falling",
-            "crank",
-            _MISC,
-            ("TT_ARCTIC_CAT", "24-1-2"),
-        ),
-        TriggerPattern(
-            "mazda-nb-crank",
-            "Mazda Miata NB crank: two 4° teeth each half turn, rising edges 70° and 110° apart",
-            360.0,
-            (110.0, 180.0, 290.0, 0.0),
-            (114.0, 184.0, 294.0, 4.0),
-            "rising",
-            "crank",
-            _MAZDA,
-            ("TT_MIATA_VVT",),
-        ),
-        TriggerPattern(
-            "mazda-nb-cam",
-            "Mazda Miata NB cam: three rising edges a cycle, 319°, 41° and 360° apart",
-            720.0,
-            (0.0, 360.0, 679.0),
-            (),
-            "rising",
-            "cam",
-            _MAZDA,
-            ("VVT_MIATA_NB",),
-        ),
-        TriggerPattern(
-            "mazda-na-cas-1",
-            "Mazda Miata NA cam-angle sensor, first signal: windows of 72° and 143° a cycle",
-            720.0,
-            (216.9, 577.0),
-            (288.8, 0.0),
-            "both",
-            "cam",
-            _MAZDA,
-            ("TT_MAZDA_MIATA_NA",),
-        ),
-        TriggerPattern(
-            "mazda-na-cas-2",
-            "Mazda Miata NA cam-angle sensor, second signal: four windows of about 70° a cycle",
-            720.0,
-            (53.0, 232.6, 412.4, 592.9),
-            (122.6, 302.6, 482.8, 662.9),
-            "both",
-            "cam",
-            _MAZDA,
-        ),
-        TriggerPattern(
-            "mitsubishi-6g72-cam",
-            "Mitsubishi 6G72 cam: four lows of 30, 65, 55 and 67.5 cam° a cam turn",
-            720.0,
-            tuple(_cam(x) for x in (82.5, 177.5, 262.5, 0.0)),
-            tuple(_cam(x) for x in (52.5, 112.5, 207.5, 292.5)),
-            "both",
-            "cam",
-            _MITSU,
-            ("TT_VVT_MITSU_6G72",),
-        ),
-        TriggerPattern(
-            "mitsubishi-4g63-crank",
-            "Mitsubishi 4G63 crank: two teeth 180° apart, no gap",
-            360.0,
-            (0.0, 180.0),
-            (80.0, 260.0),
-            "rising",
-            "crank",
-            _MITSU,
-        ),
-        TriggerPattern(
-            "mitsubishi-4g63-cam",
-            "Mitsubishi 4G63 cam: a wide and a narrow tooth (135–225 and 315–360 cam°)",
-            720.0,
-            (_cam(135.0), _cam(315.0)),
-            (_cam(225.0), 0.0),
-            "both",
-            "cam",
-            _MITSU,
-            ("VVT_MITSUBISHI_4G63",),
-        ),
-        TriggerPattern(
-            "12-tooth",
-            "12 evenly spaced crank teeth (Nissan cam-angle disc of 24 slots at cam speed)",
-            360.0,
-            tuple(30.0 * k for k in range(12)),
-            tuple(30.0 * k + 15.0 for k in range(12)),
-            "rising",
-            "crank",
-            _UNIVERSAL,
-            ("TT_12_TOOTH_CRANK",),
-        ),
-        TriggerPattern(
-            "single-tooth-cam",
-            "one cam tooth a cycle (phase)",
-            720.0,
-            (0.0,),
-            (20.0,),
-            "rising",
-            "cam",
-            _UNIVERSAL,
-            ("VVT_SINGLE_TOOTH",),
-        ),
-        TriggerPattern(
-            "dodge-neon-2003-cam",
-            "Dodge Neon 2003 cam: seven windows rising at 144, 216, 288, 360, 540, 612 and 684°",
-            720.0,
-            (144.0, 216.0, 288.0, 360.0, 540.0, 612.0, 684.0),
-            (180.0, 252.0, 324.0, 504.0, 576.0, 648.0, 0.0),
-            "rising",
-            "cam",
-            _CHRYSLER,
-            ("TT_DODGE_NEON_2003_CAM",),
-        ),
-        TriggerPattern(
-            "bosch-quick-start-cam",
-            "Bosch quick-start cam: two wide and two narrow teeth (70, 20, 20, 70 cam°)",
-            720.0,
-            tuple(_cam(x) for x in (20.0, 110.0, 200.0, 290.0)),
-            tuple(_cam(x) for x in (90.0, 130.0, 220.0, 0.0)),
-            "falling",
-            "cam",
-            _UNIVERSAL,
-            ("TT_VVT_BOSCH_QUICK_START",),
-        ),
-        TriggerPattern(
-            "nissan-hr-cam-in",
-            "Nissan HR intake cam: four 10 cam° teeth ending at 120, 142, 240 and 360 cam°",
-            720.0,
-            tuple(_cam(x) for x in (110.0, 132.0, 230.0, 350.0)),
-            tuple(_cam(x) for x in (120.0, 142.0, 240.0, 0.0)),
-            "rising",
-            "cam",
-            _NISSAN,
-            ("TT_NISSAN_HR_CAM_IN",),
-        ),
-    ]
-    return {p.name: p for p in pats}
+_PATTERNS = (
+    _nm("60-2", "60-2 missing-tooth crank wheel (Bosch; GM 58x read by its teeth)", 60, (2,), None, _UNIVERSAL),
+    _nm("36-1", "36-1 missing-tooth crank wheel (Ford EDIS)", 36, (1,), None, _UNIVERSAL),
+    _nm("36-2", "36-2 missing-tooth crank wheel (Toyota, Mazda)", 36, (2,), None, _UNIVERSAL),
+    _nm("24-1", "24-1 missing-tooth crank wheel", 24, (1,), None, _UNIVERSAL),
+    _nm("12-1", "12-1 missing-tooth crank wheel", 12, (1,), None, _UNIVERSAL),
+    _nm("8-1", "8-1 missing-tooth crank wheel (Kawasaki motorcycles)", 8, (1,), None, _UNIVERSAL),
+    _nm("4-1", "4-1 missing-tooth crank wheel", 4, (1,), None, _UNIVERSAL),
+    _nm(
+        "36-2-1",
+        "Mitsubishi 4B11 crank: 36 positions, 17 teeth, 2 missing, 16 teeth, 1 missing",
+        36,
+        (1, 2),
+        (17, 16),
+        _MITSU,
+        ("TT_36_2_1",),
+    ),
+    _nm(
+        "36-2-1-1",
+        "Mitsubishi 6G75 crank: 36 positions, 11 teeth, 1 missing, 11 teeth, 1 missing, 10 teeth, 2 missing",
+        36,
+        (2, 1, 1),
+        (11, 11, 10),
+        _MITSU,
+        ("TT_36_2_1_1",),
+    ),
+    _nm(
+        "36-2-2",
+        "Dodge Neon 2003 crank: 36 positions, two gaps of 2 missing teeth 180° apart",
+        36,
+        (2, 2),
+        (16, 16),
+        _CHRYSLER,
+        ("TT_DODGE_NEON_2003_CRANK",),
+    ),
+    TriggerPattern(
+        "arctic-cat",
+        "Arctic Cat two-stroke crank: 24 positions, 11 teeth, 1 missing, 10 teeth, 2 missing",
+        360.0,
+        tuple([x - 7.5 for x in range(45, 196, 15)] + [x - 7.5 for x in range(225, 361, 15)]),
+        tuple(list(range(45, 196, 15)) + list(range(225, 361, 15))),
+        "falling",
+        "crank",
+        _MISC,
+        ("TT_ARCTIC_CAT", "24-1-2"),
+    ),
+    TriggerPattern(
+        "mazda-nb-crank",
+        "Mazda Miata NB crank: two 4° teeth each half turn, rising edges 70° and 110° apart",
+        360.0,
+        (110.0, 180.0, 290.0, 0.0),
+        (114.0, 184.0, 294.0, 4.0),
+        "rising",
+        "crank",
+        _MAZDA,
+        ("TT_MIATA_VVT",),
+    ),
+    TriggerPattern(
+        "mazda-nb-cam",
+        "Mazda Miata NB cam: three rising edges a cycle, 319°, 41° and 360° apart",
+        720.0,
+        (0.0, 360.0, 679.0),
+        (),
+        "rising",
+        "cam",
+        _MAZDA,
+        ("VVT_MIATA_NB",),
+    ),
+    TriggerPattern(
+        "mazda-na-cas-1",
+        "Mazda Miata NA cam-angle sensor, first signal: windows of 72° and 143° a cycle",
+        720.0,
+        (216.9, 577.0),
+        (288.8, 0.0),
+        "both",
+        "cam",
+        _MAZDA,
+        ("TT_MAZDA_MIATA_NA",),
+    ),
+    TriggerPattern(
+        "mazda-na-cas-2",
+        "Mazda Miata NA cam-angle sensor, second signal: four windows of about 70° a cycle",
+        720.0,
+        (53.0, 232.6, 412.4, 592.9),
+        (122.6, 302.6, 482.8, 662.9),
+        "both",
+        "cam",
+        _MAZDA,
+    ),
+    TriggerPattern(
+        "mitsubishi-6g72-cam",
+        "Mitsubishi 6G72 cam: four lows of 30, 65, 55 and 67.5 cam° a cam turn",
+        720.0,
+        tuple(_cam(x) for x in (82.5, 177.5, 262.5, 0.0)),
+        tuple(_cam(x) for x in (52.5, 112.5, 207.5, 292.5)),
+        "both",
+        "cam",
+        _MITSU,
+        ("TT_VVT_MITSU_6G72",),
+    ),
+    TriggerPattern(
+        "mitsubishi-4g63-crank",
+        "Mitsubishi 4G63 crank: two teeth 180° apart, no gap",
+        360.0,
+        (0.0, 180.0),
+        (80.0, 260.0),
+        "rising",
+        "crank",
+        _MITSU,
+    ),
+    TriggerPattern(
+        "mitsubishi-4g63-cam",
+        "Mitsubishi 4G63 cam: a wide and a narrow tooth (135–225 and 315–360 cam°)",
+        720.0,
+        (_cam(135.0), _cam(315.0)),
+        (_cam(225.0), 0.0),
+        "both",
+        "cam",
+        _MITSU,
+        ("VVT_MITSUBISHI_4G63",),
+    ),
+    TriggerPattern(
+        "12-tooth",
+        "12 evenly spaced crank teeth (Nissan cam-angle disc of 24 slots at cam speed)",
+        360.0,
+        tuple(30.0 * k for k in range(12)),
+        tuple(30.0 * k + 15.0 for k in range(12)),
+        "rising",
+        "crank",
+        _UNIVERSAL,
+        ("TT_12_TOOTH_CRANK",),
+    ),
+    TriggerPattern(
+        "single-tooth-cam",
+        "one cam tooth a cycle (phase)",
+        720.0,
+        (0.0,),
+        (20.0,),
+        "rising",
+        "cam",
+        _UNIVERSAL,
+        ("VVT_SINGLE_TOOTH",),
+    ),
+    TriggerPattern(
+        "dodge-neon-2003-cam",
+        "Dodge Neon 2003 cam: seven windows rising at 144, 216, 288, 360, 540, 612 and 684°",
+        720.0,
+        (144.0, 216.0, 288.0, 360.0, 540.0, 612.0, 684.0),
+        (180.0, 252.0, 324.0, 504.0, 576.0, 648.0, 0.0),
+        "rising",
+        "cam",
+        _CHRYSLER,
+        ("TT_DODGE_NEON_2003_CAM",),
+    ),
+    TriggerPattern(
+        "bosch-quick-start-cam",
+        "Bosch quick-start cam: two wide and two narrow teeth (70, 20, 20, 70 cam°)",
+        720.0,
+        tuple(_cam(x) for x in (20.0, 110.0, 200.0, 290.0)),
+        tuple(_cam(x) for x in (90.0, 130.0, 220.0, 0.0)),
+        "falling",
+        "cam",
+        _UNIVERSAL,
+        ("TT_VVT_BOSCH_QUICK_START",),
+    ),
+    TriggerPattern(
+        "nissan-hr-cam-in",
+        "Nissan HR intake cam: four 10 cam° teeth ending at 120, 142, 240 and 360 cam°",
+        720.0,
+        tuple(_cam(x) for x in (110.0, 132.0, 230.0, 350.0)),
+        tuple(_cam(x) for x in (120.0, 142.0, 240.0, 0.0)),
+        "rising",
+        "cam",
+        _NISSAN,
+        ("TT_NISSAN_HR_CAM_IN",),
+    ),
+)
 
 
-CATALOGUE: dict[str, TriggerPattern] = _build()
+CATALOGUE: dict[str, TriggerPattern] = {p.name: p for p in _PATTERNS}
 """The named patterns, by name."""
 
 
@@ -310,3 +308,94 @@ def catalogue_markdown() -> str:
             out.append(f"- geometry: {p.source}")
         out.append("")
     return "\n".join(out)
+
+
+AMBIGUOUS = 0.85
+"""Two patterns of different geometry whose scores are within this ratio explain the edges
+about equally: the choice is refused, naming both [-]."""
+MIN_EVIDENCE = 0.004
+"""The least evidence per edge (:attr:`rotor.logs.patterns.PatternFit.evidence`) that a
+pattern's placement must show, times the share of the edges it keeps [-]."""
+MIN_KEPT = 0.6
+"""The least share of a channel's edges a ranked pattern must keep [-]."""
+RPM_RANGE = (10.0, 30_000.0)
+"""The crankshaft speeds a reading may imply [rev/min]; outside, the pattern is not this signal's."""
+
+
+def pattern_ways(pattern: TriggerPattern) -> list[tuple[str, str, str, bool]]:
+    """(label, channel edges to take, the pattern's polarity, inverted kinds) of each way a
+    digital channel can carry ``pattern``: its edges of the pattern's polarity, or of the other
+    (an inverted signal)."""
+    if pattern.read == "both":
+        return [("both", "both", "both", False), ("both, inverted", "both", "both", True)]
+    other = "falling" if pattern.read == "rising" else "rising"
+    return [(pattern.read, pattern.read, pattern.read, False), (f"{other} (inverted)", other, pattern.read, False)]
+
+
+def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):
+    """Every catalogue pattern (or ``patterns``) tried on a digital channel (``t`` [s], ``v``
+    levels): a list of (score, fit, label) of those that fit, best first. The score is the
+    fit's evidence per edge times the share of edges kept, halved for a pattern of two
+    alternating spacings (one ratio is all that marks it) (at least :data:`MIN_EVIDENCE`,
+    keeping at least :data:`MIN_KEPT` of the edges); patterns that timing cannot tell apart
+    (:attr:`rotor.logs.patterns.TriggerPattern.evenly_spaced`) are not ranked; a reading implying a speed outside
+    :data:`RPM_RANGE` is not this signal's."""
+    import numpy as np
+
+    from .patterns import channel_edges, decode_edges
+
+    edges = {}
+    out = []
+    for p in patterns if patterns is not None else CATALOGUE.values():
+        if p.evenly_spaced:
+            continue
+        for label, take, pol, inverted in pattern_ways(p):
+            if take not in edges:
+                edges[take] = channel_edges(t, v, take, name=name)
+            times, kinds = edges[take]
+            if inverted:
+                kinds = 1 - kinds
+            try:
+                fit = decode_edges(times, p, pol, kinds=kinds if pol == "both" else None)
+            except LogError:
+                continue
+            _, rpm = fit.rpm_per_turn()
+            if rpm.size == 0 or not (RPM_RANGE[0] < float(np.median(rpm)) < RPM_RANGE[1]):
+                continue
+            # a pattern of two alternating spacings is told from any other such signal by one ratio
+            # alone: the freedom it leaves halves its score
+            distinct = p.edges_per_turn // fit.repeats
+            score = fit.kept * fit.evidence * min(1.0, (distinct - 1) / 2)
+            if score >= MIN_EVIDENCE and fit.kept >= MIN_KEPT:
+                out.append((score, fit, label))
+    out.sort(key=lambda x: -x[0])
+    return out
+
+
+def best_pattern(t, v, patterns=None, *, name: str = "encoder_d", source: str = "the log"):
+    """The catalogue pattern that explains a digital channel's edges best: (fit, the edges
+    taken in words, evidence in words). Refused (:class:`LogError`) where none fits, naming
+    the best tried, or where two of different geometry fit about equally (within
+    :data:`AMBIGUOUS`), naming both and how to pin one (``wheel=NAME``)."""
+    ranked = rank_patterns(t, v, patterns, name=name)
+    if not ranked:
+        raise LogError(
+            f"{source}: no catalogue pattern explains the edges of {name!r} (`rotor wheels` lists them); "
+            "give the wheel (wheel=N-M or a catalogue name)",
+            argument="wheel",
+        )
+    best = ranked[0]
+    rival = next((r for r in ranked[1:] if r[1].pattern.name != best[1].pattern.name), None)
+    if rival is not None and rival[0] >= AMBIGUOUS * best[0]:
+        raise LogError(
+            f"{source}: {best[1].pattern.name} ({best[2]} edges, score {best[0]:.4f}) and "
+            f"{rival[1].pattern.name} ({rival[2]} edges, score {rival[0]:.4f}) explain the edges about "
+            "equally; give the wheel (wheel=NAME) to pin one",
+            argument="wheel",
+        )
+    why = (
+        f"{best[1].pattern.name} explains the edges best (score {best[0]:.4f}: {best[1].kept:.0%} of the edges "
+        f"kept, log-ratio rms {best[1].rms:.3f})"
+        + (f"; next {rival[1].pattern.name} {rival[0]:.4f}" if rival is not None else "")
+    )
+    return best[1], best[2], why

@@ -54,12 +54,20 @@ CLIP = 0.35
 FIT_RMS = 0.12
 """A stretch fits a placement where the RMS of its scaled log-ratio residuals is below this [-]."""
 
+BAD_RATIO = 0.33
+"""A single scaled log-ratio residual beyond this breaks a stretch [-] (a missed or extra
+edge gives about log 2 = 0.69, clipped at :data:`CLIP`; a production wheel's edges, as captured while cranking,
+stray by up to about 0.3 from their description)."""
+
 SAME_SPACING = 0.02
 """Two edge spacings that differ by less than this fraction of the mean spacing are taken as
 one [-] (a pattern whose halves differ by less repeats within its turn)."""
 
+CLEAR_AHEAD = 0.4
+"""... where the best placement's mean square is below this share of the next best's [-]."""
+
 LOOSE_RMS = 0.25
-"""... or below this, where the next best placement's mean square is at least 4× the best's [-]
+"""... or below this, where the best placement is clearly ahead (:data:`CLEAR_AHEAD`) [-]
 (a crank speed that swings within a turn while cranking distorts a sparse pattern's ratios)."""
 
 
@@ -114,6 +122,24 @@ class TriggerPattern:
         if polarity == "falling":
             return np.asarray(self.falling_deg)
         return np.sort(np.asarray(self.rising_deg + self.falling_deg))
+
+    def kinds(self, polarity: str | None = None) -> np.ndarray:
+        """Each edge's kind, aligned with :meth:`angles_deg`: 1 rising, 0 falling."""
+        polarity = polarity or self.read
+        if polarity != "both":
+            return np.full(self.angles_deg(polarity).size, 1 if polarity == "rising" else 0, dtype=np.int8)
+        a = np.concatenate([self.rising_deg, self.falling_deg])
+        k = np.concatenate([np.ones(len(self.rising_deg), np.int8), np.zeros(len(self.falling_deg), np.int8)])
+        return k[np.argsort(a, kind="stable")]
+
+    @property
+    def evenly_spaced(self) -> bool:
+        """Whether timing alone cannot tell this pattern from others: its edges that carry
+        the position are evenly spaced, or (read on both edges) one tooth repeated round the
+        turn, whose only mark is its width (any pulse train of that duty cycle fits, at any
+        tooth count)."""
+        k, r = self.edges_per_turn, self.repeats()
+        return r == k or (self.read == "both" and k // r <= 2)
 
     def polarities(self) -> tuple[str, ...]:
         """The polarities whose edges the pattern states (the one that carries the position first)."""
@@ -253,15 +279,22 @@ class PatternFit:
         return self.t[end], 60.0 * (period / (2 * math.pi)) / dt
 
 
-def channel_edges(t: ArrayLike, v: ArrayLike, polarity: str, *, name: str = "encoder_d") -> np.ndarray:
-    """The edge times [s] of a digital (0/1) channel given at its transitions (``t`` [s],
-    ``v`` its level after each row): ``"rising"``, ``"falling"`` or ``"both"``, glitches
-    (:data:`GLITCH`) removed (:func:`rotor.logs.digital.digital_edges`)."""
+def channel_edges(
+    t: ArrayLike, v: ArrayLike, polarity: str, *, name: str = "encoder_d"
+) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of a digital (0/1) channel given at its transitions (``t`` [s], ``v`` its
+    level after each row): ``"rising"``, ``"falling"`` or ``"both"``, glitches
+    (:data:`GLITCH`) removed (:func:`rotor.logs.digital.digital_edges`): (times [s], kind
+    of each: 1 rising, 0 falling)."""
     if polarity == "both":
         r = digital_edges(t, v, edge="rising", glitch=GLITCH, name=name).times
         f = digital_edges(t, v, edge="falling", glitch=GLITCH, name=name).times
-        return np.sort(np.concatenate([r, f]))
-    return digital_edges(t, v, edge=polarity, glitch=GLITCH, name=name).times
+        times = np.concatenate([r, f])
+        kinds = np.concatenate([np.ones(r.size, np.int8), np.zeros(f.size, np.int8)])
+        order = np.argsort(times, kind="stable")
+        return times[order], kinds[order]
+    times = digital_edges(t, v, edge=polarity, glitch=GLITCH, name=name).times
+    return times, np.full(times.size, 1 if polarity == "rising" else 0, dtype=np.int8)
 
 
 def _log_ratios(dt: np.ndarray) -> np.ndarray:
@@ -271,13 +304,13 @@ def _log_ratios(dt: np.ndarray) -> np.ndarray:
 def _placement_costs(d: np.ndarray, ia: np.ndarray) -> np.ndarray:
     """(log-ratios, K) robust costs of each observed log-ratio ``d[i]`` (period i+1 over
     period i) against the pattern's, with period 0 placed at pattern interval s: the
-    residual scaled by the shorter of the two intervals over the median interval (an
-    edge displaced by some degrees moves a short interval's log more than a long one's),
+    residual scaled by the shorter of the two intervals over the median interval, at most 1
+    (an edge displaced by some degrees moves a short interval's log more than a long one's),
     squared, at most :data:`CLIP` ²."""
     K = ia.size
     la = np.log(ia)
     rho = la - np.roll(la, 1)  # rho[j] = log(a_j / a_{j-1})
-    scale = np.minimum(ia, np.roll(ia, 1)) / np.median(ia)
+    scale = np.minimum(np.minimum(ia, np.roll(ia, 1)) / np.median(ia), 1.0)
     i = np.arange(d.size)[:, None] + 1
     j = (np.arange(K)[None, :] + i) % K
     r = (d[:, None] - rho[j]) * scale[j]
@@ -303,13 +336,21 @@ def _runs(good: np.ndarray, best: np.ndarray, bad: np.ndarray) -> list[tuple[int
 
 
 def decode_edges(
-    times: ArrayLike, pattern: TriggerPattern, polarity: str | None = None, *, min_turns: float = 1.0
+    times: ArrayLike,
+    pattern: TriggerPattern,
+    polarity: str | None = None,
+    *,
+    kinds: ArrayLike | None = None,
+    min_turns: float = 1.0,
 ) -> PatternFit:
     """Read edge times ``times`` [s] (one polarity, or both where ``polarity="both"``) as
     ``pattern``: each edge's place in the pattern and its crankshaft angle.
 
+    ``kinds``: with ``polarity="both"``, each edge's kind (1 rising, 0 falling; an inverted
+    signal's kinds flipped): a placement must put rising edges on the pattern's rising ones.
+
     Stretches of edges that follow one placement (log-ratio RMS below :data:`FIT_RMS` over
-    a window of two turns, no single ratio off by more than 2.5 × that) are kept; they are
+    a window of two turns, no single ratio off by more than :data:`BAD_RATIO`) are kept; they are
     joined where the time between them, at the speed on either side, spans a whole number
     of pattern intervals within a quarter of the mean interval. Where a break cannot be
     bridged, the longest joined stretch is kept and the rest reported as dropped.
@@ -334,7 +375,14 @@ def decode_edges(
     d = _log_ratios(dt)
     reps = pattern.repeats(polarity)
     C = _placement_costs(d, ia)  # C[i, s]: log-ratio i of the log against placement s
-    bad = C > (2.5 * FIT_RMS) ** 2
+    if kinds is not None:
+        ek = np.asarray(kinds, dtype=np.int8)
+        if ek.shape != t.shape:
+            raise LogError(f"kinds: {ek.size} for {t.size} edges")
+        pk = pattern.kinds(polarity)
+        j = (np.arange(K)[None, :] + np.arange(d.size)[:, None] + 1) % K
+        C = np.where(pk[j] != ek[1:-1, None], CLIP * CLIP, C)
+    bad = C > BAD_RATIO**2
     W = max(2 * K, 8)
     n = d.size
     cs = np.vstack([np.zeros((1, K)), np.cumsum(C, axis=0)])
@@ -352,7 +400,7 @@ def decode_edges(
     good = np.sqrt(b) < FIT_RMS
     if win.shape[1] > 1:
         second = win[np.arange(n), order[:, 1]]
-        good |= (np.sqrt(b) < LOOSE_RMS) & (b < 0.25 * second)
+        good |= (np.sqrt(b) < LOOSE_RMS) & (b < CLEAR_AHEAD * second)
     min_edges = max(K // 2, 4)
     pieces = [(r0, r1 + 2, s) for r0, r1, s in _runs(good, best, bad) if r1 - r0 + 2 >= min_edges]
     if not pieces:

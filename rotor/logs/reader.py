@@ -444,28 +444,15 @@ def read_log(
     ncols = len(tokens)
     known = _known_header(tokens) if header else None
     if columns is None and known is not None:
-        columns = known[1]
-        notes.append(
-            f"header line {first[0]} ({_short(first[1])}) read as a {known[0]} export: "
-            f"{', '.join(f'{h} → {n}' for h, n in zip(tokens, columns) if n != '-')} (name the columns, "
-            f"e.g. columns='time,encoder_d,-', if the channels are wired otherwise)"
-        )
+        notes.append(f"header line {first[0]} ({_short(first[1])}) read as a {known[0]} export")
+        return _recognised(path, text, sep, header, tokens, ncols, first, notes)
     elif columns is None:
         if header and all(t in COLUMN_NAMES for t in tokens):
             columns = tokens
         elif ncols == 1 and not header:
             columns = ["tooth_time_s"]
-        elif header:
-            unknown = [t for t in tokens if t not in COLUMN_NAMES]
-            raise LogError(
-                f"{path}: line {first[0]} is a header whose names {', '.join(map(repr, unknown))} are not "
-                f"column names ({', '.join(COLUMN_NAMES)}); name the {ncols} columns (e.g. "
-                f"columns='time,encoder_v,pressure_v'; '-' skips one)"
-            )
         else:
-            raise LogError(
-                f"{path}: {ncols} columns; name them (e.g. columns='time,encoder_v,pressure_v'; '-' skips one)"
-            )
+            return _recognised(path, text, sep, header, tokens, ncols, first, notes)
     elif header and known is None:
         spec = parse_columns(columns)
         clash = [
@@ -501,6 +488,38 @@ def read_log(
         notes.append(f"header line {first[0]} ({_short(first[1])}) skipped: the columns are named by the spec")
     cols = _to_seconds({names[i]: data[:, j] for j, i in enumerate(use)}, notes)
     return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes))
+
+
+def _recognised(path, text, sep, header, tokens, ncols, first, notes) -> Log:
+    """A log whose columns no spec and no header of known names gives: every column read,
+    then named by its content (:func:`rotor.logs.channels.recognise_columns`)."""
+    from .channels import recognise_columns
+
+    units = None
+    lines = _data_lines(text)
+    if header:
+        next(lines, None)
+        second = next(lines, None)
+        if second is not None:
+            toks = [t.strip() for t in (second[1].split(sep) if sep else second[1].split())]
+            if len(toks) == ncols and not any(_is_number(t) for t in toks if t):
+                units = toks  # a units row under the names (e.g. ``ms, Flag, …``)
+                text = "\n".join("# units" if n == second[0] else line for n, line in _raw_lines(text))
+    data = _parse(path, text, sep, header, ncols, list(range(ncols)))
+    nums = np.fromiter((n for n, _ in _data_lines(text)), dtype=np.int64)
+    if header:
+        nums = nums[1:]
+    names, said = recognise_columns(tokens if header else None, data, units=units, source=os.path.basename(path))
+    if units is not None:
+        said.insert(0, f"line {first[0] + 1} read as the columns' units ({_short(', '.join(units))})")
+    use = [i for i, n in enumerate(names) if n != "-"]
+    cols = _to_seconds({names[i]: data[:, i] for i in use}, notes)
+    return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes + said))
+
+
+def _raw_lines(text: str):
+    """(line number, line) of every line of ``text``, counted from 1."""
+    return enumerate(text.splitlines(), start=1)
 
 
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")

@@ -896,9 +896,10 @@ def estimate_tooth_errors(
         # be as small as the wheel's errors there, so the detection above cannot be trusted to see it
         keep = tuple(sorted(set(keep) | set(firing_orders(cylinders, strokes, w.teeth))))
         if len(keep) > (int(np.count_nonzero(clean)) - 1) // 2 - 2:
+            which = f"the engine's orders {keep[0]} … {keep[-1]} leave" if keep else "the wheel has"
             raise LogError(
-                f"tooth errors: the engine's orders {keep[0]} … {keep[-1]} leave too few to estimate "
-                f"from {E} teeth; give a calibration (tooth_errors=FILE) or engine_orders"
+                f"tooth errors: {which} too few orders to estimate from {E} teeth; give a calibration "
+                f"(tooth_errors=FILE), engine_orders, or tooth_errors=None"
             )
     else:
         keep = tuple(int(k) for k in engine_orders)

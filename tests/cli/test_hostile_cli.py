@@ -112,6 +112,10 @@ CASES = [
     (["plot", "nosuchpreset"], 2, "neither an engine file nor a preset"),
     # presets
     (["presets", "extra"], 2, "unrecognized arguments"),
+    # wheels
+    (["wheels", "nosuchwheel"], 2, "not in the catalogue"),
+    (["wheels", "36-2", "extra"], 2, "unrecognized arguments"),
+    (["wheels", "\x1b[31m"], 2, "not in the catalogue"),
     # steady
     (["steady", "4chn15", "--load", "abc"], 2, "--load 'abc'"),
     (["steady", "4chn15", "--load", "constant:nan"], 2, "--load 'constant:nan'"),

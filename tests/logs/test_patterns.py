@@ -127,8 +127,8 @@ CAPTURES = [
 def test_real_captures_read_as_their_documented_pattern(name, columns, pattern, polarity, lo, hi):
     log = read_log(TRIGGERS / name, columns)
     p = find_pattern(pattern)
-    edges = channel_edges(log["time"], log["encoder_d"], polarity)
-    fit = decode_edges(edges, p, p.read if polarity != "both" else "both")
+    edges, kinds = channel_edges(log["time"], log["encoder_d"], polarity)
+    fit = decode_edges(edges, p, p.read if polarity != "both" else "both", kinds=kinds if polarity == "both" else None)
     _, rpm = fit.rpm_per_turn()
     assert fit.turns >= 3
     # the median speed of the turns inside the documented range, ±2 %; no turn far outside it

@@ -9,6 +9,7 @@ import rotor
 import rotor.diagnostics.diagnosis
 import rotor.logs.analysis
 import rotor.logs.reader
+import rotor.logs.recording
 from rotor.cli import main
 from rotor.errors import LogError
 from rotor.logs.identify import FitStatus, find_wheel, fit_wheel
@@ -41,7 +42,7 @@ def test_diagnose_reads_and_places_the_file_once(tmp_path, monkeypatch):
     log = rotor.simulated_recording(tmp_path / "sim.txt", cycles=4, seed=2)
     texts = _count(monkeypatch, rotor.logs.reader, "_read_text")
     tracks = _count(monkeypatch, rotor.diagnostics.diagnosis, "read_track")
-    inner = _count(monkeypatch, rotor.logs.analysis, "read_track")
+    inner = _count(monkeypatch, rotor.logs.recording, "read_track")
     d = rotor.diagnose(rotor.load_engine("tue-single"), log, None, wheel="60-2", columns=TUE_COLUMNS, tdc_deg="speed")
     assert d.analysis is not None and d.analysis.cycles >= 3
     assert len(texts) == 1 and len(tracks) == 1 and len(inner) == 0
