@@ -16,6 +16,20 @@ where rotor imports JAX, applies it (:func:`apply_compilation_cache`).
 
 With the compilation cache, the engines' tables are kept between processes too
 (:func:`table_folder`): a fresh process reads an engine's tables instead of building them.
+
+**Only in a folder of the user's own.** JAX's cache holds compiled code that a later process
+runs, the kept programs (:mod:`rotor.programs`) too, and the tables and the command's kept
+outputs are trusted as computed: rotor keeps none of them in a folder that another user
+could write (:func:`own_folder`). A folder rotor makes is made mode 0700; one that exists
+must be owned by the user and writable by neither its group nor everyone (a shared
+``/tmp`` folder is not). Where it is not, rotor neither reads from it nor writes to it, and
+says once, in one line on stderr, why and what to do (``chmod go-w`` the folder, or choose
+another). On a system without POSIX owners (Windows) the folder is not checked.
+
+**A table entry proves itself.** Each holds, beside its arrays, the digest under which it
+is kept and a SHA-256 over that digest and every array's name, dtype, shape and bytes: an
+entry that is cut off, changed, copied under another name or holds a value that is not a
+finite number is ignored, deleted, and the tables are built afresh (and kept again).
 """
 
 from __future__ import annotations
@@ -25,6 +39,8 @@ import hashlib
 import importlib
 import os
 import re
+import shlex
+import stat
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -44,9 +60,11 @@ __all__ = [
     "keep_tables",
     "kept_program_folder",
     "kept_tables",
+    "own_folder",
     "padded_size",
     "prune",
     "recent_programs",
+    "say_once",
     "source_fingerprint",
     "submodules_on_demand",
     "switched_off",
@@ -123,6 +141,60 @@ def switched_off(value: str) -> bool:
     return value.strip().lower() in _OFF
 
 
+_SAID: set[str] = set()  # the warnings said in this process
+
+
+def say_once(text: str) -> None:
+    """Say ``text`` (one line) on stderr as ``rotor: warning: …``, once a process."""
+    if text not in _SAID:
+        _SAID.add(text)
+        print(f"rotor: warning: {text}", file=sys.stderr)
+
+
+_OWN: set[str] = set()  # the folders found to be the user's own in this process
+
+
+def _folder_refusal(folder: str | os.PathLike[str]) -> str | None:
+    """Why the existing ``folder`` is not one to keep what rotor runs or trusts in, with what
+    to do, as the end of a sentence ("it is writable by its group; run chmod go-w …"), or
+    None where it is the user's own: owned by this user and writable by neither its group
+    nor everyone. Not checked (None) on a system without POSIX owners. An ``OSError``
+    where it cannot be looked at."""
+    getuid = getattr(os, "getuid", None)
+    if getuid is None:
+        return None
+    st = os.stat(folder)
+    uid = getuid()
+    if st.st_uid != uid:
+        return f"it is owned by another user (uid {st.st_uid}, not {uid}); "
+    by = [who for bit, who in ((stat.S_IWGRP, "its group"), (stat.S_IWOTH, "everyone")) if st.st_mode & bit]
+    if by:
+        return f"it is writable by {' and by '.join(by)}; run chmod go-w {shlex.quote(os.fspath(folder))}, or "
+    return None
+
+
+def own_folder(folder: Path, what: str, variable: str) -> bool:
+    """Whether rotor keeps ``what`` (words: "the engines' tables") in ``folder``: made where
+    missing (mode 0700), it must be the user's own (:func:`_folder_refusal`; a folder found
+    so is not looked at again in this process). Where it is not, rotor neither reads from
+    it nor writes to it, and says so once on stderr, with what to do (``variable``: the
+    environment variable that chooses the folder). False without a word where the folder
+    cannot be made (a read-only home: nothing is kept, as before)."""
+    name = os.fspath(folder)
+    if name in _OWN:
+        return True
+    try:
+        folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+        why = _folder_refusal(folder)
+    except OSError:
+        return False
+    if why is not None:
+        say_once(f"{what} are not kept in {name}: {why}set {variable} to a folder of your own")
+        return False
+    _OWN.add(name)
+    return True
+
+
 def compilation_cache_on() -> bool:
     """Whether :func:`enable_compilation_cache` has switched the compilation cache on in this
     process (and so the tables and the kept programs, :mod:`rotor.programs`)."""
@@ -168,10 +240,12 @@ def enable_compilation_cache(
 ) -> str | None:
     """Use JAX's persistent compilation cache at ``path`` (see the module doc for the default).
 
-    ``path``: a folder (created if missing). ``min_compile_time_s``: only what takes at
-    least this long to compile is written to the cache [s] (the ``rotor`` command gives 0:
-    its few small eager operations, 20–100 ms each to compile, read back in a few ms; a
-    long Python session would fill the cache with them). Returns the directory in use, or
+    ``path``: a folder (created if missing, mode 0700) of the user's own: one that another
+    user could write is refused (:func:`own_folder`: one line on stderr, the cache off).
+    ``min_compile_time_s``: only what takes at least this long to compile is written to the
+    cache [s] (the ``rotor`` command gives 0: its few small eager operations, 20–100 ms
+    each to compile, read back in a few ms; a long Python session would fill the cache
+    with them). Returns the directory in use, or
     None when the cache is off. Sets JAX's process-wide cache directory, the compile-time
     threshold and the size cap (1 GB) — at once if JAX is imported, else as soon as rotor
     imports it (so that a command that never needs JAX does not import it); the ``rotor`` command
@@ -191,9 +265,9 @@ def enable_compilation_cache(
             base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
             path = Path(base) / "rotor" / "jax"
     path = Path(path).expanduser()
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError:  # a read-only home: run without the cache rather than fail
+    # compiled code that a later process runs: only in a folder of the user's own (made
+    # 0700 where missing); a read-only home: without the cache rather than fail
+    if not own_folder(path, "JAX's compiled programs", "ROTOR_COMPILATION_CACHE"):
         _TABLES_ON.clear()
         return None
     folder = str(path)
@@ -302,16 +376,46 @@ def source_fingerprint() -> bytes:
 
 def _table_entry(key: str) -> tuple[Path, str] | None:
     folder = table_folder()
-    if folder is None:
+    if folder is None or not own_folder(folder, "the engines' tables", "ROTOR_TABLE_CACHE"):
         return None
     digest = hashlib.blake2b(key.encode() + b"\0" + source_fingerprint(), digest_size=20).hexdigest()
     return folder / f"{_TABLE_ENTRY}{digest}.npz", digest
 
 
+_TABLE_FIELDS = ("entry", "check")  # the fields of an entry besides its arrays
+
+
+def _tables_check(digest: str, arrays: dict) -> str:
+    """The SHA-256 over the digest an entry is kept under and each array's name, dtype,
+    shape and bytes (in the order of their names): an entry whose arrays are not those it
+    was written with, or that is copied under another name, does not match it."""
+    import numpy as np
+
+    h = hashlib.sha256(digest.encode())
+    for name in sorted(arrays):
+        a = np.asarray(arrays[name])
+        h.update(f"\0{name}\0{a.dtype.str}\0{a.shape}\0".encode())
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def _all_finite(arrays: dict) -> bool:
+    """Whether every array is of numbers (bool, integer, float or complex), all finite."""
+    import numpy as np
+
+    for a in arrays.values():
+        a = np.asarray(a)
+        if a.dtype.kind not in "biufc" or (a.dtype.kind in "fc" and not np.all(np.isfinite(a))):
+            return False
+    return True
+
+
 def kept_tables(key: str) -> dict | None:
     """The arrays kept under ``key`` (the digest of an engine's table inputs), or None: also
-    where the entry is cut off, changed or was kept by another version of rotor or of the
-    numerical packages (the file's own digest of all of them must match)."""
+    where the entry is cut off, changed, copied under another name, holds a value that is not
+    a finite number, or was kept by another version of rotor or of the numerical packages
+    (its own digest of all of them and the check over its arrays must match) — such an entry
+    is deleted, and the caller builds the tables afresh."""
     entry = _table_entry(key)
     if entry is None:
         return None
@@ -319,18 +423,42 @@ def kept_tables(key: str) -> dict | None:
     import numpy as np
 
     try:
-        with np.load(path, allow_pickle=False) as z:
-            if str(z["entry"]) != digest:
-                return None
-            return {name: z[name] for name in z.files if name != "entry"}
-    except Exception:  # noqa: BLE001 - a missing, partial or foreign file is a miss, whatever it raises
+        z = np.load(path, allow_pickle=False)
+    except FileNotFoundError:
         return None
+    except Exception:  # noqa: BLE001 - a partial or foreign file is a miss, whatever it raises
+        z = None
+    arrays = None
+    if z is not None:
+        try:
+            with z:
+                fields = {name: z[name] for name in z.files}
+            arrays = {name: a for name, a in fields.items() if name not in _TABLE_FIELDS}
+            if (
+                set(_TABLE_FIELDS) - set(fields)
+                or str(fields["entry"]) != digest
+                or str(fields["check"]) != _tables_check(digest, arrays)
+                or not _all_finite(arrays)
+            ):
+                arrays = None
+        except Exception:  # noqa: BLE001 - as above: a miss
+            arrays = None
+    if arrays is None:  # not the entry it claims to be: gone, and built afresh
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:
+            pass
+    return arrays
 
 
 def keep_tables(key: str, arrays: dict) -> None:
-    """Keep ``arrays`` (name → numpy array) under ``key``, whole or not at all, and only the
-    newest :data:`TABLE_FILES` entries of rotor's (no other file of the folder); silently
-    nothing where the folder cannot be written."""
+    """Keep ``arrays`` (name → numpy array of finite numbers) under ``key``, whole or not at
+    all, with the check over them (:func:`kept_tables`), and only the newest
+    :data:`TABLE_FILES` entries of rotor's (no other file of the folder); silently nothing
+    where the folder cannot be written or an array holds a value that is not a finite
+    number (such tables are never read back)."""
+    if set(arrays) & set(_TABLE_FIELDS) or not _all_finite(arrays):
+        return
     entry = _table_entry(key)
     if entry is None:
         return
@@ -339,10 +467,11 @@ def keep_tables(key: str, arrays: dict) -> None:
 
     from .fileio import atomic_path
 
+    arrays = {name: np.asarray(a) for name, a in arrays.items()}
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
-            np.savez(f, entry=np.array(digest), **arrays)
+            np.savez(f, entry=np.array(digest), check=np.array(_tables_check(digest, arrays)), **arrays)
         prune(path.parent, re.compile(rf"^{_TABLE_ENTRY}[0-9a-f]{{40}}\.npz$"), TABLE_FILES)
     except OSError:
         return

@@ -21,8 +21,24 @@ versions of JAX and the numerical packages, XLA's options and the processor
 (:func:`rotor.cache.source_fingerprint`): a change to any of them compiles the kernel again.
 The ``rotor`` command loads the programs that its last run of the same command line used
 ahead of their first call, on a thread (:func:`read_ahead`).
-Delete the folder to clear them. As with JAX's own cache, a kept program is loaded by
-unpickling: keep the folder where only you can write.
+Delete the folder to clear them.
+
+**A kept program is verified before anything of it is read.** A program is compiled code,
+and loading it unpickles its structure (JAX's ``deserialize_and_load``): a file that someone
+else wrote would run their code. So programs are kept only in a folder of the user's own
+(:func:`rotor.cache.own_folder`: made mode 0700 where missing; one owned by another user or
+writable by its group or everyone is neither read nor written, and rotor says once on
+stderr why and what to do), and each file is sealed with an HMAC-SHA256, over its name and
+its bytes, under a secret key of rotor's own: 32 random bytes in the folder's
+``rotor-program-key``, written by rotor (mode 0600) the first time it keeps a program there.
+A key file that is not the user's own, is readable or writable by others, is a link or is
+not 32 bytes is not used (nothing is kept; rotor says so once: delete it and rotor writes
+a new one). A file whose seal does not match (changed, cut off, of an older rotor, sealed
+under another key, or copied under another program's name) is never unpickled: it is a
+miss, compiled again and written in its place. The check costs under a millisecond a
+megabyte. An empty file marks a kernel that cannot be kept (compiled as jitted in every
+process); it holds nothing to run. The key stays in the folder, so that a folder moved or
+copied by its owner keeps its programs, and goes with it when the folder is deleted.
 
 Inside a transformation (``jit``, ``vmap``, ``grad`` of the caller's: an argument is a
 tracer), with an argument that is neither an array nor a number, string or None, or where
@@ -34,13 +50,17 @@ LAPACK's, or cannot be serialized), the kernel is called as it is jitted (``jax.
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import hashlib
+import hmac
 import inspect
 import os
 import pickle
 import platform
 import re
+import secrets
+import stat
 import sys
 import threading
 from collections.abc import Callable, Iterator
@@ -52,7 +72,17 @@ import equinox as eqx
 import numpy as np
 from jax.experimental import serialize_executable
 
-from .cache import RECENT_PROGRAMS, asked_read_ahead, kept_program_folder, prune, recent_programs, source_fingerprint
+from .cache import (
+    RECENT_PROGRAMS,
+    asked_read_ahead,
+    compilation_cache_on,
+    kept_program_folder,
+    own_folder,
+    prune,
+    recent_programs,
+    say_once,
+    source_fingerprint,
+)
 from .fileio import atomic_path
 from .jaxconfig import jax
 
@@ -82,9 +112,127 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 
 def program_folder() -> Path | None:
-    """Where kernels' programs are kept between processes, or None where they are not (see
-    the module doc)."""
-    return kept_program_folder(getattr(jax.config, "jax_compilation_cache_dir", None))
+    """Where kernels' programs are kept between processes, or None where they are not: off,
+    a folder that is not the user's own, or one whose key cannot be used (see the module
+    doc)."""
+    store = _store()
+    return None if store is None else store[0]
+
+
+_KEY_FILE = "rotor-program-key"
+_KEY_BYTES = 32
+_MAGIC = b"rotor program 2\n"  # a sealed program: this line, the HMAC, the pickled program
+_SEAL = len(_MAGIC) + hashlib.sha256().digest_size
+_STORES: dict[tuple, tuple[Path, bytes] | None] = {}
+"""Per setting (``$ROTOR_PROGRAM_CACHE``, JAX's cache folder, whether rotor switched it on):
+the folder of the kept programs and its key, or None where none are kept."""
+
+
+def _store() -> tuple[Path, bytes] | None:
+    """The folder where kernels' programs are kept and its key, or None where none are kept;
+    a folder is checked and its key read once a process (every kernel call asks: a lookup)."""
+    setting = (
+        os.environ.get("ROTOR_PROGRAM_CACHE"),
+        getattr(jax.config, "jax_compilation_cache_dir", None),
+        compilation_cache_on(),
+    )
+    try:
+        return _STORES[setting]
+    except KeyError:
+        pass
+    folder = kept_program_folder(setting[1])
+    key = None
+    with contextlib.suppress(OSError):  # (a working folder that is gone: no programs kept)
+        if folder is not None:
+            folder = folder.absolute()  # a relative one: where it was first used
+        if folder is not None and own_folder(folder, "kernels' programs", "ROTOR_PROGRAM_CACHE"):
+            key = _folder_key(folder)
+    store = _STORES[setting] = None if folder is None or key is None else (folder, key)
+    return store
+
+
+def _folder_key(folder: Path) -> bytes | None:
+    """The key that seals the programs kept in ``folder`` (the user's own), written (mode
+    0600) where there is none; None where it cannot be used (said once) or written."""
+    path = folder / _KEY_FILE
+    for _ in range(3):
+        try:
+            fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        except FileNotFoundError:
+            if not _write_key(path):
+                return None
+            continue
+        except OSError as e:
+            if e.errno == errno.ELOOP:
+                _refuse_key(path, "is a link")
+            return None
+        try:
+            with os.fdopen(fd, "rb") as f:
+                st = os.fstat(f.fileno())
+                key = f.read(_KEY_BYTES + 1) if stat.S_ISREG(st.st_mode) else b""
+        except OSError:
+            return None
+        getuid = getattr(os, "getuid", None)
+        if getuid is not None and st.st_uid != getuid():
+            _refuse_key(path, f"is owned by another user (uid {st.st_uid})")
+        elif getuid is not None and st.st_mode & 0o077:
+            _refuse_key(path, f"can be read or written by others (mode {stat.S_IMODE(st.st_mode):o})")
+        elif len(key) != _KEY_BYTES:
+            _refuse_key(path, "is not a key that rotor wrote")
+        else:
+            return key
+        return None
+    return None
+
+
+def _refuse_key(path: Path, why: str) -> None:
+    say_once(
+        f"kernels' programs are not kept in {path.parent}: its key {path} {why}; delete it, and rotor writes a new one"
+    )
+
+
+def _write_key(path: Path) -> bool:
+    """Write a new key at ``path`` (mode 0600), unless another process has just written one;
+    False where it cannot be written."""
+    tmp = path.with_name(f".rotor-key-{secrets.token_hex(4)}")
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(fd, "wb") as f:
+            f.write(secrets.token_bytes(_KEY_BYTES))
+        try:
+            os.link(tmp, path)  # never over a key another process has just written
+        except FileExistsError:
+            pass
+        except OSError:  # a file system without links: the key put in place whole all the same
+            os.replace(tmp, path)
+        return True
+    except OSError:
+        return False
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+
+
+def _seal(key: bytes, name: str, body: bytes | memoryview) -> bytes:
+    """The HMAC-SHA256 under ``key`` over a program file's name and its pickled program."""
+    h = hmac.new(key, name.encode() + b"\0", hashlib.sha256)
+    h.update(body)
+    return h.digest()
+
+
+def _sealed(key: bytes, name: str, body: bytes) -> bytes:
+    """A program file's bytes: the pickled program ``body`` sealed for the file ``name``."""
+    return _MAGIC + _seal(key, name, body) + body
+
+
+def _opened(key: bytes, name: str, blob: bytes) -> memoryview | None:
+    """The pickled program of a file ``name`` with bytes ``blob``, where its seal matches
+    (else None: nothing of it is to be unpickled)."""
+    if not blob.startswith(_MAGIC) or len(blob) <= _SEAL:
+        return None
+    view = memoryview(blob)
+    body = view[_SEAL:]
+    return body if hmac.compare_digest(view[len(_MAGIC) : _SEAL], _seal(key, name, body)) else None
 
 
 def _spec(leaf: Any) -> tuple[tuple[int, ...], np.dtype, bool]:
@@ -119,8 +267,8 @@ class _Kept:
         return getattr(self.traced, name)
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        folder = program_folder()
-        if folder is None:
+        store = _store()
+        if store is None:
             return self.traced(*args, **kwargs)
         # one flattening of the arguments (not an equinox partition and combine on every
         # call); which leaves are traced: as the kernel's jit decides, except those of the
@@ -143,7 +291,7 @@ class _Kept:
         if call is _MISSING:
             if len(self.calls) >= PROGRAMS_PER_KERNEL:  # a loop over static values: traced as it would be
                 return self.traced(*args, **kwargs)
-            call = self.calls[key] = self._program(folder, key)
+            call = self.calls[key] = self._program(store, key)
         if call is None:
             return self.traced(*args, **kwargs)
         return call(*dynamic)
@@ -164,10 +312,11 @@ class _Kept:
             start += count
         return frozenset(named)
 
-    def _program(self, folder: Path, key: tuple) -> Callable[..., Any] | None:
+    def _program(self, store: tuple[Path, bytes], key: tuple) -> Callable[..., Any] | None:
         """The kept program for ``key`` (the arguments' structure, which leaves are traced,
-        the others' values and the traced ones' specs), read from disk or compiled now and
-        kept, or None where the kernel cannot be kept."""
+        the others' values and the traced ones' specs), read from the folder of ``store``
+        (with its key) or compiled now and kept, or None where the kernel cannot be kept."""
+        folder, secret = store
         tree, mask, fixed, specs = key
         text = repr((self.name, str(tree), mask, fixed, [(shape, str(dtype), weak) for shape, dtype, weak in specs]))
         digest = hashlib.blake2b(text.encode() + b"\0" + _machine(), digest_size=20).hexdigest()
@@ -176,7 +325,7 @@ class _Kept:
         early = _EARLY.pop(path.name, None)  # read ahead: wait for it, or read it here if not begun
         found: Any = early.result() if early is not None and not early.cancel() else _MISSING
         if found is _MISSING:  # not read ahead, or the reading stopped before it
-            found = _load(path)
+            found = _load(path, secret)
         if found is not _MISSING:
             return found
 
@@ -203,28 +352,31 @@ class _Kept:
         try:
             serialized, in_tree, out_tree = serialize_executable.serialize(compiled)
             lapack = bool(calls)  # LAPACK's alone (any other is not kept)
-            blob = pickle.dumps((serialized, in_tree, out_tree, lapack))
+            body = pickle.dumps((serialized, in_tree, out_tree, lapack))
             # its argument and result structures must come back equal: an equinox module's
             # holds sentinels that another process would not recognise (not kept)
-            if pickle.loads(blob)[1:3] != (in_tree, out_tree):
-                blob = b""
+            blob = _sealed(secret, path.name, body) if pickle.loads(body)[1:3] == (in_tree, out_tree) else b""
         except Exception:  # noqa: BLE001 - a program that cannot be serialized is compiled in each process
             blob = b""
         _write(folder, path, blob)
         return compiled
 
 
-def _load(path: Path) -> Any:
+def _load(path: Path, key: bytes) -> Any:
     """The program kept at ``path`` loaded, None where it is marked as a kernel that cannot
-    be kept, ``_MISSING`` where there is none (no file, a partial or a foreign one)."""
+    be kept, ``_MISSING`` where there is none (no file, or one whose seal under ``key`` does
+    not match: partial, changed, foreign or another program's; nothing of it is unpickled)."""
     try:
         blob = path.read_bytes()
     except OSError:
         return _MISSING
     if blob == b"":
         return None
+    body = _opened(key, path.name, blob)
+    if body is None:
+        return _MISSING
     try:
-        serialized, in_tree, out_tree, lapack = pickle.loads(blob)
+        serialized, in_tree, out_tree, lapack = pickle.loads(body)
         if lapack:
             _ready_lapack()
         return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
@@ -248,9 +400,10 @@ def read_ahead(task: str) -> None:
     :func:`remember_programs` ends it and notes the programs looked up since this call for
     the next run."""
     _USED.clear()
-    folder = program_folder()
-    if folder is None or _READING:
+    store = _store()
+    if store is None or _READING:
         return
+    folder, key = store
     try:
         names = recent_programs(folder, task).read_text().split()
     except OSError:
@@ -268,7 +421,7 @@ def read_ahead(task: str) -> None:
         for name, future in early.items():
             if future.set_running_or_notify_cancel():  # else a kernel's call loads it itself
                 try:
-                    future.set_result(_MISSING if _STOP.is_set() else _load(folder / name))
+                    future.set_result(_MISSING if _STOP.is_set() else _load(folder / name, key))
                 except BaseException:  # noqa: BLE001 - whatever stops it, the call waiting loads it itself
                     future.set_result(_MISSING)
 
@@ -310,7 +463,7 @@ def _write(folder: Path, path: Path, blob: bytes) -> None:
     """Keep ``blob`` at ``path``, whole or not at all, within the size cap; silently nothing
     where the folder cannot be written."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(parents=True, exist_ok=True, mode=0o700)
         with atomic_path(path) as tmp:
             Path(tmp).write_bytes(blob)
         prune(folder, _NAME, max_bytes=PROGRAM_BYTES)

@@ -9,7 +9,10 @@ a whole, successful output is kept; an error is never.
 
 The outputs live in ``$ROTOR_OUTPUT_CACHE`` if set (``0``, ``off`` or ``no`` switches
 them off), else in ``$XDG_CACHE_HOME/rotor/outputs`` (``~/.cache/rotor/outputs``); the
-newest :data:`MAX_FILES` are kept. Nothing is kept where the folder cannot be written.
+newest :data:`MAX_FILES` are kept. Nothing is kept where the folder cannot be written, nor
+in one that another user could write (owned by another, or writable by its group or
+everyone: :func:`rotor.cache.own_folder`), which is neither read nor written, and rotor
+says once on stderr why and what to do; a folder rotor makes is made mode 0700.
 
 **An entry proves itself.** Each is one file named ``rotor-output-<digest>.kept``, written
 whole or not at all, whose first line holds the length of the output and a checksum of it
@@ -27,7 +30,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from ..cache import prune, source_fingerprint, switched_off
+from ..cache import own_folder, prune, source_fingerprint, switched_off
 
 __all__ = ["MAX_FILES", "entry_path", "keep_output", "kept_output", "output_key"]
 
@@ -37,12 +40,16 @@ _MAGIC = "rotor kept output 1"
 
 
 def _folder() -> Path | None:
+    """The folder of the kept outputs, or None where they are not kept (off, or a folder
+    that is not the user's own)."""
     env = os.environ.get("ROTOR_OUTPUT_CACHE")
     if env is not None and switched_off(env):
         return None
     if env:
-        return Path(env).expanduser()
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rotor" / "outputs"
+        folder = Path(env).expanduser()
+    else:
+        folder = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rotor" / "outputs"
+    return folder if own_folder(folder, "the outputs of rotor table and rotor info", "ROTOR_OUTPUT_CACHE") else None
 
 
 def _engine_bytes(engine: str) -> bytes | None:
@@ -121,7 +128,7 @@ def keep_output(key: str | None, text: str) -> None:
 
     body = text.encode("utf-8")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
             f.write(f"{_MAGIC} {len(body)} {_checksum(key, body)}\n".encode("ascii") + body)
         prune(path.parent, _ENTRY, MAX_FILES)

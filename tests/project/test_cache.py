@@ -194,6 +194,130 @@ def test_tables_are_kept_only_where_asked_and_no_more_than_the_cap(monkeypatch, 
     assert json.loads(out.stdout) == "None"
 
 
+def _kept_then_respoilt(monkeypatch, tmp_path, spoil):
+    """δ of an engine with its tables built (no folder), then kept in a folder and read
+    back there after ``spoil`` changed the entry's arrays (name → array, the stored key and
+    check left as they were): (δ built, δ read back after the change, whether the entry is
+    whole again: as first written)."""
+    import numpy as np
+
+    from rotor.dynamics import crank_train as ct
+
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", "off")
+    ct.clear_table_cache()
+    want = float(rotor.steady_state(rotor.load_engine("4chn15")).delta)
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(tmp_path / "tables"))
+    rotor.enable_compilation_cache()  # on in the suite already: the tables are kept
+    ct.clear_table_cache()
+    rotor.crank_train(rotor.load_engine("4chn15"))
+    (entry,) = _entries(tmp_path / "tables")
+    raw = entry.read_bytes()
+    with np.load(entry) as z:
+        fields = {name: z[name] for name in z.files}
+    spoil(fields)
+    with open(entry, "wb") as f:
+        np.savez(f, **fields)
+    ct.clear_table_cache()
+    got = float(rotor.steady_state(rotor.load_engine("4chn15")).delta)
+    return want, got, entry.read_bytes() == raw
+
+
+def test_a_changed_tables_entry_is_built_afresh_and_gives_the_same_delta(monkeypatch, tmp_path):
+    """An entry whose numbers were changed (its stored key left as it was) is not used: the
+    tables are built again, δ is as built, and the entry is kept whole again."""
+
+    def spoil(fields):
+        fields["work"] *= 3.0  # the torques' work over the cycle: δ about four times as large
+
+    want, got, whole = _kept_then_respoilt(monkeypatch, tmp_path, spoil)
+    assert got == want and whole
+
+
+def test_a_tables_entry_holding_nan_is_built_afresh_not_blamed_on_the_engine(monkeypatch, tmp_path):
+    import numpy as np
+
+    def spoil(fields):
+        fields["values"][100, 0] = np.nan  # I(θ) at one angle
+
+    want, got, whole = _kept_then_respoilt(monkeypatch, tmp_path, spoil)
+    assert got == want and whole
+
+
+def test_tables_holding_nan_are_not_kept(monkeypatch, tmp_path):
+    import numpy as np
+
+    from rotor import cache
+
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(tmp_path / "tables"))
+    rotor.enable_compilation_cache()
+    cache.keep_tables("k", {"a": np.array([1.0, np.nan])})
+    assert _entries(tmp_path / "tables") == []
+    cache.keep_tables("k", {"a": np.array([1.0, 2.0])})
+    np.testing.assert_array_equal(cache.kept_tables("k")["a"], [1.0, 2.0])
+
+
+def test_tables_are_neither_read_nor_written_in_a_folder_others_can_write(monkeypatch, tmp_path, capfd):
+    import numpy as np
+
+    from rotor import cache
+
+    mine, shared = tmp_path / "mine", tmp_path / "shared"
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(mine))
+    rotor.enable_compilation_cache()
+    cache.keep_tables("k", {"a": np.arange(3.0)})
+    (entry,) = _entries(mine)
+    shared.mkdir()
+    (shared / entry.name).write_bytes(entry.read_bytes())  # a whole, valid entry
+    shared.chmod(0o777)
+    monkeypatch.setenv("ROTOR_TABLE_CACHE", str(shared))
+    capfd.readouterr()
+    assert cache.kept_tables("k") is None
+    cache.keep_tables("other", {"a": np.arange(4.0)})
+    assert cache.kept_tables("k") is None
+    assert [p.name for p in shared.iterdir()] == [entry.name]
+    (line,) = capfd.readouterr().err.splitlines()
+    assert str(shared) in line and "chmod go-w" in line and "ROTOR_TABLE_CACHE" in line
+
+
+def test_jaxs_cache_is_not_switched_on_in_a_folder_others_can_write(tmp_path):
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o775)
+    out = subprocess.run(
+        [sys.executable, "-c", CODE], env=_env(tmp_path, str(shared)), capture_output=True, text=True, check=True
+    )
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["used"] is None and r["dir"] is None
+    (line,) = out.stderr.strip().splitlines()
+    assert line.startswith("rotor: warning: ") and str(shared) in line and "chmod go-w" in line
+    assert list(shared.iterdir()) == []
+    r = _run(str(tmp_path / "mine"), tmp_path)  # a folder rotor makes is the user's own
+    assert r["used"] == str(tmp_path / "mine") and (tmp_path / "mine").stat().st_mode & 0o077 == 0
+
+
+def test_kept_outputs_are_neither_read_nor_written_in_a_folder_of_another_user(monkeypatch, tmp_path, capfd):
+    from rotor.cli import kept
+
+    folder = tmp_path / "outputs"
+    monkeypatch.setenv("ROTOR_OUTPUT_CACHE", str(folder))
+    key = kept.output_key("info", "4chn15", {})
+    kept.keep_output(key, "the output")
+    assert kept.kept_output(key) == "the output"
+    entry = kept.entry_path(key)
+    theirs = tmp_path / "theirs"
+    theirs.mkdir()
+    (theirs / entry.name).write_bytes(entry.read_bytes())  # a whole, valid entry
+    capfd.readouterr()
+    monkeypatch.setenv("ROTOR_OUTPUT_CACHE", str(theirs))
+    monkeypatch.setattr(os, "getuid", lambda: os.stat(tmp_path).st_uid + 4242)  # the folder: another user's
+    assert kept.entry_path(key) is None and kept.output_key("info", "4chn15", {}) is None
+    assert kept.kept_output(key) is None
+    kept.keep_output(kept.output_key("info", "4chn15", {"rpm": 900}), "another output")
+    assert [p.name for p in theirs.iterdir()] == [entry.name]
+    (line,) = capfd.readouterr().err.splitlines()
+    assert "owned by another user" in line and "ROTOR_OUTPUT_CACHE" in line
+
+
 # ---------------------------------------------------------------------- XLA's CPU emitters
 EMITTERS_CHILD = (
     "import os, sys, importlib; importlib.import_module(sys.argv[1]); print(os.environ.get('XLA_FLAGS', ''))"

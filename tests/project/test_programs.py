@@ -366,3 +366,130 @@ def test_another_task_reads_nothing_ahead(kept_here):
     programs.remember_programs("another task")
     assert len(list(kept_here.glob("rotor-program-*.bin"))) == 3
     assert len(list(kept_here.glob("recent-*.txt"))) == 2
+
+
+# ---------------------------------------------------------------------- what a kept program must prove
+def _entries(folder):
+    return sorted(folder.glob("rotor-program-*.bin"), key=lambda p: p.stat().st_mtime_ns)
+
+
+def test_the_folder_and_its_key_are_the_users_own(kept_here):
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    key = kept_here / "rotor-program-key"
+    assert key.stat().st_size == 32 and key.stat().st_mode & 0o077 == 0
+    assert kept_here.stat().st_mode & 0o077 == 0  # made 0700
+    (entry,) = _entries(kept_here)
+    assert entry.read_bytes().startswith(b"rotor program 2\n")
+
+
+@pytest.mark.parametrize("mode", [0o770, 0o757, 0o1777], ids=["group-writable", "world-writable", "like /tmp"])
+def test_programs_are_neither_read_nor_written_in_a_folder_others_can_write(kept_here, mode, capfd, monkeypatch):
+    """A folder others can write: its programs (here, whole ones with their key, copied from
+    a folder of the user's own) are not loaded, nothing is written there, and rotor says
+    once, in one line, why and what to do."""
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    shared = kept_here.parent / f"shared-{mode:o}"
+    shared.mkdir()
+    for path in kept_here.iterdir():
+        (shared / path.name).write_bytes(path.read_bytes())
+    key = shared / "rotor-program-key"
+    if key.exists():
+        key.chmod(0o600)
+    before = {p.name: p.read_bytes() for p in shared.iterdir()}
+    shared.chmod(mode)
+    monkeypatch.setenv("ROTOR_PROGRAM_CACHE", str(shared))
+    programs.clear_programs()
+    capfd.readouterr()
+
+    loaded = []
+
+    def load(*args, **kwargs):
+        loaded.append(args)
+        raise AssertionError("a program was loaded from a folder others can write")
+
+    monkeypatch.setattr(programs.serialize_executable, "deserialize_and_load", load)
+    for power in (3, 3, 2):
+        np.testing.assert_array_equal(_cubic(x, 2.0, power=power), 2.0 * x**power)
+    programs.read_ahead("a task")
+    programs.remember_programs("a task")
+    assert loaded == []
+    assert {p.name: p.read_bytes() for p in shared.iterdir()} == before
+    assert programs.program_folder() is None
+    lines = capfd.readouterr().err.splitlines()
+    assert len(lines) == 1, lines
+    assert str(shared) in lines[0] and "writable by" in lines[0] and "chmod go-w" in lines[0]
+    assert "ROTOR_PROGRAM_CACHE" in lines[0]
+
+
+def test_programs_are_not_kept_in_a_folder_of_another_user(kept_here, capfd, monkeypatch):
+    # the folder (made by this process) belongs to this uid: the process seen as another user's
+    monkeypatch.setattr(os, "getuid", lambda: os.stat(kept_here.parent).st_uid + 4242)
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    assert _entries(kept_here) == []
+    (line,) = capfd.readouterr().err.splitlines()
+    assert "owned by another user" in line and "ROTOR_PROGRAM_CACHE" in line
+
+
+@pytest.mark.parametrize("spoil", ["readable by others", "a link", "not a key"])
+def test_a_key_that_is_not_rotors_own_is_not_used(kept_here, spoil, capfd):
+    x = np.linspace(0.0, 1.0, 5)
+    kept_here.mkdir()
+    key = kept_here / "rotor-program-key"
+    if spoil == "readable by others":
+        key.write_bytes(bytes(32))
+        key.chmod(0o644)
+    elif spoil == "a link":
+        (kept_here.parent / "elsewhere").write_bytes(bytes(32))
+        key.symlink_to(kept_here.parent / "elsewhere")
+    else:
+        key.write_bytes(b"short")
+        key.chmod(0o600)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    assert _entries(kept_here) == []
+    (line,) = capfd.readouterr().err.splitlines()
+    assert str(key) in line and "delete it" in line
+
+
+def test_a_changed_program_is_never_unpickled(kept_here, tmp_path):
+    """A kept file replaced by a pickle that would run code (bare, or framed as rotor frames
+    its programs but with a seal of its own making) is not unpickled: a miss, compiled again
+    and written in its place."""
+    import pickle
+
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    (entry,) = _entries(kept_here)
+    good = entry.read_bytes()
+    ran = tmp_path / "ran"
+
+    class Runs:
+        def __reduce__(self):
+            return (open, (str(ran), "w"))  # unpickling it makes the file
+
+    payload = pickle.dumps(Runs())
+    for spoilt in (payload, b"rotor program 2\n" + bytes(32) + payload, good[:-1] + bytes([good[-1] ^ 1])):
+        entry.write_bytes(spoilt)
+        programs.clear_programs()
+        np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+        assert not ran.exists()
+        assert entry.read_bytes() != spoilt and entry.read_bytes().startswith(b"rotor program 2\n")
+
+
+def test_a_program_copied_under_another_programs_name_is_compiled_again(kept_here):
+    """A program file copied under the name of another kernel's program (another structure of
+    arguments: run, it would fail; the same: it would give the other kernel's results) is a
+    miss: the kernel is compiled again and its file written in its place, with its results."""
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_array_equal(_cubic(x, 2.0), 2.0 * x**3)
+    np.testing.assert_array_equal(_cubic(x, 2.0, power=2), 2.0 * x**2)
+    np.testing.assert_array_equal(_doubled(x, 3), 8.0 * x)
+    cube, square, doubled = _entries(kept_here)
+    for source, target in ((cube, doubled), (cube, square)):
+        target.write_bytes(source.read_bytes())
+        programs.clear_programs()
+        np.testing.assert_array_equal(_cubic(x, 2.0, power=2), 2.0 * x**2)
+        np.testing.assert_array_equal(_doubled(x, 3), 8.0 * x)
+        assert target.read_bytes() != source.read_bytes()
