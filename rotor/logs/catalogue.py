@@ -229,7 +229,7 @@ def catalogue_names() -> tuple[str, ...]:
 
 def find_pattern(name: str) -> TriggerPattern:
     """The pattern named ``name``: a catalogue name or alias (any case, ``_`` for ``-``),
-    or an ``N-g1-g2-…`` shorthand (gaps spread as evenly as they go; a catalogue entry of
+    ``N-tooth`` (N evenly spaced crank teeth), or an ``N-g1-g2-…`` shorthand (gaps spread as evenly as they go; a catalogue entry of
     that shorthand first). A :class:`LogError` naming the closest names otherwise."""
     if not isinstance(name, str):
         raise TypeError(f"pattern = {name!r}: a catalogue name (a str)")
@@ -237,6 +237,12 @@ def find_pattern(name: str) -> TriggerPattern:
     for p in CATALOGUE.values():
         if key == p.name or key in (a.lower().replace("_", "-") for a in p.aliases):
             return p
+    m = re.fullmatch(r"(\d+)-tooth", key)
+    if m and 1 <= int(m.group(1)) <= 1000:
+        n = int(m.group(1))
+        return TriggerPattern(
+            f"{n}-tooth", f"{n} evenly spaced crank teeth", 360.0, tuple(360.0 * k / n for k in range(n)), (), "rising"
+        )
     m = re.fullmatch(r"(\d+)((?:-\d+)*)", key)
     if m:
         teeth = int(m.group(1))

@@ -21,6 +21,8 @@ from __future__ import annotations
 import dataclasses
 import re
 
+import numpy as np
+
 from ..errors import LogError
 from .catalogue import best_pattern, find_pattern, pattern_ways
 from .patterns import PatternFit, TriggerPattern, channel_edges, decode_edges
@@ -31,6 +33,10 @@ from .wheel import Wheel
 __all__ = ["PatternReading", "read_wheel"]
 
 _NM = re.compile(r"^\d+(-\d+)*$")
+
+EVEN_RATIO = 0.15
+"""A wheel's edges are evenly spaced where 90 % of its neighbouring periods differ by less
+than this in log [-] (a cranking engine's speed swings included)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -156,7 +162,46 @@ def _auto(log: Log, name: str) -> PatternReading | None:
             continue
         used = log if channel == "encoder_d" else _with_wheel_channel(log, channel)
         return PatternReading(used, name, fit, channel, label, True, why)
-    return None
+    return _even_wheel_by_cam(log, name)
+
+
+def _even_wheel_by_cam(log: Log, name: str) -> PatternReading | None:
+    """An evenly spaced wheel counted against a cam channel of one edge a cycle: the wheel's
+    edges between neighbouring cam edges, the same number M (even) in nearly every cycle, give
+    M/2 teeth a revolution (a cam turns once a cycle). None where that does not hold."""
+    if "cam_d" not in log:
+        return None
+    times, _ = channel_edges(log["time"], log["encoder_d"], "rising")
+    cam, _ = channel_edges(log["time"], log["cam_d"], "rising", name="cam_d")
+    if times.size < 24 or cam.size < 3:
+        return None
+    r = np.abs(np.log(times[2:] - times[1:-1]) - np.log(times[1:-1] - times[:-2]))
+    if float(np.percentile(r, 90)) > EVEN_RATIO:
+        return None
+    counts = np.diff(np.searchsorted(times, cam))
+    if counts.size < 2:
+        return None
+    m = int(np.bincount(counts).argmax())
+    share = float(np.mean(counts == m))
+    if m < 4 or m % 2 or share < 0.8:
+        return None
+    teeth = m // 2
+    pattern = TriggerPattern(
+        f"{teeth}-tooth",
+        f"{teeth} evenly spaced crank teeth, counted against a cam edge a cycle",
+        360.0,
+        tuple(360.0 * k / teeth for k in range(teeth)),
+        (),
+        "rising",
+        "crank",
+        "counted from the recording: evenly spaced edges, the same number between the cam's edges",
+    )
+    fit = decode_edges(times, pattern)
+    why = (
+        f"{teeth}-tooth: the wheel's edges are evenly spaced and {m} of them fall between neighbouring cam edges "
+        f"in {share:.0%} of the cycles, so {teeth} a revolution (a cam turns once a cycle)"
+    )
+    return PatternReading(log, name, fit, "encoder_d", "rising", True, why)
 
 
 def read_wheel(
