@@ -62,7 +62,8 @@ import numpy as np
 from ..errors import EngineError, LogError
 from ..logs.analysis import LogAnalysis, PhaseSource, analyze_log
 from ..logs.reader import read_log
-from ..logs.track import read_track
+from ..logs.recording import PatternReading, read_wheel
+from ..logs.track import WheelReading
 from ..logs.wheel import ToothErrors, parse_wheel
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
@@ -577,11 +578,16 @@ def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source) -> _Reader:
     tooth errors are another wheel's."""
     source_log = read_log(log, plan.columns)
     reading = (
-        read_track(source_log, wheel, edge=plan.edge, name=os.path.basename(os.fspath(log)))
-        if source_log.kind != "speed" and wheel is not None
+        read_wheel(source_log, wheel, edge=plan.edge, name=os.path.basename(os.fspath(log)))
+        if source_log.kind != "speed"
         else None
     )
-    if reading is not None and isinstance(te, ToothErrors) and parse_wheel(te.wheel) != reading.wheel:
+    if isinstance(reading, PatternReading) and isinstance(te, ToothErrors):
+        raise LogError(
+            f"{reading.source}: the calibration holds the tooth errors of a {te.wheel} wheel, and this log's wheel "
+            f"is the {reading.pattern.name} pattern: give a calibration made on this wheel or none (calibration=None)"
+        )
+    if isinstance(reading, WheelReading) and isinstance(te, ToothErrors) and parse_wheel(te.wheel) != reading.wheel:
         origin = (
             f"the preset's own calibration, {cal_source[len('preset ') :]}"
             if cal_source is not None and cal_source.startswith("preset ")

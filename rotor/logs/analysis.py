@@ -324,11 +324,12 @@ class LogAnalysis(Result):
 
 def _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise):
     """TypeError naming the argument of :func:`analyze_log` that has the wrong type."""
+    from .recording import PatternReading
     from .track import WheelReading
 
     model = sys.modules.get("rotor.engine.model")  # not imported: no Engine was made, and JAX stays out
 
-    if not isinstance(source, (str, os.PathLike, Log, WheelReading)):
+    if not isinstance(source, (str, os.PathLike, Log, WheelReading, PatternReading)):
         raise TypeError(
             f"source = {source!r}: a log file's name (str or os.PathLike) or a rotor.Log, not {type(source).__name__}"
         )
@@ -435,9 +436,11 @@ def analyze_log(
     _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise)
     _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle)
     reading: WheelReading | None = source if isinstance(source, WheelReading) else None
-    pattern_reading: PatternReading | None = None
+    pattern_reading: PatternReading | None = source if isinstance(source, PatternReading) else None
     if reading is not None:
         log, name = reading.log, reading.source
+    elif pattern_reading is not None:
+        log, name = pattern_reading.log, pattern_reading.source
     else:
         log = source if isinstance(source, Log) else read_log(source, columns)
         name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
@@ -445,7 +448,7 @@ def analyze_log(
     if log.kind == "speed":
         angle = speed_angle(log, name, revs)
     else:
-        if reading is None:
+        if reading is None and pattern_reading is None:
             placed = read_wheel(log, wheel, edge=edge, name=name)
             if isinstance(placed, PatternReading):
                 pattern_reading, log = placed, placed.log
