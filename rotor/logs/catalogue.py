@@ -16,10 +16,21 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
 from ..errors import LogError
 from .patterns import TriggerPattern, pattern_from_wheel
 
-__all__ = ["CATALOGUE", "find_pattern", "catalogue_names", "pattern_ways", "rank_patterns", "best_pattern"]
+__all__ = [
+    "CATALOGUE",
+    "find_pattern",
+    "catalogue_names",
+    "pattern_ways",
+    "rank_patterns",
+    "best_pattern",
+    "decode_channel",
+    "AmbiguousPattern",
+]
 
 _MITSU = "rusEFI trigger decoders, trigger_mitsubishi.cpp"
 _MAZDA = "rusEFI trigger decoders, trigger_mazda.cpp"
@@ -316,12 +327,19 @@ def catalogue_markdown() -> str:
     return "\n".join(out)
 
 
+class AmbiguousPattern(LogError):
+    """Two patterns of different geometry explain a channel's edges about equally."""
+
+
 AMBIGUOUS = 0.85
 """Two patterns of different geometry whose scores are within this ratio explain the edges
 about equally: the choice is refused, naming both [-]."""
 MIN_EVIDENCE = 0.004
 """The least evidence per edge (:attr:`rotor.logs.patterns.PatternFit.evidence`) that a
 pattern's placement must show, times the share of the edges it keeps [-]."""
+RANKING_ROWS = 40_000
+"""Of a long record, the patterns are ranked on its first this many rows (about 20 000 edges
+of each polarity) [-]; the pattern taken is then placed on all of it."""
 MIN_KEPT = 0.6
 """The least share of a channel's edges a ranked pattern must keep [-]."""
 RPM_RANGE = (10.0, 30_000.0)
@@ -338,7 +356,7 @@ def pattern_ways(pattern: TriggerPattern) -> list[tuple[str, str, str, bool]]:
     return [(pattern.read, pattern.read, pattern.read, False), (f"{other} (inverted)", other, pattern.read, False)]
 
 
-def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):
+def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):  # noqa: C901
     """Every catalogue pattern (or ``patterns``) tried on a digital channel (``t`` [s], ``v``
     levels): a list of (score, fit, label) of those that fit, best first. The score is the
     fit's evidence per edge times the share of edges kept, halved for a pattern of two
@@ -346,12 +364,14 @@ def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):
     keeping at least :data:`MIN_KEPT` of the edges); patterns that timing cannot tell apart
     (:attr:`rotor.logs.patterns.TriggerPattern.evenly_spaced`) are not ranked; a reading implying a speed outside
     :data:`RPM_RANGE` is not this signal's."""
-    import numpy as np
-
     from .patterns import channel_edges, decode_edges
 
     edges = {}
     out = []
+    t = np.asarray(t, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    if t.size > RANKING_ROWS:  # ranked on the start of a long record; the one taken is placed on all of it
+        t, v = t[:RANKING_ROWS], v[:RANKING_ROWS]
     for p in patterns if patterns is not None else CATALOGUE.values():
         if p.evenly_spaced:
             continue
@@ -378,11 +398,13 @@ def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):
     return out
 
 
-def best_pattern(t, v, patterns=None, *, name: str = "encoder_d", source: str = "the log"):
+def best_pattern(t, v, patterns=None, *, name: str = "encoder_d", source: str = "the log", whole: bool = True):
     """The catalogue pattern that explains a digital channel's edges best: (fit, the edges
     taken in words, evidence in words). Refused (:class:`LogError`) where none fits, naming
     the best tried, or where two of different geometry fit about equally (within
-    :data:`AMBIGUOUS`), naming both and how to pin one (``wheel=NAME``)."""
+    :data:`AMBIGUOUS`), naming both and how to pin one (``wheel=NAME``). ``whole=False``: the
+    fit of a long record is that of its start (:data:`RANKING_ROWS`), for a caller that places
+    the pattern by other means."""
     ranked = rank_patterns(t, v, patterns, name=name)
     if not ranked:
         raise LogError(
@@ -393,15 +415,29 @@ def best_pattern(t, v, patterns=None, *, name: str = "encoder_d", source: str = 
     best = ranked[0]
     rival = next((r for r in ranked[1:] if r[1].pattern.name != best[1].pattern.name), None)
     if rival is not None and rival[0] >= AMBIGUOUS * best[0]:
-        raise LogError(
+        raise AmbiguousPattern(
             f"{source}: {best[1].pattern.name} ({best[2]} edges, score {best[0]:.4f}) and "
             f"{rival[1].pattern.name} ({rival[2]} edges, score {rival[0]:.4f}) explain the edges about "
             "equally; give the wheel (wheel=NAME) to pin one",
             argument="wheel",
         )
+    fit = best[1]
+    if whole and np.size(t) > RANKING_ROWS:
+        fit = decode_channel(t, v, fit.pattern, best[2], name=name)
     why = (
         f"{best[1].pattern.name} explains the edges best (score {best[0]:.4f}: {best[1].kept:.0%} of the edges "
         f"kept, log-ratio rms {best[1].rms:.3f})"
         + (f"; next {rival[1].pattern.name} {rival[0]:.4f}" if rival is not None else "")
     )
-    return best[1], best[2], why
+    return fit, best[2], why
+
+
+def decode_channel(t, v, pattern: TriggerPattern, label: str, *, name: str = "encoder_d"):
+    """``pattern`` placed on every edge of a digital channel (``t`` [s], ``v`` levels), read
+    the way ``label`` (of :func:`pattern_ways`) says."""
+    from .patterns import channel_edges, decode_edges
+
+    take, pol, inverted = next((w[1], w[2], w[3]) for w in pattern_ways(pattern) if w[0] == label)
+    times, kinds = channel_edges(t, v, take, name=name)
+    kinds = 1 - kinds if inverted else kinds
+    return decode_edges(times, pattern, pol, kinds=kinds if pol == "both" else None)

@@ -24,7 +24,7 @@ import re
 import numpy as np
 
 from ..errors import LogError
-from .catalogue import best_pattern, find_pattern, pattern_ways
+from .catalogue import RANKING_ROWS, AmbiguousPattern, best_pattern, decode_channel, find_pattern, pattern_ways
 from .patterns import PatternFit, TriggerPattern, channel_edges, decode_edges
 from .reader import Log
 from .track import WheelReading, read_track
@@ -155,11 +155,13 @@ def _auto(log: Log, name: str) -> PatternReading | None:
         if channel not in log:
             continue
         try:
-            fit, label, why = best_pattern(log["time"], log[channel], name=channel, source=name)
-        except LogError as e:
-            if "about equally" in str(e):
-                raise
-            continue
+            fit, label, why = best_pattern(log["time"], log[channel], name=channel, source=name, whole=False)
+        except AmbiguousPattern:
+            raise
+        except LogError:
+            continue  # no pattern fits this channel: the next, or the missing-tooth finder
+        if log.rows > RANKING_ROWS and not (_NM.match(fit.pattern.name) and channel == "encoder_d"):
+            fit = decode_channel(log["time"], log[channel], fit.pattern, label, name=channel)
         used = log if channel == "encoder_d" else _with_wheel_channel(log, channel)
         return PatternReading(used, name, fit, channel, label, True, why)
     return _even_wheel_by_cam(log, name)
