@@ -41,11 +41,12 @@ def test_diagnose_reads_and_places_the_file_once(tmp_path, monkeypatch):
     edges found and placed on the wheel once."""
     log = rotor.simulated_recording(tmp_path / "sim.txt", cycles=4, seed=2)
     texts = _count(monkeypatch, rotor.logs.reader, "_read_text")
-    tracks = _count(monkeypatch, rotor.diagnostics.diagnosis, "read_track")
-    inner = _count(monkeypatch, rotor.logs.recording, "read_track")
+    placed = _count(monkeypatch, rotor.diagnostics.diagnosis, "read_wheel")
+    tracks = _count(monkeypatch, rotor.logs.recording, "read_track")
+    again = _count(monkeypatch, rotor.logs.analysis, "read_wheel")
     d = rotor.diagnose(rotor.load_engine("tue-single"), log, None, wheel="60-2", columns=TUE_COLUMNS, tdc_deg="speed")
     assert d.analysis is not None and d.analysis.cycles >= 3
-    assert len(texts) == 1 and len(tracks) == 1 and len(inner) == 0
+    assert len(texts) == 1 and len(placed) == 1 and len(tracks) == 1 and len(again) == 0
 
 
 def test_choices_recorded_with_evidence_and_pins(tmp_path):
