@@ -5,7 +5,8 @@ Angles are crankshaft degrees over the pattern's turn (360° for a crank wheel, 
 a cam wheel), counted from the angle the source counts from. The geometry of the named
 production patterns is that of the rusEFI project's trigger decoders (rusEFI, "trigger
 decoders", ``firmware/controllers/trigger/decoders/``: the file is named with each), the
-open-source engine controller whose unit tests decode real captures of these wheels.
+open-source engine controller whose unit tests decode real captures of these wheels;
+where rusEFI has no description, that of the Speeduino project's decoders (named as such).
 The missing-tooth wheels (``60-2``, ``36-1``, …) are the generic ``N-M`` form, also
 available by shorthand for any N and gaps (:func:`find_pattern`).
 
@@ -38,11 +39,32 @@ _CHRYSLER = "rusEFI trigger decoders, trigger_chrysler.cpp"
 _NISSAN = "rusEFI trigger decoders, trigger_nissan.cpp"
 _UNIVERSAL = "rusEFI trigger decoders, trigger_universal.cpp"
 _MISC = "rusEFI trigger decoders, trigger_misc.cpp"
+_HONDA = "rusEFI trigger decoders, trigger_honda.cpp"
+_GM = "rusEFI trigger decoders, trigger_gm.cpp"
+_SUBARU = "rusEFI trigger decoders, trigger_subaru.cpp"
+_FORD = "rusEFI trigger decoders, trigger_ford.cpp"
+_TOYOTA = "rusEFI trigger decoders, trigger_toyota.cpp"
+_SPEEDUINO = "Speeduino (Josh Stewart et al.) trigger decoders, decoders.cpp"
 
 
 def _cam(x: float) -> float:
     """Cam degrees as crankshaft degrees."""
     return 2.0 * x
+
+
+_GM24X_NARROW = "011111011100110001010000"
+"""GM 24x: of the 24 teeth, from the one that starts at angle 0, which rise soon after the
+falling edge before them (1) and which late (0) (rusEFI's 0x0A33BE, least significant bit first)."""
+
+
+def _gm24(short: float) -> list[float]:
+    """GM 24x: each tooth's rising edge after the falling edge before it [deg]."""
+    return [short if b == "1" else 15.0 - short for b in _GM24X_NARROW]
+
+
+_VQ30_ENDS = (52.0, 61.0, 70.0, 115.0, 124.0, 133.0, 142.0, 151.0, 160.0, 176.0, 233.0)
+_VQ30_ENDS += (242.0, 251.0, 260.0, 291.0, 300.0, 309.0, 318.0, 327.0, 351.0, 360.0)
+"""Nissan VQ30 cam: where its 21 teeth end [cam deg]."""
 
 
 def _nm(name: str, title: str, teeth: int, gaps: tuple, layout: tuple | None, source: str, aliases=()):
@@ -78,12 +100,12 @@ _PATTERNS = (
     ),
     _nm(
         "36-2-2",
-        "Dodge Neon 2003 crank: 36 positions, two gaps of 2 missing teeth 180° apart",
+        "Dodge Neon 2003, Nissan QR25 and MR18 crank: 36 positions, two gaps of 2 missing teeth 180° apart",
         36,
         (2, 2),
         (16, 16),
-        _CHRYSLER,
-        ("TT_DODGE_NEON_2003_CRANK",),
+        _CHRYSLER + "; " + _NISSAN + " (initializeNissanQR25crank, initializeNissanMR18crank)",
+        ("TT_DODGE_NEON_2003_CRANK", "TT_NISSAN_QR25", "TT_NISSAN_MR18_CRANK"),
     ),
     TriggerPattern(
         "arctic-cat",
@@ -226,6 +248,251 @@ _PATTERNS = (
         _NISSAN,
         ("TT_NISSAN_HR_CAM_IN",),
     ),
+    TriggerPattern(
+        "honda-k-crank",
+        "Honda K crank: 12 teeth 30° apart and a 13th tooth 10° after one of them (12+1)",
+        360.0,
+        (6.0,) + tuple(30.0 * k - 4.0 for k in range(1, 13)),
+        (10.0,) + tuple(30.0 * k for k in range(1, 13)),
+        "rising",
+        "crank",
+        _HONDA + " (configureHondaK_12_1)",
+        ("TT_HONDA_K_CRANK_12_1", "TT_HONDA_K_12_1"),
+    ),
+    TriggerPattern(
+        "honda-k-cam",
+        "Honda K exhaust cam: four 15 cam° teeth ending at 70.5 cam° and 90 cam° apart, a 7 cam° one ending at 360 (4+1)",
+        720.0,
+        tuple(_cam(55.5 + 90.0 * k) for k in range(4)) + (_cam(353.0),),
+        tuple(_cam(70.5 + 90.0 * k) for k in range(4)) + (0.0,),
+        "rising",
+        "cam",
+        _HONDA + " (configureHondaK_4_1)",
+        ("TT_HONDA_K_CAM_4_1", "TT_HONDA_K_4_1"),
+    ),
+    TriggerPattern(
+        "gm-24x",
+        "GM 24x crank (LS): falling edges 15° apart, each tooth 5° or 10° wide in a fixed sequence",
+        360.0,
+        # each rising edge 5° or 10° after the falling edge before it, in the sequence of _GM24X_NARROW
+        tuple(15.0 * i + w for i, w in enumerate(_gm24(5.0))),
+        tuple(15.0 * i for i in range(24)),
+        "both",
+        "crank",
+        _GM + " (initGmLS24, initGmLS24_5deg)",
+        ("TT_GM_24x", "TT_GM_24x_5"),
+    ),
+    TriggerPattern(
+        "gm-24x-3",
+        "GM 24x crank, 3° variant: falling edges 15° apart, each tooth 3° or 12° wide in a fixed sequence",
+        360.0,
+        tuple(15.0 * i + w for i, w in enumerate(_gm24(3.0))),
+        tuple(15.0 * i for i in range(24)),
+        "both",
+        "crank",
+        _GM + " (initGmLS24, initGmLS24_3deg); Speeduino wiki, GM 24X (12 wide and 12 narrow teeth, 12° and 3°)",
+        ("TT_GM_24x_3", "TT_GM_24x_2"),
+    ),
+    TriggerPattern(
+        "gm-7x",
+        "GM 7x crank: six 5° teeth 60° apart and a seventh 10° before the sixth",
+        360.0,
+        (55.0, 115.0, 175.0, 235.0, 295.0, 345.0, 355.0),
+        (60.0, 120.0, 180.0, 240.0, 300.0, 350.0, 0.0),
+        "rising",
+        "crank",
+        _GM + " (configureGmTriggerWaveform)",
+        ("TT_GM_7X",),
+    ),
+    TriggerPattern(
+        "gm-60-2-2-2",
+        "GM/Daewoo F8CV distributor: 60 positions a cam turn, three gaps of 2 missing 120 cam° apart",
+        720.0,
+        tuple(_cam(1.0 + 6.0 * j) for j in range(60) if j not in (12, 13, 32, 33, 52, 53)),
+        tuple(_cam(4.0 + 6.0 * j) for j in range(60) if j not in (12, 13, 32, 33, 52, 53)),
+        "rising",
+        "cam",
+        _GM + " (configureGm60_2_2_2)",
+        ("TT_GM_60_2_2_2",),
+    ),
+    TriggerPattern(
+        "36-2-2-2",
+        "Subaru H4 crank (36-2-2-2): 36 positions, 13 teeth, 2 missing, 16 teeth, 2 missing, 1 tooth, 2 missing",
+        360.0,
+        tuple(10.0 * k for k in range(13)) + tuple(10.0 * k for k in range(15, 31)) + (330.0,),
+        tuple(10.0 * k + 5.0 for k in range(12))
+        + (135.0,)
+        + tuple(10.0 * k + 5.0 for k in range(15, 30))
+        + (315.0, 345.0),
+        "rising",
+        "crank",
+        _SUBARU + " (initialize36_2_2_2); Speeduino, decoders.cpp (triggerSetup_ThirtySixMinus222: H4 13-16-1)",
+        ("TT_36_2_2_2", "subaru-36-2-2-2"),
+    ),
+    TriggerPattern(
+        "subaru-h6-36-2-2-2",
+        "Subaru H6 crank (36-2-2-2): 36 positions, 19 teeth, 2 missing, 10 teeth, 2 missing, 1 tooth, 2 missing",
+        360.0,
+        tuple(10.0 * k for k in range(19)) + tuple(10.0 * k for k in range(21, 31)) + (330.0,),
+        (),
+        "rising",
+        "crank",
+        _SPEEDUINO + " (triggerSetup_ThirtySixMinus222: H6 19-missing-10-missing-1-missing)",
+    ),
+    TriggerPattern(
+        "nissan-vq35-crank",
+        "Nissan VQ35 crank: 36 positions, three gaps of 2 missing teeth 120° apart (10 teeth between)",
+        360.0,
+        tuple(25.0 + 10.0 * k + 120.0 * m for m in range(3) for k in range(10)),
+        tuple(30.0 + 10.0 * k + 120.0 * m for m in range(3) for k in range(10)),
+        "rising",
+        "crank",
+        _NISSAN + " (initializeNissanVQ35crank)",
+        ("TT_NISSAN_VQ35",),
+    ),
+    TriggerPattern(
+        "nissan-hr-crank",
+        "Nissan HR crank: 36 positions, 10 teeth, 2 missing, 22 teeth, 2 missing",
+        360.0,
+        tuple(10.0 * k for k in range(10)) + tuple(10.0 * k for k in range(12, 34)),
+        tuple(10.0 * k + 5.0 for k in range(9)) + (105.0,) + tuple(10.0 * k + 5.0 for k in range(12, 33)) + (355.0,),
+        "rising",
+        "crank",
+        _NISSAN + " (initializeNissanHRcrank)",
+        ("TT_NISSAN_HR",),
+    ),
+    TriggerPattern(
+        "nissan-vq-cam",
+        "Nissan VQ35 intake cam (VVT): six 10 cam° teeth ending at 120, 180, 200, 240, 260 and 360 cam°",
+        720.0,
+        tuple(_cam(x - 10.0) for x in (120.0, 180.0, 200.0, 240.0, 260.0, 360.0)),
+        tuple(_cam(x) for x in (120.0, 180.0, 200.0, 240.0, 260.0, 0.0)),
+        "rising",
+        "cam",
+        _NISSAN + " (initializeNissanVQvvt)",
+        ("TT_VVT_NISSAN_VQ35",),
+    ),
+    TriggerPattern(
+        "nissan-mr-cam",
+        "Nissan MR18 cam (VVT): groups of 1, 3, 4 and 2 teeth 90 cam° apart, 17 cam° between teeth",
+        720.0,
+        tuple(_cam(x - 4.0) for x in (73.0, 163.0, 180.0, 197.0, 253.0, 270.0, 287.0, 304.0, 343.0, 360.0)),
+        tuple(_cam(x) for x in (73.0, 163.0, 180.0, 197.0, 253.0, 270.0, 287.0, 304.0, 343.0, 0.0)),
+        "rising",
+        "cam",
+        _NISSAN + " (initializeNissanMRvvt)",
+        ("TT_NISSAN_MR18_CAM_VVT",),
+    ),
+    TriggerPattern(
+        "nissan-vq30-cam",
+        "Nissan VQ30 cam: 21 teeth of 4 cam° in groups of 3, 6, 1, 4, 5 and 2, 9 cam° apart within a group",
+        720.0,
+        tuple(_cam(x - 4.0) for x in _VQ30_ENDS),
+        tuple(_cam(x) for x in _VQ30_ENDS),
+        "rising",
+        "cam",
+        _NISSAN + " (initializeNissanVQ30cam)",
+        ("TT_NISSAN_VQ30",),
+    ),
+    TriggerPattern(
+        "nissan-sr20ve-cam",
+        "Nissan SR20VE cam-angle sensor, cylinder windows: four windows 180° apart, one 16° wide, three 4°",
+        720.0,
+        (164.0, 356.0, 536.0, 716.0),
+        (180.0, 360.0, 540.0, 0.0),
+        "both",
+        "cam",
+        _NISSAN + " (initializeNissanSR20VE_4)",
+        ("TT_NISSAN_SR20VE",),
+    ),
+    TriggerPattern(
+        "kawasaki-kx450f",
+        "Kawasaki KX450F crank: 18 teeth 20° apart, 3° wide but the last 10.8° wide",
+        360.0,
+        tuple(17.0 + 20.0 * i for i in range(17)) + (349.2,),
+        tuple(20.0 + 20.0 * i for i in range(17)) + (0.0,),
+        "rising",
+        "crank",
+        _UNIVERSAL + " (configureKawaKX450F)",
+        ("TT_KAWA_KX450F",),
+    ),
+    TriggerPattern(
+        "ford-st170-cam",
+        "Ford ST170 (Duratec) cam: 8 positions a cam turn, 3 missing (teeth at 90, 180, 360, 540 and 720°)",
+        720.0,
+        (80.0, 170.0, 350.0, 530.0, 710.0),
+        (90.0, 180.0, 360.0, 540.0, 0.0),
+        "rising",
+        "cam",
+        _MISC + " (configureFordST170)",
+        ("TT_FORD_ST170",),
+    ),
+    TriggerPattern(
+        "ford-tfi-pip",
+        "Ford TFI signature PIP (V8 distributor): eight windows ending 90° apart, 45° wide but one 22.5°",
+        720.0,
+        (67.5,) + tuple(90.0 * i - 45.0 for i in range(2, 9)),
+        tuple(90.0 * i for i in range(1, 9)),
+        "rising",
+        "cam",
+        _MISC + " (configureFordPip)",
+        ("TT_FORD_TFI_PIP",),
+    ),
+    TriggerPattern(
+        "ford-coyote-cam",
+        "Ford Coyote cam (VVT): seven 10 cam° teeth ending at 45, 90, 150, 180, 240, 270 and 360 cam°",
+        720.0,
+        tuple(_cam(x - 10.0) for x in (45.0, 90.0, 150.0, 180.0, 240.0, 270.0, 360.0)),
+        tuple(_cam(x) for x in (45.0, 90.0, 150.0, 180.0, 240.0, 270.0, 0.0)),
+        "rising",
+        "cam",
+        _FORD + " (configureFordCoyote)",
+        ("TT_VVT_FORD_COYOTE",),
+    ),
+    TriggerPattern(
+        "ford-barra-cam",
+        "Ford Barra cam (VVT, 3+1): four 5 cam° teeth ending at 60, 120, 240 and 360 cam°",
+        720.0,
+        tuple(_cam(x - 5.0) for x in (60.0, 120.0, 240.0, 360.0)),
+        tuple(_cam(x) for x in (60.0, 120.0, 240.0, 0.0)),
+        "rising",
+        "cam",
+        _MISC + " (configureBarra3plus1cam)",
+        ("TT_VVT_BARRA_3_PLUS_1",),
+    ),
+    TriggerPattern(
+        "mitsubishi-4g69-cam",
+        "Mitsubishi 4G69 cam: six 5 cam° teeth ending at 90, 160, 180, 250, 270 and 360 cam°",
+        720.0,
+        tuple(_cam(x - 5.0) for x in (90.0, 160.0, 180.0, 250.0, 270.0, 360.0)),
+        tuple(_cam(x) for x in (90.0, 160.0, 180.0, 250.0, 270.0, 0.0)),
+        "rising",
+        "cam",
+        _MITSU + " (initializeMitsubishi4G69Cam)",
+        ("TT_VVT_MITSUBISHI_4G69",),
+    ),
+    TriggerPattern(
+        "toyota-uz-cam",
+        "Toyota UZ cam: three 5 cam° teeth ending at 135, 270 and 360 cam°",
+        720.0,
+        tuple(_cam(x - 5.0) for x in (135.0, 270.0, 360.0)),
+        tuple(_cam(x) for x in (135.0, 270.0, 0.0)),
+        "rising",
+        "cam",
+        _TOYOTA + " (initializeUzCam)",
+        ("TT_TOYOTA_3_TOOTH_UZ",),
+    ),
+    TriggerPattern(
+        "daihatsu-4cyl-cam",
+        "Daihatsu four-cylinder cam: four 10° teeth 180° apart and a fifth 30° into the cycle (4+1)",
+        720.0,
+        (20.0, 170.0, 350.0, 530.0, 710.0),
+        (30.0, 180.0, 360.0, 540.0, 0.0),
+        "rising",
+        "cam",
+        _MISC + " (configureDaihatsu4cyl)",
+        ("TT_DAIHATSU_4_CYL",),
+    ),
 )
 
 
@@ -293,7 +560,8 @@ def catalogue_markdown() -> str:
         "`rotor.logs.catalogue.find_pattern(NAME)`). Angles are crankshaft degrees over the pattern's turn:",
         "360° for a wheel on the crankshaft, 720° for one on the camshaft. Any `N-g1-g2…` missing-tooth wheel",
         "is also named by its shorthand. The geometry of the production patterns is that of the rusEFI",
-        "project's trigger decoders (the source file is named with each).",
+        "project's trigger decoders (the source file and function are named with each), or where so named",
+        "that of the Speeduino project's decoders.",
         "",
         "In the pictures each character is 1/72 of the turn, angle 0 at the left, and shows the edges that",
         "carry the position: `^` a rising edge, `v` a falling one, `X` both in one character.",
