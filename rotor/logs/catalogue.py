@@ -608,7 +608,19 @@ pattern's placement must show, times the share of the edges it keeps [-]."""
 RANKING_ROWS = 40_000
 """Of a long record, the patterns are ranked on its first this many rows (about 20 000 edges
 of each polarity) [-]; the pattern taken is then placed on all of it."""
+GATE_RMS = 0.25
+"""The largest RMS log-ratio of neighbouring speeds over a ranked pattern's kept edges [-]: a
+pattern placed on edges whose spacing it does not share leaves larger ones (real captures of
+a cranking engine read as their own patterns leave up to about 0.23)."""
+PULSE_TRAIN = 0.1
+"""A channel whose periods two apart differ by less than this in log (95 % of them) is a plain
+pulse train [-]."""
+MIN_TURNS = 3.0
+"""The fewest turns of a pattern its kept edges must span to be ranked [-]: its marks (a gap,
+a wide tooth) seen three times or more."""
 MIN_KEPT = 0.6
+PARTIAL_KEPT = 0.25
+"""The share of a channel's edges a pattern must explain to question a wheel found from the gaps [-]."""
 """The least share of a channel's edges a ranked pattern must keep [-]."""
 RPM_RANGE = (10.0, 30_000.0)
 """The crankshaft speeds a reading may imply [rev/min]; outside, the pattern is not this signal's."""
@@ -624,14 +636,29 @@ def pattern_ways(pattern: TriggerPattern) -> list[tuple[str, str, str, bool]]:
     return [(pattern.read, pattern.read, pattern.read, False), (f"{other} (inverted)", other, pattern.read, False)]
 
 
-def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):  # noqa: C901
+def _pulse_train(t, v, name: str) -> bool:
+    """Whether a digital channel is a plain pulse train (one tooth, repeated): its periods
+    between neighbouring edges of both kinds alternate between two values, so it carries one
+    ratio, and no pattern of more distinct marks read on both edges can be told from it."""
+    from .patterns import channel_edges
+
+    times, _ = channel_edges(t, v, "both", name=name)
+    if times.size < 8:
+        return False
+    d = np.log(np.diff(times))
+    return float(np.percentile(np.abs(d[2:] - d[:-2]), 95)) < PULSE_TRAIN
+
+
+def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d", partial: bool = False):  # noqa: C901
     """Every catalogue pattern (or ``patterns``) tried on a digital channel (``t`` [s], ``v``
     levels): a list of (score, fit, label) of those that fit, best first. The score is the
     fit's evidence per edge times the share of edges kept, halved for a pattern of two
     alternating spacings (one ratio is all that marks it) (at least :data:`MIN_EVIDENCE`,
     keeping at least :data:`MIN_KEPT` of the edges); patterns that timing cannot tell apart
     (:attr:`rotor.logs.patterns.TriggerPattern.evenly_spaced`) are not ranked; a reading implying a speed outside
-    :data:`RPM_RANGE` is not this signal's."""
+    :data:`RPM_RANGE` is not this signal's. ``partial``: also the patterns that explain a part
+    of the edges (at least :data:`PARTIAL_KEPT` of them, over two turns), to question a wheel
+    found by other means."""
     from .patterns import channel_edges, decode_edges
 
     edges = {}
@@ -640,8 +667,9 @@ def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):  # noqa: C90
     v = np.asarray(v, dtype=np.float64)
     if t.size > RANKING_ROWS:  # ranked on the start of a long record; the one taken is placed on all of it
         t, v = t[:RANKING_ROWS], v[:RANKING_ROWS]
+    train = _pulse_train(t, v, name)
     for p in patterns if patterns is not None else CATALOGUE.values():
-        if p.evenly_spaced:
+        if p.evenly_spaced or (train and p.read == "both" and p.edges_per_turn // p.repeats() > 2):
             continue
         for label, take, pol, inverted in pattern_ways(p):
             if take not in edges:
@@ -660,7 +688,10 @@ def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d"):  # noqa: C90
             # alone: the freedom it leaves halves its score
             distinct = p.edges_per_turn // fit.repeats
             score = fit.kept * fit.evidence * min(1.0, (distinct - 1) / 2)
-            if score >= MIN_EVIDENCE and fit.kept >= MIN_KEPT:
+            if partial:
+                if fit.evidence > 0 and fit.kept >= PARTIAL_KEPT and fit.rms <= GATE_RMS and fit.turns >= 2:
+                    out.append((score, fit, label))
+            elif score >= MIN_EVIDENCE and fit.kept >= MIN_KEPT and fit.rms <= GATE_RMS and fit.turns >= MIN_TURNS:
                 out.append((score, fit, label))
     out.sort(key=lambda x: -x[0])
     return out

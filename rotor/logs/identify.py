@@ -62,6 +62,14 @@ STANDARD_WHEELS = ("60-2", "60-1", "36-1", "36-2", "36-2-1", "36-2-1-1", "36-2-2
 MARGIN = 3.0  # the best wheel's gap misfit must be this many times below the runner-up's
 MISFIT_FLOOR = 0.03  # below this relative misfit, two wheels fit alike whatever their ratio
 REVOLUTIONS_PER_INFERRED_EDGE = 20  # a wheel may need one inferred edge per this many revolutions
+MAX_GAP_MISFIT = 0.25
+"""The largest gap misfit (:func:`gap_misfit`) of a wheel found from the log [-]: a wheel whose
+gaps are further off the edges is not this signal's, whatever else fits."""
+MIN_REVOLUTIONS = 2
+"""The fewest complete revolutions on which a wheel is found from the log [-]."""
+MIN_COUNTED_POSITIONS = 8
+"""A wheel counted from the log (not a standard pattern) has at least this many positions [-]:
+a handful of uneven edges a turn is some other pattern's, not a wheel of three or five teeth."""
 
 
 class FitStatus(enum.Enum):
@@ -418,8 +426,26 @@ def candidates(times: ArrayLike) -> list[Wheel]:
 def rank(fits: Sequence[WheelFit]) -> tuple[WheelFit | None, WheelFit | None, str]:
     """The best fit of ``fits``, the runner-up, and why in words; ``(None, runner-up, why)``
     where the signal does not tell the two best apart (both standard patterns, or neither)."""
-    ok = [f for f in fits if f.status.ok]
+    ok = [
+        f
+        for f in fits
+        if f.status.ok
+        and f.gap_misfit <= MAX_GAP_MISFIT
+        and f.revolutions >= MIN_REVOLUTIONS
+        and (f.standard or int(f.spec.split("-")[0]) >= MIN_COUNTED_POSITIONS)
+    ]
     if not ok:
+        loose = [f for f in fits if f.status.ok]
+        if loose:
+            f = min(loose, key=lambda f: f.gap_misfit)
+            return (
+                None,
+                None,
+                (
+                    f"no wheel fits within a gap misfit of {100 * MAX_GAP_MISFIT:.0f} % on {MIN_REVOLUTIONS} or more "
+                    f"revolutions (the best, {f.spec}: {100 * f.gap_misfit:.1f} % on {f.revolutions})"
+                ),
+            )
         return None, None, "no wheel fits"
     ok.sort(key=lambda f: (f.inferred, f.gap_misfit))
     best = ok[0]
@@ -467,7 +493,8 @@ def find_wheel(times: ArrayLike, *, what: str = "the tooth edges") -> tuple[Whee
     if best is None:
         if second is None:
             reasons = "; ".join(f.describe() for f in fits)
-            raise LogError(f"no wheel fits {what}: {reasons}; give the wheel (wheel='N-g1-g2…')")
+            lead = f"{why}; " if why != "no wheel fits" else ""
+            raise LogError(f"no wheel fits {what}: {lead}{reasons}; give the wheel (wheel='N-g1-g2…')")
         ok = sorted((f for f in fits if f.status.ok), key=lambda f: (f.inferred, f.gap_misfit))
         raise LogError(
             f"{what} fit {ok[0].describe()} and {second.describe()} alike (within {MARGIN:g}× gap misfit); "

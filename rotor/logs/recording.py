@@ -24,10 +24,21 @@ import re
 import numpy as np
 
 from ..errors import LogError
-from .catalogue import RANKING_ROWS, AmbiguousPattern, best_pattern, decode_channel, find_pattern, pattern_ways
-from .patterns import PatternFit, TriggerPattern, channel_edges, decode_edges
+from .catalogue import (
+    CATALOGUE,
+    MIN_KEPT,
+    RANKING_ROWS,
+    AmbiguousPattern,
+    best_pattern,
+    decode_channel,
+    find_pattern,
+    pattern_ways,
+    rank_patterns,
+)
+from .identify import MAX_GAP_MISFIT, MIN_REVOLUTIONS
+from .patterns import PatternFit, TriggerPattern, channel_edges, decode_edges, pattern_from_wheel
 from .reader import Log
-from .track import WheelReading, read_track
+from .track import ChoiceSource, WheelReading, read_track
 from .wheel import Wheel
 
 __all__ = ["PatternReading", "read_wheel"]
@@ -231,8 +242,120 @@ def read_wheel(
                 # a missing-tooth wheel: its tracker repairs and estimates tooth errors
                 try:
                     reading = read_track(found.log, spec, edge=edge, name=name)
+                    if reading.fit.revolutions < MIN_REVOLUTIONS or reading.fit.gap_misfit > MAX_GAP_MISFIT:
+                        raise LogError(f"{name}: {spec} placed on too little of the log, or loosely")
                 except LogError:
-                    return found
+                    # the tracker does not follow it (edges too irregular for its repairs): a catalogue
+                    # wheel the gaps also find is taken, else the pattern as the decoder placed it
+                    try:
+                        other = read_track(log, "auto", edge=edge, name=name)
+                    except LogError:
+                        return found
+                    return other if _known_wheel(other.wheel) else found
                 return dataclasses.replace(reading, notes=(*reading.notes, f"wheel: {found.evidence}"))
             return found
+        reading = read_track(log, wheel, edge=edge, name=name)
+        _refuse_a_half_of_a_known_wheel(reading, name)
+        _refuse_a_loose_counted_wheel(reading, name)
+        _refuse_where_a_pattern_explains_better(reading, name)
+        return reading
     return read_track(log, wheel, edge=edge, name=name)
+
+
+RIVAL_SHARE = 0.6
+"""A catalogue pattern that places at least this share of what a wheel found from the gaps
+places (by its own edge list) questions that wheel: both are named and the log refused [-]."""
+COUNTED_MISFIT = 0.05
+"""A wheel counted from the gaps that is no catalogue or standard wheel is taken only where it
+fits cleanly: no repair and a gap misfit below this [-]."""
+
+
+def _known_wheel(wheel: Wheel) -> bool:
+    """Whether a wheel found from the gaps is a catalogue wheel (its gaps where the catalogue's
+    are, read round from any tooth) or a standard one the catalogue does not list."""
+    from .identify import STANDARD_WHEELS
+
+    p = CATALOGUE.get(wheel.spec)
+    if p is None:
+        return wheel.spec in STANDARD_WHEELS
+    if wheel.layout is None:
+        return True
+    mine = pattern_from_wheel(wheel.teeth, wheel.gaps, wheel.layout).intervals_deg()
+    theirs = p.intervals_deg()
+    return mine.size == theirs.size and any(np.allclose(np.roll(mine, k), theirs) for k in range(mine.size))
+
+
+def _refuse_a_loose_counted_wheel(reading: WheelReading, name: str) -> None:
+    """Refuse a wheel counted from the gaps that no catalogue names, unless its edges fit it
+    cleanly: a few displaced or missed edges make the gaps of some other count. On a digital
+    channel (an ECU's or logic analyser's: a production wheel) it is always refused."""
+    from .identify import FitStatus
+
+    f = reading.fit
+    choice = reading.choice("wheel")
+    if choice is None or choice.source is not ChoiceSource.FOUND or _known_wheel(reading.wheel):
+        return
+    if reading.log.kind == "digital" or f.status is not FitStatus.FITS or f.gap_misfit > COUNTED_MISFIT:
+        how = (
+            ""
+            if reading.log.kind == "digital"
+            else f", and the edges fit it only loosely (gap misfit {100 * f.gap_misfit:.1f} %, {f.status.value})"
+        )
+        raise LogError(
+            f"{name}: the gaps suggest a {f.spec} wheel, which no catalogue pattern is{how}; give the wheel "
+            f"(wheel='{f.spec}' if that is it, or a catalogue name: `rotor wheels`)",
+            argument="wheel",
+        )
+
+
+def _refuse_where_a_pattern_explains_better(reading: WheelReading, name: str) -> None:
+    """On a digital channel, a wheel found from the gaps whose own edge list does not place the
+    edges, where a catalogue pattern of other geometry places part of them: the two are named
+    and the log refused (the gaps can be made by the other pattern's marks)."""
+    log = reading.log
+    if log.kind != "digital":
+        return
+    own = pattern_from_wheel(reading.wheel.teeth, reading.wheel.gaps, reading.wheel.layout)
+    times, _ = channel_edges(log["time"], log["encoder_d"], reading.edge or "rising")
+    try:
+        placed = decode_edges(times[: RANKING_ROWS // 2], own).kept
+    except LogError:
+        placed = 0.0
+    rivals = [
+        (s, f)
+        for s, f, _ in rank_patterns(log["time"], log["encoder_d"], partial=True)
+        if f.pattern.name != own.name and f.pattern.name != reading.wheel.spec and f.kept >= RIVAL_SHARE * placed
+    ]
+    if placed < MIN_KEPT or rivals:
+        if not rivals:
+            return  # nothing else places them either: the gaps are the evidence
+        s, f = rivals[0]
+        raise AmbiguousPattern(
+            f"{name}: the gaps suggest a {reading.wheel.spec} wheel, but its edge list does not place the edges, and "
+            f"the {f.pattern.name} pattern places {f.kept:.0%} of them; give the wheel "
+            f"(wheel='{reading.wheel.spec}' or wheel='{f.pattern.name}')",
+            argument="wheel",
+        )
+
+
+def _refuse_a_half_of_a_known_wheel(reading: WheelReading, name: str) -> None:
+    """Refuse a wheel found from the gaps whose edges are, in timing, a part of a catalogue
+    wheel that repeats within its turn (an ``18-2`` found where a ``36-2-2`` wheel's two equal
+    halves give the same edges): the two differ in speed by the repetition, and only the
+    user knows which it is."""
+    w = reading.wheel
+    for p in CATALOGUE.values():
+        m = p.repeats()
+        if m < 2 or not _NM.match(p.name):
+            continue
+        parts = [int(x) for x in p.name.split("-")]
+        teeth, gaps = parts[0], parts[1:]
+        if teeth % m or len(gaps) % m:
+            continue
+        unit = f"{teeth // m}" + "".join(f"-{g}" for g in gaps[: len(gaps) // m])
+        if w.spec == unit:
+            raise AmbiguousPattern(
+                f"{name}: the edges fit a {w.spec} wheel, and in timing alike a {p.name} wheel ({p.title}), whose "
+                f"speed is 1/{m} of it; give the wheel (wheel='{w.spec}' or wheel='{p.name}')",
+                argument="wheel",
+            )
