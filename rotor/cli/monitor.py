@@ -16,6 +16,9 @@ CHUNK_BYTES = 65536
 """The most bytes read at a time (a pipe hands over what it holds, up to this)."""
 FOLLOW_POLL_S = 0.2
 """With --follow: how long to wait at the end of the file before looking again [s]."""
+TAIL_BYTES = 64
+"""With --follow: the last bytes read, looked for again before reading on (a file truncated
+and written again past the place read shows other bytes there)."""
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -27,7 +30,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "log",
         metavar="LOG|-",
-        help="tooth edge times [s], one per line (as `rotor simulate --record` writes them); - reads standard input",
+        help="tooth edge times [s], one per line (as `rotor simulate --record` writes them; LF, CRLF or CR line "
+        "ends); a header line 'tooth_time_ms' or 'tooth_time_us' gives them in ms or µs; - reads standard input",
     )
     p.add_argument(
         "--engine",
@@ -59,7 +63,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         metavar="X",
         help="a misfire where the index falls below -X baseline spreads (default 8)",
     )
-    p.add_argument("--follow", action="store_true", help="at the end of the file, wait for more (Ctrl-C ends)")
+    p.add_argument(
+        "--follow",
+        action="store_true",
+        help="at the end of the file, wait for more (a file truncated or replaced is read again from its start, "
+        "and that said on stderr; Ctrl-C ends)",
+    )
     add_json(p)
     p.set_defaults(func=cmd_monitor)
 
@@ -82,11 +91,20 @@ def _order(text: str) -> list[int]:
 
 
 class _Source:
-    """Text from a file or standard input, read in chunks as it comes."""
+    """Text from a file or standard input, read in chunks as it comes. With ``follow``, at
+    the end of the file it waits for more, and before it reads on notices a file truncated
+    (its size below what was read, or the bytes before the place it reads from no longer
+    those it read: truncated and written again) or replaced (another file under its name:
+    rotated, or removed and made again): it reads the file again from its start, and
+    :attr:`event` says so (the caller reads it after each call)."""
 
     def __init__(self, name: str, follow: bool) -> None:
         self.follow = follow
         self.name = name
+        self.event: str | None = None
+        self._gone = False
+        self._at_end = False  # waited at the end of the file: look at it before reading on
+        self._tail = b""  # the last bytes read
         if name == "-":
             self.stream: Any = getattr(sys.stdin, "buffer", sys.stdin)
             self.own = False
@@ -96,15 +114,57 @@ class _Source:
         self._decoder = _Decoder()
 
     def read(self) -> str | None:
-        """The next text, or None at the end of the input."""
+        """The next text ("" after an :attr:`event`), or None at the end of the input."""
+        from ..fileio import INTERRUPT
+
         while True:
+            if self._at_end:
+                self.event = self._changed()
+                if self.event is not None:
+                    self._at_end, self._tail = False, b""
+                    return ""
             reader = getattr(self.stream, "read1", None)
             data = reader(CHUNK_BYTES) if reader is not None else self.stream.read(CHUNK_BYTES)
             if data:
+                self._at_end = False
+                if self.follow:
+                    self._tail = (self._tail + data[-TAIL_BYTES:])[-TAIL_BYTES:]
                 return self._decoder(data)
             if not (self.follow and self.own):
                 return None
+            INTERRUPT.check()  # an interrupt dropped on the way (in a garbage collector's callback) ends the wait
+            self._at_end = True
             time.sleep(FOLLOW_POLL_S)
+
+    def _changed(self) -> str | None:
+        """What became of the followed file, if it changed other than by growing."""
+        try:
+            now = os.stat(self.name)
+        except FileNotFoundError:
+            if self._gone:
+                return None
+            self._gone = True
+            return f"{self.name} was removed: waiting for a file of that name to follow"
+        was = os.fstat(self.stream.fileno())
+        if (now.st_ino, now.st_dev) != (was.st_ino, was.st_dev):
+            if self.stream.read(1):  # written to before it was replaced: read that first
+                self.stream.seek(-1, os.SEEK_CUR)
+                return None
+            self.stream.close()
+            self.stream = open(self.name, "rb")  # noqa: SIM115 - closed by close()
+            self._decoder = _Decoder()
+            self._gone = False
+            return f"{self.name} was replaced by another file (rotated?): following the new one from its start"
+        read = self.stream.tell()
+        size = len(self._tail)
+        if now.st_size < read or (size and os.pread(self.stream.fileno(), size, read - size) != self._tail):
+            self.stream.seek(0)
+            self._decoder = _Decoder()
+            return (
+                f"{self.name} was truncated ({now.st_size} bytes now, {read} read before): reading it again "
+                "from its start"
+            )
+        return None
 
     def close(self) -> None:
         if self.own:
@@ -121,13 +181,37 @@ class _Decoder:
         return data if isinstance(data, str) else self._d.decode(data)
 
 
+NOTES_SHOWN = 3
+"""Notes of one kind printed on stderr; the rest are counted (the summary gives their number)."""
+
+
+class _Notes:
+    """The notes on stderr, at most :data:`NOTES_SHOWN` of a kind, then one line saying that
+    the rest are counted: what a long bad stream prints stays bounded."""
+
+    def __init__(self) -> None:
+        import collections
+
+        self.counts: collections.Counter = collections.Counter()
+
+    def __call__(self, kind: str, text: str, level: str = "warning") -> None:
+        self.counts[kind] += 1
+        n = self.counts[kind]
+        if n <= NOTES_SHOWN:
+            print(f"rotor: {level}: {text}", file=sys.stderr, flush=True)
+        elif n == NOTES_SHOWN + 1:
+            print(
+                f"rotor: {level}: more notes '{kind}' are counted, not shown: the summary at the end gives how many",
+                file=sys.stderr,
+                flush=True,
+            )
+
+
 def cmd_monitor(args: argparse.Namespace) -> None:
     """Read the log in chunks, print each verdict as it is decided (a JSON object per line
-    with --json), each note on the stream as one line on stderr, the per-cylinder summary
-    at the end."""
-    from ..diagnostics.monitor import DEFAULT_THRESHOLD, MisfireMonitor, NoteKind, ToothLines
+    with --json), the notes on the stream on stderr (a few of each kind), the per-cylinder
+    summary at the end; a log on which no firing was judged is an error."""
     from ..errors import EngineError
-    from .output import json_line
 
     if args.engine is None and args.cylinders is None:
         raise EngineError("--engine ENGINE or --cylinders N (with --firing-order): the monitor needs the firing angles")
@@ -135,6 +219,35 @@ def cmd_monitor(args: argparse.Namespace) -> None:
         raise EngineError("--cylinders and --firing-order are for a monitor without --engine: give one or the other")
     if args.follow and args.log == "-":
         raise EngineError("--follow follows a file as it grows; standard input is followed to its end anyway")
+    # a Ctrl-C that lands in a garbage collector's callback cannot be raised there: Python
+    # prints it as an ignored exception, with a traceback; here it is dropped quietly (the
+    # command line's handler has noted it: the run still ends with 130)
+    previous = sys.unraisablehook
+    sys.unraisablehook = _quiet_interrupts(previous)
+    try:
+        _monitor(args)
+    finally:
+        sys.unraisablehook = previous
+
+
+def _quiet_interrupts(previous: Any) -> Any:
+    def hook(unraisable: Any) -> None:
+        from ..fileio import INTERRUPT
+
+        if isinstance(unraisable.exc_type, type) and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            INTERRUPT.set()
+            return
+        previous(unraisable)
+
+    return hook
+
+
+def _monitor(args: argparse.Namespace) -> None:
+    from ..diagnostics.monitor import DEFAULT_THRESHOLD, MisfireMonitor, NoteKind, ToothLines, check_wheel
+    from ..errors import EngineError, LogError
+    from ..fileio import INTERRUPT
+    from .output import json_line
+
     engine = None
     if args.engine is not None:
         from ..engine.file import load_engine
@@ -144,12 +257,16 @@ def cmd_monitor(args: argparse.Namespace) -> None:
         raise IsADirectoryError(21, "Is a directory", args.log)
     if args.log != "-" and not os.path.isfile(args.log):
         raise FileNotFoundError(2, "No such file", args.log)
+    name = "standard input" if args.log == "-" else args.log
+    # the wheel and the firings checked before anything is read (a wheel too coarse for the
+    # monitor refused at once, not at the first edges)
+    check_wheel(
+        args.wheel, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes
+    )
     source = _Source(args.log, args.follow)
-    lines = ToothLines()
+    lines = ToothLines(name=name)
     monitor: MisfireMonitor | None = None
-
-    def warn(text: str, level: str = "warning") -> None:
-        print(f"rotor: {level}: {text}", file=sys.stderr, flush=True)
+    show = _Notes()
 
     def emit(verdicts: list) -> None:
         for v in verdicts:
@@ -157,7 +274,7 @@ def cmd_monitor(args: argparse.Namespace) -> None:
             sys.stdout.flush()
         if monitor is not None:
             for note in monitor.pop_notes():
-                warn(note.text, "note" if note.kind is NoteKind.FOUND else "warning")
+                show(note.kind.value, note.text, "note" if note.kind is NoteKind.FOUND else "warning")
 
     def start() -> MisfireMonitor:
         tdc = args.tdc_deg
@@ -183,29 +300,48 @@ def cmd_monitor(args: argparse.Namespace) -> None:
             strokes=args.strokes,
             firing_parity=parity,
             threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
+            log_name=name,
         )
+
+    def take(text: str, final: bool) -> None:
+        nonlocal monitor
+        times, notes = lines.feed(text, final=final)
+        for note in notes:
+            show(note.kind.value, note.text, "note" if note.kind is NoteKind.UNITS else "warning")
+        if times.size:
+            if monitor is None:
+                monitor = start()
+            emit(monitor.feed(times))
 
     try:
         while True:
             text = source.read()
-            final = text is None
-            times, notes = lines.feed("" if text is None else text, final=final)
-            for note in notes:
-                warn(note.text)
-            if times.size:
-                if monitor is None:
-                    monitor = start()
-                emit(monitor.feed(times))
-            if final:
+            if source.event is not None:
+                take("", final=True)  # the last line of what was read before
+                lines.restart()
+                print(f"rotor: note: {source.event}", file=sys.stderr, flush=True)
+                source.event = None
+                continue
+            take("" if text is None else text, final=text is None)
+            INTERRUPT.check()
+            if text is None:
                 break
     finally:
         source.close()
     if monitor is None:
-        raise EngineError(f"{args.log}: no tooth time in the input")
+        raise LogError(f"{name}: no tooth time in the input")
     emit(monitor.close())
     result = monitor.result()
+    why = monitor.nothing_judged_reason()
+    if why is not None:
+        raise LogError(f"{name}: {why}")
     if args.json:
-        sys.stdout.write(json_line({"summary": result.to_json_dict()}))
+        summary = result.to_json_dict()
+        summary["lines_skipped"] = lines.skipped
+        sys.stdout.write(json_line({"summary": summary}))
     else:
-        sys.stdout.write(result.summary() + "\n")
+        text = result.summary()
+        if lines.skipped:
+            text += f"\n  {lines.skipped} line(s) of the log not a time: skipped"
+        sys.stdout.write(text + "\n")
     sys.stdout.flush()

@@ -121,11 +121,20 @@ the dynamics of the IC engine", IEEE Trans. Vehicular Technology 38 (1989)), sol
 firing by least squares instead of by deconvolution. Without an engine: ``cylinders``,
 ``firing_order`` and ``strokes``, evenly spaced firings, and no IMEP (NaN).
 
+**Checks** (:class:`MisfireMonitor`'s doc): a wheel with too few teeth per firing is
+refused when the monitor is made; the first edges' time base (the speed they imply, the
+resolution of their stamps) as ``rotor analyze`` checks a log's; with an engine, the model's
+IMEP of the first firings (an engine that does not fit the log is refused); the speed's
+strongest order against the engine's firing frequency (the verdicts flagged where it is
+not of the firings). :class:`ToothLines` reads text in bounded memory and linear time
+whatever its line ends, converts the units a header names, and refuses a sampled signal.
+
 **Memory.** The edges are kept for the current firing segment and one revolution before
 it (dropped once more than two revolutions are held; a chunk longer than
-:data:`SLICE_REVOLUTIONS` revolutions is taken in slices), the baselines hold
-:data:`HISTORY` + :data:`OWN_HISTORY` per cylinder numbers, the notes at most
-:data:`MAX_NOTES`: nothing grows with the length of the stream.
+:data:`SLICE_REVOLUTIONS` revolutions is taken in slices; in a run's first
+:data:`FIT_CYCLES` whole cycles, until the speed's orders are read over them, from the
+first of them), the baselines hold :data:`HISTORY` + :data:`OWN_HISTORY` per cylinder
+numbers, the notes at most :data:`MAX_NOTES`: nothing grows with the length of the stream.
 
 **Speed.** A chunk costs a few numpy operations on all its edges at once (the wheel's
 pattern checked on every tooth period, one interpolation for every time its firings need)
@@ -156,7 +165,9 @@ from ..units import PA_PER_BAR
 
 __all__ = [
     "HISTORY",
+    "MAX_LINE_CHARS",
     "MAX_NOTES",
+    "MIN_TEETH_PER_SEGMENT",
     "PERIOD_TOLERANCE",
     "SLICE_REVOLUTIONS",
     "DEFAULT_THRESHOLD",
@@ -166,6 +177,7 @@ __all__ = [
     "NoteKind",
     "ToothLines",
     "Verdict",
+    "check_wheel",
 ]
 
 HISTORY = 32
@@ -190,6 +202,27 @@ MAX_NOTES = 1000
 """Notes kept (the oldest are dropped beyond this; each is also handed out as it comes)."""
 MODEL_WINDOWS = 8
 """Speed windows over a firing's segment for the model's IMEP (with an engine)."""
+MIN_TEETH_PER_SEGMENT = 4
+"""The fewest wheel teeth over a firing's segment (its speed windows a quarter of it each)."""
+RESOLUTION_NOTE = 0.001
+"""Time stamps that resolve more than this share of the tooth period are noted."""
+RESOLUTION_REFUSE = 0.003
+"""Time stamps that resolve more than this share of the tooth period are refused: stricter than
+``rotor analyze`` (2 %, :data:`rotor.logs.plausibility.RESOLUTION_REFUSE`), as a firing's index
+reads the speed over windows of a few teeth (a simulated 4chn15 recording on a 60-2 wheel,
+its times offset to resolve 0.24 %, 0.48 % and 1 % of the tooth period: no false misfire, 2
+and 6)."""
+FIT_SCALE_LOW = -0.3
+"""The lowest plausible combustion scale of a firing (0 a misfire), by the model (with an engine)."""
+FIT_SCALE_HIGH = 3.0
+"""The highest plausible combustion scale of a firing (1 the engine file's full pressure)."""
+FIT_SHARE = 0.25
+"""The engine does not fit where more than this share of the first firings are implausible."""
+FIT_CYCLES = 3
+"""Whole cycles of speed whose orders are read for the engine's firing frequency."""
+FIT_Z = 6.0
+"""The strongest order is read only where its mean over the cycles is this many of its
+standard errors (the same in every cycle: the firings', not the noise's)."""
 TWO_PI = 2.0 * math.pi
 
 
@@ -203,6 +236,9 @@ class NoteKind(enum.Enum):
     NOT_TIME = "not_time"  # a value that is not a finite time: skipped
     BAD_LINE = "bad_line"  # a line of text that is not a time: skipped
     NOT_JUDGED = "not_judged"  # firings whose segment fell into a loss of the wheel
+    UNITS = "units"  # the header names the times' unit: converted to seconds
+    TIME_BASE = "time_base"  # the time stamps resolve the tooth period coarsely (a note)
+    ENGINE_FIT = "engine_fit"  # the speed's orders do not show the engine's firings: the verdicts flagged from then
 
 
 @dataclasses.dataclass(frozen=True)
@@ -227,7 +263,10 @@ class Verdict:
     ``index_std`` its uncertainty; ``energy``: the raw e = (ω_end² − ω_start²)/ω_mean²
     [-]; ``cycle_end_s``: the log time at which the firing's cycle ends [s] (predicted
     from the last speed where the cycle had not ended when the verdict was given,
-    ``cycle_end_predicted``); ``decided_at_s``: the log time of the last edge used [s];
+    ``cycle_end_predicted``); ``decided_at_s``: the log time of the edge with which the
+    verdict was given [s]: the last edge its firing and the firings after it used (the first
+    firings, which wait for every cylinder's baseline, the edge that completed them; at the
+    end of the stream, the last edge measured), never before the data it needed;
     ``imep_pa``, ``imep_std_pa``: with an engine, the firing's IMEP from the engine model
     and its standard error [Pa] (NaN without one); ``swing``: the speed's rise from the
     firing's TDC to half its segment after, (ω²(TDC + Θ/2) − ω²(TDC))/ω_mean² [-] (Θ the
@@ -239,6 +278,8 @@ class Verdict:
     that does not (a plug out, a valve held open) has almost none (a Mitsubishi 6G75
     cranked at 150 rpm: 1.34 with its plugs in, 0.002 with them out). At speed, a
     misfire's swing falls below every fired one's. The misfire verdict does not use it.
+    ``engine_doubt``: the speed's orders did not show the engine's firings (see
+    :class:`MisfireMonitor`, **The engine's fit**): the verdict may be on the wrong angles.
     """
 
     cycle: int
@@ -253,6 +294,7 @@ class Verdict:
     imep_pa: float = math.nan
     imep_std_pa: float = math.nan
     swing: float = math.nan
+    engine_doubt: bool = False
 
     def to_json_dict(self) -> dict:
         return {
@@ -268,6 +310,7 @@ class Verdict:
             "imep_bar": _num(self.imep_pa / PA_PER_BAR),
             "imep_std_bar": _num(self.imep_std_pa / PA_PER_BAR),
             "swing": _num(self.swing),
+            "engine_doubt": self.engine_doubt,
         }
 
     def line(self) -> str:
@@ -282,11 +325,17 @@ class Verdict:
         return (
             f"cycle {self.cycle:5d} cylinder {self.cylinder:2d}: {what} index {self.index:+9.2f} ± "
             f"{self.index_std:.2f}{imep}  decided at {self.decided_at_s:.6f} s, cycle end {end}"
+            + ("  (engine doubtful: its firings are not seen in the speed)" if self.engine_doubt else "")
         )
 
 
 def _num(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
+
+
+def _cell(x: float, width: int, spec: str) -> str:
+    """``x`` in a column of ``width``; a dash where it is not a number (nothing measured)."""
+    return f"{x:>{width}{spec}}" if math.isfinite(x) else f"{'-':>{width}}"
 
 
 @dataclasses.dataclass(repr=False)
@@ -318,6 +367,9 @@ class MonitorResult(Result):
     """Each firing's segment, chosen by the monitor: ``(cylinder, segment_deg,
     start_after_tdc_deg)`` in firing order (the angle to the next firing, at most 180°, from
     TDC + (180° − segment)/8, where a firing's combustion work falls: the module doc)."""
+    engine_doubt: bool = False
+    """The speed's orders did not show the engine's firings: the verdicts are flagged
+    (:attr:`Verdict.engine_doubt`)."""
 
     def summary(self) -> str:
         lines = [
@@ -327,10 +379,14 @@ class MonitorResult(Result):
             f" {'median swing':>13}" + (f" {'IMEP [bar]':>11}" if self.median_imep_pa is not None else ""),
         ]
         for c in range(self.cylinders):
-            imep = f" {self.median_imep_pa[c] / PA_PER_BAR:>11.2f}" if self.median_imep_pa is not None else ""
+            # a cylinder without a judged firing has no figures: a dash, not NaN
+            imep = (
+                f" {_cell(self.median_imep_pa[c] / PA_PER_BAR, 11, '.2f')}" if self.median_imep_pa is not None else ""
+            )
             lines.append(
                 f"  {c + 1:>8} {int(self.judged[c]):>7} {int(self.misfires[c]):>9} "
-                f"{self.median_index[c]:>13.2f} {self.min_index[c]:>13.2f} {self._swing(c):>13.4f}{imep}"
+                f"{_cell(self.median_index[c], 13, '.2f')} {_cell(self.min_index[c], 13, '.2f')} "
+                f"{_cell(self._swing(c), 13, '.4f')}{imep}"
             )
         if self.segments:
             kinds = sorted({(seg, start) for _, seg, start in self.segments})
@@ -345,6 +401,11 @@ class MonitorResult(Result):
             lines.append(f"  misfires (cycle:cylinder): {shown}{more}")
         if self.not_judged:
             lines.append(f"  {self.not_judged} firing(s) not judged: their segments fell where the wheel was lost")
+        if self.engine_doubt:
+            lines.append(
+                "  the engine may not fit the log: the speed's strongest order is not of its firings "
+                "(the verdicts are flagged; the note 'engine_fit' says more)"
+            )
         for kind, n in self.note_counts.items():
             lines.append(f"  {n} note(s) '{kind}'")
         return "\n".join(lines)
@@ -364,6 +425,7 @@ class MonitorResult(Result):
                 "misfire_count": int(self.misfires.sum()),
                 "misfires": [list(p) for p in self.misfire_list],
                 "not_judged": self.not_judged,
+                "engine_doubt": self.engine_doubt,
                 "segments": [
                     {"cylinder": c, "segment_deg": seg, "start_after_tdc_deg": start} for c, seg, start in self.segments
                 ],
@@ -417,6 +479,94 @@ class MonitorResult(Result):
         return ax
 
 
+def _firings(engine: Any, cylinders: Any, firing_order: Any, strokes: Any) -> tuple:
+    """(engine, cylinders, strokes, the cycle [rad], each cylinder's firing angle within it
+    [rad], where they come from): from an engine (a file or preset name loaded), else evenly
+    spaced in ``firing_order``."""
+    if engine is not None:
+        if isinstance(engine, str):
+            from ..engine.file import load_engine
+
+            engine = load_engine(engine)
+        strokes = int(engine.strokes)
+        n = int(engine.cylinders)
+        cycle = TWO_PI * strokes / 2
+        fire = np.mod(np.asarray(engine.firing_angles_rad, dtype=np.float64), cycle)
+        return (
+            engine,
+            n,
+            strokes,
+            cycle,
+            fire,
+            f"engine {getattr(engine, 'name', '') or 'file'}: firing angles from the model",
+        )
+    if strokes not in (2, 4):
+        raise EngineError(f"strokes = {strokes!r}: 4 or 2")
+    if not (isinstance(cylinders, (int, np.integer)) and 1 <= cylinders <= 64):
+        raise EngineError(f"cylinders = {cylinders!r}: a whole number 1 … 64 (or give engine=)")
+    n = int(cylinders)
+    order = list(range(1, n + 1)) if firing_order is None else [int(c) for c in firing_order]
+    if sorted(order) != list(range(1, n + 1)):
+        raise EngineError(f"firing_order = {order!r}: each cylinder 1 … {n} once")
+    cycle = TWO_PI * strokes / 2
+    first = TWO_PI if strokes == 4 else 0.0
+    fire = np.zeros(n)
+    for j, c in enumerate(order):
+        fire[c - 1] = math.fmod(first + j * cycle / n, cycle)
+    return None, n, strokes, cycle, fire, f"{n} cylinders, firing order {','.join(map(str, order))}, evenly spaced"
+
+
+def _segments(fire: np.ndarray, cycle: float, segment_deg: Any) -> np.ndarray:
+    """Each firing's segment [rad] (the firing angles ``fire`` sorted): to the next firing's
+    TDC (an uneven firing order gives each its own), at most 180°; or ``segment_deg``."""
+    n = fire.size
+    if segment_deg is None:
+        gaps = np.diff(np.concatenate([fire, [fire[0] + cycle]])) if n > 1 else np.array([cycle])
+        return np.minimum(np.where(gaps > 0, gaps, cycle), math.pi)
+    seg = math.radians(float(segment_deg)) if math.isfinite(float(segment_deg)) else math.nan
+    if not (0 < seg <= cycle):
+        raise EngineError(f"segment_deg = {segment_deg!r}: a positive angle up to one cycle")
+    return np.full(n, seg)
+
+
+def _check_teeth(wheel: Any, segs: np.ndarray, n: int, strokes: int) -> float:
+    """The wheel's teeth over the shortest segment; a :class:`rotor.LogError` below
+    :data:`MIN_TEETH_PER_SEGMENT`."""
+    per_segment = wheel.edges_per_rev * float(segs.min()) / TWO_PI
+    if per_segment < MIN_TEETH_PER_SEGMENT:
+        raise LogError(
+            f"wheel {wheel.spec}: its {wheel.edges_per_rev} teeth a revolution give {per_segment:.3g} "
+            f"{'tooth' if per_segment == 1 else 'teeth'} over a "
+            f"firing's segment of {math.degrees(float(segs.min())):.4g}° ({n} cylinder(s), {strokes}-stroke); the "
+            f"monitor needs at least {MIN_TEETH_PER_SEGMENT} teeth per firing (its speed windows are a quarter of a "
+            "segment each): a wheel with more teeth (e.g. 60-2, 36-1)"
+        )
+    return per_segment
+
+
+def check_wheel(
+    wheel: Any,
+    *,
+    engine: Any = None,
+    cylinders: int | None = None,
+    firing_order: Sequence[int] | None = None,
+    strokes: int = 4,
+    segment_deg: float | None = None,
+) -> float:
+    """What :class:`MisfireMonitor` checks of the wheel and the firings before it reads
+    an edge, without building the engine's model: a wheel with a gap and at least
+    :data:`MIN_TEETH_PER_SEGMENT` teeth over the shortest firing segment (its teeth over
+    it returned), valid cylinders and firing order; a :class:`rotor.LogError` or
+    :class:`rotor.EngineError` naming what is wrong."""
+    from ..logs.wheel import parse_wheel
+
+    w = parse_wheel(wheel)
+    if w.needs_index:
+        raise LogError(f"wheel {w.spec}: the monitor follows a wheel with a gap (e.g. 60-2, 36-1)")
+    _, n, strokes, cycle, fire, _ = _firings(engine, cylinders, firing_order, strokes)
+    return _check_teeth(w, _segments(np.sort(fire), cycle, segment_deg), n, strokes)
+
+
 class MisfireMonitor:
     """A streaming misfire monitor on tooth edge times (see the module's doc).
 
@@ -429,7 +579,56 @@ class MisfireMonitor:
     ``threshold``: a misfire where the index is below −threshold; ``segment_deg``: the
     firing segment [deg] (default the angle to the next firing, at most 180°), from TDC +
     (180° − segment)/8 (``segment_rad``, ``offset_rad``: per firing in the order of the
-    firing angles); ``min_spread``: the smallest baseline spread of e.
+    firing angles); ``min_spread``: the smallest baseline spread of e; ``check_fit``: refuse
+    an engine whose model IMEP does not fit the log, and flag the verdicts where the speed
+    does not show the engine's firings (below; default True); ``log_name``: the log's name,
+    for the messages.
+
+    **The wheel's teeth.** Each firing's index takes the speed over windows of a quarter of
+    its segment at the segment's ends: a wheel with fewer than
+    :data:`MIN_TEETH_PER_SEGMENT` teeth over the shortest segment (a 3-1 or 12-10 wheel on a
+    four-cylinder engine: one tooth per 180°) leaves those windows inside one tooth period,
+    and is refused when the monitor is made (a noise-free simulated 4chn15 run on a 4-1
+    wheel missed a misfire, on 3-1 and 12-10 wheels called normal firings misfires; 6-1 and
+    up found them all; the detection map of ``benchmarks/misfire_detection.py`` holds 8 and
+    more teeth per segment).
+
+    **The time base.** The first edges on which the wheel is looked for are checked as
+    ``rotor analyze`` checks a log (:mod:`rotor.logs.plausibility`): a tooth period that
+    implies a mean speed under 10 or over 30,000 rpm (times in milliseconds or
+    microseconds read as seconds: named in the message), and time stamps that resolve more
+    than :data:`RESOLUTION_REFUSE` (0.3 %) of the tooth period (times offset far from 0,
+    e.g. by 1e12 s, where a float64 holds only 1.2e-4 s; a coarse timer), are refused
+    (:class:`rotor.LogError` from :meth:`feed`); a resolution above
+    :data:`RESOLUTION_NOTE` (0.1 %) is noted (:attr:`NoteKind.TIME_BASE`).
+
+    **The engine's fit.** With an engine, when the first firings are judged together (every
+    cylinder's baseline filled, about three cycles), the model's combustion scale of each of
+    them (s: 0 a misfire, 1 the engine file's full pressure) is checked: where more than
+    :data:`FIT_SHARE` (a quarter) of them lie below :data:`FIT_SCALE_LOW` or above
+    :data:`FIT_SCALE_HIGH` (a firing doing negative work, or several times the file's; not
+    widened by the fit's standard error, which a model that does not fit makes large), the
+    engine does not fit the log (its cylinders or firing order, the TDC, the time unit), and
+    :meth:`feed` refuses it (:class:`rotor.LogError`) before any verdict is given: the
+    4chn15's recording read with the v8 preset gives s = −0.5 for every firing, with the mwm6
+    preset −1.9; the mwm6's read with the 4chn15 preset 7.7; a 4chn15 whose cylinder 2 never
+    fires keeps s = 0 for it and fits. With or without an engine, once the wheel has been
+    followed over :data:`FIT_CYCLES` whole cycles, the speed's orders over them are read
+    (each cycle's trend off): the strongest order of the angular acceleration (each order's
+    speed amplitude, averaged over the cycles, times the order: a dead cylinder's missing
+    pulse adds every order, weakly against the firings' own) must be a multiple of the
+    engine's firing frequency (its cylinders/2 a revolution for an evenly firing
+    four-stroke; an uneven firing order repeats once a cycle, and every order fits). Where
+    it is not (a four-cylinder log monitored as a six), a note says so
+    (:attr:`NoteKind.ENGINE_FIT`) and every verdict given from then on (from the edge that
+    ends those cycles) carries ``engine_doubt``: a wheel's tooth errors at high speed can put
+    the strongest order elsewhere, so that this is a warning, not a refusal. Nothing is said
+    where that order is not the same in every cycle (its mean under :data:`FIT_Z` of its
+    standard errors over the cycles: timer noise, a run at exactly constant speed). A log
+    whose firing frequency is a multiple of the engine's (a V8 monitored as a four-cylinder)
+    fits the orders, and so does a four-cylinder monitored as a V8 where its fourth order is
+    its strongest (the 4chn15's: it is a V8 whose every other cylinder is dead): only the
+    model's IMEP tells these, with an engine file.
     """
 
     def __init__(
@@ -445,9 +644,13 @@ class MisfireMonitor:
         threshold: float = DEFAULT_THRESHOLD,
         segment_deg: float | None = None,
         min_spread: float = DEFAULT_MIN_SPREAD,
+        check_fit: bool = True,
+        log_name: str | None = None,
     ) -> None:
         from ..logs.wheel import parse_wheel
 
+        self.log_name = log_name
+        self.check_fit = bool(check_fit)
         self.wheel = parse_wheel(wheel)
         if self.wheel.needs_index:
             raise LogError(f"wheel {self.wheel.spec}: the monitor follows a wheel with a gap (e.g. 60-2, 36-1)")
@@ -459,49 +662,19 @@ class MisfireMonitor:
             raise EngineError(f"threshold = {threshold!r}: a positive number of baseline spreads")
         if not (math.isfinite(min_spread) and min_spread > 0):
             raise EngineError(f"min_spread = {min_spread!r}: a positive number")
-        if engine is not None:
-            if isinstance(engine, str):
-                from ..engine.file import load_engine
-
-                engine = load_engine(engine)
-            strokes = int(engine.strokes)
-            n = int(engine.cylinders)
-            cycle = TWO_PI * strokes / 2
-            fire = np.mod(np.asarray(engine.firing_angles_rad, dtype=np.float64), cycle)
-            self.source = f"engine {getattr(engine, 'name', '') or 'file'}: firing angles from the model"
-        else:
-            if strokes not in (2, 4):
-                raise EngineError(f"strokes = {strokes!r}: 4 or 2")
-            if not (isinstance(cylinders, (int, np.integer)) and 1 <= cylinders <= 64):
-                raise EngineError(f"cylinders = {cylinders!r}: a whole number 1 … 64 (or give engine=)")
-            n = int(cylinders)
-            order = list(range(1, n + 1)) if firing_order is None else [int(c) for c in firing_order]
-            if sorted(order) != list(range(1, n + 1)):
-                raise EngineError(f"firing_order = {order!r}: each cylinder 1 … {n} once")
-            cycle = TWO_PI * strokes / 2
-            first = TWO_PI if strokes == 4 else 0.0
-            fire = np.zeros(n)
-            for j, c in enumerate(order):
-                fire[c - 1] = math.fmod(first + j * cycle / n, cycle)
-            self.source = f"{n} cylinders, firing order {','.join(map(str, order))}, evenly spaced"
+        engine, n, strokes, cycle, fire, self.source = _firings(engine, cylinders, firing_order, strokes)
         self.cylinders, self.strokes, self.cycle_rad = n, strokes, cycle
         self.threshold, self.min_spread = float(threshold), float(min_spread)
         by_angle = np.argsort(fire, kind="stable")
         self._fire = fire[by_angle]  # firing angles within a cycle, sorted
         self._fire_list = [float(f) for f in self._fire]
         self._fire_cyl = [int(c) + 1 for c in by_angle]  # their cylinders, from 1
-        self._model = None if engine is None else _ModelIndex(engine, self._fire, self._fire_cyl)
-        if segment_deg is None:
-            # each firing's segment reaches to the next firing's TDC (an uneven firing order
-            # gives each its own), at most 180°
-            gaps = np.diff(np.concatenate([self._fire, [self._fire[0] + cycle]])) if n > 1 else np.array([cycle])
-            segs = np.minimum(np.where(gaps > 0, gaps, cycle), math.pi)
-        else:
-            seg = math.radians(float(segment_deg)) if math.isfinite(float(segment_deg)) else math.nan
-            if not (0 < seg <= cycle):
-                raise EngineError(f"segment_deg = {segment_deg!r}: a positive angle up to one cycle")
-            segs = np.full(n, seg)
+        segs = _segments(self._fire, cycle, segment_deg)
         self.segment_rad = segs  # per firing slot (firing angles sorted)
+        _check_teeth(self.wheel, segs, n, strokes)
+        self._model = None if engine is None else _ModelIndex(engine, self._fire, self._fire_cyl)
+        # the firing pattern repeats this many times a cycle: the speed's orders that fit it
+        self._pattern = _pattern_repeats(self._fire, cycle)
         # from TDC + (180° − segment)/8: where the most of the firing's own combustion work
         # falls into its segment (see the module doc, **The index**)
         self.offset_rad = np.maximum(0.0, (math.pi - segs) / 8)
@@ -535,6 +708,18 @@ class MisfireMonitor:
         self._last_omega = math.nan
         self._last_t_locked = math.nan
         self._ever_locked = False
+        self._time_checked = False  # the time base checked on the first edges
+        # the speed's orders: read once over the first FIT_CYCLES whole cycles of a run (their
+        # edges kept until then)
+        self._orders_pending = self.check_fit
+        self._orders_t = math.inf  # the log time at which they were read
+        self._orders_k: int | None = None  # the next whole cycle of the run to read
+        self._orders_x: list[np.ndarray] = []  # the spectra of the cycles read
+        self._orders_h = max(3 * n, 16)  # harmonics of the cycle read
+        self._orders_n = max(256, 8 * self._orders_h)  # points a cycle
+        self._doubt = False  # the speed's orders did not show the engine's firings
+        self._doubt_t = math.inf  # the verdicts given from this log time on are flagged
+        self._no_wheel = ""  # why the wheel was not found, the last time
         self._next: tuple[int, int] | None = None  # (cycle index k, firing slot j) to judge next
         self._run_start = math.nan
         self._history = _Baseline(HISTORY)  # the firings' deviations from their cylinders' medians
@@ -551,6 +736,8 @@ class MisfireMonitor:
         self._dead_of = [0.0] + [COMMON_DEAD / math.sqrt(m) for m in range(1, n + 2)]
         self._own = [_Baseline(OWN_HISTORY) for _ in range(n)]  # each cylinder's last values of e
         self._warm = False
+        self._ends: dict[int, float] = {}  # while the first firings wait: the times at which cycles ended
+        self._ends_next = -(2**62)  # the next cycle boundary to note
         self._held: tuple | None = None  # the last firing judged, until the next one is measured
         self._prev_index = math.nan
         self._waiting: list = []  # firings measured, not yet judged: [k, j, e, t_dec, cycle end, predicted, in the baseline]
@@ -596,6 +783,28 @@ class MisfireMonitor:
             out.extend(self._feed_slice(t[s : s + self._slice]))
         return out
 
+    def nothing_judged_reason(self) -> str | None:
+        """Why no firing has been judged, in words (None where some were): the wheel never
+        found, too few edges to look for it, or a log that ends before a firing's segment."""
+        if sum(self._judged):
+            return None
+        spec = self.wheel.spec
+        if not self._ever_locked:
+            if self._edges < self._acquire_edges:
+                return (
+                    f"no firing judged: {self._edges} tooth edge(s), fewer than the {self._acquire_edges} (two "
+                    f"revolutions of the {spec} wheel) in which the monitor looks for its gap"
+                )
+            why = f" (the last try: {self._no_wheel})" if self._no_wheel else ""
+            return (
+                f"no firing judged: the {spec} wheel was not found in {self._edges} tooth edges{why}; is the wheel "
+                "right, and are these tooth edge times?"
+            )
+        return (
+            f"no firing judged: the {spec} wheel was found, but the log ends before a firing's segment was measured "
+            f"({self._edges} tooth edges, {self._edges / self._E:.1f} revolutions)"
+        )
+
     def close(self) -> list[Verdict]:
         """End of the stream: the verdicts still waiting for their baseline (judged on what
         there is), and the monitor closed."""
@@ -631,6 +840,7 @@ class MisfireMonitor:
                 (c, round(math.degrees(seg), 6), round(math.degrees(off), 6))
                 for c, seg, off in zip(self._fire_cyl, self._seg_list, self._off_list)
             ],
+            engine_doubt=self._doubt,
         )
 
     # ------------------------------------------------------------------ notes
@@ -699,6 +909,56 @@ class MisfireMonitor:
                 self._skipping_back += 1
         return np.asarray(out_t, dtype=np.float64)
 
+    def _check_time_base(self, t: np.ndarray) -> None:
+        """The first edges' time base, as ``rotor analyze`` checks a log's: the mean speed
+        they imply and the resolution of their stamps (see the class doc, **The time
+        base**); a :class:`rotor.LogError` where they cannot be tooth times in seconds."""
+        from ..logs.plausibility import MAX_RPM, MIN_RPM, time_resolution_s
+
+        self._time_checked = True
+        d = np.diff(t)
+        d = d[d > 0]
+        if d.size == 0:
+            return
+        dt = float(np.median(d))
+        rpm = 60.0 / (dt * self.wheel.teeth)
+        if not MIN_RPM <= rpm <= MAX_RPM:
+            self._closed = True
+            units = (("milliseconds", 1e3, "tooth_time_ms"), ("microseconds", 1e6, "tooth_time_us"))
+            hint = next(
+                (
+                    f"are they in {unit} ({rpm * f:.4g} rpm if so)? give seconds, or name the column {name!r} "
+                    "in a header line above the times"
+                    for unit, f, name in units
+                    if MIN_RPM <= rpm * f <= MAX_RPM
+                ),
+                "are these tooth edge times in seconds, and is the wheel right?",
+            )
+            raise LogError(
+                f"{self._where()}the tooth times imply {rpm:.3g} rpm (a tooth period of {dt:.4g} s on a "
+                f"{self.wheel.spec} wheel), outside {MIN_RPM:g} … {MAX_RPM:,.0f} rpm; {hint}"
+            )
+        # from the first time on (exact): the step's tolerance scales with the times' size
+        q = time_resolution_s(t - t[0])
+        ratio = q / dt
+        if ratio <= RESOLUTION_NOTE:
+            return
+        big = float(np.max(np.abs(t)))
+        spacing = float(np.spacing(big))
+        far = (
+            f" (a float64 near {big:.4g} s resolves only {spacing:.2g} s: the times lie far from 0)"
+            if spacing >= 0.5 * q
+            else ""
+        )
+        text = f"the tooth times resolve {q:.3g} s, {ratio:.1%} of the tooth period {dt:.4g} s{far}"
+        if ratio > RESOLUTION_REFUSE:
+            self._closed = True
+            raise LogError(
+                f"{self._where()}{text}: too coarse to measure the speed by; give the times with more digits, "
+                "or as offsets from the start of the log"
+            )
+        self._note(NoteKind.TIME_BASE, float(t[0]), f"{text}: the indices and IMEPs carry some of the rounding")
+
     def _acquire(self, t: np.ndarray) -> np.ndarray:
         """Look for the wheel on the first edges not placed; the edges left over."""
         from ..logs.pattern import locate_teeth
@@ -710,9 +970,12 @@ class MisfireMonitor:
         if self._raw.size < need:
             return rest
         window = self._raw
+        if not self._time_checked:
+            self._check_time_base(window)
         try:
             track = locate_teeth(window, self.wheel)
         except LogError as e:
+            self._no_wheel = str(e)
             drop = self._E // 2
             self._note(
                 NoteKind.NO_WHEEL,
@@ -818,6 +1081,8 @@ class MisfireMonitor:
         self._raw = np.empty(0)
         self._t, self._th = np.empty(0), np.empty(0)
         self._locked = False
+        # the speed's orders read afresh in the next run
+        self._orders_k, self._orders_x = None, []
 
     def _omega_now(self) -> float:
         th, t = self._th, self._t
@@ -859,6 +1124,10 @@ class MisfireMonitor:
         th = self._th
         if not self._locked or self._next is None or th.size < 2:
             return []
+        if self._orders_pending:
+            self._read_orders()
+        if not self._warm:
+            self._note_cycle_ends()
         segs, offs, wins = self._seg_list, self._off_list, self._win_list
         cyc = self.cycle_rad
         fire = self._fire_list
@@ -938,6 +1207,16 @@ class MisfireMonitor:
         self._trim()
         return out
 
+    def _note_cycle_ends(self) -> None:
+        """While the first firings wait: the log time of each cycle's end that the edges
+        pass (by the edges about it, the same however the stream is cut), so that a verdict
+        given after its cycle ended says when it did, not when it was predicted to."""
+        th, cyc = self._th, self.cycle_rad
+        last = math.floor(th[-1] / cyc)
+        for b in range(max(math.ceil(th[0] / cyc), self._ends_next), last + 1):
+            self._ends[b] = float(np.interp(b * cyc, th, self._t))
+        self._ends_next = max(self._ends_next, last + 1)
+
     def _release_waiting(self, force: bool) -> list[Verdict]:
         out: list[Verdict] = []
         own, pool = self._own, self._history
@@ -951,6 +1230,7 @@ class MisfireMonitor:
                 item[6] = True
             if not force and min(len(b) for b in own) < MIN_OWN:
                 return out
+            self._check_imep()
             self._warm = True
             for item in self._waiting:
                 # the verdict against the median of all the cylinder's values (robust to a
@@ -960,15 +1240,57 @@ class MisfireMonitor:
                 c = int(self._fire_cyl[item[1]]) - 1
                 item[7] = item[2] - own[c].median()
                 pool.append(item[2] - own[c].median_without(item[2]))
-        while self._waiting:
-            k, j, e, td, es, pr, fed, r, figures = self._waiting.pop(0)
-            self._decide(k, j, e, td, es, pr, fed, r if fed else 0.0, figures, out)
+        if self._waiting:
+            # given now, with the edge that completed the baselines (the last measured): the
+            # time each was decided, not the earlier one of its own last edge
+            t_given = self._waiting[-1][3]
+            ends = self._ends
+            for k, j, e, _, es, pr, fed, r, figures in self._waiting:
+                if pr and ends.get(k + 1, math.inf) <= t_given:  # its cycle has ended by now: measured
+                    es, pr = ends[k + 1], False
+                self._decide(k, j, e, t_given, es, pr, fed, r if fed else 0.0, figures, out)
+            self._waiting = []
+            self._ends = {}
         if force:
             self._finish(out, self._last_t_dec, force=True)
             if self._held is not None:
-                out.append(self._verdict(self._held, math.nan, self._held[8]))
+                out.append(self._verdict(self._held, math.nan, max(self._held[8], self._last_t_dec)))
                 self._held = None
         return out
+
+    def _check_imep(self) -> None:
+        """With an engine: refuse it where the model's IMEP of the first firings (those that
+        waited for the baselines) is implausible in more than :data:`FIT_SHARE` of them
+        (see the class doc, **The engine's fit**)."""
+        model = self._model
+        if model is None or not self.check_fit:
+            return
+        measured, bad = 0, []
+        for item in self._waiting:
+            imep = item[8][0]
+            motored, comb, size = model.figures[self._fire_cyl[item[1]] - 1]
+            if not (math.isfinite(imep) and size > 0):
+                continue
+            # not widened by the fit's standard error: a model that does not fit has a large one
+            scale = (imep - motored) / comb
+            measured += 1
+            if not FIT_SCALE_LOW <= scale <= FIT_SCALE_HIGH:
+                bad.append(imep)
+        if measured < self.cylinders or len(bad) <= FIT_SHARE * measured:
+            return
+        self._closed = True
+        motored = float(np.median([f[0] for f in model.figures])) / PA_PER_BAR
+        full = float(np.median([f[0] + f[1] for f in model.figures])) / PA_PER_BAR
+        raise LogError(
+            f"{self._where()}the engine does not fit the log: the model's IMEP of {len(bad)} of the first "
+            f"{measured} firings is {min(bad) / PA_PER_BAR:.3g} … {max(bad) / PA_PER_BAR:.3g} bar, where a firing "
+            f"of this engine gives {motored:.3g} bar (a misfire) to about {full:.3g} bar (its file's full pressure): "
+            "check the engine (its cylinders and firing order), cylinder 1's TDC after the gap (the log's "
+            "'# tdc_after_gap_deg') and that the times are in seconds"
+        )
+
+    def _where(self) -> str:
+        return f"{self.log_name}: " if self.log_name else ""
 
     def _decide(
         self,
@@ -1072,7 +1394,8 @@ class MisfireMonitor:
         else:
             spill = False
         misfire = index < -self.threshold and not spill
-        v = Verdict(k, c, misfire, index, index_std, e, end_s, t_dec, predicted, imep, imep_std, swing)
+        doubt = t_dec >= self._doubt_t
+        v = Verdict(k, c, misfire, index, index_std, e, end_s, t_dec, predicted, imep, imep_std, swing, doubt)
         c0 = c - 1
         self._judged[c0] += 1
         self._index_sketch[c0].append(index)
@@ -1087,15 +1410,79 @@ class MisfireMonitor:
         return v
 
     def _trim(self) -> None:
-        """Drop the edges no firing to come needs (keep a revolution before the next one)."""
+        """Drop the edges no firing to come needs (keep a revolution before the next one),
+        and none of the whole cycle whose speed's orders are to be read next."""
         if self._next is None or self._th.size <= self._trim_above:
             return
         k, j = self._next
         keep_from = self._firing_theta(k, j) - self._trim_back - TWO_PI
+        if self._orders_pending and self._orders_k is not None:
+            keep_from = min(keep_from, self._orders_k * self.cycle_rad)
         i = int(np.searchsorted(self._th, keep_from)) - 1
         if i > 0:
             self._t = self._t[i:]
             self._th = self._th[i:]
+
+    def _read_orders(self) -> None:
+        """The spectra of the speed over the whole cycles of the run that the edges now
+        reach (each cycle's trend off), until :data:`FIT_CYCLES` of them are read; then the
+        strongest order of the acceleration: where it stands out of the cycles' scatter and is
+        not a multiple of the firing frequency, a note, and the verdicts given from the edge
+        that ended those cycles flagged (see the class doc, **The engine's fit**). What is read
+        depends on the edges alone, not on how the stream was cut."""
+        th, t = self._th, self._t
+        cyc, per = self.cycle_rad, self._orders_n
+        if self._orders_k is None:
+            self._orders_k = math.ceil(th[0] / cyc)
+        x = np.arange(per) - 0.5 * (per - 1)
+        while (self._orders_k + 1) * cyc <= th[-1]:
+            grid = self._orders_k * cyc + (cyc / per) * np.arange(per + 1)
+            w = (cyc / per) / np.diff(np.interp(grid, th, t))
+            w = w - w.mean() - (w @ x / (x @ x)) * x
+            self._orders_x.append(np.fft.rfft(w)[1 : self._orders_h + 1])
+            self._orders_k += 1
+            if len(self._orders_x) == FIT_CYCLES:
+                end = self._orders_k * cyc
+                self._orders_t = float(t[int(np.searchsorted(th, end))])
+                self._orders_pending = False
+                self._judge_orders(end)
+                return
+
+    def _judge_orders(self, end: float) -> None:
+        spectra = np.asarray(self._orders_x)
+        self._orders_x = []
+        mean = spectra.mean(axis=0)
+        se = np.sqrt((np.abs(spectra - mean) ** 2).sum(axis=0) / (FIT_CYCLES * (FIT_CYCLES - 1)))
+        acc = np.abs(mean) * np.arange(1, mean.size + 1)  # the acceleration's orders
+        best = int(np.argmax(acc))
+        if not abs(mean[best]) > FIT_Z * se[best] or (best + 1) % self._pattern == 0:
+            return
+        self._doubt, self._doubt_t = True, self._orders_t
+        revs = self.cycle_rad / TWO_PI
+        start = end - FIT_CYCLES * self.cycle_rad
+        self._note(
+            NoteKind.ENGINE_FIT,
+            self._orders_t,
+            f"the speed's strongest order is {(best + 1) / revs:g} a revolution (over {FIT_CYCLES} cycles from "
+            f"{float(np.interp(start, self._th, self._t)):.6f} s), where the engine ({self.cylinders} cylinder(s), "
+            f"{self.strokes}-stroke) fires {self._pattern / revs:g} times a revolution (its orders: multiples of "
+            "that): the cylinders, firing order or strokes may not fit the log (or the wheel's tooth errors outweigh "
+            "the firings); every verdict from here is flagged (engine_doubt)",
+        )
+
+
+def _pattern_repeats(fire: np.ndarray, cycle: float) -> int:
+    """How many times a cycle the firing angles ``fire`` (sorted, within the cycle) repeat
+    themselves: the number of cylinders for an even firing order, 1 for an uneven one."""
+    n = fire.size
+    for m in range(n, 1, -1):
+        if n % m:
+            continue
+        shifted = np.sort(np.mod(fire + cycle / m, cycle))
+        gap = np.abs(shifted - fire)
+        if float(np.minimum(gap, cycle - gap).max()) < 1e-6:
+            return m
+    return 1
 
 
 class _ModelIndex:
@@ -1297,29 +1684,123 @@ def _slots(k0: int, j0: int, k1: int, j1: int, nf: int):
             k, j = k + 1, 0
 
 
-class ToothLines:
-    """Tooth edge times from text as it arrives: one time [s] per line, ``#`` comment lines
-    (the header's ``# tdc_after_gap_deg: DEG`` and ``# firing_parity: 0|1`` kept in
-    ``stated``), a column-name line before the first time. :meth:`feed` takes text (a
-    line may be split between calls) and returns the times and the notes on lines that are
-    not a time (each named by its line number)."""
+MAX_LINE_CHARS = 1_000_000
+"""The longest line :class:`ToothLines` takes [characters]: a longer one (a file without
+line ends, a binary file) is refused, so that the text held stays bounded."""
+TOOTH_COLUMNS = {"tooth_time_s": 1.0, "tooth_time_ms": 1e3, "tooth_time_us": 1e6}
+"""The column names of tooth edge times, and what each is divided by for seconds (as
+:data:`rotor.logs.reader.UNIT_COLUMNS` reads them)."""
 
-    def __init__(self) -> None:
-        self._rest = ""
-        self.line_no = 0
+
+class ToothLines:
+    """Tooth edge times from text as it arrives: one time per line, ``#`` comment lines (the
+    header's ``# tdc_after_gap_deg: DEG`` and ``# firing_parity: 0|1`` kept in ``stated``),
+    a column-name line before the first time. :meth:`feed` takes text (a line may be split
+    between calls) and returns the times [s] and the notes on lines that are not a time
+    (each named by its line number).
+
+    **Line ends**: LF, CRLF and CR alike, a CRLF split between two calls included. The text
+    held for a line not yet ended is bounded: a line longer than ``max_line`` characters
+    (:data:`MAX_LINE_CHARS`; a file without line ends, a binary file), or a NUL byte, is
+    refused (:class:`rotor.LogError` naming the line), and the work is linear in the text
+    whatever its line ends (lines of one number are converted together, by NumPy).
+
+    **Columns and units**: the column-name line may name the tooth times' column and their
+    unit: ``tooth_time_s``, ``tooth_time_ms`` or ``tooth_time_us`` (among other columns:
+    that column is read); a lone column ``time_ms`` or ``time_us`` is read in that unit; the
+    times are converted to seconds and a note (:attr:`NoteKind.UNITS`) says so. A name line
+    of a sampled signal's columns without a tooth-time column (``time, encoder_v``, a logic
+    analyser's ``Time[s], Channel 0``), and a first row of several numbers without a name
+    line for them, are refused: the monitor reads tooth edge times. Other names are skipped
+    (the times then one a line, in seconds). ``skipped`` counts the lines
+    that are not a time. ``name`` (the log's, for the messages) prefixes every error."""
+
+    def __init__(self, max_line: int = MAX_LINE_CHARS, name: str | None = None) -> None:
+        if not (isinstance(max_line, int) and max_line > 0):
+            raise EngineError(f"max_line = {max_line!r}: a positive number of characters")
+        self.max_line = max_line
+        self.name = name
         self.stated: dict[str, str] = {}
+        self.skipped = 0
+        self.column: str | None = None  # the column named in the header, if any
+        self._divisor = 1.0  # times as given, divided by this: seconds
+        self._col = 0  # the field that holds the time
+        self._columns = 1  # fields a row has, by the header (1: one time a line)
+        self.restart()
+
+    def restart(self) -> None:
+        """A new file (one followed was replaced or truncated): its lines counted from 1, a
+        header line read again (the columns and unit of the last one kept where it has none),
+        the text held dropped."""
+        self.line_no = 0
+        self._pieces: list[str] = []
+        self._held = 0
+        self._cr = False  # the last text ended in CR: an LF that starts the next belongs to it
         self._seen_time = False
+        self._header = False
+
+    def _error(self, text: str) -> LogError:
+        return LogError(f"{self.name}: {text}" if self.name else text)
 
     def feed(self, text: str, final: bool = False) -> tuple[np.ndarray, list[Note]]:
+        if self._cr:
+            text = "\r" + text
+            self._cr = False
+        if not final and text.endswith("\r"):
+            text = text[:-1]
+            self._cr = True
+        if "\0" in text:
+            before = text[: text.index("\0")].replace("\r\n", "\n")
+            n = self.line_no + 1 + before.count("\n") + before.count("\r")
+            raise self._error(f"line {n}: a NUL byte: a binary or zero-filled file, not tooth times as text")
+        if not final and "\n" not in text and "\r" not in text:
+            if text:  # no line end yet: held (bounded), not joined again at every call
+                self._pieces.append(text)
+                self._held += len(text)
+                if self._held > self.max_line:
+                    raise self._too_long(self.line_no + 1)
+            return np.empty(0), []
+        if self._pieces:
+            text = "".join(self._pieces) + text
+            self._pieces, self._held = [], 0
+        if "\r" in text:
+            text = text.replace("\r\n", "\n").replace("\r", "\n")
+        lines = text.split("\n")
+        rest = "" if final else lines.pop()
+        if len(text) > self.max_line:
+            longest = max(range(len(lines)), key=lambda i: len(lines[i]), default=0)
+            if lines and len(lines[longest]) > self.max_line:
+                raise self._too_long(self.line_no + 1 + longest)
+            if len(rest) > self.max_line:
+                raise self._too_long(self.line_no + 1 + len(lines))
+        if rest:
+            self._pieces, self._held = [rest], len(rest)
+        first = self.line_no + 1
+        self.line_no += len(lines)
+        if not lines:
+            return np.empty(0), []
+        if self._seen_time and self._columns == 1:
+            # the usual case: a number a line, converted together (no Python a line)
+            try:
+                x = np.array(lines, dtype=np.float64)
+            except ValueError:  # an empty line, a comment, a bad line: line by line
+                x = None
+            if x is not None and bool(np.isfinite(x).all()):
+                return (x / self._divisor if self._divisor != 1.0 else x), []
+        return self._lines(lines, first)
+
+    def _too_long(self, n: int) -> LogError:
+        return self._error(
+            f"line {n}: longer than {self.max_line:,} characters without a line end: not tooth times, one a "
+            "line (a binary file, or one without line ends?)"
+        )
+
+    def _lines(self, lines: list[str], first: int) -> tuple[np.ndarray, list[Note]]:
         from .stated import PHASE_KEYS
 
-        text = self._rest + text
-        lines = text.split("\n")
-        self._rest = "" if final else lines.pop()
         times: list[float] = []
         notes: list[Note] = []
-        for raw in lines:
-            self.line_no += 1
+        for i, raw in enumerate(lines):
             s = raw.strip()
             if not s:
                 continue
@@ -1328,18 +1809,85 @@ class ToothLines:
                 if sep and key.strip() in PHASE_KEYS and not self._seen_time:
                     self.stated[key.strip()] = value.strip()
                 continue
-            field = s.split(",")[0].split()[0] if s.split(",")[0].split() else s
+            fields = _fields(s)
             try:
-                x = float(field)
-            except ValueError:
-                if not self._seen_time and not times:
-                    continue  # the column names
+                x = float(fields[self._col])
+            except (ValueError, IndexError):
+                if not self._seen_time and not self._header:
+                    self._read_header(fields, first + i, notes)  # the column names
+                    continue
+                self.skipped += 1
                 shown = s if len(s) <= 40 else s[:37] + "..."
-                notes.append(Note(NoteKind.BAD_LINE, None, f"line {self.line_no}: {shown!r} is not a time: skipped"))
+                notes.append(Note(NoteKind.BAD_LINE, None, f"line {first + i}: {shown!r} is not a time: skipped"))
                 continue
+            if not self._seen_time and self._columns == 1 and len(fields) > 1 and _is_number(fields[1]):
+                shown = s if len(s) <= 40 else s[:37] + "..."
+                raise self._error(
+                    f"line {first + i}: {len(fields)} columns of numbers ({shown!r}) and no header line naming them: "
+                    "the monitor reads tooth edge times, one a line, or the column a header line names "
+                    "'tooth_time_s' ('tooth_time_ms', 'tooth_time_us'); a sampled signal is read by `rotor analyze`"
+                )
             if not math.isfinite(x):
-                notes.append(Note(NoteKind.BAD_LINE, None, f"line {self.line_no}: {s!r} is not a finite time: skipped"))
+                self.skipped += 1
+                notes.append(Note(NoteKind.BAD_LINE, None, f"line {first + i}: {s!r} is not a finite time: skipped"))
                 continue
             times.append(x)
             self._seen_time = True
-        return np.asarray(times, dtype=np.float64), notes
+        t = np.asarray(times, dtype=np.float64)
+        return (t / self._divisor if self._divisor != 1.0 else t), notes
+
+    def _read_header(self, fields: list[str], n: int, notes: list[Note]) -> None:
+        """The column-name line ``fields`` (line ``n``): which column holds the times, in
+        which unit; a sampled signal's columns (without a tooth-time column) refused."""
+        from ..logs.reader import UNIT_COLUMNS
+
+        self._header = True
+        names = [f.strip().lower() for f in fields]
+        tooth = [i for i, f in enumerate(names) if f in TOOTH_COLUMNS]
+        if tooth:
+            col, name, divisor = tooth[0], names[tooth[0]], TOOTH_COLUMNS[names[tooth[0]]]
+        elif len(names) == 1 and names[0] in UNIT_COLUMNS:
+            col, name, divisor = 0, names[0], float(round(1.0 / UNIT_COLUMNS[names[0]][1]))
+        else:
+            signal = [f.strip() for f, low in zip(fields, names, strict=True) if _signal_column(low)]
+            if signal and len(names) > 1:
+                shown = ", ".join(repr(f) for f in signal[:6]) + (", …" if len(signal) > 6 else "")
+                raise self._error(
+                    f"line {n}: the columns {shown} are a sampled signal, not tooth edge times: the monitor reads one "
+                    "time a line, or the column a header line names 'tooth_time_s' ('tooth_time_ms', "
+                    "'tooth_time_us'); `rotor analyze` reads a sampled signal"
+                )
+            col, name, divisor = 0, None, 1.0  # names of its own: the times in seconds, a number a line
+            names = names[:1]
+        self._col, self._columns, self.column, self._divisor = col, len(names), name, float(divisor)
+        if divisor != 1.0:
+            notes.append(
+                Note(NoteKind.UNITS, None, f"line {n}: column {name!r} read as tooth times in seconds (÷ {divisor:g})")
+            )
+
+
+def _signal_column(name: str) -> bool:
+    """Whether the column name ``name`` (lower case) is one of a sampled signal: a reader's
+    column other than the tooth times (``time``, ``encoder_v``, …), or a logic analyser's
+    (``Time[s]``, ``Channel 0``)."""
+    from ..logs.reader import COLUMN_NAMES, UNIT_COLUMNS
+
+    if name in TOOTH_COLUMNS or name == "-":
+        return False
+    return name in COLUMN_NAMES or name in UNIT_COLUMNS or name.startswith(("time[", "channel"))
+
+
+def _fields(s: str) -> list[str]:
+    """The fields of a row: separated by commas, semicolons, tabs or blanks."""
+    for sep in (",", ";", "\t"):
+        if sep in s:
+            return [f.strip() for f in s.split(sep)]
+    return s.split()
+
+
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+    except ValueError:
+        return False
+    return True

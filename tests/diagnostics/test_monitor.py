@@ -303,12 +303,13 @@ def test_without_an_engine_there_is_no_imep(recorded):
 def test_a_firing_whose_model_windows_are_not_all_measured_has_no_imep():
     """A V8's 45° segment starts 16.9° after TDC (its speed window 11.25° after), its model
     windows at TDC: after a hole in the data the first firing judged can have model windows
-    before the first edge placed."""
+    before the first edge placed. (The four-cylinder teeth do not fit the V8's model, which
+    the monitor would refuse: its check is off here.)"""
     import warnings
 
     t = synthetic_teeth(12)
     t = np.concatenate([t[:641], t[641:] + 1.0])
-    m = MisfireMonitor("60-2", tdc_deg=0.0, engine="v8", segment_deg=45.0)
+    m = MisfireMonitor("60-2", tdc_deg=0.0, engine="v8", segment_deg=45.0, check_fit=False)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         out = m.feed(t[:100]) + m.feed(t[100:]) + m.close()
