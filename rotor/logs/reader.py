@@ -500,6 +500,8 @@ def _recognised(path, text, sep, header, tokens, ncols, first, notes) -> Log:
     if header:
         next(lines, None)
         second = next(lines, None)
+        if second is None:
+            raise LogError(f"{path}: line {first[0]} ({_short(first[1])}) and no data rows: not a recording")
         if second is not None:
             toks = [t.strip() for t in (second[1].split(sep) if sep else second[1].split())]
             if len(toks) == ncols and not any(_is_number(t) for t in toks if t):
@@ -509,7 +511,8 @@ def _recognised(path, text, sep, header, tokens, ncols, first, notes) -> Log:
     nums = np.fromiter((n for n, _ in _data_lines(text)), dtype=np.int64)
     if header:
         nums = nums[1:]
-    names, said = recognise_columns(tokens if header else None, data, units=units, source=os.path.basename(path))
+    finite = data[np.all(np.isfinite(data), axis=1)]  # a row that is not numbers is named by the checks below
+    names, said = recognise_columns(tokens if header else None, finite, units=units, source=os.path.basename(path))
     if units is not None:
         said.insert(0, f"line {first[0] + 1} read as the columns' units ({_short(', '.join(units))})")
     use = [i for i, n in enumerate(names) if n != "-"]

@@ -461,7 +461,7 @@ def test_capture_channels_are_mapped_by_name_wherever_their_columns_stand(tmp_pa
         assert rc == 0, err
         results[order] = json.loads(out)
     assert results[(1, 0)]["cycles"] == results[(0, 1)]["cycles"]
-    assert any("Channel 0 → encoder_d" in n and "Channel 1 → cam_d" in n for n in results[(1, 0)]["notes"])
+    assert any("'Channel 0' → encoder_d" in n and "'Channel 1' → cam_d" in n for n in results[(1, 0)]["notes"])
     # the column names given win over the header's
     path = tmp_path / "capture10.csv"
     rc, out, err = run_cli(
