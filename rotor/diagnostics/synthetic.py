@@ -55,6 +55,7 @@ from jaxtyping import ArrayLike
 from ..checks import check_size
 from ..engine.forces import cylinder_pressure  # compiled once per shape
 from ..errors import EngineError
+from ..logs.synthetic import wheel_with_layout
 from ..logs.wheel import ToothErrors, Wheel, parse_wheel
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
 
@@ -489,6 +490,8 @@ def simulated_tooth_time_text(
 
     try:
         w = Wheel(60, 2) if wheel is None else parse_wheel(wheel)
+        if w.missing >= 1:
+            w = wheel_with_layout(w, None)  # where its gaps lie: the standard layout, or spread evenly
     except ValueError as e:
         raise EngineError(f"wheel = {wheel!r}: {e}") from None
     if w.missing < 1:
@@ -509,7 +512,7 @@ def simulated_tooth_time_text(
     err = _wheel_errors(w, tooth_error_deg)
     r0, r1 = int(math.floor((lo - gap) / (2 * np.pi))) - 1, int(math.ceil((hi - gap) / (2 * np.pi))) + 1
     rev = np.arange(r0, r1 + 1)
-    ang = (gap + 2 * np.pi * rev[:, None] + w.pitch_rad * np.arange(w.edges_per_rev)[None, :] + err[None, :]).ravel()
+    ang = (gap + 2 * np.pi * rev[:, None] + w.tooth_angles_rad[None, :] + err[None, :]).ravel()
     ang = ang[(ang >= lo) & (ang <= hi)]
     times = CubicSpline(th, t)(ang) + np.random.default_rng(seed).normal(0.0, jitter_s, ang.size)
     out = io.StringIO()

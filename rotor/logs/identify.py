@@ -436,6 +436,23 @@ def rank(fits: Sequence[WheelFit]) -> tuple[WheelFit | None, WheelFit | None, st
     ]
     if not ok:
         loose = [f for f in fits if f.status.ok]
+        small = [
+            f
+            for f in loose
+            if f.gap_misfit <= MAX_GAP_MISFIT
+            and f.revolutions >= MIN_REVOLUTIONS
+            and int(f.spec.split("-")[0]) < MIN_COUNTED_POSITIONS
+        ]
+        if small:
+            f = small[0]
+            return (
+                None,
+                None,
+                (
+                    f"{f.spec} fits ({f.revolutions} revolutions, gap misfit {100 * f.gap_misfit:.1f} %), but a wheel of "
+                    f"fewer than {MIN_COUNTED_POSITIONS} positions is taken only when named (wheel='{f.spec}')"
+                ),
+            )
         if loose:
             f = min(loose, key=lambda f: f.gap_misfit)
             return (

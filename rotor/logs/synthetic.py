@@ -52,6 +52,7 @@ from .wheel import Wheel, parse_wheel
 __all__ = [
     "SPEED_KINDS",
     "STANDARD_LAYOUTS",
+    "wheel_with_layout",
     "SpeedProfile",
     "speed_profile",
     "SimulatedSignal",
@@ -413,7 +414,7 @@ def speed_profile(
 # ------------------------------------------------------------------------------ the wheel
 
 
-def _wheel_with_layout(wheel: Any, layout: Sequence[int] | None) -> Wheel:
+def wheel_with_layout(wheel: Any, layout: Sequence[int] | None) -> Wheel:
     """The :class:`Wheel` of ``wheel`` with where its gaps lie (``layout``, the standard
     one, or the teeth spread as evenly as can be), gap 1 as :class:`Wheel` defines it."""
     try:
@@ -644,7 +645,7 @@ def wheel_signal(
     shift = _number("gap_tooth_shift", gap_tooth_shift, low=0.0, high=0.45, low_ok=True, high_ok=True)
     kinds = _gap_kinds(gap_tooth)
     sen = _sensor(sensor, sensitivity_v_per_rad_s, pulse_width, offset_v, low_v, high_v, duty, rise_time_s)
-    w = _wheel_with_layout(wheel, layout)
+    w = wheel_with_layout(wheel, layout)
     err_deg = _tooth_errors_deg(w, tooth_error_deg, seed)
     N, pitch = w.teeth, w.pitch_rad
     present, amp, on, width, after = _tooth_tables(w, sensor, kinds, amp_gap, shift, sen.duty, err_deg / (360.0 / N))

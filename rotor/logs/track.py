@@ -524,6 +524,9 @@ def _refusal(name, log, w, edge, per_edge, tried, edge_errors) -> LogError:
                 f"{name}: the signal fits {a.describe()} and {b.describe()} alike; give the wheel "
                 f"(wheel='{a.spec}' or wheel='{b.spec}')"
             )
+        said = next((p[2] for p in per_edge if p[0] is None and p[2] and p[2] != "no wheel fits"), "")
+        if said:
+            return LogError(f"{name}: no wheel found: {said}")
         reasons = "; ".join(f.describe() for f in tried[:4])
         return LogError(f"{name}: no wheel found that fits the signal: {reasons}; give the wheel (wheel='N-g1-g2…')")
     mine = [f for f in tried if f.spec == w.spec]

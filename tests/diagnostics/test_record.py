@@ -148,3 +148,24 @@ def test_record_never_writes_onto_a_pipe_or_a_link(tmp_path, capsys):
     code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "2", "--record", "-")
     assert code == 2 and err.startswith("rotor: error: --record -: ") and "give a file name" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "pipe.csv", "target.csv"]
+
+
+@pytest.mark.parametrize("wheel", ["36-2-1", "36-2-2-2", "36-2-1-1"])
+def test_a_multi_gap_wheel_is_recorded_with_its_gaps_where_they_lie(tmp_path, capsys, wheel):
+    log = tmp_path / "rec.csv"
+    code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "6", "--record", str(log), "--wheel", wheel)
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "analyze", str(log), "--json")  # the wheel found from the log alone
+    assert code == 0, err
+    assert json.loads(out)["wheel"]["spec"] == wheel
+
+
+@pytest.mark.parametrize("wheel", ["3-1", "12-10"])
+def test_a_wheel_of_few_teeth_recorded_reads_back_when_named_and_is_refused_in_words_when_not(tmp_path, capsys, wheel):
+    log = tmp_path / "rec.csv"
+    code, _, err = run_cli(capsys, "simulate", "4chn15", "--cycles", "6", "--record", str(log), "--wheel", wheel)
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "analyze", str(log), "--wheel", wheel, "--json")
+    assert code == 0 and json.loads(out)["wheel"]["spec"] == wheel, err
+    code, _, err = run_cli(capsys, "analyze", str(log))
+    assert code in (0, 2) and "Traceback" not in err and len(err.strip().splitlines()) <= 1
