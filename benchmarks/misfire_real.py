@@ -286,13 +286,13 @@ def part_6g75():
             }
             if v:
                 # the starter's cranking apart from the coast-down after it lets go: firings
-                # decided before the speed over 120° stays below 85 % of its median
+                # whose cycle ends before the speed over 120° stays below 85 % of its median
                 tw, ph = wheel_angles(t, wheel)
                 rpm120, _, tg = speed_on_grid(tw, ph, 120.0)
                 low = rpm120 < 0.85 * np.median(rpm120)
                 stay = np.flatnonzero(~low)
                 release = float(tg[stay[-1] + 1]) if stay.size and stay[-1] + 1 < tg.size else math.inf
-                crank = np.array([u.decided_at_s <= release for u in v])
+                crank = np.array([u.cycle_end_s <= release for u in v])
                 row.update(
                     {
                         "median_abs_index": float(np.median(np.abs(idx))),

@@ -21,6 +21,10 @@ TAIL_BYTES = 64
 and written again past the place read shows other bytes there)."""
 
 
+AUTO_EDGES = 4000
+"""With ``--wheel auto``, the wheel is found from this many edges before the first verdict."""
+
+
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``monitor`` to the subcommands ``sub``."""
     p = sub.add_parser(
@@ -39,7 +43,13 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="engine file or preset: cylinders, strokes, firing angles and each firing's IMEP from the model "
         "(else --cylinders and --firing-order: no IMEP)",
     )
-    p.add_argument("--wheel", required=True, metavar="SPEC", help="trigger wheel with a gap, e.g. 60-2, 36-1, 36-2-1")
+    p.add_argument(
+        "--wheel",
+        default="auto",
+        metavar="SPEC",
+        help="trigger wheel with a gap, e.g. 60-2, 36-1, 36-2-1, or auto (the default: found from the log's first "
+        f"{AUTO_EDGES} edges, or all of a shorter log, as rotor analyze finds it)",
+    )
     p.add_argument("--cylinders", type=_cylinders, metavar="N", help="cylinders, without --engine")
     p.add_argument(
         "--firing-order", type=_order, metavar="1,3,4,2", help="firing order, without --engine (default 1,2,…)"
@@ -243,6 +253,8 @@ def _quiet_interrupts(previous: Any) -> Any:
 
 
 def _monitor(args: argparse.Namespace) -> None:
+    import numpy as np
+
     from ..diagnostics.monitor import DEFAULT_THRESHOLD, MisfireMonitor, NoteKind, ToothLines, check_wheel
     from ..errors import EngineError, LogError
     from ..fileio import INTERRUPT
@@ -260,9 +272,12 @@ def _monitor(args: argparse.Namespace) -> None:
     name = "standard input" if args.log == "-" else args.log
     # the wheel and the firings checked before anything is read (a wheel too coarse for the
     # monitor refused at once, not at the first edges)
-    check_wheel(
-        args.wheel, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes
-    )
+    auto = args.wheel.strip().lower() == "auto"
+    if not auto:
+        check_wheel(
+            args.wheel, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes
+        )
+    waiting: list = []  # with --wheel auto, the edges read before the wheel is found
     source = _Source(args.log, args.follow)
     lines = ToothLines(name=name)
     monitor: MisfireMonitor | None = None
@@ -276,7 +291,23 @@ def _monitor(args: argparse.Namespace) -> None:
             for note in monitor.pop_notes():
                 show(note.kind.value, note.text, "note" if note.kind is NoteKind.FOUND else "warning")
 
-    def start() -> MisfireMonitor:
+    def found_wheel(times) -> str:
+        """The wheel of the edges read so far, found as ``rotor analyze`` finds it; a note says which."""
+        from ..logs.reader import Log
+        from ..logs.recording import PatternReading, read_wheel
+
+        reading = read_wheel(Log.from_arrays(tooth_time_s=times), "auto", name=name)
+        if isinstance(reading, PatternReading):
+            raise LogError(
+                f"{name}: the log's wheel is the {reading.pattern.name} pattern; the monitor follows missing-tooth "
+                f"wheels (--wheel N-M, e.g. 60-2)"
+            )
+        spec = reading.wheel.spec
+        check_wheel(spec, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes)
+        show("wheel", f"wheel {spec} found from the log's first {times.size} edges (--wheel {spec} pins it)", "note")
+        return spec
+
+    def start(wheel: str) -> MisfireMonitor:
         tdc = args.tdc_deg
         if tdc is None and "tdc_after_gap_deg" in lines.stated:
             try:
@@ -292,7 +323,7 @@ def _monitor(args: argparse.Namespace) -> None:
         if parity is None:
             parity = 1 if lines.stated.get("firing_parity", "0").strip() == "1" else 0
         return MisfireMonitor(
-            args.wheel,
+            wheel,
             tdc_deg=tdc,
             engine=engine,
             cylinders=args.cylinders,
@@ -308,11 +339,45 @@ def _monitor(args: argparse.Namespace) -> None:
         times, notes = lines.feed(text, final=final)
         for note in notes:
             show(note.kind.value, note.text, "note" if note.kind is NoteKind.UNITS else "warning")
+        if monitor is None and auto:
+            if times.size:
+                waiting.append(times)
+            held = sum(w.size for w in waiting)
+            if held < AUTO_EDGES and not (final and held):
+                return
+            times = np.concatenate(waiting)
+            waiting.clear()
+            monitor = start(found_wheel(times))
+            emit(monitor.feed(times))
+            return
         if times.size:
             if monitor is None:
-                monitor = start()
+                monitor = start(args.wheel)
             emit(monitor.feed(times))
 
+    if args.log != "-" and not args.follow and _a_recording(args.log):
+        # a capture or bench file (several columns): read through the stages `rotor analyze` uses,
+        # and its wheel's edges, as placed, followed as tooth times
+        from ..logs.reader import read_log
+        from ..logs.recording import PatternReading, read_wheel
+
+        recording = read_log(args.log)
+        reading = read_wheel(recording, args.wheel, name=os.path.basename(args.log))
+        if isinstance(reading, PatternReading):
+            raise LogError(
+                f"{name}: the recording's wheel is the {reading.pattern.name} pattern; the monitor follows "
+                f"missing-tooth wheels (--wheel N-M, e.g. 60-2)"
+            )
+        for note in recording.notes:
+            show("reading", note, "note")
+        spec = reading.wheel.spec
+        check_wheel(spec, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes)
+        show("wheel", f"wheel {spec}, {reading.edge or 'tooth'} edges, as `rotor analyze` reads the file", "note")
+        monitor = start(spec)
+        source.close()
+        emit(monitor.feed(np.asarray(reading.track.t, dtype=np.float64)))
+        _close(monitor, args, lines, name, emit)
+        return
     try:
         while True:
             text = source.read()
@@ -330,6 +395,33 @@ def _monitor(args: argparse.Namespace) -> None:
         source.close()
     if monitor is None:
         raise LogError(f"{name}: no tooth time in the input")
+    _close(monitor, args, lines, name, emit)
+
+
+def _a_recording(path: str) -> bool:
+    """Whether the file's first row of numbers holds several columns (a capture or a bench
+    recording), not tooth times one per line."""
+    import re
+
+    with open(path, "rb") as f:
+        head = f.read(65536).decode("utf-8", "replace")
+    for line in re.split(r"\r\n|\r|\n", head)[:50]:
+        fields = [x for x in re.split(r"[,;\t ]+", line.strip()) if x]
+        if not fields or fields[0].startswith("#"):
+            continue
+        try:
+            [float(x) for x in fields]
+        except ValueError:
+            continue  # a header line: the first row of numbers decides
+        return len(fields) > 1
+    return False
+
+
+def _close(monitor, args, lines, name: str, emit) -> None:
+    """The last verdicts, the refusal where nothing was judged, and the summary."""
+    from ..errors import LogError
+    from .output import json_line
+
     emit(monitor.close())
     result = monitor.result()
     why = monitor.nothing_judged_reason()

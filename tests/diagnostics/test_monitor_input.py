@@ -13,6 +13,8 @@ import time
 import tracemalloc
 
 import numpy as np
+
+import rotor
 import pytest
 from conftest import run_cli
 
@@ -115,19 +117,27 @@ def test_monitor_refuses_times_too_far_from_zero_to_resolve_the_teeth(recorded, 
     assert {(r["cycle"], r["cylinder"]) for r in rows if r["misfire"]} == MISFIRES
 
 
-def test_monitor_refuses_a_sampled_signal_log(tmp_path, capsys):
-    """A sampled signal (rows of time and voltages, or a logic analyser's columns) is not tooth
-    times: refused in one line at its first row (each row's time was read as an edge, and a
-    warning printed every 119 rows)."""
+def test_monitor_reads_a_recording_of_several_columns_as_analyze_does(tmp_path, capsys):
+    """A sampled signal or a logic analyser's columns is read through the stages `rotor analyze`
+    uses (channels, edges, wheel), not line by line as tooth times (each row's time was read as
+    an edge, and a warning printed every 119 rows): a recording too short for its wheel is
+    refused in that reading's one line, a capture is judged."""
     t = np.arange(0, 0.05, 1e-5)
     analog = tmp_path / "analog.txt"
     np.savetxt(analog, np.column_stack([t, np.sin(t * 6000), np.cos(t * 100)]), delimiter="\t", fmt="%.6e")
-    saleae = tmp_path / "saleae.csv"
-    saleae.write_text("Time[s], Channel 0, Channel 1\n" + "".join(f"{x:.6f}, {i % 2}, 1\n" for i, x in enumerate(t)))
-    for path, words in ((analog, "3 columns of numbers"), (saleae, "'Time[s]', 'Channel 0', 'Channel 1'")):
-        code, out, err = run_cli(capsys, "monitor", path, "--cylinders", "1", "--wheel", "60-2", "--tdc-deg", "0")
-        line = one_error_line(err)
-        assert code == 2 and out == "" and words in line and "rotor analyze" in line
+    code, out, err = run_cli(capsys, "monitor", analog, "--cylinders", "1", "--wheel", "60-2", "--tdc-deg", "0")
+    line = one_error_line(err)
+    assert code == 2 and out == "" and "60-2" in line and "Traceback" not in err
+    rec = tmp_path / "rec.csv"
+    assert run_cli(capsys, "simulate", "4chn15", "--cycles", "12", "--record", rec, "--wheel", "60-2")[0] == 0
+    times = rotor.read_log(rec)["tooth_time_s"]
+    level = np.ones(2 * times.size)
+    level[1::2] = 0
+    rows = np.column_stack([np.sort(np.r_[times, times + 2e-4]), level])
+    capture = tmp_path / "capture.csv"
+    capture.write_text("Time[s], Channel 0\n" + "".join(f"{a:.7f}, {int(b)}\n" for a, b in rows))
+    code, out, err = run_cli(capsys, "monitor", capture, "--engine", "4chn15", "--tdc-deg", "29.4")
+    assert code == 0 and "firings judged" in out and "wheel 60-2" in err, err
 
 
 # ---------------------------------------------------------------------- engine and wheel
