@@ -13,11 +13,10 @@ import time
 import tracemalloc
 
 import numpy as np
-
-import rotor
 import pytest
 from conftest import run_cli
 
+import rotor
 from rotor import cli
 from rotor.diagnostics.monitor import (
     MIN_TEETH_PER_SEGMENT,
