@@ -33,7 +33,7 @@ DOCUMENTED = [
     ("ecu-triggers/3000gt.csv", "time,encoder_d", "mitsubishi-6g72-cam", "both", 164, 194),
     ("ecu-triggers/4g63-cranking.csv", "time,-,encoder_d", "mitsubishi-4g63-cam", "both", 133, 218),
     ("ecu-triggers/cranking_na_3.csv", "time,-,encoder_d,-,-", "mazda-na-cas-1", "both", 225, 1100),
-    ("ecu-triggers/nb2_rev-d-1.csv", "time,-,encoder_d,-,-", "mazda-nb-cam", "rising", 240, 250),
+    ("ecu-triggers/nb2_rev-d-1.csv", "time,encoder_d,-,-,-", "mazda-nb-crank", "rising", 240, 250),
     ("ecu-triggers/nb2_rev-d-2.csv", "time,-,encoder_d,-,-", "mazda-nb-cam", "rising", 235, 235),
     ("ecu-triggers/cas_nissan_24_plus_1.csv", "time,encoder_d,-", "12-tooth", "rising", 806, 1063),
     ("ecu-triggers/chrysler-phaser.csv", "time,encoder_d", None, "rising", 787, 821),
@@ -51,9 +51,14 @@ def as_a_user(path: Path) -> dict:
     t0 = time.perf_counter()
     try:
         a = rotor.analyze_log(path)
+        wheel = a.pattern.pattern.name if a.pattern is not None else a.track.wheel.spec
         return {
             "read": True,
-            "mean_rpm": float(np.mean(a.mean_omega) * 60 / (2 * np.pi)),
+            "wheel": wheel,
+            "channel": a.pattern.channel if a.pattern is not None else None,
+            "cycles": a.cycles,
+            "median_cycle_rpm": float(np.median(a.mean_rpm)),
+            "delta_median": float(np.median(a.delta)),
             "s": time.perf_counter() - t0,
         }
     except Exception as e:  # the refusal's message is the result
@@ -112,7 +117,7 @@ def main() -> int:
         rows.append(row)
         u, d = row["as_a_user"], row["documented"]
         print(
-            f"{rel:48s} user: {'read' if u['read'] else 'refused':7s} documented: "
+            f"{rel:48s} user: {u.get('wheel', 'refused'):22s} documented: "
             + (
                 f"{d['pattern']} {d['rpm_median']:.0f} rpm (README {lo}–{hi})"
                 if d.get("decoded")
@@ -123,9 +128,18 @@ def main() -> int:
         path = DATA / "tue-4gb10" / f"{name}.txt"
         rows.append({"file": f"tue-4gb10/{name}.txt", "as_a_user": as_a_user(path)})
         print(f"tue-4gb10/{name}.txt user: {'read' if rows[-1]['as_a_user']['read'] else 'refused'}")
+    for r in rows:
+        u, d = r["as_a_user"], r.get("documented", {})
+        if u["read"] and d.get("pattern"):
+            u["as_documented"] = u["wheel"] == d["pattern"]
+            lo, hi = d.get("readme_rpm", [None, None])
+            if lo is not None:
+                u["within_readme_range_2pct"] = bool(0.98 * lo <= u["median_cycle_rpm"] <= 1.02 * hi)
     summary = {
         "files": len(rows),
         "read_as_a_user": sum(r["as_a_user"]["read"] for r in rows),
+        "read_as_a_user_as_documented": sum(bool(r["as_a_user"].get("as_documented")) for r in rows),
+        "read_as_a_user_within_range": sum(bool(r["as_a_user"].get("within_readme_range_2pct")) for r in rows),
         "decoded_as_documented": sum(bool(r.get("documented", {}).get("decoded")) for r in rows),
         "within_readme_range": sum(bool(r.get("documented", {}).get("median_within_readme_range_2pct")) for r in rows),
     }
