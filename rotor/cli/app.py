@@ -34,7 +34,7 @@ from ..fileio import INTERRUPT
 
 # light: see tests/cli/test_cli_latency.py
 from . import demo, design, diagnostics, engine, logs, monitor, report, run, torsion
-from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text
+from .args import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SOLVER, EXIT_USAGE, Parser, error_text, terminal_safe
 
 __all__ = [
     "COMMAND_GROUPS",
@@ -256,7 +256,7 @@ def report_error(e: BaseException, debug: bool = False, sizes: Sequence[str] = (
         print(f"rotor: error: {_one_line(e)}", file=sys.stderr)
         return EXIT_USAGE
     if isinstance(e, OSError) and not isinstance(e, InternalError):
-        msg = f"{e.filename}: {e.strerror}" if e.filename and e.strerror else _one_line(e)
+        msg = terminal_safe(f"{e.filename}: {e.strerror}") if e.filename and e.strerror else _one_line(e)
         print(f"rotor: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
     if type(e).__module__.split(".")[0] not in ("jax", "jaxlib") and isinstance(e, ValueError):
@@ -264,7 +264,7 @@ def report_error(e: BaseException, debug: bool = False, sizes: Sequence[str] = (
             print(f"rotor: error: {_one_line(e)}", file=sys.stderr)
             return EXIT_USAGE
     print(
-        f"rotor: internal error: this is a bug in rotor: {type(e).__name__}: {_brief(e)} "
+        f"rotor: internal error: this is a bug in rotor: {type(e).__name__}: {terminal_safe(_brief(e))} "
         "(run again with --debug for the traceback; please report it)",
         file=sys.stderr,
     )

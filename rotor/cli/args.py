@@ -154,7 +154,22 @@ def error_text(e: BaseException) -> str:
         text = f"--{argument.replace('_', '-')} {text[len(argument) + 1 :]}"
     if hasattr(e, "argument"):  # a library error (rotor.RotorError)
         text = _ARGUMENT_SETTING.sub(_flag, text)
-    return text
+    return terminal_safe(text)
+
+
+MAX_MESSAGE_CHARS = 800
+"""The longest error line printed [characters]; a longer one (a log of 10 000 columns named)
+is cut, saying how long it was."""
+
+
+def terminal_safe(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """``text`` as one line a terminal shows as it is: control characters (an escape, a
+    carriage return, a line feed in a file's name) written as their escapes, and cut to
+    ``limit`` characters, saying so."""
+    out = "".join(ch if ch == "\t" or (ch.isprintable() or ch == " ") else ascii(ch)[1:-1] for ch in text)
+    if len(out) > limit:
+        out = out[: limit - 40].rstrip() + f" … ({len(out)} characters in all)"
+    return out
 
 
 # ----------------------------------------------------------------------------- types

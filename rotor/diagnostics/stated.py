@@ -27,6 +27,8 @@ def stated_phase(path: str | os.PathLike, max_lines: int = 20) -> tuple[float, i
     Written by :func:`rotor.diagnostics.record.record_run`, so that a recorded run is read
     back at its own phase."""
     found: dict[str, str] = {}
+    if not os.path.isfile(path):
+        return None  # a folder, a named pipe, a device: not opened here (a pipe would block)
     try:
         with open(path, encoding="utf-8", errors="replace") as f:
             for _, line in zip(range(max_lines), f):

@@ -552,6 +552,21 @@ def _read_text(path: str) -> str:
     ``path`` for a missing, unreadable, binary or too large file)."""
     if os.path.isdir(path):
         raise LogError(f"{path}: is a folder, not a log file")
+    if os.path.exists(path) and not os.path.isfile(path):
+        import stat
+
+        mode = os.stat(path).st_mode
+        kind = (
+            "a named pipe"
+            if stat.S_ISFIFO(mode)
+            else "a device"
+            if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+            else "a socket"
+        )
+        raise LogError(
+            f"{path}: is {kind}, not a log file: save the recording to a file first (rotor monitor reads a stream: "
+            f"rotor monitor - < {os.path.basename(path)})"
+        )
     try:
         size = os.path.getsize(path)
         with open(path, "rb") as f:

@@ -570,3 +570,23 @@ def test_running_out_of_memory_names_only_the_commands_own_options(capsys, monke
     monkeypatch.setattr("rotor.engine.table.crank_table", exhausted)
     rc, _, err = run_cli(capsys, "table", "4chn15")
     assert_refused(rc, err, "ran out of memory: reduce the size of the run (--step, or a smaller input")
+
+
+def test_a_named_pipe_given_as_a_log_is_named_as_one(tmp_path: Path, capsys) -> None:
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    rc, _, err = run_cli(capsys, "analyze", str(fifo))
+    assert rc == 2 and "is a named pipe, not a log file" in err and len(err.strip().splitlines()) == 1
+
+
+def test_control_characters_of_a_name_reach_the_terminal_escaped(tmp_path: Path, capsys) -> None:
+    name = tmp_path / "a\x1b[31mred\rname.csv"
+    rc, _, err = run_cli(capsys, "analyze", str(name))
+    assert rc == 2 and "\x1b" not in err and "\r" not in err and "\\x1b" in err
+
+
+def test_an_error_naming_ten_thousand_columns_is_cut_to_a_line(tmp_path: Path, capsys) -> None:
+    wide = tmp_path / "wide.csv"
+    wide.write_text(",".join(f"c{i}" for i in range(10_000)) + "\n" + ",".join(["1"] * 10_000) + "\n")
+    rc, _, err = run_cli(capsys, "analyze", str(wide), "--columns", ",".join(["bogus"] * 10_000))
+    assert rc == 2 and len(err) < 1000 and "characters in all" in err
