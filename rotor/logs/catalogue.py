@@ -62,7 +62,7 @@ def _gm24(short: float) -> list[float]:
     return [short if b == "1" else 15.0 - short for b in _GM24X_NARROW]
 
 
-_VQ30_ENDS = (52.0, 61.0, 70.0, 115.0, 124.0, 133.0, 142.0, 151.0, 160.0, 176.0, 233.0)
+_VQ30_ENDS: tuple[float, ...] = (52.0, 61.0, 70.0, 115.0, 124.0, 133.0, 142.0, 151.0, 160.0, 176.0, 233.0)
 _VQ30_ENDS += (242.0, 251.0, 260.0, 291.0, 300.0, 309.0, 318.0, 327.0, 351.0, 360.0)
 """Nissan VQ30 cam: where its 21 teeth end [cam deg]."""
 

@@ -90,6 +90,13 @@ def recognise_columns(
     if n_rows < 3:
         raise LogError(f"{source}: {n_rows} rows; far too short to tell its columns apart")
     inc = [bool(np.all(np.diff(data[:, j]) > 0)) for j in range(n_cols)]
+    for j in range(n_cols):
+        if names[j] and _TIME.fullmatch(str(names[j]).strip()) and not inc[j]:
+            i = int(np.flatnonzero(np.diff(data[:, j]) <= 0)[0]) + 1
+            raise LogError(
+                f"{source}: column {names[j]!r} is named a time but does not increase (data row {i + 1}: "
+                f"{data[i, j]:.9g} after {data[i - 1, j]:.9g}); sort the rows, or name the columns"
+            )
     cand = [j for j in range(n_cols) if inc[j]]
     if not cand:
         raise LogError(
@@ -147,7 +154,7 @@ def recognise_columns(
         ]
         dt = np.diff(t)
         even = dt.size > 10 and float(np.percentile(dt, 99)) < 1.5 * float(np.median(dt))
-        if rpm and not even:
+        if rpm:
             out[rpm[0]] = "rpm"
             said.append(f"{_shown(names[rpm[0]], rpm[0])} → rpm (named so; speeds)")
             analog = [j for j in analog if j != rpm[0]]

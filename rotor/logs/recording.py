@@ -72,8 +72,9 @@ class PatternReading:
         return self.fit.pattern
 
     def pins(self) -> str:
-        """The options that read the recording the same way again."""
-        return f"--wheel {self.pattern.name}"
+        """The argument that reads the recording the same way again (``wheel='mazda-nb-cam'``;
+        the command line prints it as its flag)."""
+        return f"wheel={self.pattern.name!r}"
 
     def notes(self) -> tuple[str, ...]:
         out = []
