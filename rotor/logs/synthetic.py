@@ -39,6 +39,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -47,12 +48,14 @@ import numpy as np
 from ..checks import check_size
 from ..errors import LogError
 from ..units import RAD_S_PER_RPM
+from .reader import Log
 from .wheel import Wheel, parse_wheel
 
 __all__ = [
     "SPEED_KINDS",
     "STANDARD_LAYOUTS",
     "wheel_with_layout",
+    "pattern_capture",
     "SpeedProfile",
     "speed_profile",
     "SimulatedSignal",
@@ -976,3 +979,63 @@ def write_log(path: str | os.PathLike, signal: SimulatedSignal, *, rows_per_bloc
             sep = np.full((tb.shape[0], 1), ord("\t"), np.uint8)
             eol = np.full((tb.shape[0], 1), ord("\n"), np.uint8)
             f.write(np.concatenate([tb, sep, vb, eol], axis=1).tobytes())
+
+
+def pattern_capture(
+    pattern: Any,
+    *,
+    rpm: float = 900.0,
+    turns: int = 14,
+    swing: float = 0.03,
+    jitter_deg: float = 0.0,
+    displace: float = 0.0,
+    glitch: bool = False,
+    invert: bool = False,
+    seed: int = 0,
+) -> Log:
+    """A logic-analyser export of a trigger pattern (:class:`rotor.logs.patterns.TriggerPattern`):
+    the time [s] and the 0/1 level at each transition, as a :class:`rotor.logs.reader.Log`
+    (``time``, ``encoder_d``), with the defects real captures carry.
+
+    **Arguments:** ``rpm`` [rev/min], rising 10 % over the record; ``turns`` of the pattern;
+    ``swing``: the speed's swing twice a revolution [-] (a four-cylinder's compressions);
+    ``jitter_deg``: a normal error of each edge's angle [deg]; ``displace``: a missing-tooth
+    wheel's edges on either side of its widest gap moved into it by this share of a pitch [-];
+    ``glitch``: a 1 µs pulse in the middle; ``invert``: the levels inverted; ``seed``. Where the
+    pattern states one polarity only, the other's edges follow at 0.3 of the shortest spacing
+    (at most 4°)."""
+    rng = np.random.default_rng(seed)
+    P = pattern.period_deg
+    r = np.asarray(pattern.rising_deg)
+    f = np.asarray(pattern.falling_deg)
+    if f.size == 0:
+        f = (r + min(np.diff(np.r_[r, r[0] + P]).min() * 0.3, 4.0)) % P
+    if r.size == 0:
+        r = (f - min(np.diff(np.r_[f, f[0] + P]).min() * 0.3, 4.0)) % P
+    if displace and re.fullmatch(r"\d+(-\d+)+", pattern.name):
+        # a toothed wheel's edges on either side of its gap moved into it by ``displace`` of a pitch
+        a = pattern.angles_deg()
+        gaps = np.diff(np.r_[a, a[0] + P])
+        k = int(np.argmax(gaps))
+        pitch = float(np.median(gaps))
+        shift = {float(a[k]): displace * pitch, float(a[(k + 1) % a.size]): -displace * pitch}
+        r = np.array([x + shift.get(float(x), 0.0) if pattern.read in ("rising", "both") else x for x in r]) % P
+        f = np.array([x + shift.get(float(x), 0.0) if pattern.read in ("falling", "both") else x for x in f]) % P
+    ang = np.concatenate(
+        [(r[None, :] + P * np.arange(turns)[:, None]).ravel(), (f[None, :] + P * np.arange(turns)[:, None]).ravel()]
+    )
+    lev = np.concatenate([np.ones(r.size * turns), np.zeros(f.size * turns)])
+    ang = ang + 3.0 + rng.normal(0.0, jitter_deg, ang.size)
+    order = np.argsort(ang)
+    ang, lev = ang[order], lev[order]
+    w0 = rpm * 6.0
+    t = np.linspace(0.0, 1.2 * ang.max() / w0, 400_000)
+    theta = w0 * t * (1 + 0.1 * t / t[-1]) + swing * 360 / (4 * math.pi) * np.sin(4 * math.pi * w0 * t / 360)
+    te = np.interp(ang, theta, t) + 1e-3
+    if glitch:  # a pulse of a microsecond in the middle
+        i = te.size // 2
+        te = np.insert(te, i, [te[i - 1] + 0.4 * (te[i] - te[i - 1]), te[i - 1] + 0.4 * (te[i] - te[i - 1]) + 1e-6])
+        lev = np.insert(lev, i, [1 - lev[i - 1], lev[i - 1]])
+    if invert:
+        lev = 1 - lev
+    return Log.from_arrays(time=np.r_[0.0, te], encoder_d=np.r_[1 - lev[0], lev])
