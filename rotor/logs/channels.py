@@ -32,6 +32,8 @@ from ..errors import LogError
 
 __all__ = ["recognise_columns", "RIVAL", "CAM_SHARE", "PRESSURE_SHARE"]
 
+RECOGNITION_ROWS = 1_000_000
+"""Of a long recording, the channels are told apart on its first this many rows [-]."""
 RIVAL = 0.8
 """A second channel with at least this share of the wheel's transitions (or crossings) could
 be the wheel too: the choice is refused, naming both [-]."""
@@ -85,6 +87,9 @@ def recognise_columns(
     Raises :class:`LogError` naming the columns and what each looks like where no time, or
     no signal, can be told, or where two columns could be the wheel."""
     n_rows, n_cols = data.shape
+    if n_rows > RECOGNITION_ROWS:  # the channels told apart on the start of a long recording
+        data = data[:RECOGNITION_ROWS]
+        n_rows = RECOGNITION_ROWS
     names = list(header) if header is not None else [None] * n_cols
     units_l = list(units) if units is not None else [None] * n_cols
     if n_rows < 3:
