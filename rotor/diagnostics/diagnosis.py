@@ -64,7 +64,7 @@ from ..logs.analysis import LogAnalysis, PhaseSource, analyze_log
 from ..logs.reader import read_log
 from ..logs.recording import PatternReading, read_wheel
 from ..logs.track import WheelReading
-from ..logs.wheel import ToothErrors, parse_wheel
+from ..logs.wheel import TooFewOrders, ToothErrors, parse_wheel
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
 from .calibration_record import Calibration, check_argument_types, preset_calibration
@@ -524,6 +524,16 @@ class _Reader:
         engine = self.engine
         cr = getattr(engine.pressure, "compression_ratio", None)
         rod_ratio = float(engine.geometry.stroke_m) / 2 / float(engine.geometry.rod_length_m)
+        try:
+            return self._analysis(tdc, fire, teeth, cr, rod_ratio)
+        except TooFewOrders as e:
+            raise LogError(
+                f"{str(e).split(';')[0]}; give a calibration made on this wheel from a coast-down or motored run "
+                "(calibration=FILE)"
+            ) from None
+
+    def _analysis(self, tdc, fire, teeth, cr, rod_ratio) -> LogAnalysis:
+        engine = self.engine
         return analyze_log(
             self.reading if self.reading is not None else self.log,
             self.wheel,

@@ -61,10 +61,18 @@ __all__ = [
     "repairs_summary",
     "ToothErrors",
     "estimate_tooth_errors",
+    "TooFewOrders",
     "firing_orders",
 ]
 
 TWO_PI = 2.0 * np.pi
+
+
+class TooFewOrders(LogError):
+    """A firing run's tooth errors cannot be estimated: the engine's orders leave too few of
+    the wheel's (a calibration from a coast-down or motored run gives them)."""
+
+
 ENGINE_ORDER_FACTOR = 4.0  # an order is the engine's if its amplitude is this many times the floor
 
 
@@ -897,7 +905,7 @@ def estimate_tooth_errors(
         keep = tuple(sorted(set(keep) | set(firing_orders(cylinders, strokes, w.teeth))))
         if len(keep) > (int(np.count_nonzero(clean)) - 1) // 2 - 2:
             which = f"the engine's orders {keep[0]} … {keep[-1]} leave" if keep else "the wheel has"
-            raise LogError(
+            raise TooFewOrders(
                 f"tooth errors: {which} too few orders to estimate from {E} teeth; give a calibration "
                 f"(tooth_errors=FILE), engine_orders, or tooth_errors=None"
             )

@@ -169,3 +169,10 @@ def test_a_wheel_of_few_teeth_recorded_reads_back_when_named_and_is_refused_in_w
     assert code == 0 and json.loads(out)["wheel"]["spec"] == wheel, err
     code, _, err = run_cli(capsys, "analyze", str(log))
     assert code in (0, 2) and "Traceback" not in err and len(err.strip().splitlines()) <= 1
+
+
+def test_diagnose_of_a_wheel_whose_errors_a_firing_run_cannot_give_names_its_own_option(tmp_path, capsys):
+    log = tmp_path / "rec.csv"
+    assert run_cli(capsys, "simulate", "4chn15", "--cycles", "6", "--record", str(log), "--wheel", "36-2-2-2")[0] == 0
+    code, _, err = run_cli(capsys, "diagnose", str(log), "--engine", "4chn15")
+    assert code == 2 and "--calibration FILE" in err and "--tooth-errors" not in err
