@@ -27,6 +27,7 @@ import threading
 import traceback
 import warnings
 from collections.abc import Sequence
+from typing import Any
 
 from ..cache import ask_read_ahead, enable_compilation_cache
 from ..errors import InternalError, RotorError, SolverError
@@ -162,6 +163,20 @@ def _raised_outside(e: BaseException) -> bool:
     top = str(tb.tb_frame.f_globals.get("__name__", "")).split(".")[0]
     where = tb.tb_frame.f_code.co_filename.replace(os.sep, "/")
     return top != "rotor" and ("/site-packages/" in where or "/dist-packages/" in where)
+
+
+def _quiet_interrupts(previous: Any) -> Any:
+    """An unraisable-exception hook that drops a Ctrl-C Python could not raise (one landing in a
+    garbage collector's callback, which it would print with a traceback), noting it as the
+    interrupt flag so the run still ends with 130; anything else goes to ``previous``."""
+
+    def hook(unraisable: Any) -> None:
+        if isinstance(unraisable.exc_type, type) and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            INTERRUPT.set()
+            return
+        previous(unraisable)
+
+    return hook
 
 
 def _one_line(e: BaseException) -> str:
@@ -418,6 +433,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     INTERRUPT.clear()
     MADE_FOLDERS.clear()
     previous = _catch_interrupts()
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = _quiet_interrupts(unraisable)
     task, finished = None, False
     try:
         words = _join_columns(list(sys.argv[1:] if argv is None else argv))
@@ -456,5 +473,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             programs = sys.modules.get("rotor.programs")  # imported where the command computed with JAX
             if programs is not None:  # the reading ahead stopped; a finished run's programs noted
                 programs.remember_programs(task if finished else None)
+        sys.unraisablehook = unraisable
         if previous is not None:
             signal.signal(signal.SIGINT, previous)  # type: ignore[arg-type]

@@ -229,27 +229,7 @@ def cmd_monitor(args: argparse.Namespace) -> None:
         raise EngineError("--cylinders and --firing-order are for a monitor without --engine: give one or the other")
     if args.follow and args.log == "-":
         raise EngineError("--follow follows a file as it grows; standard input is followed to its end anyway")
-    # a Ctrl-C that lands in a garbage collector's callback cannot be raised there: Python
-    # prints it as an ignored exception, with a traceback; here it is dropped quietly (the
-    # command line's handler has noted it: the run still ends with 130)
-    previous = sys.unraisablehook
-    sys.unraisablehook = _quiet_interrupts(previous)
-    try:
-        _monitor(args)
-    finally:
-        sys.unraisablehook = previous
-
-
-def _quiet_interrupts(previous: Any) -> Any:
-    def hook(unraisable: Any) -> None:
-        from ..fileio import INTERRUPT
-
-        if isinstance(unraisable.exc_type, type) and issubclass(unraisable.exc_type, KeyboardInterrupt):
-            INTERRUPT.set()
-            return
-        previous(unraisable)
-
-    return hook
+    _monitor(args)  # a Ctrl-C in a garbage collector's callback: dropped quietly by rotor.cli.app.main
 
 
 def _monitor(args: argparse.Namespace) -> None:
