@@ -354,6 +354,11 @@ def _dask_client(address: str) -> Any:
         return Client(address, timeout=10)
     except (OSError, TimeoutError, ValueError) as e:
         raise EngineError(f"--scheduler {address}: cannot reach the Dask scheduler ({e})") from None
+    except (MemoryError, Exception) as e:  # noqa: BLE001 - whatever a server that is no scheduler makes the client raise
+        raise EngineError(
+            f"--scheduler {address}: what answers there is not a Dask scheduler ({type(e).__name__}); give the "
+            "address a Dask scheduler prints (tcp://HOST:8786)"
+        ) from None
 
 
 def for_each_log(

@@ -591,3 +591,35 @@ def test_an_error_naming_ten_thousand_columns_is_cut_to_a_line(tmp_path: Path, c
     wide.write_text(",".join(f"c{i}" for i in range(10_000)) + "\n" + ",".join(["1"] * 10_000) + "\n")
     rc, _, err = run_cli(capsys, "analyze", str(wide), "--columns", ",".join(["bogus"] * 10_000))
     assert rc == 2 and len(err) < 1000 and "characters in all" in err
+
+
+def test_a_scheduler_address_where_no_dask_scheduler_answers_is_named(tmp_path: Path, capsys) -> None:
+    import socket
+    import threading
+
+    pytest.importorskip("distributed")
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))  # this machine only, one connection, stops by itself
+    server.listen(1)
+    server.settimeout(20)
+    port = server.getsockname()[1]
+
+    def answer_once() -> None:
+        try:
+            conn, _ = server.accept()
+            conn.settimeout(5)
+            conn.recv(100)
+            conn.sendall(b"HTTP/1.0 200 OK\r\n\r\nnot a scheduler")
+            conn.close()
+        except OSError:
+            pass
+        finally:
+            server.close()
+
+    thread = threading.Thread(target=answer_once, daemon=True)
+    thread.start()
+    log = tmp_path / "teeth.csv"
+    log.write_text("tooth_time_s\n" + "".join(f"{0.001 * i:.6f}\n" for i in range(200)))
+    rc, _, err = run_cli(capsys, "analyze", str(log), str(log), "--scheduler", f"tcp://127.0.0.1:{port}")
+    thread.join(timeout=10)
+    assert rc == 2 and "is not a Dask scheduler" in err and "memory" not in err.split("(")[0]
