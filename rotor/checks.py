@@ -1,13 +1,22 @@
 """Validation helpers shared by the parameter modules.
 
-Checks run only on concrete values: inside ``jax.jit``/``jax.grad`` the fields are
-tracers and were already checked when the object was first built from numbers. JAX is
-imported where a JAX array is made: the size and number checks of a log's reading need none.
+Concrete values are checked in NumPy when they arrive (:func:`check_finite`,
+:func:`check_positive`: a :class:`rotor.EngineError` at once). A traced value (inside
+``jax.jit``, ``jax.vmap`` or ``jax.grad``) has no value to look at while the program is
+built: the public functions check it with :func:`guard` (``eqx.error_if``), which raises
+when the compiled program runs, under ``vmap`` if any item fails, under ``grad`` on the
+primal value. They do so for the values a caller outside rotor hands them
+(:func:`called_from_outside`): rotor's own kernels pass on values checked on the host, or
+iterates of a solver that looks at them itself, and a program with no host callback in it
+can be kept on disk (:mod:`rotor.programs`). JAX is imported where a JAX array is made:
+the size and number checks of a log's reading need none.
 """
 
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -19,6 +28,148 @@ def is_tracer(x) -> bool:
     that has not imported JAX."""
     jax = sys.modules.get("jax")
     return jax is not None and isinstance(x, jax.core.Tracer)
+
+
+def tracing() -> bool:
+    """Whether JAX is tracing a program now (inside ``jit``, ``vmap``, ``grad``): only then
+    can an argument be a tracer. True where it cannot be told (the caller then looks at
+    every argument)."""
+    jax = sys.modules.get("jax")
+    if jax is None:
+        return False
+    try:
+        from jax._src.core import trace_state_clean
+    except ImportError:  # pragma: no cover - another JAX: look at the arguments instead
+        return True
+    return not trace_state_clean()
+
+
+def has_tracer(tree) -> bool:
+    """Whether any leaf of the pytree ``tree`` is a JAX tracer (False at once where JAX is
+    not tracing)."""
+    if not tracing():
+        return False
+    from .jaxconfig import jax
+
+    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(tree))
+
+
+def called_from_outside(depth: int = 2) -> bool:
+    """Whether the function ``depth − 1`` frames above this one was called from code outside
+    the rotor package (a user's script, notebook or test): its traced arguments are then
+    checked (:func:`guard`). rotor's own modules call the public functions with values they
+    checked on the host, or with a solver's iterates that the solver judges itself."""
+    module = sys._getframe(depth).f_globals.get("__name__", "")
+    return not (module == "rotor" or module.startswith("rotor."))
+
+
+TRACED = "the value traced under jax.jit, vmap or grad is not"
+"""The end of a traced check's message: the value is known only when the program runs."""
+
+
+class TracedChecks:
+    """The traced checks of one call, gathered to be made at once: a program that holds a
+    host callback (``eqx.error_if``) pays a fixed cost each time it runs (about 30 µs on a
+    CPU), however many it holds, so a solver makes all its checks in one (:meth:`tie`), or,
+    asked for a status instead, none (:meth:`valid`)."""
+
+    def __init__(self) -> None:
+        self.items: list[tuple[Any, str]] = []
+
+    def add(self, bad: Any, message: str) -> None:
+        """Record the check ``bad`` (true where it fails) with its one-line ``message``."""
+        self.items.append((bad, message))
+
+    def valid(self) -> Any:
+        """True where every check recorded passes (a traced bool; True with none)."""
+        from .jaxconfig import jnp
+
+        ok = jnp.asarray(True)
+        for bad, _ in self.items:
+            ok = ok & ~jnp.any(jnp.asarray(bad))
+        return ok
+
+    def tie(self, tree: Any, more: Sequence[tuple[Any, str]] = ()) -> Any:
+        """``tree`` with the recorded checks and ``more`` (the same pairs) made in one
+        ``eqx.branched_error_if`` on a scalar zero added to every floating-point leaf: the
+        program raises the message of the first that fails when it runs (under ``vmap``, of
+        any item), or at once where the checks are known while tracing (as under ``grad``);
+        whichever leaf the caller uses carries it, and the leaves it drops cost nothing."""
+        import equinox as eqx
+
+        from .jaxconfig import jax, jnp
+
+        items = [*self.items, *more]
+        if not items:
+            return tree
+        bads = jnp.stack([jnp.any(jnp.asarray(bad)) for bad, _ in items])
+        zero = eqx.branched_error_if(jnp.zeros(()), jnp.any(bads), jnp.argmax(bads), [m for _, m in items])
+
+        def tied(leaf: Any) -> Any:
+            if isinstance(leaf, (jax.Array, np.ndarray)) and jnp.issubdtype(leaf.dtype, jnp.inexact):
+                return leaf + zero.astype(leaf.dtype)
+            return leaf
+
+        return jax.tree_util.tree_map(tied, tree)
+
+
+def guard(x, bad, message: str, checks: TracedChecks | None = None):
+    """``x`` (an array or a pytree of them) with ``eqx.error_if(x, bad, message)`` where
+    ``x`` or ``bad`` is traced: the program raises ``message`` when it runs and ``bad`` is
+    true (any item under ``vmap``; at once where ``bad`` is known while tracing, as under
+    ``grad``); ``x`` itself where both are concrete (the caller checks concrete values at
+    once). With ``checks``, the check is recorded there instead (the caller makes it with
+    the others, :class:`TracedChecks`). The returned value must be the one used
+    afterwards, or the check is dropped with it."""
+    if not (is_tracer(bad) or has_tracer(x)):
+        return x
+    if checks is not None:
+        checks.add(bad, message)
+        return x
+    import equinox as eqx
+
+    from .jaxconfig import jax
+
+    if not any(eqx.is_array(leaf) for leaf in jax.tree_util.tree_leaves(x)):  # a Python number: an array to carry it
+        x = jax.tree_util.tree_map(jax.numpy.asarray, x)
+    return eqx.error_if(x, bad, message)
+
+
+def guard_number(
+    x,
+    name: str,
+    lo: float = -np.inf,
+    hi: float = np.inf,
+    *,
+    above: bool = False,
+    unit: str = "",
+    expected: str = "",
+    checks: TracedChecks | None = None,
+):
+    """``x`` checked where it is traced (:func:`guard`): every element finite and within
+    ``lo`` … ``hi`` (inclusive; ``above``: strictly above ``lo``), or the program raises a
+    one-line message naming ``name`` and what it takes (``expected``, e.g. ``"a crank speed
+    in rpm, e.g. 3000"``; ``unit`` of the bounds); with ``checks``, recorded there. Concrete
+    values pass unchanged: the caller checks them itself."""
+    if not is_tracer(x):
+        return x
+    from .jaxconfig import jnp
+
+    value = jnp.asarray(x)
+    bad = ~jnp.isfinite(value)
+    has_lo, has_hi = bool(np.isfinite(lo)), bool(np.isfinite(hi))
+    if has_lo:
+        bad = bad | ((value <= lo) if above else (value < lo))
+    if has_hi:
+        bad = bad | (value > hi)
+    low = f"above {lo:g}" if above else f"{lo:g} or more"
+    bounds = f" between {lo:g} and {hi:g}" if has_lo and has_hi else f", {low}" if has_lo else ""
+    bounds = bounds if has_lo or not has_hi else f", {hi:g} or less"
+    if above and has_lo and has_hi:
+        bounds = f", above {lo:g} and at most {hi:g}"
+    u = f" {unit}" if unit and (has_lo or has_hi) else ""
+    what = f" ({expected})" if expected else ""
+    return guard(x, bad, f"{name}: must be finite{bounds}{u}{what}; {TRACED}", checks)
 
 
 def as_f64(x):

@@ -42,7 +42,7 @@ from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
 from ..engine.model import Engine, require_engine
-from ..engine.plausible import PLAUSIBLE, check_results_finite, check_speed_rpm, require_number
+from ..engine.plausible import PLAUSIBLE, check_results_finite, check_speed_rpm, require_known, require_number
 from ..errors import EngineError, NoSteadyStateError, SolverError
 from ..plotting.design import plot_disc_flywheel, plot_flywheel_design, plot_textbook_flywheel
 from ..programs import kept_program
@@ -60,6 +60,9 @@ __all__ = [
     "textbook_flywheel",
     "design_flywheel",
     "lightest_disc",
+    "disc_limits",
+    "DiscLimits",
+    "MAX_WIDTH_PER_DIAMETER",
     "inertia_for_delta",
     "with_crankshaft_inertia",
 ]
@@ -142,6 +145,11 @@ DELTA_MIN = 1e-5
 """The smallest target δ a design takes [-]: generator sets, the most demanding, ask for
 about 1/300; at 1e-6 the root find on 4chn15 no longer converges (the δ of the steady
 state nears the solver's own noise), and 1e-5 already asks 700 times 4chn15's inertia."""
+
+
+def _known_values(call: str, **values: Any) -> None:
+    """Refuse a value traced by ``jax.jit``/``vmap``/``grad``, naming ``call(argument)``."""
+    require_known(call, "the design searches on the host, over compiled steady states", **values)
 
 
 def _check_delta(delta: float) -> float:
@@ -277,8 +285,10 @@ def textbook_flywheel(
     **Returns:** a :class:`TextbookFlywheel`.
 
     **Raises:** :class:`rotor.EngineError` for a bad argument; :class:`rotor.NoSteadyStateError`
-    where the engine has no steady state at this point with its own inertia.
+    where the engine has no steady state at this point with its own inertia; a
+    :class:`TypeError` for a value of the wrong type or traced by ``jax.jit``/``vmap``/``grad``.
     """
+    _known_values("textbook_flywheel", engine=engine, delta=delta, rpm=rpm, imep_scale=imep_scale, load=load)
     require_engine(engine, "textbook_flywheel(engine)").check()
     delta = _check_delta(delta)
     _number("diameter_strokes", diameter_strokes, 0.0, hi=100.0)
@@ -304,8 +314,8 @@ def _state(
     steady state with ``[crankshaft] inertia_kgm2 = inertia``, from the prepared tables
     (:class:`DeltaOfInertia`'s own, made by :func:`rotor.prepare` and never changed)."""
     prepared = checked_on_host(prepared)
-    r = steady_state(prepared.with_inertia(inertia), rpm, load, friction=friction, imep_scale=scale)
-    ok = jnp.min(r.omega) > 0.01 * r.mean_omega
+    r = steady_state(prepared.with_inertia(inertia), rpm, load, friction=friction, imep_scale=scale, throw=False)
+    ok = r.converged & (jnp.min(r.omega) > 0.01 * r.mean_omega)
     return jnp.where(ok, r.delta, jnp.nan), r.excess_work_J
 
 
@@ -404,6 +414,8 @@ def inertia_for_delta(
     ``rtol``: Newton tolerance on log J [-]. As :func:`design_flywheel` for one point,
     with the same errors.
     """
+    _known_values("inertia_for_delta", engine=engine, delta=delta, rpm=rpm, imep_scale=imep_scale, load=load)
+    require_engine(engine, "inertia_for_delta(engine)")
     design = design_flywheel(
         engine,
         delta,
@@ -456,8 +468,75 @@ class DiscFlywheel(Result):
         return plot_disc_flywheel(self, ax=ax)
 
 
-def lightest_disc(
-    inertia_kgm2: float,
+MAX_WIDTH_PER_DIAMETER = 1.0
+"""The widest disc :func:`lightest_disc` makes where no width limit is given, as a multiple of
+its outer diameter [-]: a disc is no wider than it is across (wider, it is a drum, and
+needs a larger diameter or a looser target)."""
+
+
+class DiscLimits(NamedTuple):
+    """The limits of a disc flywheel, checked (:func:`disc_limits`): ``limited_by`` (the
+    limit that sets the outer diameter, ``"outer diameter"`` or ``"rim speed"``), the
+    ``outer_diameter_m`` it allows [m], the ``max_width_m`` [m] (the given one, or
+    :data:`MAX_WIDTH_PER_DIAMETER` times the outer diameter: ``width_given`` says which),
+    ``density_kg_m3`` [kg/m³], ``bore_m`` [m] and ``omega`` (the peak speed [rad/s])."""
+
+    limited_by: str
+    outer_diameter_m: float
+    max_width_m: float
+    width_given: bool
+    density_kg_m3: float
+    bore_m: float
+    omega: float
+
+    def largest_inertia_kgm2(self) -> float:
+        """The inertia of the largest disc the limits allow [kg·m²]."""
+        D, d = self.outer_diameter_m, self.bore_m
+        return self.density_kg_m3 * math.pi * self.max_width_m * (D**4 - d**4) / 32
+
+    def what(self) -> str:
+        """The limit that sets the outer diameter, in the arguments' words."""
+        if self.limited_by == "outer diameter":
+            return f"max_outer_diameter_m = {self.outer_diameter_m:.4g} m"
+        return (
+            f"max_rim_speed_m_s = {self.omega * self.outer_diameter_m / 2:.4g} m/s (an outer diameter of "
+            f"{self.outer_diameter_m:.4g} m at the peak speed)"
+        )
+
+    def smallest_diameter_m(self, inertia_kgm2: float) -> float:
+        """The smallest outer diameter [m] at which a disc no wider than the width limit (the
+        given one, else :data:`MAX_WIDTH_PER_DIAMETER` times that diameter) carries
+        ``inertia_kgm2`` [kg·m²]."""
+        rho, d = self.density_kg_m3, self.bore_m
+
+        def inertia(D: float) -> float:
+            width = self.max_width_m if self.width_given else MAX_WIDTH_PER_DIAMETER * D
+            return rho * math.pi * width * (D**4 - d**4) / 32
+
+        lo, hi = d, max(2 * d, self.outer_diameter_m, 1e-3)
+        while inertia(hi) < inertia_kgm2:
+            lo, hi = hi, 2 * hi
+        for _ in range(200):  # bisection: the inertia grows with the diameter
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if inertia(mid) < inertia_kgm2 else (lo, mid)
+            if hi - lo <= 1e-12 * hi:
+                break
+        return hi
+
+    def way_out(self, inertia_kgm2: float) -> str:
+        """What would let a disc carry ``inertia_kgm2`` [kg·m²]: the diameter or rim speed it
+        needs, or a wider disc."""
+        need_D = self.smallest_diameter_m(inertia_kgm2)
+        larger = (
+            f"max_outer_diameter_m ≥ {need_D:.4g} m"
+            if self.limited_by == "outer diameter"
+            else f"max_rim_speed_m_s ≥ {need_D * self.omega / 2:.4g} m/s (an outer diameter of {need_D:.4g} m)"
+        )
+        width = "" if self.width_given else " no wider than it is across"
+        return f"a disc{width} needs {larger}"
+
+
+def disc_limits(
     *,
     peak_rpm: float,
     density_kg_m3: float = CAST_IRON_KG_M3,
@@ -465,24 +544,9 @@ def lightest_disc(
     max_outer_diameter_m: float | None = None,
     max_width_m: float | None = None,
     max_rim_speed_m_s: float | None = None,
-) -> DiscFlywheel:
-    """The lightest disc with inertia ``inertia_kgm2`` [kg·m²] under the limits.
-
-    A disc of outer diameter D, bore d and width b has J = ρπb(D⁴ − d⁴)/32 and mass
-    m = 8J/(D² + d²): for a given inertia the lightest is the largest allowed D, with the
-    width b = 32J/(ρπ(D⁴ − d⁴)). **Arguments:** ``peak_rpm``, the highest crank speed
-    [rev/min] (for the rim speed); ``density_kg_m3`` [kg/m³] (default cast iron 7200);
-    ``bore_m`` [m]; the limits: outer diameter [m], width [m], rim speed [m/s]; at least
-    one of the outer diameter or the rim speed must be given.
-    """
-    J = require_number(inertia_kgm2, "lightest_disc(inertia_kgm2)", "kg·m²")
-    if not (math.isfinite(J) and J > 0):
-        raise EngineError(
-            f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
-            "the target: no flywheel is needed)"
-        )
-    if J > MAX_INERTIA_KGM2:
-        raise EngineError(f"flywheel inertia {J:.4g} kg·m²: above the plausible {MAX_INERTIA_KGM2:g} kg·m²")
+) -> DiscLimits:
+    """The limits of :func:`lightest_disc` checked (units as there): a
+    :class:`rotor.EngineError` or a :class:`TypeError` naming the argument at fault."""
     for name, x, unit in (("density_kg_m3", density_kg_m3, "kg/m³"), ("peak_rpm", peak_rpm, "rpm")):
         v = require_number(x, name, unit)
         if not (v is not None and math.isfinite(v) and v > 0):
@@ -504,8 +568,7 @@ def lightest_disc(
         if limit is not None and not (math.isfinite(limit) and limit > 0):
             raise EngineError(f"{name} = {given!r}: a limit must be positive (or left out)")
     bore = require_number(bore_m, "bore_m", "m")
-    bore_m = bore
-    if not (bore_m >= 0 and math.isfinite(bore_m)):
+    if not (bore >= 0 and math.isfinite(bore)):
         raise EngineError("bore_m: must be a number ≥ 0 [m]")
     omega = rpm_to_rad_s(float(peak_rpm))
     bounds: dict[str, float] = {}
@@ -526,25 +589,68 @@ def lightest_disc(
             f"({MAX_DISC_DIAMETER_M:g} m): check the unit of the limit (max_outer_diameter_m is metres, "
             "max_rim_speed_m_s metres per second), or give a tighter one"
         )
-    if not D**4 - bore_m**4 > 0 or D <= bore_m:
+    if not D**4 - bore**4 > 0 or D <= bore:
         raise EngineError(
-            f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the "
-            f"bore {bore_m:.4g} m"
+            f"the outer diameter allowed by the {limited_by} limit, {D:.4g} m, is not larger than the bore {bore:.4g} m"
         )
-    width = 32 * J / (rho * math.pi * (D**4 - bore_m**4))
-    if max_width_m is not None and width > max_width_m:
-        need_D = (32 * J / (rho * math.pi * max_width_m) + bore_m**4) ** 0.25
-        larger = (
-            f"an outer diameter of {need_D:.4g} m"
-            if limited_by == "outer diameter"
-            else f"a rim speed of {need_D * omega / 2:.4g} m/s"
+    width = MAX_WIDTH_PER_DIAMETER * D if max_width_m is None else float(max_width_m)
+    return DiscLimits(limited_by, D, width, max_width_m is not None, rho, bore, omega)
+
+
+def lightest_disc(
+    inertia_kgm2: float,
+    *,
+    peak_rpm: float,
+    density_kg_m3: float = CAST_IRON_KG_M3,
+    bore_m: float = 0.0,
+    max_outer_diameter_m: float | None = None,
+    max_width_m: float | None = None,
+    max_rim_speed_m_s: float | None = None,
+) -> DiscFlywheel:
+    """The lightest disc with inertia ``inertia_kgm2`` [kg·m²] under the limits.
+
+    A disc of outer diameter D, bore d and width b has J = ρπb(D⁴ − d⁴)/32 and mass
+    m = 8J/(D² + d²): for a given inertia the lightest is the largest allowed D, with the
+    width b = 32J/(ρπ(D⁴ − d⁴)). **Arguments:** ``peak_rpm``, the highest crank speed
+    [rev/min] (for the rim speed); ``density_kg_m3`` [kg/m³] (default cast iron 7200);
+    ``bore_m`` [m]; the limits: outer diameter [m], width [m] (default: the outer
+    diameter, :data:`MAX_WIDTH_PER_DIAMETER`), rim speed [m/s]; at least one of the outer
+    diameter or the rim speed must be given.
+
+    **Raises:** :class:`rotor.EngineError` for a bad argument, and where no disc within the
+    limits carries the inertia (it names the limit and the outer diameter or rim speed
+    that would do); a :class:`TypeError` for a value that is not a number (or is traced by
+    ``jax.jit``/``vmap``/``grad``: the design is computed on the host).
+    """
+    J = require_number(inertia_kgm2, "lightest_disc(inertia_kgm2)", "kg·m²")
+    if not (math.isfinite(J) and J > 0):
+        raise EngineError(
+            f"flywheel inertia {J:.4g} kg·m²: must be positive (the shaft's own inertia already meets "
+            "the target: no flywheel is needed)"
+        )
+    if J > MAX_INERTIA_KGM2:
+        raise EngineError(f"flywheel inertia {J:.4g} kg·m²: above the plausible {MAX_INERTIA_KGM2:g} kg·m²")
+    lim = disc_limits(
+        peak_rpm=peak_rpm,
+        density_kg_m3=density_kg_m3,
+        bore_m=bore_m,
+        max_outer_diameter_m=max_outer_diameter_m,
+        max_width_m=max_width_m,
+        max_rim_speed_m_s=max_rim_speed_m_s,
+    )
+    rho, bore, omega, D, limited_by = lim.density_kg_m3, lim.bore_m, lim.omega, lim.outer_diameter_m, lim.limited_by
+    width = 32 * J / (rho * math.pi * (D**4 - bore**4))
+    if width > lim.max_width_m:
+        allowed = (
+            f"the {lim.max_width_m:.4g} m allowed; allow a width of {width:.4g} m, or"
+            if lim.width_given
+            else "its own diameter (max_width_m allows a wider one);"
         )
         raise EngineError(
-            f"no disc meets the limits: {J:.4g} kg·m² at an outer diameter of {D:.4g} m ({limited_by} limit) needs a "
-            f"width of {width * 1e3:.1f} mm, more than the {max_width_m * 1e3:.1f} mm allowed; allow a width of "
-            f"{width * 1e3:.1f} mm, {larger}, or a looser δ target"
+            f"no disc within {lim.what()} carries {J:.4g} kg·m²: it needs a width of {width:.4g} m, more than "
+            f"{allowed} {lim.way_out(J)}, or a smaller inertia (a looser δ target)"
         )
-    mass = rho * math.pi * width * (D**2 - bore_m**2) / 4
+    mass = rho * math.pi * width * (D**2 - bore**2) / 4
     check_results_finite(
         f"the lightest disc for {J:.4g} kg·m²",
         {"width_m": width, "mass_kg": mass, "rim_speed_m_s": omega * D / 2},
@@ -556,7 +662,7 @@ def lightest_disc(
         )
     return DiscFlywheel(
         outer_diameter_m=D,
-        bore_m=float(bore_m),
+        bore_m=float(bore),
         width_m=width,
         density_kg_m3=rho,
         inertia_kgm2=J,
@@ -974,10 +1080,24 @@ def design_flywheel(
     **Returns:** a :class:`FlywheelDesign`; ``.summary()`` compares it with the textbook.
 
     **Raises:** :class:`rotor.EngineError` for a bad target, point or limit, limits no disc
-    can meet, or a target met with no flywheel at all; :class:`rotor.NoSteadyStateError`
-    (a :class:`rotor.SolverError`) for an operating point with no steady state, and
-    :class:`rotor.SolverError` where Newton's method finds no inertia.
+    can meet (the message names the limit, the outer diameter or rim speed that would carry
+    the flywheel, and the δ the largest disc allowed gives), or a target met with no
+    flywheel at all; :class:`rotor.NoSteadyStateError` (a :class:`rotor.SolverError`) for
+    an operating point with no steady state, and :class:`rotor.SolverError` where Newton's
+    method finds no inertia; a :class:`TypeError` for a value of the wrong type or traced by
+    ``jax.jit``/``vmap``/``grad`` (the design is a search on the host).
     """
+    _known_values(
+        "design_flywheel",
+        engine=engine,
+        delta=delta,
+        points=points,
+        shaft_inertia_kgm2=shaft_inertia_kgm2,
+        max_outer_diameter_m=max_outer_diameter_m,
+        max_width_m=max_width_m,
+        max_rim_speed_m_s=max_rim_speed_m_s,
+        max_rpm=max_rpm,
+    )
     engine = resolve_engine(engine)  # a prepared engine: its tables are reused
     require_engine(engine, "design_flywheel(engine)").check()
     pts = _points(points, engine)
@@ -1020,6 +1140,16 @@ def design_flywheel(
             delta_shaft = None
     disc = None
     if (max_outer_diameter_m is not None or max_rim_speed_m_s is not None) and flywheel > 0:
+        limits = disc_limits(
+            peak_rpm=peak,
+            density_kg_m3=density_kg_m3,
+            bore_m=bore_m,
+            max_outer_diameter_m=max_outer_diameter_m,
+            max_width_m=max_width_m,
+            max_rim_speed_m_s=max_rim_speed_m_s,
+        )
+        if flywheel > limits.largest_inertia_kgm2():
+            _refuse_disc(limits, flywheel, shaft, ev, pts, [r[4] for r in results])
         disc = lightest_disc(
             flywheel,
             peak_rpm=peak,
@@ -1048,6 +1178,38 @@ def design_flywheel(
         friction=friction,
         grid_deg=float(grid_deg),
         diameter_strokes=float(diameter_strokes),
+    )
+
+
+def _refuse_disc(
+    limits: DiscLimits,
+    flywheel: float,
+    shaft: float,
+    ev: DeltaOfInertia,
+    pts: list[OperatingPoint],
+    targets: list[float],
+) -> None:
+    """Refuse a design whose flywheel of ``flywheel`` [kg·m²] no disc within ``limits``
+    carries: a :class:`rotor.EngineError` naming the limit, the outer diameter (or rim
+    speed) that would carry it, and the δ the largest disc allowed gives at the point
+    where it is furthest above its target (``targets``; ``shaft``: the crankshaft's own
+    inertia [kg·m²])."""
+    largest = limits.largest_inertia_kgm2()
+    deltas = [ev.delta(shaft + largest, p) for p in pts]
+    ratios = [d / t if math.isfinite(d) else math.inf for d, t in zip(deltas, targets)]
+    worst = int(np.argmax(ratios))
+    rpm = pts[worst].rpm
+    d = deltas[worst]
+    if math.isfinite(d) and d < 1:
+        looser = f", or a δ target of {d:.4g} or more (what that largest disc gives at {rpm:g} rpm)"
+    else:
+        got = f"δ = {d:.4g}" if math.isfinite(d) else "no steady state"
+        looser = f"; no δ target below 1 is met with that largest disc ({got} at {rpm:g} rpm)"
+    width = f"{limits.max_width_m:.4g} m wide" if limits.width_given else "as wide as it is across"
+    raise EngineError(
+        f"no disc within {limits.what()} meets the δ target: the flywheel needs {flywheel:.4g} kg·m², the largest "
+        f"disc allowed ({limits.outer_diameter_m:.4g} m across, {width}) carries {largest:.4g} kg·m²; "
+        f"{limits.way_out(flywheel)}{looser}"
     )
 
 

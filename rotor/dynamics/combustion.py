@@ -23,6 +23,7 @@ from collections.abc import Iterable
 import numpy as np
 from jaxtyping import ArrayLike
 
+from ..engine.plausible import require_known
 from ..errors import EngineError
 
 __all__ = ["combustion_pattern"]
@@ -51,7 +52,19 @@ def combustion_pattern(
       pattern can be drawn again.
 
     **Returns:** float64 array (cycles, cylinders).
+
+    **Raises:** :class:`rotor.EngineError` for values out of range; a :class:`TypeError`
+    for a value traced by ``jax.jit``/``vmap``/``grad`` (the pattern is drawn in NumPy:
+    draw it outside and pass it, or an array of scales, as ``simulate(combustion=...)``,
+    which may be traced).
     """
+    require_known(
+        "combustion_pattern",
+        "the pattern is drawn in NumPy; traced scales go to rotor.simulate(combustion=...) as they are",
+        imep_scale=imep_scale,
+        misfire_rate=misfire_rate,
+        cov=cov,
+    )
     if not (isinstance(cycles, (int, np.integer)) and cycles >= 1):
         raise EngineError(f"cycles = {cycles!r}: must be a whole number, 1 or more")
     if not (isinstance(cylinders, (int, np.integer)) and cylinders >= 1):
@@ -65,7 +78,7 @@ def combustion_pattern(
         ) from None
     if not np.all(np.isfinite(s)) or np.any(s < 0):
         raise EngineError("imep_scale must be finite and not negative")
-    if not (0.0 <= misfire_rate <= 1.0):
+    if not (np.isfinite(misfire_rate) and 0.0 <= misfire_rate <= 1.0):
         raise EngineError(f"misfire_rate = {misfire_rate!r}: must lie in 0…1")
     if not (np.isfinite(cov) and cov >= 0):
         raise EngineError(f"cov = {cov!r}: must be zero or positive")

@@ -41,12 +41,12 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..cache import keep_tables, kept_tables
-from ..checks import arrays_only, check_size, concrete
+from ..checks import arrays_only, called_from_outside, check_size, concrete, tracing
 from ..cycles import array_module
 from ..engine.forces import cylinder_gas_torques, reciprocating_inertia_torque
 from ..engine.inertia import inertia_coefficients, mean_reduced_inertia, ordinary_cylinder_inertia, reduced_inertia
 from ..engine.kinematics import piston_motion
-from ..engine.model import Engine, engine_jit, require_engine, unnamed
+from ..engine.model import Engine, engine_jit, guard_engine, require_engine, unnamed
 from ..engine.plausible import require_number
 from ..errors import EngineError
 from ..programs import kept_program
@@ -431,8 +431,13 @@ def crank_train(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.
     - ``engine``: a :class:`rotor.Engine`.
     - ``fidelity``: ``"variable"`` (default), ``"series"``, ``"coefficients"`` or ``"constant"``.
     - ``grid_deg``: node spacing [deg]; must divide the cycle (default 0.25°).
+
+    A traced engine field (``jax.jit``/``vmap``/``grad``) is checked when the program runs
+    (:func:`rotor.engine.model.guard_engine`).
     """
     check_fidelity(fidelity, require_engine(engine, "crank_train(engine)"))
+    if tracing() and called_from_outside():  # traced fields: checked when the program runs
+        engine = guard_engine(engine)
     return train_from_engine(engine, fidelity, grid_points(engine.strokes, grid_deg, engine.cylinders))
 
 

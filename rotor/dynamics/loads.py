@@ -19,14 +19,14 @@ cylinder's gas torque) by a PI law on the speed error.
 from __future__ import annotations
 
 import abc
-from typing import ClassVar
+from typing import Any, ClassVar, cast
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..checks import as_f64, check_finite, check_positive, concrete
+from ..checks import TRACED, as_f64, check_finite, check_positive, concrete, guard, guard_number, has_tracer, is_tracer
 from ..errors import EngineError
 from ..units import RPM_PER_RAD_S
 from .load_help import LOAD_HELP
@@ -40,6 +40,8 @@ __all__ = [
     "LoadStep",
     "Governor",
     "parse_load",
+    "guard_load",
+    "guard_governor",
 ]
 
 #: (a, b, c) of a load a + b·ω + c·ω², None for a coefficient that is zero
@@ -241,6 +243,64 @@ class Governor(eqx.Module):
         """Fuel scale [-] at speed ``omega`` [rad/s] and integrated error ``integral`` [s]."""
         u = self.fuel_start + self.kp * self.error(omega) + self.ki * integral
         return jnp.clip(u, self.fuel_min, self.fuel_max)
+
+
+def _guarded(module: eqx.Module, rules: dict[str, tuple[float, bool]], table: str, checks: Any) -> eqx.Module:
+    """``module`` with each traced field of ``rules`` (name → (lower bound, strictly above
+    it)) checked when the program runs (recorded in ``checks`` where given): finite and
+    within the bound, the message naming ``[table] field`` as the concrete check does."""
+    names = [k for k in rules if is_tracer(getattr(module, k))]
+    if not names:
+        return module
+    checked = [
+        guard_number(getattr(module, k), f"[{table}] {k}", rules[k][0], above=rules[k][1], checks=checks) for k in names
+    ]
+    return eqx.tree_at(lambda m: [getattr(m, k) for k in names], module, checked)
+
+
+_FINITE = (-np.inf, False)
+_POSITIVE = (0.0, True)
+_NOT_NEGATIVE = (0.0, False)
+
+
+def guard_load(load: Load | None, checks: Any = None) -> Load | None:
+    """``load`` with its traced fields checked when the program runs (``eqx.error_if``; with
+    ``checks``, a :class:`rotor.checks.TracedChecks`, recorded there), as its class checks
+    concrete ones when it is built: a torque finite, a speed positive, a time not negative,
+    a table's speeds increasing. The same load where nothing is traced."""
+    if load is None or not has_tracer(load):
+        return load
+    if isinstance(load, ConstantLoad):
+        return cast(Load, _guarded(load, {"torque_Nm": _FINITE}, "load", checks))
+    if isinstance(load, PolynomialLoad):
+        return cast(Load, _guarded(load, {"a": _FINITE, "b": _FINITE, "c": _FINITE}, "load", checks))
+    if isinstance(load, PropellerLoad):
+        return cast(Load, _guarded(load, {"torque_Nm": _FINITE, "rpm": _POSITIVE}, "load", checks))
+    if isinstance(load, TableLoad):
+        load = cast(TableLoad, _guarded(load, {"rpm": _FINITE, "torque_Nm": _FINITE}, "load", checks))
+        rpm = guard(load.rpm, ~jnp.all(jnp.diff(load.rpm) > 0), f"load table: rpm must increase; {TRACED}", checks)
+        return eqx.tree_at(lambda m: m.rpm, load, rpm)
+    if isinstance(load, LoadStep):
+        load = cast(LoadStep, _guarded(load, {"time_s": _NOT_NEGATIVE, "ramp_s": _NOT_NEGATIVE}, "load", checks))
+        parts = [guard_load(load.before, checks), guard_load(load.after, checks)]
+        return eqx.tree_at(lambda m: [m.before, m.after], load, parts)
+    return load  # a load class of the caller's own: its own checks
+
+
+def guard_governor(governor: Governor | None) -> Governor | None:
+    """``governor`` with its traced fields checked when the program runs, as
+    :class:`Governor` checks concrete ones (a positive set speed, gains and fuel scales
+    not negative, ``fuel_min`` below ``fuel_max``). The same governor where nothing is traced."""
+    if governor is None or not has_tracer(governor):
+        return governor
+    rules = {"rpm": _POSITIVE} | dict.fromkeys(("kp", "ki", "fuel_start", "fuel_min", "fuel_max"), _NOT_NEGATIVE)
+    governor = cast(Governor, _guarded(governor, rules, "governor", None))
+    fuel_max = guard(
+        governor.fuel_max,
+        ~(jnp.asarray(governor.fuel_min) < jnp.asarray(governor.fuel_max)),
+        f"governor: fuel_min must be below fuel_max; {TRACED}",
+    )
+    return eqx.tree_at(lambda g: g.fuel_max, governor, fuel_max)
 
 
 def _numbers(text: str, n: int, spec: str) -> list[float]:

@@ -36,8 +36,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
-from ..checks import concrete
-from ..engine.model import Engine, require_engine
+from ..checks import called_from_outside, concrete, guard, tracing
+from ..engine.model import Engine, guard_engine, require_engine
+from ..engine.plausible import require_real
 from ..errors import EngineError
 from .crank_train import (
     CrankTrain,
@@ -79,7 +80,9 @@ class PreparedEngine(eqx.Module):
 
     def with_inertia(self, inertia_kgm2: ArrayLike) -> PreparedEngine:
         """The same prepared engine with the crankshaft inertia ``inertia_kgm2`` [kg·m²]
-        (``[crankshaft] inertia_kgm2``, flywheel included): nothing is built again."""
+        (``[crankshaft] inertia_kgm2``, flywheel included): nothing is built again. The value
+        is checked where it is used (:func:`checked_reference`; traced, when the program runs)."""
+        require_real("with_inertia", "inertia_kgm2", inertia_kgm2, "kg·m²")
         value = jnp.asarray(inertia_kgm2, dtype=jnp.float64)
         return eqx.tree_at(lambda p: p.engine.crankshaft.inertia_kgm2, self, value)
 
@@ -96,8 +99,14 @@ def prepare(engine: Engine, fidelity: str = "variable", grid_deg: float = 0.25) 
     **Returns:** a :class:`rotor.PreparedEngine`, accepted wherever an engine is by
     :func:`rotor.steady_state`, :func:`rotor.steady_sweep`, :func:`rotor.simulate`,
     :func:`rotor.identify` and :func:`rotor.design_flywheel`.
+
+    **Raises:** a :class:`TypeError` for what is not a :class:`rotor.Engine`, a
+    :class:`rotor.EngineError` for an engine whose table inputs are traced; a traced
+    crankshaft inertia is checked when the program runs.
     """
     check_fidelity(fidelity, require_engine(engine, "prepare(engine)"), recheck=False)
+    if tracing() and called_from_outside():  # a traced crankshaft inertia: checked when the program runs
+        engine = guard_engine(engine)
     points = grid_points(engine.strokes, grid_deg, engine.cylinders)
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(table_inputs(engine))):
         raise EngineError(
@@ -120,12 +129,14 @@ _STALE = (
 )
 
 
-def checked_reference(prepared: PreparedEngine) -> Any:
+def checked_reference(prepared: PreparedEngine, checks: Any = None) -> Any:
     """``prepared.inertia_ref_kgm2`` after checking that the crankshaft inertia is a
     positive number and that the table inputs
     (:func:`rotor.dynamics.crank_train.table_inputs`) are those it was prepared from: a
     :class:`rotor.EngineError` for known values that differ; for traced ones the returned
-    value carries an ``eqx.error_if`` check that raises when the compiled call runs."""
+    value carries an ``eqx.error_if`` check that raises when the compiled call runs (with
+    ``checks``, a :class:`rotor.checks.TracedChecks`, the check is recorded there, for the
+    caller to make with its others)."""
     ref = prepared.inertia_ref_kgm2
     inertia = concrete(prepared.engine.crankshaft.inertia_kgm2)
     if inertia is not None and not (inertia.ndim == 0 and np.isfinite(inertia) and inertia > 0):
@@ -146,7 +157,7 @@ def checked_reference(prepared: PreparedEngine) -> Any:
             raise EngineError(_STALE.format(what="geometry, masses, layout or pressure"))
     if traced:
         same = jnp.all(jnp.stack([jnp.all(jnp.asarray(a) == jnp.asarray(b)) for a, b in traced]))
-        ref = eqx.error_if(ref, ~same, _STALE.format(what="geometry, masses, layout or pressure"))
+        ref = guard(ref, ~same, _STALE.format(what="geometry, masses, layout or pressure"), checks)
     return ref
 
 

@@ -325,7 +325,11 @@ class SpeedResult(Result):
     total torque) [J] and ``textbook_delta`` (its δ ≈ L_excess/(J·ω²)) [-];
     ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting only) [-]; ``converged``: whether
     the solver reached the periodic solution and the kinetic energy stays above 10⁻⁴ of
-    its mean (a JAX bool under ``jit``/``vmap``, where no error can be raised: check it).
+    its mean (a JAX bool under ``jit``/``vmap``; False only where the steady state was
+    asked for with ``throw=False``, which returns the finding instead of raising it).
+
+    A result is a pytree: a compiled function may return it (its words and counts are the
+    structure, its numbers and arrays the leaves).
 
     **A transient run** may have ``steps_per_cycle`` (``method="grid"``),
     ``solver_steps`` (accepted steps of ``method="angle"``), ``fuel`` (the governor's
@@ -783,3 +787,32 @@ class SpeedResult(Result):
         gas = np.asarray(self.torque if self.gas_torque is None else self.gas_torque)[sl]
         total = np.asarray(self.total_torque)[sl]
         return plot_cycle_torque(angle, gas, load, title, cycle_deg, ax=ax, total_Nm=total)
+
+
+# A result is a pytree, so that a function returning one can be compiled
+# (``eqx.filter_jit(lambda rpm: rotor.steady_state(engine, rpm))``) or vmapped: its numbers
+# and arrays are leaves, its words and counts the structure. The δ kept with a steady
+# state's arrays is dropped (it belongs to those very array objects, which a transformation
+# replaces): δ is computed again from ω.
+_SPEED_RESULT_META = (
+    "method",
+    "fidelity",
+    "kind",
+    "strokes",
+    "cycle_rad",
+    "points_per_cycle",
+    "uniform_cycles",
+    "engine_name",
+    "solved_for",
+    "steps_per_cycle",
+    "incomplete",
+    "first_kept_cycle_index",
+)
+jax.tree_util.register_dataclass(
+    SpeedResult,
+    data_fields=[
+        f.name for f in dataclasses.fields(SpeedResult) if f.name not in (*_SPEED_RESULT_META, "_known_delta")
+    ],
+    meta_fields=list(_SPEED_RESULT_META),
+    drop_fields=["_known_delta"],
+)

@@ -24,9 +24,12 @@ below 0 is refused (:mod:`rotor.dynamics.operating`).
 A periodic solution with a given mean speed always exists in theory, but when the
 kinetic energy at its minimum is below 10⁻⁴ of its mean (ω_min < 1 % of ω_mean) the
 crankshaft practically stops once a cycle: :class:`rotor.NoSteadyStateError` (a solver
-outcome, not an input error) says so and where. Under ``jit``/``vmap``/``grad`` no error
-can be raised on a traced value: there ``result.converged`` says whether the solution is
-usable, and the caller must look at it.
+outcome, not an input error) says so and where. Under ``jit``/``vmap``/``grad`` the
+compiled program raises the same finding when it runs (``eqx.error_if``; under ``vmap``
+if any item has none); ``throw=False`` returns the result with ``result.converged`` False
+instead, as optimistix's ``throw=``. The arguments are checked there too: a traced NaN,
+infinite or implausible speed, engine field, load or fuelling raises when the program runs,
+naming it.
 """
 
 from __future__ import annotations
@@ -41,11 +44,11 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
-from ..checks import arrays_only, concrete
+from ..checks import TRACED, TracedChecks, arrays_only, called_from_outside, concrete, guard_number, is_tracer, tracing
 from ..cycles import array_module, cycle_delta, extreme_index
 from ..engine.friction import Friction
-from ..engine.model import Engine
-from ..engine.plausible import PLAUSIBLE
+from ..engine.model import Engine, guard_engine, require_engine
+from ..engine.plausible import PLAUSIBLE, guard_fields, what_it_is
 from ..errors import EngineError, NoSteadyStateError
 from ..programs import kept_program
 from ..units import RPM_PER_RAD_S
@@ -71,8 +74,8 @@ from .equation import (
     wrap_periodic,
 )
 from .invariants import check_speed_result, steady_invariants_hold
-from .loads import Load
-from .operating import FUEL_SCALE_WARN, check_fuel_scale
+from .loads import Load, guard_load
+from .operating import FUEL_SCALE_MAX, FUEL_SCALE_WARN, check_fuel_scale
 from .prepared import PreparedEngine, checked_reference
 from .result import SpeedResult, periodic_extremes
 
@@ -84,13 +87,132 @@ STOP_FRACTION = 1e-4  # E_min / E_mean below which the crankshaft is taken to st
 _RPM_RANGE = PLAUSIBLE[("operating", "rpm")][:2]
 
 
-def _check_rpm(rpm, what="rpm"):
+def checked_rpm(rpm: Any, checks: TracedChecks | None, what: str = "rpm") -> Any:
+    """``rpm`` [rpm] checked: a real number (else a :class:`TypeError` naming ``what``),
+    one speed, finite and within the plausible range of ``[operating] rpm`` (else a
+    :class:`rotor.EngineError`). A traced speed is checked when the program runs where
+    ``checks`` records the caller's traced checks (:func:`rotor.checks.guard_number`)."""
     lo, hi = _RPM_RANGE
     if type(rpm) in (float, int, np.float64) and lo <= rpm <= hi:  # the usual number (NaN fails here)
-        return
-    r = concrete(rpm)
-    if r is not None and not (r.ndim == 0 and np.isfinite(r) and lo <= r <= hi):
+        return rpm
+    if is_tracer(rpm):
+        if np.dtype(rpm.dtype).kind not in "iuf":
+            raise TypeError(f"{what}: expected a real number [rpm], got a traced {rpm.dtype} value")
+        if rpm.ndim:
+            raise EngineError(
+                f"{what}: one speed per call [rpm], got a traced array of shape {rpm.shape}; jax.vmap over the "
+                "speeds, or rotor.steady_sweep"
+            )
+        return guard_number(rpm, what, lo, hi, unit="rpm", expected="a time-mean crank speed", checks=checks)
+    r = None
+    if not isinstance(rpm, (bool, np.bool_, str, bytes)) and rpm is not None:
+        try:
+            r = np.asarray(rpm)  # one copy of a device number
+        except (TypeError, ValueError):
+            r = None
+    if r is None or r.dtype.kind not in "iuf":
+        raise TypeError(f"{what}: expected a real number [rpm], e.g. 1250, got {what_it_is(rpm)}")
+    r = r.astype(np.float64)
+    if r.ndim:
+        raise EngineError(
+            f"{what} = {rpm!r:.60}: one speed per call [rpm]; jax.vmap over the speeds, or rotor.steady_sweep"
+        )
+    if not (np.isfinite(r) and lo <= r <= hi):
         raise EngineError(f"{what} = {rpm!r}: must be a positive, finite speed between {lo:g} and {hi:g} rpm")
+    return rpm
+
+
+def _checked_scale(imep_scale: Any, cylinders: int, balance: str, checks: TracedChecks | None) -> Any:
+    """``imep_scale`` checked: real numbers (else a :class:`TypeError`), one or one per
+    cylinder (else a :class:`rotor.EngineError`); traced values (recorded in ``checks``): finite
+    and 0 … :data:`rotor.dynamics.operating.FUEL_SCALE_MAX` with no load (the fuel scale
+    given), finite and not negative with one (a pattern the fuelling found multiplies),
+    when the program runs. Concrete values are judged by the caller."""
+    if isinstance(imep_scale, (float, int)) and not isinstance(imep_scale, bool) and balance == "load":
+        return imep_scale  # the fuel scale given: refused or warned about by check_fuel_scale
+    if is_tracer(imep_scale):
+        dtype, shape = imep_scale.dtype, imep_scale.shape
+    else:
+        if isinstance(imep_scale, (bool, np.bool_, str, bytes)) or imep_scale is None:
+            raise TypeError(f"imep_scale: expected a number or one per cylinder [-], got {what_it_is(imep_scale)}")
+        try:
+            a = np.asarray(imep_scale)
+        except (TypeError, ValueError):
+            raise TypeError(
+                f"imep_scale: expected a number or one per cylinder [-], got {what_it_is(imep_scale)}"
+            ) from None
+        dtype, shape = a.dtype, a.shape
+    if not (np.issubdtype(dtype, np.floating) or np.issubdtype(dtype, np.integer)):
+        raise TypeError(f"imep_scale: expected real numbers [-], got {dtype} values")
+    if shape not in ((), (1,), (cylinders,)):
+        raise EngineError(
+            f"imep_scale: one combustion scale for all cylinders or one per cylinder ({cylinders}) [-], "
+            f"got shape {shape}"
+        )
+    if not is_tracer(imep_scale):
+        a = np.asarray(imep_scale, dtype=np.float64)
+        if balance == "fuel" and not (np.all(np.isfinite(a)) and np.all(a >= 0)):
+            raise EngineError(f"imep_scale = {a.tolist()}: combustion scales must be finite and not negative [-]")
+        return imep_scale
+    if checks is None:
+        return imep_scale
+    hi = FUEL_SCALE_MAX if balance == "load" else np.inf
+    return guard_number(
+        imep_scale, "imep_scale", 0.0, hi, expected="the combustion scale, 1 = the engine file's", checks=checks
+    )
+
+
+def _resolved(engine: Any, checks: TracedChecks | None) -> tuple[PreparedEngine | None, Engine]:
+    """The prepared engine (or None) and the :class:`rotor.Engine` of :func:`steady_state`'s
+    ``engine`` (a :class:`TypeError` for anything else), their traced fields recorded in
+    ``checks``: a prepared engine's crankshaft and friction (its table inputs are compared
+    with those it was prepared from, :func:`rotor.dynamics.prepared.checked_reference`)."""
+    if isinstance(engine, PreparedEngine):
+        prepared = engine
+        if checks is not None:
+            guarded_engine = guard_engine(prepared.engine, ("crankshaft", "friction"), checks)
+            prepared = eqx.tree_at(lambda p: p.engine, prepared, guarded_engine)
+        return prepared, prepared.engine
+    engine = require_engine(engine, "steady_state(engine)")
+    return None, guard_engine(engine, checks=checks) if checks is not None else engine
+
+
+def _checked_arguments(
+    load: Any, friction: Any, imep_scale: Any, throw: Any, cylinders: int, checks: TracedChecks | None
+) -> tuple:
+    """:func:`steady_state`'s ``load``, ``friction``, ``imep_scale`` and ``throw`` checked
+    (a :class:`TypeError` naming the argument for the wrong type; :func:`_checked_scale`);
+    their traced fields recorded in ``checks`` (a caller's traced values). Returns the
+    load, friction and fuelling to use."""
+    if load is not None and not isinstance(load, Load):
+        raise TypeError(
+            f"steady_state(load): expected a rotor load (e.g. rotor.ConstantLoad) or None, got {what_it_is(load)}"
+        )
+    if friction is not None and friction is not False and not isinstance(friction, Friction):
+        raise TypeError(f"steady_state(friction): expected a rotor.Friction, None or False, got {what_it_is(friction)}")
+    if not isinstance(throw, (bool, np.bool_)):
+        raise TypeError(f"steady_state(throw): expected True or False, got {what_it_is(throw)}")
+    imep_scale = _checked_scale(imep_scale, cylinders, "load" if load is None else "fuel", checks)
+    if checks is not None:
+        load = guard_load(load, checks)
+        friction = guard_fields(friction, checks) if isinstance(friction, Friction) else friction
+    return load, friction, imep_scale
+
+
+NO_STEADY_STATE_TRACED = (
+    "no steady state: the kinetic energy would reach zero within the cycle (the crankshaft stops once a cycle), "
+    "or the balancing load or fuel scale is not finite, at values traced under jax.jit, vmap or grad "
+    "(rotor.NoSteadyStateError for known values); raise the speed or the crankshaft/flywheel inertia "
+    "([crankshaft] inertia_kgm2), check that a load is in N·m of the engine's size, or pass throw=False to read "
+    "result.converged instead"
+)
+"""The run-time error of a traced steady state with none (``throw=True``)."""
+
+FUEL_SCALE_TRACED = (
+    f"the load needs a fuel scale outside 0 … {FUEL_SCALE_MAX:g} (not an operating point of the engine); check "
+    f"the load's units (N·m) and size; {TRACED}"
+)
+"""The run-time error of a traced steady state whose solved fuel scale is no operating point."""
 
 
 def _closed_solution(train, s_nodes, a, c, omega_m, balance):
@@ -497,6 +619,7 @@ def steady_state(
     imep_scale: ArrayLike = 1.0,
     method: str = "auto",
     grid_deg: float | None = None,
+    throw: bool = True,
 ) -> SpeedResult:
     """The periodic steady state over one cycle at time-mean speed ``rpm``.
 
@@ -521,6 +644,17 @@ def steady_state(
       ``"closed"`` or ``"shooting"``.
     - ``grid_deg``: node spacing of the tables and of the result [deg] (default 0.25; a
       prepared engine's own).
+    - ``throw``: True (default): where there is no steady state, raise
+      (:class:`rotor.NoSteadyStateError`, or under ``jit``/``vmap``/``grad`` an
+      ``eqx.error_if`` error when the program runs); False: return the result with
+      ``converged`` False instead (as optimistix's ``throw=``), and for an invalid traced
+      argument NaN numbers with it.
+
+    Every argument may be traced (``jax.jit``, ``jax.vmap``, ``jax.grad``) and is checked
+    when the program runs, as a concrete one is at once: a NaN, infinite or implausible
+    speed, engine field, load or fuelling raises a one-line error naming it (all checks in
+    one ``eqx.error_if``, whose host callback costs a compiled call about 20 µs on a CPU),
+    or with ``throw=False`` gives ``converged`` False and NaN numbers, never a plausible one.
 
     **Returns:** a :class:`rotor.SpeedResult` over one cycle (``kind="steady"``) with
     ``load_torque_Nm`` [N·m] and ``fuel_scale`` [-] (``solved_for`` says which was
@@ -532,21 +666,24 @@ def steady_state(
     in one piece); JAX arrays otherwise (the shooting method, or under ``jit``/``vmap``/``grad``).
 
     **Raises:** :class:`rotor.NoSteadyStateError` (a :class:`rotor.SolverError`) where the
-    kinetic energy would reach zero, when the values are concrete; under ``jit``/``vmap``
-    the result's ``converged`` is False instead. :class:`rotor.SolverError` where the
+    kinetic energy would reach zero (with ``throw``; under ``jit``/``vmap``/``grad`` the
+    program raises its message when it runs). :class:`rotor.SolverError` where the
     solution breaks an invariant of every run (:func:`rotor.dynamics.invariants.check_speed_result`).
-    :class:`rotor.EngineError` for impossible arguments.
+    :class:`rotor.EngineError` for impossible arguments, a :class:`TypeError` for
+    arguments of the wrong type (an engine's name instead of the engine:
+    ``rotor.load_engine(name)`` first), each naming the argument.
     """
     start = time.perf_counter()
-    prepared: PreparedEngine | None = None
-    if isinstance(engine, PreparedEngine):
-        prepared, engine = engine, engine.engine
+    # a caller's traced values: checked when the program runs, all at once (_finish)
+    checks = TracedChecks() if called_from_outside() and tracing() else None
+    prepared, engine = _resolved(engine, checks)
+    if prepared is not None:
         fidelity = prepared.fidelity if fidelity is None else fidelity
         grid_deg = prepared.grid_deg if grid_deg is None else grid_deg
     fidelity = "variable" if fidelity is None else fidelity
     grid_deg = 0.25 if grid_deg is None else grid_deg
-    rpm = engine.operating.rpm if rpm is None else rpm
-    _check_rpm(rpm)
+    rpm = checked_rpm(engine.operating.rpm if rpm is None else rpm, checks)
+    load, friction, imep_scale = _checked_arguments(load, friction, imep_scale, throw, engine.cylinders, checks)
     if load is not None and load.time_dependent:
         raise EngineError(
             "a steady state needs a load that does not change in time; use rotor.simulate for a load step"
@@ -557,7 +694,7 @@ def steady_state(
     if prepared is not None and (fidelity, points) == (prepared.fidelity, prepared.points):
         # checked when prepared; what may have changed since is checked here
         train = prepared.train
-        d_inertia = prepared.engine.crankshaft.inertia_kgm2 - checked_reference(prepared)
+        d_inertia = prepared.engine.crankshaft.inertia_kgm2 - checked_reference(prepared, checks)
     else:
         train = checked_train(engine, fidelity, points)  # checked and kept once per engine object
         d_inertia = np.float64(0.0)
@@ -602,7 +739,9 @@ def steady_state(
         pack = _closed_steady(train, numbers, speed_load, balance, flat)
         t, x, ok, arrays = _unpack(pack, points, n)
         _check_combustion(train, balance)
-        return _finish(engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays)
+        return _finish(
+            engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays, throw, checks
+        )
     _check_combustion(train, balance)
     train = shift_inertia(train, d_inertia)
     # start from the closed form with the losses linearised about ω_m
@@ -617,7 +756,9 @@ def steady_state(
         x_g = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
     scene = Scene(train, s[None, :], fr, speed_load)
     x, E, t, E_end, ok, arrays = _shooting_kernel(scene, omega_m, E_g[0], x_g, balance)
-    return _finish(engine, train, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays)
+    return _finish(
+        engine, train, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays, throw, checks
+    )
 
 
 def _check_combustion(train, balance):
@@ -702,20 +843,39 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
     }
 
 
-def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays):
+def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays, throw, checks):
     a = arrays
     checkable = not isinstance(a["e_ratio"], jax.core.Tracer)
     if checkable:  # NumPy where the closed form's packed vector came back; else one transfer
         ok, e_ratio, i_min, x_found = (ok, a["e_ratio"], a["i_min"], x)
         if any(isinstance(v, jax.Array) for v in (ok, e_ratio, i_min, x_found)):
             ok, e_ratio, i_min, x_found = jax.device_get((ok, e_ratio, i_min, x_found))
-        converged = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION))
-        if not (converged.all() and np.isfinite(x_found).all()):
+        converged = np.asarray(ok & np.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION) & np.isfinite(x_found))
+        if throw and not converged.all():
             _no_steady_state(train, balance, omega_m, converged, i_min, x_found)
     else:
-        converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION)
+        converged = ok & jnp.isfinite(a["e_ratio"]) & (a["e_ratio"] >= STOP_FRACTION) & jnp.isfinite(x)
+        checks = TracedChecks() if checks is None else checks
+        outputs = (t, x, E, E_end, a)
+        if throw:  # one check for the arguments and the solution, carried by every output
+            more = []
+            if balance == "fuel":  # the fuelling found must be an operating point (known values: check_fuel_scale)
+                fuel = a["fuel_scale"]
+                more.append((converged & ~((fuel >= 0) & (fuel <= FUEL_SCALE_MAX)), FUEL_SCALE_TRACED))
+            more.append((~converged, NO_STEADY_STATE_TRACED))
+            t, x, E, E_end, a = checks.tie(outputs, more)
+        elif checks.items:  # a status instead: an invalid argument gives NaN numbers, converged False
+            valid = checks.valid()
+            t, x, E, E_end, a = jax.tree_util.tree_map(
+                lambda v: jnp.where(valid, v, jnp.nan) if jnp.issubdtype(jnp.result_type(v), jnp.inexact) else v,
+                outputs,
+            )
+            converged = converged & valid
+        if balance == "fuel":
+            fuel = a["fuel_scale"]
+            converged = converged & (fuel >= 0) & (fuel <= FUEL_SCALE_MAX)
     load_carried = x if balance == "load" else a["carried_load"]
-    if checkable and balance == "fuel":
+    if checkable and balance == "fuel" and bool(np.all(converged)):
         fuel, carried = np.asarray(a["fuel_scale"]), np.asarray(load_carried)
         if fuel.ndim == 0:
             imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
@@ -752,7 +912,8 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         _known_delta=(a["omega"], a["period_s"], train.cycle_rad, a["delta"]) if "delta" in a else None,
     )
     # concrete values only (under jit/vmap ``converged`` says it); the closed form's program
-    # has checked the invariants already where its flag is set
-    if not (checkable and a.get("invariants_hold", False)):
+    # has checked the invariants already where its flag is set; a result with no steady
+    # state (throw=False) is returned as it is, ``converged`` False
+    if not (checkable and a.get("invariants_hold", False)) and (throw or not checkable or bool(np.all(converged))):
         check_speed_result(result)
     return result

@@ -14,8 +14,9 @@ nothing prepared. Any other field of the engine (masses, geometry) is swept by p
         jax.tree_util.tree_map(lambda x: x, engines))   # in_axes as the batch requires
 
 where every item builds its own tables in the trace (about the cost of one unprepared
-steady state each). Under ``vmap`` no error can be raised on a traced value: each item's
-``converged`` says whether it is a solution.
+steady state each). Under ``vmap`` an item with no steady state raises when the program
+runs (``eqx.error_if``), as do implausible values; ``steady_state(..., throw=False)``
+returns each item's ``converged`` instead.
 
 The same code runs on a GPU where JAX has one (``pip install -U "jax[cuda12]"``): arrays
 then live on the device, a chunk's items are vectorised all together, and a chunk of
@@ -38,8 +39,8 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..engine.friction import Friction
-from ..engine.model import Engine
-from ..engine.plausible import PLAUSIBLE
+from ..engine.model import Engine, require_engine
+from ..engine.plausible import PLAUSIBLE, require_known, what_it_is
 from ..errors import EngineError
 from ..progress import Progress
 from ..results import Result, json_safe
@@ -177,8 +178,22 @@ class SteadySweep(Result):
         return plot_sweep(cols[x_name][ok], self.delta[ok], labels.get(x_name, "combustion scale [-]"), title, ax=ax)
 
 
+def _real(name: str, value: Any, unit: str) -> np.ndarray:
+    """``value`` as a float64 array, or a :class:`TypeError` naming ``name`` for what is not
+    real numbers (a string, a complex number: never a part of it dropped)."""
+    kind = "?"
+    if not isinstance(value, (str, bytes)) and value is not None:
+        try:
+            kind = np.asarray(value).dtype.kind
+        except (TypeError, ValueError):
+            kind = "?"
+    if kind not in "iuf":
+        raise TypeError(f"steady_sweep({name}): expected real numbers [{unit}], got {what_it_is(value)}")
+    return np.asarray(value, dtype=np.float64)
+
+
 def _column(name: str, value: Any, unit: str) -> np.ndarray:
-    a = np.asarray(value, dtype=np.float64)
+    a = _real(name, value, unit)
     if a.ndim > 1:
         raise EngineError(f"{name}: takes a number or a 1-D array of numbers [{unit}], got shape {a.shape}")
     if not np.all(np.isfinite(a)):
@@ -268,7 +283,9 @@ def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies):
     def one(rpm_i, inertia_i, scale_i, load_i):
         s = jnp.broadcast_to(scale_i, (prepared.train.cylinders,))
         load_obj = None if load_i is None else ConstantLoad(load_i)
-        r = steady_state(prepared.with_inertia(inertia_i), rpm_i, load_obj, imep_scale=s, friction=friction)
+        r = steady_state(
+            prepared.with_inertia(inertia_i), rpm_i, load_obj, imep_scale=s, friction=friction, throw=False
+        )  # an item with no steady state is a row with converged False
         x = r.load_torque_Nm if load_i is None else r.fuel_scale
         return r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged
 
@@ -343,8 +360,25 @@ def steady_sweep(
 
     **Returns:** a :class:`rotor.SteadySweep`, one row per item; ``converged`` is False
     where an item has no steady state (no error is raised for one item).
+
+    **Raises:** :class:`rotor.EngineError` for values out of range, a :class:`TypeError`
+    for values of the wrong type or traced by ``jax.jit``/``vmap``/``grad`` (the sweep runs
+    its own compiled chunks: ``jax.vmap`` :func:`rotor.steady_state` for a sweep inside a
+    transformation), each naming the argument.
     """
     start = time.perf_counter()
+    require_known(
+        "steady_sweep",
+        "the sweep compiles and runs its own chunks; jax.vmap rotor.steady_state for a sweep inside one",
+        engine=engine,
+        rpm=rpm,
+        inertia_kgm2=inertia_kgm2,
+        imep_scale=imep_scale,
+        load_torque_Nm=load_torque_Nm,
+        friction=friction,
+    )
+    if not isinstance(engine, PreparedEngine):
+        require_engine(engine, "steady_sweep(engine)")
     if isinstance(engine, PreparedEngine):
         for name, given, own in (("fidelity", fidelity, engine.fidelity), ("grid_deg", grid_deg, engine.grid_deg)):
             if given is not None and given != own:
@@ -359,7 +393,7 @@ def steady_sweep(
     n_cyl = base.cylinders
     rpm_a = _column("rpm", base.operating.rpm if rpm is None else rpm, "rpm")
     inertia_a = _column("inertia_kgm2", base.crankshaft.inertia_kgm2 if inertia_kgm2 is None else inertia_kgm2, "kg·m²")
-    scale = np.asarray(imep_scale, dtype=np.float64)
+    scale = _real("imep_scale", imep_scale, "-")
     if scale.ndim <= 1:
         scale = np.broadcast_to(scale.reshape(-1, 1), (scale.size, n_cyl))
     if scale.ndim != 2 or scale.shape[1] != n_cyl or not np.all(np.isfinite(scale)):

@@ -23,10 +23,21 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ..cache import padded_size
-from ..checks import arrays_only, check_size, concrete, is_tracer
+from ..checks import (
+    TRACED,
+    arrays_only,
+    called_from_outside,
+    check_size,
+    concrete,
+    guard,
+    guard_number,
+    is_tracer,
+    tracing,
+)
 from ..cycles import array_module, cycle_delta, cycle_slopes
 from ..engine.friction import Friction
-from ..engine.model import Engine
+from ..engine.model import Engine, guard_engine, require_engine
+from ..engine.plausible import PLAUSIBLE, guard_fields, what_it_is
 from ..errors import EngineError
 from ..programs import kept_program
 from ..progress import Progress
@@ -42,7 +53,7 @@ from .equation import (
     node_offsets,
 )
 from .invariants import check_speed_result
-from .loads import Governor, Load
+from .loads import Governor, Load, guard_governor, guard_load
 from .operating import given_operating_point
 from .prepared import PreparedEngine, resolve_engine
 from .result import CycleSummary, SpeedResult, cycle_extremes
@@ -78,6 +89,16 @@ def chunk_cycles(method: str, cycles: int, steps_per_cycle: int = 0, nodes_per_c
     else:
         return int(min(max(CHUNK_ANGLE_CYCLES, 1), cycles))
     return int(min(max(per, 1), padded_size(cycles)))
+
+
+def _kind(value) -> str:
+    """The NumPy dtype kind of ``value`` (``"f"``, ``"i"``, …), ``"?"`` where it is none."""
+    if isinstance(value, (str, bytes)):
+        return "U"
+    try:
+        return np.asarray(value).dtype.kind
+    except (TypeError, ValueError):
+        return "?"
 
 
 def _whole(name, value):
@@ -120,10 +141,21 @@ def _warn_runaway(train, scales, fr, rpm):
         )
 
 
-def _check_scales(combustion, cycles, n):
+def _check_scales(combustion, cycles, n, guarded=False):
+    """The combustion scales (cycles, cylinders) [-]: concrete ones checked at once, traced
+    ones (where ``guarded``) when the program runs: finite and not negative."""
     if combustion is None:
         return np.ones((cycles, n))
     c = combustion
+    if is_tracer(c):
+        if c.shape != (cycles, n):
+            raise EngineError(
+                f"combustion has shape {c.shape}: needs one scale per cycle and cylinder, ({cycles}, {n}); "
+                "build it with rotor.combustion_pattern"
+            )
+        return guard_number(c, "combustion", 0.0, expected="combustion scales [-]") if guarded else c
+    if isinstance(c, (str, bytes)) or np.asarray(c).dtype.kind not in "iuf":
+        raise TypeError(f"combustion: expected real combustion scales [-], got {what_it_is(c)}")
     if not isinstance(c, jax.Array) or concrete(c) is not None:
         c = np.asarray(c, dtype=np.float64)
         if c.shape != (cycles, n):
@@ -228,10 +260,30 @@ def simulate(
       run whose samples would not fit is refused before it starts. Not under
       ``jax.grad``/``jax.vmap`` (keep every sample there).
 
+    Every number may be traced (``jax.jit``, ``jax.vmap``, ``jax.grad``; a start from rest
+    needs ``rpm=0`` known): a traced value is checked when the program runs
+    (``eqx.error_if``), as a concrete one is at once, and a NaN, infinite or implausible
+    speed, tolerance, engine field, load, governor or combustion scale raises a one-line
+    error naming it.
+
     **Returns:** a :class:`rotor.SpeedResult` (``kind="transient"``).
+
+    **Raises:** :class:`rotor.EngineError` for values out of range, a :class:`TypeError`
+    for arguments of the wrong type, each naming the argument.
     """
-    engine = resolve_engine(engine)  # a prepared engine: its tables are reused
     started = time.perf_counter()
+    guarded = called_from_outside() and tracing()  # a caller's traced values: checked when they run
+    if not isinstance(engine, PreparedEngine):
+        require_engine(engine, "simulate(engine)")
+    engine = resolve_engine(engine)  # a prepared engine: its tables are reused
+    for name, value, kind in (("load", load, Load), ("governor", governor, Governor)):
+        if value is not None and not isinstance(value, kind):
+            raise TypeError(f"simulate({name}): expected a rotor.{kind.__name__} or None, got {what_it_is(value)}")
+    if friction is not None and friction is not False and not isinstance(friction, Friction):
+        raise TypeError(f"simulate(friction): expected a rotor.Friction, None or False, got {what_it_is(friction)}")
+    if guarded:
+        engine, load, governor = guard_engine(engine), guard_load(load), guard_governor(governor)
+        friction = guard_fields(friction) if isinstance(friction, Friction) else friction
     plan = plan_run(
         engine,
         rpm,
@@ -250,6 +302,7 @@ def simulate(
         max_time_s=max_time_s,
         keep_cycles=keep_cycles,
         started=started,
+        guarded=guarded,
     )
     # the progress bar hears from inside each compiled chunk (a host callback: the same
     # kernels, compiled once) and between chunks
@@ -336,10 +389,12 @@ def plan_run(
     max_time_s: float | None,
     keep_cycles: int | None,
     started: float,
+    guarded: bool = False,
 ) -> RunPlan:
     """The arguments of :func:`simulate` checked (an :class:`rotor.EngineError` or a
     :class:`TypeError` naming the argument) and the engine's tables found: the
-    :class:`RunPlan` of the run."""
+    :class:`RunPlan` of the run. ``guarded``: traced values (of a caller outside rotor)
+    are checked when the program runs (``eqx.error_if``)."""
     if method not in METHODS:
         raise EngineError(f"method = {method!r}: must be one of {', '.join(map(repr, METHODS))}")
     cycles = _whole("cycles", cycles)
@@ -347,13 +402,25 @@ def plan_run(
         keep_cycles = _whole("keep_cycles", keep_cycles)
     _check_sizes(engine, cycles, keep_cycles, step_deg, grid_deg)
     rpm = engine.operating.rpm if rpm is None else rpm
+    hi = PLAUSIBLE[("operating", "rpm")][1]
+    for name, value in (("rpm", rpm), ("rtol", rtol)):
+        if value is not None and not is_tracer(value) and _kind(value) not in "iuf":
+            raise TypeError(f"{name}: expected a real number, got {what_it_is(value)}")
     r = concrete(rpm)
-    if r is not None and not (r.ndim == 0 and np.isfinite(r) and r >= 0):
-        raise EngineError(f"rpm = {rpm!r}: the starting speed must be zero or a positive, finite speed in rpm")
+    if r is not None and not (r.ndim == 0 and np.isfinite(r) and 0 <= r <= hi):
+        raise EngineError(
+            f"rpm = {rpm!r}: the starting speed must be zero or a positive, finite speed in rpm, at most {hi:g}"
+        )
+    if guarded:  # a traced start speed: the run was planned in the angle domain, so above 0
+        rpm = guard_number(rpm, "rpm", 0.0, hi, above=True, unit="rpm", expected="a start from rest is rpm=0, known")
     rtol = DEFAULT_RTOL if rtol is None else rtol
     rt = concrete(rtol)
-    if rt is not None and not (1e-14 <= rt <= 1e-2):
+    if rt is not None and not (rt.ndim == 0 and 1e-14 <= rt <= 1e-2):
         raise EngineError(f"rtol = {rtol!r}: must lie between 1e-14 and 1e-2")
+    if guarded and is_tracer(rtol):  # checked with the start speed, which every method uses
+        rt_traced = jnp.asarray(rtol)
+        bad = ~((rt_traced >= 1e-14) & (rt_traced <= 1e-2))
+        rpm, rtol = guard((jnp.asarray(rpm), rtol), bad, f"rtol: must lie between 1e-14 and 1e-2; {TRACED}")
     load, governor = arrays_only(load), arrays_only(governor)
     if keep_cycles is not None and keep_cycles < cycles:
         leaves = jax.tree_util.tree_leaves((rpm, rtol, load, governor, combustion, engine))
@@ -368,7 +435,7 @@ def plan_run(
         raise EngineError(
             f"step_deg = {step_deg!r}: must be a multiple of grid_deg ({grid_deg:g}°) that divides the cycle"
         )
-    scales = _check_scales(combustion, cycles, engine.cylinders)
+    scales = _check_scales(combustion, cycles, engine.cylinders, guarded)
     fr = friction_coefficients(engine, friction)
     at_rest = r is not None and r == 0
     losses = linear_losses(load, fr) if governor is None else None

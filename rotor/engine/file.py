@@ -36,6 +36,10 @@ __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path", "MA
 MAX_FILE_BYTES = 16 * 1024**2
 """The largest engine file read [bytes]: a pressure table of a million points fits well within."""
 
+MAX_NESTING = 16
+"""The deepest nesting of tables and lists an engine description may have: an engine file
+nests four levels at most (``[[counterweights]]``, a table, a key, a list of numbers)."""
+
 _NUM, _NUMS, _INTS, _STR, _INT, _STRS, _NUM_OR_NUMS = (
     "a number",
     "a list of numbers",
@@ -213,13 +217,36 @@ def _build_counterweights(data):
         raise EngineError(f"[[counterweights]]: {e}") from None
 
 
+def _check_nesting(data: dict) -> None:
+    """Refuse tables and lists nested deeper than :data:`MAX_NESTING`, naming the key where
+    it happens (checked without recursion: a value nested thousands deep is refused, not a
+    ``RecursionError`` in whatever reads or prints it later)."""
+    stack: list[tuple[Any, str, int]] = [(data, "", 0)]
+    while stack:
+        value, key, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise EngineError(
+                f"{key or 'the engine description'}: nested more than {MAX_NESTING} levels deep; an engine file's "
+                "values are numbers, strings and lists of them, in tables (see `rotor presets`)"
+            )
+        if isinstance(value, dict):
+            stack.extend((v, k if not key else f"{key}.{k}", depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, key, depth + 1) for v in value)
+
+
 def engine_from_dict(data: dict) -> Engine:
     """Build and validate an :class:`rotor.Engine` from the parsed contents of an engine file.
 
-    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) naming the key and the problem.
+    **Arguments:** ``data``: the file's tables and keys as ``tomllib`` reads them (units as
+    the keys' names say, e.g. ``data["geometry"]["bore_m"]`` in metres).
+
+    **Raises:** :class:`rotor.EngineError` (a ``ValueError``) naming the key and the problem,
+    also for tables or lists nested deeper than :data:`MAX_NESTING`.
     """
     if not isinstance(data, dict):
         raise EngineError("an engine description must be a table of keys")
+    _check_nesting(data)
     known = set(_TOP) | set(_TABLES) | {"pressure", "counterweights"}
     for key in data:
         if key not in known:
@@ -280,9 +307,9 @@ def load_engine(path_or_name: str | os.PathLike[str]) -> Engine:
     :data:`MAX_FILE_BYTES` long.
 
     **Raises:** :class:`rotor.EngineError` (a ``ValueError``) for a missing, empty or
-    malformed file, a directory, or text that is not UTF-8, naming the file (the user's
-    path), the key and the problem; a :class:`TypeError` if ``path_or_name`` is not a
-    string or path.
+    malformed file, a directory, text that is not UTF-8, or arrays and tables nested too
+    deeply, naming the file (the user's path), the key and the problem; a
+    :class:`TypeError` if ``path_or_name`` is not a string or path.
     """
     if isinstance(path_or_name, bytes) or not isinstance(path_or_name, (str, os.PathLike)):
         raise TypeError(
@@ -322,6 +349,11 @@ def load_engine(path_or_name: str | os.PathLike[str]) -> Engine:
         if "\x00" in text:
             raise EngineError(f"{label}: not a TOML file (it holds NUL bytes: a binary file?)")
         data = tomllib.loads(text)
+    except RecursionError:  # tomllib reads nested arrays and inline tables by recursion
+        raise EngineError(
+            f"{label}: not a usable engine file: its arrays or inline tables are nested too deeply to read (an "
+            f"engine file nests {MAX_NESTING} levels at most)"
+        ) from None
     except UnicodeDecodeError as e:
         raise EngineError(
             f"{label}: not a TOML file: byte {e.start} is not UTF-8 text (save the file as UTF-8)"

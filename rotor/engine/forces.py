@@ -26,12 +26,12 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
 
-from ..checks import check_size
+from ..checks import called_from_outside, check_size, tracing
 from ..errors import EngineError
 from .kinematics import piston_motion, rod_motion
 from .mechanism import engine_piston_motion
-from .model import engine_jit, require_engine
-from .plausible import require_number, require_whole
+from .model import engine_jit, guard_engine, require_engine
+from .plausible import checked_angle, require_number, require_whole
 
 if TYPE_CHECKING:
     from .model import Engine
@@ -130,7 +130,11 @@ def crank_forces(
     **Raises:** :class:`rotor.EngineError` for a cylinder the engine does not have or one a
     slave rod drives; ``TypeError`` for a cylinder that is not a whole number.
     """
-    require_engine(engine, "crank_forces(engine)")
+    engine = require_engine(engine, "crank_forces(engine)")
+    if called_from_outside():
+        engine = guard_engine(engine) if tracing() else engine
+        theta = checked_angle("crank_forces", "theta", theta)
+        omega = checked_angle("crank_forces", "omega", omega, "rad/s")
     return cylinder_forces(engine, theta, omega, cylinder_index(engine, cylinder), model)
 
 
@@ -215,7 +219,10 @@ def indicated_power_w(engine: Engine, omega: ArrayLike | None = None) -> Array:
 
     **Arguments:** ``omega``: crank speed [rad/s]; default the engine's ``[operating] rpm``.
     """
-    require_engine(engine, "indicated_power_w(engine)")
+    engine = require_engine(engine, "indicated_power_w(engine)")
+    if called_from_outside():
+        engine = guard_engine(engine) if tracing() else engine
+        omega = None if omega is None else checked_angle("indicated_power_w", "omega", omega, "rad/s")
     omega = engine.operating.omega if omega is None else omega
     return mean_gas_torque(engine) * omega
 

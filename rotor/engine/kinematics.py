@@ -21,11 +21,15 @@ O(λ³ + λ²z²) for an offset one.
 from __future__ import annotations
 
 import functools
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
+import numpy as np
 from jaxtyping import Array, ArrayLike
 
+from ..checks import TRACED, called_from_outside, guard, guard_number, is_tracer
+from ..errors import EngineError
 from ..jaxconfig import jax, jnp
+from .plausible import checked_angle, require_real
 
 __all__ = [
     "PistonMotion",
@@ -71,7 +75,40 @@ def _check_model(model: str) -> None:
         raise ValueError(f"kinematics model must be one of {_MODELS}, got {model!r}")
 
 
-@jax.jit  # one compiled program per shape, not one per operation when called outside a jit
+def checked_mechanism(call: str, crank_radius_m: Any, rod_length_m: Any, pin_offset_m: Any) -> tuple[Any, Any, Any]:
+    """R, L and k [m] of a public kinematics function ``call``: real and finite, R > 0 and
+    L > R + |k| (else the crank cannot turn), each error naming ``call(argument)``; traced
+    values are checked when the program runs. Returns the values to use."""
+    names = ("crank_radius_m", "rod_length_m", "pin_offset_m")
+    values = [crank_radius_m, rod_length_m, pin_offset_m]
+    for name, v in zip(names, values):
+        require_real(call, name, v, "m")
+    if not any(is_tracer(v) for v in values):
+        R, L, k = (np.asarray(v, dtype=np.float64) for v in values)
+        for name, v in zip(names, (R, L, k)):
+            if not np.all(np.isfinite(v)):
+                raise EngineError(f"{call}({name}): must be finite [m], got a NaN or an infinity")
+        if not np.all(R > 0):
+            raise EngineError(f"{call}(crank_radius_m): must be positive [m]")
+        if not np.all(L > R + np.abs(k)):
+            raise EngineError(
+                f"{call}(rod_length_m): the rod must be longer than crank_radius_m plus |pin_offset_m| [m], or the "
+                "crank cannot turn"
+            )
+        return crank_radius_m, rod_length_m, pin_offset_m
+    R = guard_number(crank_radius_m, f"{call}(crank_radius_m)", 0.0, above=True, unit="m")
+    k = guard_number(pin_offset_m, f"{call}(pin_offset_m)", unit="m")
+    L = guard_number(rod_length_m, f"{call}(rod_length_m)", unit="m")
+    short = ~jnp.all(jnp.asarray(L) > jnp.asarray(R) + jnp.abs(jnp.asarray(k)))
+    L = guard(
+        L,
+        short,
+        f"{call}(rod_length_m): the rod must be longer than crank_radius_m plus |pin_offset_m| [m], or the crank "
+        f"cannot turn; {TRACED}",
+    )
+    return R, L, k
+
+
 def rod_motion(
     theta: ArrayLike, crank_radius_m: ArrayLike, rod_length_m: ArrayLike, pin_offset_m: ArrayLike = 0.0
 ) -> RodMotion:
@@ -83,7 +120,24 @@ def rod_motion(
     - ``pin_offset_m``: piston-pin offset k [m] (0 for a central mechanism).
 
     **Returns:** a :class:`RodMotion`.
+
+    **Raises:** a :class:`TypeError` for arguments that are not real numbers, a
+    :class:`rotor.EngineError` for a NaN or an infinity, R ≤ 0 or a rod no longer than
+    R + |k|, naming the argument; traced values (``jax.jit``/``vmap``/``grad``) are checked
+    when the program runs.
     """
+    if called_from_outside():  # rotor's own callers pass a checked engine's geometry
+        theta = checked_angle("rod_motion", "theta", theta)
+        crank_radius_m, rod_length_m, pin_offset_m = checked_mechanism(
+            "rod_motion", crank_radius_m, rod_length_m, pin_offset_m
+        )
+    return _rod_motion(theta, crank_radius_m, rod_length_m, pin_offset_m)
+
+
+@jax.jit  # one compiled program per shape, not one per operation when called outside a jit
+def _rod_motion(
+    theta: ArrayLike, crank_radius_m: ArrayLike, rod_length_m: ArrayLike, pin_offset_m: ArrayLike
+) -> RodMotion:
     theta = jnp.asarray(theta, dtype=jnp.float64)
     R, L, k = crank_radius_m, rod_length_m, pin_offset_m
     sin_beta = (R * jnp.sin(theta) - k) / L
@@ -94,7 +148,6 @@ def rod_motion(
     return RodMotion(beta, jnp.asarray(dbeta), jnp.asarray(d2beta))
 
 
-@functools.partial(jax.jit, static_argnames="model")
 def piston_motion(
     theta: ArrayLike,
     crank_radius_m: ArrayLike,
@@ -117,8 +170,22 @@ def piston_motion(
     - ``model``: ``"exact"`` (default) or ``"series"``.
 
     **Returns:** a :class:`PistonMotion` [m, m/rad, m/rad²].
+
+    **Raises:** as :func:`rod_motion`.
     """
     _check_model(model)
+    if called_from_outside():  # rotor's own callers pass a checked engine's geometry
+        theta = checked_angle("piston_motion", "theta", theta)
+        crank_radius_m, rod_length_m, pin_offset_m = checked_mechanism(
+            "piston_motion", crank_radius_m, rod_length_m, pin_offset_m
+        )
+    return _piston_motion(theta, crank_radius_m, rod_length_m, pin_offset_m, model)
+
+
+@functools.partial(jax.jit, static_argnames="model")
+def _piston_motion(
+    theta: ArrayLike, crank_radius_m: ArrayLike, rod_length_m: ArrayLike, pin_offset_m: ArrayLike, model: str
+) -> PistonMotion:
     theta = jnp.asarray(theta, dtype=jnp.float64)
     R, L, k = crank_radius_m, rod_length_m, pin_offset_m
     lam = R / L
@@ -128,7 +195,7 @@ def piston_motion(
         ds = R * (jnp.sin(theta) + lam / 2 * jnp.sin(2 * theta) - lam * z * jnp.cos(theta))
         d2s = R * (jnp.cos(theta) + lam * jnp.cos(2 * theta) + lam * z * jnp.sin(theta))
         return PistonMotion(jnp.asarray(s), jnp.asarray(ds), jnp.asarray(d2s))
-    beta, dbeta, _ = rod_motion(theta, R, L, k)
+    beta, dbeta, _ = _rod_motion(theta, R, L, k)
     cos_beta = jnp.cos(beta)
     s = jnp.sqrt((R + L) ** 2 - k**2) - R * jnp.cos(theta) - L * cos_beta
     ds = R * jnp.sin(theta + beta) / cos_beta
@@ -139,6 +206,17 @@ def piston_motion(
 def mean_piston_speed(stroke_m: ArrayLike, omega: ArrayLike) -> Array:
     """Mean piston speed v_m = S·n/30 = S·ω/π [m/s].
 
-    **Arguments:** ``stroke_m``: S [m]; ``omega``: mean crank speed [rad/s].
+    **Arguments:** ``stroke_m``: S [m], positive; ``omega``: mean crank speed [rad/s].
+
+    **Raises:** a :class:`TypeError` for arguments that are not real numbers, a
+    :class:`rotor.EngineError` for a NaN or an infinity or a stroke not above 0, naming the
+    argument; traced values are checked when the program runs.
     """
+    if called_from_outside():
+        omega = checked_angle("mean_piston_speed", "omega", omega, "rad/s")
+        stroke_m = checked_angle("mean_piston_speed", "stroke_m", stroke_m, "m")
+        if is_tracer(stroke_m):
+            stroke_m = guard_number(stroke_m, "mean_piston_speed(stroke_m)", 0.0, above=True, unit="m")
+        elif not np.all(np.asarray(stroke_m, dtype=np.float64) > 0):
+            raise EngineError("mean_piston_speed(stroke_m): must be positive [m]")
     return jnp.asarray(stroke_m) * jnp.asarray(omega) / jnp.pi

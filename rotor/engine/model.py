@@ -15,7 +15,10 @@ ratio of 1.5 … 100, …), and what is computed from the inputs (the piston are
 displacement, the clearance volume, the inertia of the rods and pistons, the inertia and
 gas forces at the operating speed) must come out finite, or the error names the input
 that made it overflow. ``eqx.tree_at`` skips these checks; :meth:`Engine.check` runs
-them again, and every solver calls it on an engine with concrete fields.
+them again, and every solver calls it on an engine with concrete fields. A field traced by
+``jax.jit``, ``vmap`` or ``grad`` is checked by :func:`guard_engine`, which the public
+functions call on the engine they are given: finite and within its plausible range, the
+rod longer than the crank radius, or the program raises when it runs, naming the key.
 
 Angles: ``throw_angles_deg[i]`` is the crank angle at which throw i points along an
 unbanked cylinder axis (its TDC); ``bank_angles_deg[i]`` is the angle of cylinder i's
@@ -28,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 from typing import Any, ClassVar
 
 import equinox as eqx
@@ -36,13 +40,25 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..checks import as_f64, check_finite, check_positive, concrete, fmt, where
+from ..checks import (
+    TRACED,
+    as_f64,
+    called_from_outside,
+    check_finite,
+    check_positive,
+    concrete,
+    fmt,
+    guard,
+    has_tracer,
+    tracing,
+    where,
+)
 from ..cycles import array_module
 from ..errors import EngineError
 from ..programs import kept_program
 from ..units import RAD_S_PER_RPM
 from .friction import Friction
-from .plausible import check_fields_plausible, finite_derived, number, what_it_is
+from .plausible import check_fields_plausible, checked_angle, finite_derived, guard_fields, number, what_it_is
 from .pressure import NoPressure, PressureSource
 
 __all__ = [
@@ -56,6 +72,7 @@ __all__ = [
     "Torsion",
     "Engine",
     "require_engine",
+    "guard_engine",
     "engine_jit",
     "unnamed",
 ]
@@ -249,6 +266,12 @@ class Crankshaft(eqx.Module):
     table: ClassVar[str] = "crankshaft"
 
     def __check_init__(self):
+        if jnp.ndim(self.inertia_kgm2) != 0:  # a traced value under vmap is one item's number
+            raise EngineError(
+                f"{where(self.table, 'inertia_kgm2')}: one number [kg·m²] (crankshaft, flywheel and what is rigidly "
+                f"attached), got an array of shape {jnp.shape(self.inertia_kgm2)}; for many inertias use "
+                "rotor.steady_sweep(inertia_kgm2=...) or jax.vmap"
+            )
         check_positive(self.table, "inertia_kgm2", self.inertia_kgm2)
         if self.main_journals is not None and (
             isinstance(self.main_journals, bool) or not isinstance(self.main_journals, (int, np.integer))
@@ -688,7 +711,8 @@ class Engine(eqx.Module):
         inertia or a NaN bore can be put into an engine that way; the solvers
         (:func:`rotor.crank_train`, and through it :func:`rotor.steady_state`,
         :func:`rotor.simulate` and the flywheel design) call this on every engine whose
-        fields are concrete numbers. Traced fields (inside ``jax.jit``) are not checked.
+        fields are concrete numbers. Traced fields (inside ``jax.jit``) are checked when the
+        program runs instead (:func:`guard_engine`).
 
         **Raises:** :class:`rotor.EngineError` naming the key and the problem, or a
         :class:`TypeError` for a field that is not a number (or not a table).
@@ -879,14 +903,40 @@ def unnamed(engine: Any) -> Any:
     return copy
 
 
+_ARGUMENT_UNITS = {"theta": "rad", "omega": "rad/s"}
+"""The numeric arguments :func:`engine_jit` checks by name, and their units."""
+
+
 def engine_jit(fn: Any) -> Any:
     """``eqx.filter_jit`` for a function whose first argument is an :class:`Engine`,
     compiled once for engines of the same structure whatever their names (:func:`unnamed`).
-    The function must not read the name."""
+    The function must not read the name.
+
+    Called from outside rotor (:func:`rotor.checks.called_from_outside`), the function's
+    ``theta`` [rad] and ``omega`` [rad/s] are checked first (real and finite:
+    :func:`rotor.engine.plausible.checked_angle`) and a traced engine's fields when the
+    program runs (:func:`guard_engine`); rotor's own callers pass checked values."""
     jitted = kept_program()(eqx.filter_jit(fn))
+    positions = {
+        name: i for i, name in enumerate(inspect.signature(fn).parameters) if name in _ARGUMENT_UNITS and i > 0
+    }
+
+    def checked(engine: Any, args: tuple, kwargs: dict) -> tuple[Any, tuple, dict]:
+        engine = require_engine(engine, f"{fn.__name__}(engine)")
+        if tracing():
+            engine = guard_engine(engine)
+        given, kwargs = list(args), dict(kwargs)
+        for name, i in positions.items():
+            if i - 1 < len(given):
+                given[i - 1] = checked_angle(fn.__name__, name, given[i - 1], _ARGUMENT_UNITS[name])
+            elif name in kwargs:
+                kwargs[name] = checked_angle(fn.__name__, name, kwargs[name], _ARGUMENT_UNITS[name])
+        return engine, tuple(given), kwargs
 
     @functools.wraps(fn)
     def call(engine: Any, *args: Any, **kwargs: Any) -> Any:
+        if called_from_outside():
+            engine, args, kwargs = checked(engine, args, kwargs)
         return jitted(unnamed(engine), *args, **kwargs)
 
     call.lower = lambda engine, *args, **kwargs: jitted.lower(unnamed(engine), *args, **kwargs)  # type: ignore[attr-defined]
@@ -905,6 +955,40 @@ _TABLE_TYPES = (
     ("counterweights", Counterweights, True),
     ("torsion", Torsion, True),
 )
+
+
+def guard_engine(engine: Engine, tables: tuple[str, ...] | None = None, checks: Any = None) -> Engine:
+    """``engine`` with its traced fields checked when the program runs (``eqx.error_if``):
+    each finite and within its plausible range (:func:`rotor.engine.plausible.guard_fields`)
+    and the rod longer than the crank radius plus the pin offset, or a one-line error naming
+    the key. ``tables``: the tables to check (default all; a prepared engine's table inputs
+    are compared with the values it was prepared from instead); ``checks``: a
+    :class:`rotor.checks.TracedChecks` to record the checks in, for the caller to make with
+    its others. The engine itself where no field is traced (:meth:`Engine.check` judges
+    concrete ones)."""
+    if not has_tracer(engine):
+        return engine
+    parts = [
+        f.name
+        for f in dataclasses.fields(engine)
+        if (tables is None or f.name in tables)
+        and isinstance(getattr(engine, f.name), eqx.Module)
+        and has_tracer(getattr(engine, f.name))
+    ]
+    guarded = [guard_fields(getattr(engine, name), checks) for name in parts]
+    engine = eqx.tree_at(lambda e: [getattr(e, name) for name in parts], engine, guarded)
+    g = engine.geometry
+    if (tables is None or "geometry" in tables) and has_tracer(g):
+        reach = jnp.asarray(g.stroke_m) / 2 + jnp.abs(jnp.asarray(g.pin_offset_m))
+        rod = guard(
+            g.rod_length_m,
+            ~(jnp.asarray(g.rod_length_m) > reach),
+            "[geometry] rod_length_m: the rod must be longer than the crank radius stroke_m/2 plus the pin offset |k|, "
+            f"or the crank cannot turn; {TRACED}",
+            checks,
+        )
+        engine = eqx.tree_at(lambda e: e.geometry.rod_length_m, engine, rod)
+    return engine
 
 
 def require_engine(engine: object, call: str) -> Engine:

@@ -65,7 +65,7 @@ from typing import Any, Literal, overload
 import jax
 import numpy as np
 
-from ..checks import as_f64, concrete, where
+from ..checks import as_f64, concrete, guard_number, has_tracer, is_tracer, where
 from ..errors import EngineError
 
 __all__ = [
@@ -73,10 +73,14 @@ __all__ = [
     "number",
     "check_plausible",
     "check_fields_plausible",
+    "guard_fields",
     "check_results_finite",
     "check_speed_rpm",
     "finite_derived",
     "require_number",
+    "require_real",
+    "require_known",
+    "checked_angle",
     "what_it_is",
     "require_whole",
 ]
@@ -193,10 +197,18 @@ def require_number(value: Any, call: str, unit: str = "", *, optional: bool) -> 
 def require_number(value: Any, call: str, unit: str = "", *, optional: bool = False) -> float | None:
     """``value`` as a Python float if it is a real number (a Python, numpy or concrete JAX
     scalar; not a bool or a string), else a :class:`TypeError` naming ``call`` (e.g.
-    ``"design_flywheel(delta)"``) and the ``unit`` it takes. ``optional``: ``None`` passes
-    as ``None``. Whether the number is in range is the caller's check."""
+    ``"design_flywheel(delta)"``) and the ``unit`` it takes, also for a value traced by
+    ``jax.jit``/``vmap``/``grad`` (the functions that take numbers this way compute on the
+    host). ``optional``: ``None`` passes as ``None``. Whether the number is in range is the
+    caller's check."""
     if value is None and optional:
         return None
+    if is_tracer(value):
+        u = f" [{unit}]" if unit else ""
+        raise TypeError(
+            f"{call}: takes a number{u} known when it is called, not a value traced by jax.jit, vmap or grad; "
+            "call it outside the transformation"
+        )
     ok = not isinstance(value, (bool, np.bool_, str, bytes)) and value is not None
     if ok and not isinstance(value, (int, float, np.integer, np.floating)):
         a = concrete(value) if hasattr(value, "dtype") else None
@@ -205,6 +217,48 @@ def require_number(value: Any, call: str, unit: str = "", *, optional: bool = Fa
         u = f" [{unit}]" if unit else ""
         raise TypeError(f"{call}: expected a number{u}, got {what_it_is(value)}")
     return float(value)
+
+
+def require_real(call: str, name: str, value: Any, unit: str) -> None:
+    """A :class:`TypeError` naming ``call(name)`` and the ``unit`` it takes where ``value``
+    is not real numbers (a string, a complex number, a bool, None); traced values too."""
+    if is_tracer(value):
+        kind = np.dtype(value.dtype).kind
+    elif isinstance(value, (str, bytes, bool, np.bool_)) or value is None:
+        kind = "?"
+    else:
+        try:
+            kind = np.asarray(value).dtype.kind
+        except (TypeError, ValueError):
+            kind = "?"
+    if kind not in "iuf":
+        raise TypeError(f"{call}({name}): expected real numbers [{unit}], got {what_it_is(value)}")
+
+
+def require_known(call: str, why: str, **values: Any) -> None:
+    """Refuse a value traced by ``jax.jit``/``vmap``/``grad`` (a :class:`TypeError` naming
+    ``call(argument)``) in a function that computes on the host; ``why`` says what it
+    does there (e.g. ``"the design searches on the host"``), the message what to do."""
+    for name, value in values.items():
+        if has_tracer(value):
+            raise TypeError(
+                f"{call}({name}): takes values known when it is called, not values traced by jax.jit, vmap or grad "
+                f"({why}); call it outside the transformation"
+            )
+
+
+def checked_angle(call: str, name: str, theta: Any, unit: str = "rad") -> Any:
+    """``theta`` (an angle [rad], or a speed: ``unit``) of a public function ``call``: real
+    numbers (else a :class:`TypeError`), all finite (else a :class:`rotor.EngineError`, or
+    for a traced value an error when the program runs,
+    :func:`rotor.checks.guard_number`), each naming ``call(name)``. Returns the value to use."""
+    require_real(call, name, theta, unit)
+    if is_tracer(theta):
+        return guard_number(theta, f"{call}({name})", unit=unit)
+    a = np.asarray(theta, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        raise EngineError(f"{call}({name}): must be finite [{unit}], got a NaN or an infinity")
+    return theta
 
 
 def require_whole(value: Any, call: str, lo: int = 1) -> int:
@@ -241,6 +295,30 @@ def check_fields_plausible(module: Any) -> None:
     table = getattr(module, "table", "")
     for f in dataclasses.fields(module):
         check_plausible(table, f.name, getattr(module, f.name))
+
+
+def guard_fields(module: Any, checks: Any = None) -> Any:
+    """``module`` (an engine table, or a :class:`rotor.Friction`) with each traced field
+    checked when the program runs (:func:`rotor.checks.guard_number`; with ``checks``, a
+    :class:`rotor.checks.TracedChecks`, recorded there): finite and within its
+    :data:`PLAUSIBLE` range (a key without one: finite), the message naming the key. The
+    same module where no field is traced (its concrete values were checked when it was
+    built, or by :meth:`rotor.Engine.check`)."""
+    import dataclasses
+
+    import equinox as eqx
+
+    table = getattr(module, "table", "")
+    changes: dict[str, Any] = {}
+    for f in dataclasses.fields(module):
+        value = getattr(module, f.name)
+        if is_tracer(value):
+            lo, hi, unit, hint = PLAUSIBLE.get((table, f.name), (-math.inf, math.inf, "", ""))
+            changes[f.name] = guard_number(value, where(table, f.name), lo, hi, unit=unit, expected=hint, checks=checks)
+    if not changes:
+        return module
+    names = list(changes)
+    return eqx.tree_at(lambda m: [getattr(m, k) for k in names], module, [changes[k] for k in names])
 
 
 def check_speed_rpm(rpm: Any, call: str) -> float:

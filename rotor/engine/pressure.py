@@ -23,10 +23,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..checks import check_finite, check_positive, concrete, fmt, where
+from ..checks import TRACED, called_from_outside, check_finite, check_positive, concrete, fmt, guard, is_tracer, where
 from ..errors import EngineError
 from .kinematics import piston_motion
-from .plausible import check_fields_plausible, number
+from .plausible import check_fields_plausible, checked_angle, number, require_number
 
 __all__ = [
     "PressureSource",
@@ -60,7 +60,6 @@ def _pchip_slopes(x, y, period):
     return jnp.where(same_sign, m, 0.0)
 
 
-@eqx.filter_jit  # one compiled program per shape when called outside a jit
 def periodic_pchip(xq: ArrayLike, x: ArrayLike, y: ArrayLike, period: float) -> Array:
     """Evaluate the periodic monotone cubic through (x, y) at ``xq``.
 
@@ -70,7 +69,36 @@ def periodic_pchip(xq: ArrayLike, x: ArrayLike, y: ArrayLike, period: float) -> 
     - ``y``: values at the knots. ``period``: the period, same unit as ``x``.
 
     **Returns:** interpolated values, shape of ``xq``. Differentiable in ``xq`` and ``y``.
+
+    **Raises:** a :class:`TypeError` for values that are not real numbers, a
+    :class:`rotor.EngineError` for a NaN or an infinity, knots that do not increase within
+    one period or a period not above 0, naming the argument; traced values are checked
+    when the program runs.
     """
+    if called_from_outside():  # rotor's own pressure tables were checked when they were built
+        xq, x, y = (
+            checked_angle("periodic_pchip", name, v, "x's unit") for name, v in (("xq", xq), ("x", x), ("y", y))
+        )
+        p = require_number(period, "periodic_pchip(period)")
+        if not (np.isfinite(p) and p > 0):
+            raise EngineError(f"periodic_pchip(period) = {period!r}: must be a positive, finite number")
+        knots = jnp.asarray(x, dtype=jnp.float64)
+        increasing = (knots.ndim == 1) & (knots.shape[0] >= 2)
+        message = "periodic_pchip(x): the knots must increase strictly, within one period of the first"
+        if increasing:
+            steps = jnp.concatenate([jnp.diff(knots), (knots[:1] + p) - knots[-1:]])
+            ok = jnp.all(steps > 0)
+            if is_tracer(ok):
+                x = guard(x, ~ok, f"{message}; {TRACED}")
+            elif not bool(ok):
+                raise EngineError(message)
+        else:
+            raise EngineError(f"{message}: give two knots or more, in one list")
+    return _periodic_pchip(xq, x, y, period)
+
+
+@eqx.filter_jit  # one compiled program per shape when called outside a jit
+def _periodic_pchip(xq: ArrayLike, x: ArrayLike, y: ArrayLike, period: float) -> Array:
     x = jnp.asarray(x, dtype=jnp.float64)
     y = jnp.asarray(y, dtype=jnp.float64)
     xq = jnp.asarray(xq, dtype=jnp.float64)

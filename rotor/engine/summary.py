@@ -15,7 +15,7 @@ from .forces import gas_torque, imep_pa, mean_gas_torque, total_torque
 from .inertia import inertia_coefficients, mean_reduced_inertia, reduced_inertia
 from .kinematics import mean_piston_speed
 from .model import Engine, engine_jit, require_engine
-from .plausible import check_results_finite, check_speed_rpm, require_whole
+from .plausible import check_results_finite, check_speed_rpm, require_known, require_whole
 
 __all__ = ["EngineSummary", "engine_summary", "EngineCurves", "engine_curves"]
 
@@ -125,6 +125,7 @@ def engine_summary(engine: Engine, rpm: float | None = None) -> EngineSummary:
     and its excess work (the largest swing of ∫(M − M_mean)dθ, Shishkov (2014) §3.2.12), and the
     mean, minimum and maximum of the reduced inertia I(θ).
     """
+    require_known("engine_summary", "a table for people, computed on the host", engine=engine)
     require_engine(engine, "engine_summary(engine)").check()
     rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
     omega = rpm * RAD_S_PER_RPM
@@ -304,6 +305,7 @@ def engine_curves(engine: Engine, rpm: float | None = None, points_per_deg: int 
     **Arguments:** ``engine``: a :class:`rotor.Engine`; ``rpm``: crank speed [rev/min]
     (default ``[operating] rpm``); ``points_per_deg``: samples per degree [1/deg].
     """
+    require_known("engine_curves", "a table for people, computed on the host", engine=engine)
     require_engine(engine, "engine_curves(engine)").check()
     rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
     points_per_deg = require_whole(points_per_deg, "engine_curves(points_per_deg)")

@@ -16,7 +16,7 @@ from ..results import Result, json_safe
 from ..units import RAD_S_PER_RPM
 from .forces import cylinder_forces, cylinder_index, table_angles_deg
 from .model import Engine, engine_jit, require_engine
-from .plausible import check_results_finite, check_speed_rpm, require_whole
+from .plausible import check_results_finite, check_speed_rpm, require_known, require_whole
 
 __all__ = ["CrankTable", "crank_table", "TABLE_COLUMNS"]
 
@@ -167,6 +167,7 @@ def crank_table(
 
     **Returns:** a :class:`CrankTable`, rows at 0, step, …, cycle degrees.
     """
+    require_known("crank_table", "a table for people, computed on the host", engine=engine)
     require_engine(engine, "crank_table(engine)").check()
     rpm = float(engine.operating.rpm) if rpm is None else check_speed_rpm(rpm, "rpm")
     if kinematics not in ("series", "exact"):

@@ -4,6 +4,7 @@ lightest disc (checked by a general constrained optimiser) and the command line.
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -165,6 +166,47 @@ def test_lightest_disc_errors():
         rotor.lightest_disc(1.0, peak_rpm=1250)
     with pytest.raises(rotor.EngineError, match="must be positive"):
         rotor.lightest_disc(-1.0, peak_rpm=1250, max_outer_diameter_m=0.5)
+
+
+def test_a_disc_no_limit_allows_is_refused_with_what_would_do(diesel):
+    """A design whose disc would break its own limit is refused: the message names the limit,
+    the outer diameter that carries the flywheel (a disc no wider than it is across) and the
+    δ the largest disc allowed gives, never a disc hundreds of kilometres wide."""
+    with pytest.raises(rotor.EngineError) as info:
+        rotor.design_flywheel(diesel, 0.01, max_outer_diameter_m=0.3)
+    text = str(info.value)
+    assert "\n" not in text and "max_outer_diameter_m = 0.3 m" in text
+    needed = float(re.search(r"needs max_outer_diameter_m ≥ ([0-9.e+-]+) m", text).group(1))
+    looser = float(re.search(r"a δ target of ([0-9.e+-]+) or more", text).group(1))
+    # what the message offers is what works: that diameter carries the design, that δ is met
+    ok = rotor.design_flywheel(diesel, 0.01, max_outer_diameter_m=needed * 1.001)
+    assert ok.disc is not None and ok.disc.width_m <= ok.disc.outer_diameter_m
+    assert ok.disc.inertia_kgm2 == pytest.approx(ok.flywheel_kgm2)
+    loose = rotor.design_flywheel(diesel, looser * 1.001, max_outer_diameter_m=0.3)
+    assert loose.disc is not None and loose.disc.outer_diameter_m == pytest.approx(0.3)
+    assert loose.disc.width_m <= 0.3
+
+
+def test_a_disc_past_its_limit_is_refused_by_lightest_disc_too():
+    J, rho = 50.0, 7200.0
+    square = (32 * J / (rho * math.pi)) ** 0.2  # the disc as wide as it is across: ρπD⁵/32 = J
+    with pytest.raises(rotor.EngineError, match=rf"max_outer_diameter_m = 0.01 m.*≥ {square:.4g} m") as info:
+        rotor.lightest_disc(J, peak_rpm=1250, max_outer_diameter_m=0.01)
+    assert "\n" not in str(info.value)
+    rim = rpm_to_rad_s(1250) * square / 2
+    with pytest.raises(rotor.EngineError, match=rf"max_rim_speed_m_s = 5 m/s.*max_rim_speed_m_s ≥ {rim:.4g} m/s"):
+        rotor.lightest_disc(J, peak_rpm=1250, max_rim_speed_m_s=5.0)
+    wide = rotor.lightest_disc(50.0, peak_rpm=1250, max_outer_diameter_m=0.5, max_width_m=2.0)  # a drum, allowed
+    assert wide.width_m == pytest.approx(32 * 50.0 / (7200.0 * math.pi * 0.5**4))
+
+
+def test_cli_refuses_a_disc_thousands_of_kilometres_wide(capsys):
+    from rotor.cli import main
+
+    assert main(["flywheel", "4chn15", "--delta", "0.01", "--max-diameter", "0.01"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "max_outer_diameter_m = 0.01 m" in captured.err and "max_outer_diameter_m ≥ " in captured.err
 
 
 def test_design_with_disc_and_shaft(diesel):

@@ -191,3 +191,37 @@ def test_console_script_exit_code_and_message(tmp_path):
     r = subprocess.run(exe + ["table", str(path)], capture_output=True, text=True)
     assert r.returncode == 2
     assert r.stderr.strip().count("\n") == 0 and "strokes is missing" in r.stderr
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "name = " + "[" * 5000 + "]" * 5000 + "\n",  # nested arrays, past what tomllib reads
+        "name = " + "{a = " * 3000 + "1" + "}" * 3000 + "\n",  # nested inline tables
+    ],
+    ids=["arrays", "inline tables"],
+)
+def test_a_deeply_nested_file_is_refused_naming_it(tmp_path, capsys, text):
+    path = tmp_path / "deep.toml"
+    path.write_text(text)
+    with pytest.raises(rotor.EngineError, match=re.escape(str(path)) + ".*nested too deeply") as info:
+        rotor.load_engine(path)
+    assert "\n" not in str(info.value)
+    assert main(["table", str(path)]) == 2  # an input error, not an internal one (70)
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "nested too deeply" in err
+
+
+def test_nesting_that_tomllib_reads_is_refused_by_the_engine_reader(tmp_path):
+    """Arrays nested a few hundred deep parse, and are refused by the engine's own check,
+    naming the key (no RecursionError printing them)."""
+    path = tmp_path / "deep.toml"
+    path.write_text(
+        preset_path("4chn15").read_text().replace("[layout]", "[layout]\nnames = " + "[" * 300 + "]" * 300, 1)
+    )
+    with pytest.raises(rotor.EngineError, match=r"deep\.toml: layout\.names: nested more than 16 levels") as info:
+        rotor.load_engine(path)
+    assert len(str(info.value)) < 300
+    data = {**BASE, "geometry": {**BASE["geometry"], "bore_m": [[[[[[[[[[[[[[[[[[[[0.15]]]]]]]]]]]]]]]]]]]]}}
+    with pytest.raises(rotor.EngineError, match=r"geometry\.bore_m: nested more than"):
+        rotor.engine_from_dict(data)
