@@ -92,6 +92,11 @@ class Calibration(Result):
             v = getattr(self, key)
             if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v)):
                 raise EngineError(f"calibration {key} = {v!r}: must be a finite number")
+        if not -720.0 <= float(self.tdc_after_gap_deg) <= 720.0:
+            raise EngineError(
+                f"calibration tdc_after_gap_deg = {self.tdc_after_gap_deg!r}: an angle after the gap, -720 … 720 "
+                "[deg]; the calibration file is damaged, make it again"
+            )
         if self.scaling not in SCALINGS:
             raise EngineError(f"calibration scaling = {self.scaling!r}: one of {', '.join(SCALINGS)}")
 

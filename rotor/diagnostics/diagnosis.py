@@ -570,7 +570,17 @@ def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan)
         tdc_deg = calibration.tdc_after_gap_deg
     w = plan.wheel or (calibration.wheel if calibration is not None and calibration.wheel else None)
     te = "estimate" if calibration is None or calibration.tooth_errors is None else calibration.tooth_errors
-    read = _open_log(engine, log, w, te, plan, cal_source)
+    try:
+        read = _open_log(engine, log, w, te, plan, cal_source)
+    except LogError as e:
+        if plan.wheel is None and calibration is not None and calibration.wheel:
+            origin = f"the calibration{f' ({cal_source})' if cal_source else ''}"
+            raise LogError(
+                f"{os.path.basename(os.fspath(log))}: {origin} was made on a {calibration.wheel} wheel, which this "
+                f"log's edges do not fit ({str(e).split(': ', 1)[-1][:160]}); give a calibration made on this log's "
+                "wheel, or none (calibration=None)"
+            ) from None
+        raise
     analysis = read(0.0 if from_speed else tdc_deg, firing, te)  # type: ignore[arg-type]
     if analysis.tdc_source is PhaseSource.UNKNOWN:
         raise EngineError(

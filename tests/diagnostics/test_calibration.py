@@ -261,3 +261,34 @@ def test_engine_identity_is_stored_and_checked(tmp_path):
         rotor.Calibration.from_json_dict({**d, "geometry": {"bore_m": "wide"}})
     with pytest.raises(rotor.EngineError, match="cylinders"):
         rotor.Calibration.from_json_dict({**d, "cylinders": -1})
+
+
+def test_a_calibration_with_no_angle_for_tdc_is_refused_by_itself(tmp_path, capsys):
+    from importlib import resources
+
+    from conftest import run_cli
+
+    d = json.loads((resources.files("rotor.presets") / "tue-single.calibration.json").read_text())
+    d["tdc_after_gap_deg"] = 1e300
+    (tmp_path / "cal.json").write_text(json.dumps(d))
+    log = rotor.simulated_recording(tmp_path / "sim.txt", "tue-single", cycles=4, seed=1)
+    rc, _, err = run_cli(
+        capsys, "diagnose", str(log), "--engine", "tue-single", "--calibration", str(tmp_path / "cal.json")
+    )
+    assert rc == 2 and "calibration tdc_after_gap_deg = 1e+300" in err and "sim.txt" not in err
+
+
+def test_a_calibration_of_another_wheel_is_named_as_the_cause(tmp_path, capsys):
+    from importlib import resources
+
+    from conftest import run_cli
+
+    d = json.loads((resources.files("rotor.presets") / "tue-single.calibration.json").read_text())
+    d["wheel"] = "36-1"
+    d.pop("tooth_errors", None)
+    (tmp_path / "cal.json").write_text(json.dumps(d))
+    log = rotor.simulated_recording(tmp_path / "sim.txt", "tue-single", cycles=4, seed=1)
+    rc, _, err = run_cli(
+        capsys, "diagnose", str(log), "--engine", "tue-single", "--calibration", str(tmp_path / "cal.json")
+    )
+    assert rc == 2 and "was made on a 36-1 wheel, which this log's edges do not fit" in err
