@@ -154,7 +154,18 @@ def error_text(e: BaseException) -> str:
         text = f"--{argument.replace('_', '-')} {text[len(argument) + 1 :]}"
     if hasattr(e, "argument"):  # a library error (rotor.RotorError)
         text = _ARGUMENT_SETTING.sub(_flag, text)
+        for function, command in LIBRARY_COMMANDS.items():
+            text = text.replace(function, command)
     return terminal_safe(text)
+
+
+LIBRARY_COMMANDS = {
+    "rotor.simulate(..., method='time')": "`rotor simulate ENGINE --method time`",
+    "with rotor.simulate": "with `rotor simulate ENGINE`",
+    "use rotor.simulate": "use `rotor simulate`",
+    "rotor.preset_names()": "`rotor presets`",
+}
+"""The library's functions its messages recommend, and the command that does the same."""
 
 
 MAX_MESSAGE_CHARS = 800

@@ -318,6 +318,8 @@ def load_engine(path_or_name: str | os.PathLike[str]) -> Engine:
         )
     path = Path(path_or_name)
     name = str(path_or_name)
+    if not name.strip():
+        raise EngineError("engine: an empty name; give an engine file (.toml) or a preset name (rotor.preset_names())")
     if path.suffix != ".toml" and name in preset_names():
         text_source: Path | Any = preset_path(name)
         label = f"preset {name!r}"

@@ -623,3 +623,18 @@ def test_a_scheduler_address_where_no_dask_scheduler_answers_is_named(tmp_path: 
     rc, _, err = run_cli(capsys, "analyze", str(log), str(log), "--scheduler", f"tcp://127.0.0.1:{port}")
     thread.join(timeout=10)
     assert rc == 2 and "is not a Dask scheduler" in err and "memory" not in err.split("(")[0]
+
+
+def test_a_library_function_a_message_recommends_is_named_as_its_command(capsys) -> None:
+    rc, _, err = run_cli(capsys, "steady", "4chn15", "--rpm", "5")
+    assert rc != 0 and "rotor.simulate" not in err and "`rotor simulate ENGINE`" in err
+
+
+def test_an_empty_engine_name_is_named_as_empty(capsys) -> None:
+    import rotor
+    from rotor.errors import EngineError
+
+    with pytest.raises(EngineError, match="an empty name"):
+        rotor.load_engine("")
+    rc, _, err = run_cli(capsys, "info", "")
+    assert rc == 2 and "an empty name" in err and "`rotor presets`" in err
