@@ -59,8 +59,18 @@ def called_from_outside(depth: int = 2) -> bool:
     the rotor package (a user's script, notebook or test): its traced arguments are then
     checked (:func:`guard`). rotor's own modules call the public functions with values they
     checked on the host, or with a solver's iterates that the solver judges itself."""
-    module = sys._getframe(depth).f_globals.get("__name__", "")
-    return not (module == "rotor" or module.startswith("rotor."))
+    frame: Any = sys._getframe(depth)
+    while frame is not None:  # past the transformations' own frames (jax.jit, vmap, equinox's wrappers)
+        module = frame.f_globals.get("__name__", "")
+        if module.split(".")[0] not in _TRANSFORM_MODULES:
+            return not (module == "rotor" or module.startswith("rotor."))
+        frame = frame.f_back
+    return True
+
+
+_TRANSFORM_MODULES = frozenset({"jax", "jaxlib", "equinox", "functools", "contextlib", "lineax", "optimistix", "diffrax"})
+"""Modules whose frames stand between a transformed function and its caller: skipped to find
+who called it."""
 
 
 TRACED = "the value traced under jax.jit, vmap or grad is not"
