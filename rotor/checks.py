@@ -68,7 +68,9 @@ def called_from_outside(depth: int = 2) -> bool:
     return True
 
 
-_TRANSFORM_MODULES = frozenset({"jax", "jaxlib", "equinox", "functools", "contextlib", "lineax", "optimistix", "diffrax"})
+_TRANSFORM_MODULES = frozenset(
+    {"jax", "jaxlib", "equinox", "functools", "contextlib", "lineax", "optimistix", "diffrax"}
+)
 """Modules whose frames stand between a transformed function and its caller: skipped to find
 who called it."""
 
