@@ -248,7 +248,16 @@ def _monitor(args: argparse.Namespace) -> None:
     if args.log != "-" and os.path.isdir(args.log):
         raise IsADirectoryError(21, "Is a directory", args.log)
     if args.log != "-" and not os.path.isfile(args.log):
-        raise FileNotFoundError(2, "No such file", args.log)
+        import stat
+
+        if not os.path.exists(args.log):
+            raise FileNotFoundError(2, "No such file", args.log)
+        if not stat.S_ISFIFO(os.stat(args.log).st_mode):  # a named pipe is a stream, read as it comes
+            raise LogError(
+                f"{args.log}: is a device or socket, not a log; give a file, a named pipe or - (standard input)"
+            )
+        if args.follow:
+            raise LogError(f"{args.log}: is a named pipe: it is read as it comes without --follow")
     name = "standard input" if args.log == "-" else args.log
     # the wheel and the firings checked before anything is read (a wheel too coarse for the
     # monitor refused at once, not at the first edges)
@@ -335,7 +344,7 @@ def _monitor(args: argparse.Namespace) -> None:
                 monitor = start(args.wheel)
             emit(monitor.feed(times))
 
-    if args.log != "-" and not args.follow and _a_recording(args.log):
+    if args.log != "-" and not args.follow and os.path.isfile(args.log) and _a_recording(args.log):
         # a capture or bench file (several columns): read through the stages `rotor analyze` uses,
         # and its wheel's edges, as placed, followed as tooth times
         from ..logs.reader import read_log

@@ -457,3 +457,20 @@ def test_follow_ends_on_an_interrupt_dropped_in_a_garbage_collector_callback(rec
     )
     assert p.returncode == 130 and "rotor: interrupted" in p.stderr
     assert "Traceback" not in p.stderr and "Exception ignored" not in p.stderr
+
+
+@pytest.mark.timeout(60)
+def test_a_named_pipe_is_read_as_a_stream(recorded, tmp_path):
+    """A named pipe given as the log is read as it comes (it was 'no such file')."""
+    fifo = tmp_path / "teeth.pipe"
+    os.mkfifo(fifo)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rotor.cli", "monitor", str(fifo), "--engine", "4chn15", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    with open(fifo, "wb") as f:
+        f.write(recorded.read_bytes())
+    out, err = proc.communicate(timeout=50)
+    assert proc.returncode == 0, err.decode()
+    assert json.loads(out.decode().splitlines()[-1])["summary"]["misfire_count"] == 3
