@@ -232,19 +232,10 @@ def cmd_monitor(args: argparse.Namespace) -> None:
     _monitor(args)  # a Ctrl-C in a garbage collector's callback: dropped quietly by rotor.cli.app.main
 
 
-def _monitor(args: argparse.Namespace) -> None:
-    import numpy as np
+def _check_input(args: argparse.Namespace) -> None:
+    """The LOG argument refused where it is no file, named pipe or standard input."""
+    from ..errors import LogError
 
-    from ..diagnostics.monitor import DEFAULT_THRESHOLD, MisfireMonitor, NoteKind, ToothLines, check_wheel
-    from ..errors import EngineError, LogError
-    from ..fileio import INTERRUPT
-    from .output import json_line
-
-    engine = None
-    if args.engine is not None:
-        from ..engine.file import load_engine
-
-        engine = load_engine(args.engine)
     if args.log != "-" and os.path.isdir(args.log):
         raise IsADirectoryError(21, "Is a directory", args.log)
     if args.log != "-" and not os.path.isfile(args.log):
@@ -258,6 +249,22 @@ def _monitor(args: argparse.Namespace) -> None:
             )
         if args.follow:
             raise LogError(f"{args.log}: is a named pipe: it is read as it comes without --follow")
+
+
+def _monitor(args: argparse.Namespace) -> None:
+    import numpy as np
+
+    from ..diagnostics.monitor import DEFAULT_THRESHOLD, MisfireMonitor, NoteKind, ToothLines, check_wheel
+    from ..errors import EngineError, LogError
+    from ..fileio import INTERRUPT
+    from .output import json_line
+
+    engine = None
+    if args.engine is not None:
+        from ..engine.file import load_engine
+
+        engine = load_engine(args.engine)
+    _check_input(args)
     name = "standard input" if args.log == "-" else args.log
     # the wheel and the firings checked before anything is read (a wheel too coarse for the
     # monitor refused at once, not at the first edges)
