@@ -151,3 +151,40 @@ def test_the_pressure_gain_from_a_motored_stretch(motored, recording, capsys):
         "motored",
     )
     assert rc == 2 and out == "" and err.count("\n") == 1 and "no motored cycle" in err, err
+
+
+def test_files_of_one_simulated_bench_read_as_one_wheel_and_one_calibration_reads_them_all(tmp_path, capsys):
+    """Five files of one bench (one wheel with its tooth errors, its noise, speed and load
+    differing from file to file), read with nothing but the file: every one as the same
+    wheel; a calibration made on one (with its pressure) reads the other four."""
+    files = [
+        simulated_recording(tmp_path / f"bench{k}.txt", rpm=rpm, cycles=4, seed=k, noise_v=noise, imep_scale=scale)
+        for k, (rpm, noise, scale) in enumerate(
+            [(3000, 0.01, 1.0), (2600, 0.02, 0.6), (3300, 0.005, 1.0), (2900, 0.03, 0.8), (3100, 0.015, 0.9)]
+        )
+    ]
+    wheels = set()
+    for f in files:
+        rc, out, err = run_cli(capsys, "analyze", str(f), "--json")
+        assert rc == 0, err
+        wheels.add(json.loads(out)["wheel"]["spec"])
+    assert wheels == {"60-2"}
+    cal = tmp_path / "cal.json"
+    rc, _, err = run_cli(
+        capsys,
+        "calibrate",
+        str(files[0]),
+        "--engine",
+        "tue-single",
+        "--pressure-gain",
+        str(BENCH_GAIN_PA_PER_V),
+        "--output",
+        str(cal),
+    )
+    assert rc == 0, err
+    for f in files[1:]:
+        rc, out, err = run_cli(
+            capsys, "diagnose", str(f), "--engine", "tue-single", "--calibration", str(cal), "--json"
+        )
+        assert rc == 0, err
+        assert json.loads(out)["cycles"]
