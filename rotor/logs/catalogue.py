@@ -25,7 +25,6 @@ from .patterns import TriggerPattern, pattern_from_wheel
 __all__ = [
     "CATALOGUE",
     "find_pattern",
-    "catalogue_names",
     "pattern_ways",
     "rank_patterns",
     "best_pattern",
@@ -500,11 +499,6 @@ CATALOGUE: dict[str, TriggerPattern] = {p.name: p for p in _PATTERNS}
 """The named patterns, by name."""
 
 
-def catalogue_names() -> tuple[str, ...]:
-    """Every catalogue name, in the catalogue's order."""
-    return tuple(CATALOGUE)
-
-
 def find_pattern(name: str) -> TriggerPattern:
     """The pattern named ``name``: a catalogue name or alias (any case, ``_`` for ``-``),
     ``N-tooth`` (N evenly spaced crank teeth), or an ``N-g1-g2-…`` shorthand (gaps spread as evenly as they go; a catalogue entry of
@@ -688,23 +682,38 @@ def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d", partial: bool
             # alone: the freedom it leaves halves its score
             distinct = p.edges_per_turn // fit.repeats
             score = fit.kept * fit.evidence * min(1.0, (distinct - 1) / 2)
-            if partial:
-                if fit.evidence > 0 and fit.kept >= PARTIAL_KEPT and fit.rms <= GATE_RMS and fit.turns >= 2:
-                    out.append((score, fit, label))
-            elif score >= MIN_EVIDENCE and fit.kept >= MIN_KEPT and fit.rms <= GATE_RMS and fit.turns >= MIN_TURNS:
+            if fit.evidence > 0 and fit.kept >= PARTIAL_KEPT and fit.rms <= GATE_RMS and fit.turns >= 2:
                 out.append((score, fit, label))
     out.sort(key=lambda x: -x[0])
-    return out
+    return out if partial else [r for r in out if _clearly(r)]
 
 
-def best_pattern(t, v, patterns=None, *, name: str = "encoder_d", source: str = "the log", whole: bool = True):
+def _clearly(ranked: tuple) -> bool:
+    """Whether a ranked (score, fit, label) explains the channel clearly enough to be taken."""
+    score, fit, _ = ranked
+    return score >= MIN_EVIDENCE and fit.kept >= MIN_KEPT and fit.turns >= MIN_TURNS
+
+
+def best_pattern(
+    t,
+    v,
+    patterns=None,
+    *,
+    name: str = "encoder_d",
+    source: str = "the log",
+    whole: bool = True,
+    ranked: list | None = None,
+):
     """The catalogue pattern that explains a digital channel's edges best: (fit, the edges
     taken in words, evidence in words). Refused (:class:`LogError`) where none fits, naming
     the best tried, or where two of different geometry fit about equally (within
     :data:`AMBIGUOUS`), naming both and how to pin one (``wheel=NAME``). ``whole=False``: the
     fit of a long record is that of its start (:data:`RANKING_ROWS`), for a caller that places
-    the pattern by other means."""
-    ranked = rank_patterns(t, v, patterns, name=name)
+    the pattern by other means. ``ranked``: the channel's :func:`rank_patterns` with
+    ``partial=True``, where the caller has it (not ranked again)."""
+    ranked = [
+        r for r in (rank_patterns(t, v, patterns, name=name, partial=True) if ranked is None else ranked) if _clearly(r)
+    ]
     if not ranked:
         raise LogError(
             f"{source}: no catalogue pattern explains the edges of {name!r} (`rotor wheels` lists them); "

@@ -141,14 +141,6 @@ class TriggerPattern:
         k, r = self.edges_per_turn, self.repeats()
         return r == k or (self.read == "both" and k // r <= 2)
 
-    def polarities(self) -> tuple[str, ...]:
-        """The polarities whose edges the pattern states (the one that carries the position first)."""
-        out = [self.read]
-        for p in ("rising", "falling", "both"):
-            if p not in out and len(self.angles_deg(p)) and (p != "both" or (self.rising_deg and self.falling_deg)):
-                out.append(p)
-        return tuple(out)
-
     def intervals_deg(self, polarity: str | None = None) -> np.ndarray:
         """The angle from each edge to the next [deg] (the last to the first of the next turn)."""
         a = self.angles_deg(polarity)

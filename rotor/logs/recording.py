@@ -156,9 +156,10 @@ def _with_wheel_channel(log: Log, channel: str) -> Log:
     return Log(cols, log.lines, log.source, log.notes)
 
 
-def _auto(log: Log, name: str) -> PatternReading | None:
+def _auto(log: Log, name: str, ranked: dict) -> PatternReading | None:
     """The catalogue pattern that clearly explains the wheel channel (or, failing it, the cam
-    channel), or None where no catalogue pattern fits."""
+    channel), or None where no catalogue pattern fits; ``ranked`` gets each channel's ranking
+    (:func:`rotor.logs.catalogue.rank_patterns`, partial fits included), for the checks after."""
     if log.kind == "teeth":
         return None  # tooth times: the missing-tooth wheels' finder reads them
     if log.kind != "digital":
@@ -166,8 +167,11 @@ def _auto(log: Log, name: str) -> PatternReading | None:
     for channel in ("encoder_d", "cam_d"):
         if channel not in log:
             continue
+        ranked[channel] = rank_patterns(log["time"], log[channel], name=channel, partial=True)
         try:
-            fit, label, why = best_pattern(log["time"], log[channel], name=channel, source=name, whole=False)
+            fit, label, why = best_pattern(
+                log["time"], log[channel], name=channel, source=name, whole=False, ranked=ranked[channel]
+            )
         except AmbiguousPattern:
             raise
         except LogError:
@@ -236,7 +240,8 @@ def read_wheel(
     if given is not None:
         return _decode_given(log, name, given, edge)
     if isinstance(wheel, str) and wheel.strip().lower() == "auto":
-        found = _auto(log, name)
+        ranked: dict = {}
+        found = _auto(log, name, ranked)
         if found is not None:
             spec = found.pattern.name
             if _NM.match(spec) and found.channel == "encoder_d":
@@ -258,7 +263,7 @@ def read_wheel(
         reading = read_track(log, wheel, edge=edge, name=name)
         _refuse_a_half_of_a_known_wheel(reading, name)
         _refuse_a_loose_counted_wheel(reading, name)
-        _refuse_where_a_pattern_explains_better(reading, name)
+        _refuse_where_a_pattern_explains_better(reading, name, ranked.get("encoder_d"))
         return reading
     return read_track(log, wheel, edge=edge, name=name)
 
@@ -309,7 +314,7 @@ def _refuse_a_loose_counted_wheel(reading: WheelReading, name: str) -> None:
         )
 
 
-def _refuse_where_a_pattern_explains_better(reading: WheelReading, name: str) -> None:
+def _refuse_where_a_pattern_explains_better(reading: WheelReading, name: str, ranked: list | None) -> None:
     """On a digital channel, a wheel found from the gaps whose own edge list does not place the
     edges, where a catalogue pattern of other geometry places part of them: the two are named
     and the log refused (the gaps can be made by the other pattern's marks)."""
@@ -324,7 +329,7 @@ def _refuse_where_a_pattern_explains_better(reading: WheelReading, name: str) ->
         placed = 0.0
     rivals = [
         (s, f)
-        for s, f, _ in rank_patterns(log["time"], log["encoder_d"], partial=True)
+        for s, f, _ in (rank_patterns(log["time"], log["encoder_d"], partial=True) if ranked is None else ranked)
         if f.pattern.name != own.name and f.pattern.name != reading.wheel.spec and f.kept >= RIVAL_SHARE * placed
     ]
     if placed < MIN_KEPT or rivals:
