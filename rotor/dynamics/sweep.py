@@ -40,7 +40,7 @@ from jaxtyping import ArrayLike
 
 from ..engine.friction import Friction
 from ..engine.model import Engine, require_engine
-from ..engine.plausible import PLAUSIBLE, require_known, what_it_is
+from ..engine.plausible import PLAUSIBLE, require_known, require_real
 from ..errors import EngineError
 from ..progress import Progress
 from ..results import Result, json_safe
@@ -181,14 +181,7 @@ class SteadySweep(Result):
 def _real(name: str, value: Any, unit: str) -> np.ndarray:
     """``value`` as a float64 array, or a :class:`TypeError` naming ``name`` for what is not
     real numbers (a string, a complex number: never a part of it dropped)."""
-    kind = "?"
-    if not isinstance(value, (str, bytes)) and value is not None:
-        try:
-            kind = np.asarray(value).dtype.kind
-        except (TypeError, ValueError):
-            kind = "?"
-    if kind not in "iuf":
-        raise TypeError(f"steady_sweep({name}): expected real numbers [{unit}], got {what_it_is(value)}")
+    require_real("steady_sweep", name, value, unit)
     return np.asarray(value, dtype=np.float64)
 
 
