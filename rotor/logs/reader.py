@@ -54,7 +54,7 @@ import io
 import math
 import os
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -67,6 +67,7 @@ __all__ = [
     "UNIT_COLUMNS",
     "KNOWN_HEADERS",
     "Log",
+    "channel_map",
     "parse_columns",
     "read_log",
     "READ_BYTES_PER_FILE_BYTE",
@@ -155,20 +156,73 @@ def _to_seconds(cols: dict, notes: list) -> dict:
     return out
 
 
+def _items(spec: object) -> list[str]:
+    if isinstance(spec, str):
+        return [s.strip() for s in spec.split(",")]
+    if isinstance(spec, Sequence) and not isinstance(spec, bytes):
+        return [str(s).strip() for s in spec]
+    raise TypeError(
+        f"columns = {spec!r}: the column names as a string ('time,encoder_v' or 'time=t,encoder_d=CRANK'), a list "
+        f"of strings or a dict of roles and channel names, not {type(spec).__name__}"
+    )
+
+
+def channel_map(spec: str | Sequence[str] | Mapping[str, str] | None) -> dict[str, str] | None:
+    """Role → the file's channel name of a spec that names channels, ``"time=t,encoder_d=CRANK"``
+    (or a dict ``{"time": "t", "encoder_d": "CRANK"}``); None for no spec or a spec of column
+    names in file order (:func:`parse_columns`).
+
+    The roles: :data:`COLUMN_NAMES` (a time in ms or µs as ``time_ms``, ``time_us``, …) and
+    :data:`rotor.logs.formats.ROLE_ALIASES` (``crank``, ``cam``: analog or digital as the
+    channel's content says; ``pressure``, ``speed``). A channel name is the file's (a text
+    file's header names, or its columns' numbers 1, 2, … where it has no header line).
+    Raises :class:`LogError` naming an unknown or repeated role, a spec that mixes both
+    forms, or a role without a name."""
+    from .formats import ROLE_ALIASES
+
+    if spec is None:
+        return None
+    if isinstance(spec, Mapping):
+        pairs = [(str(k).strip(), str(v).strip()) for k, v in spec.items()]
+    else:
+        items = [s for s in _items(spec) if s]
+        if not any("=" in s for s in items):
+            return None
+        loose = [s for s in items if "=" not in s]
+        if loose:
+            raise LogError(
+                f"columns {spec!r}: {loose[0]!r} has no '='; name every column as role=channel "
+                "(time=t,encoder_d=CRANK), or give the names in file order without '='"
+            )
+        pairs = [tuple(x.strip() for x in s.split("=", 1)) for s in items]  # type: ignore[misc]
+    roles = [n for n in COLUMN_NAMES if n != "-"] + list(ROLE_ALIASES)
+    out: dict[str, str] = {}
+    kinds: dict[str, str] = {}
+    for role, name in pairs:
+        if role not in roles:
+            raise LogError(f"columns {spec!r}: {role!r} is no role; roles: {', '.join(roles)}")
+        if not name:
+            raise LogError(f"columns {spec!r}: {role}= names no channel (role=the file's channel name)")
+        kind = _canonical(role)
+        kind = {"crank": "encoder_v", "encoder_d": "encoder_v", "cam": "cam_v", "cam_d": "cam_v"}.get(kind, kind)
+        kind = {"pressure": "pressure_v", "speed": "rpm"}.get(kind, kind)
+        if kind in kinds:
+            raise LogError(f"columns {spec!r}: {role!r} names the channel of {kinds[kind]!r} a second time")
+        kinds[kind] = role
+        out[role] = name
+    if not out:
+        raise LogError(f"columns {spec!r}: name at least one channel (role=name, e.g. encoder_d=CRANK)")
+    return out
+
+
 def parse_columns(spec: str | Sequence[str]) -> tuple[str, ...]:
     """The column names of a spec such as ``"time,encoder_v,pressure_v"`` (or a list).
 
     Raises :class:`LogError` naming an unknown or repeated name.
     """
-    if isinstance(spec, str):
-        names = [s.strip() for s in spec.split(",")]
-    elif isinstance(spec, Sequence) and not isinstance(spec, bytes):
-        names = [str(s).strip() for s in spec]
-    else:
-        raise TypeError(
-            f"columns = {spec!r}: the column names as a string ('time,encoder_v') or a list of strings, "
-            f"not {type(spec).__name__}"
-        )
+    names = _items(spec)
+    if any("=" in n for n in names):
+        raise LogError(f"columns {spec!r}: a spec of channel names (role=name) is read by read_log, not here")
     if not names or all(n in ("", "-") for n in names):
         raise LogError(f"columns {spec!r}: name at least one column ({', '.join(n for n in COLUMN_NAMES if n != '-')})")
     seen = set()
@@ -388,15 +442,24 @@ def _data_lines(text: str):
 
 
 def read_log(
-    path: str | os.PathLike, columns: str | Sequence[str] | None = None, *, delimiter: str | None = None
+    path: str | os.PathLike,
+    columns: str | Sequence[str] | Mapping[str, str] | None = None,
+    *,
+    delimiter: str | None = None,
 ) -> Log:
-    """Read a CSV/TSV/blank-separated log.
+    """Read a log: a CSV/TSV/blank-separated text file, or a measurement file (MDF 3/4,
+    TDMS, MATLAB ``.mat``, Parquet, Arrow; :mod:`rotor.logs.formats`), told by its first
+    bytes, else by its suffix.
 
     **Arguments:**
     - ``path``: the file.
     - ``columns``: the column names in file order (``"time,encoder_v,pressure_v"`` or a
-      list; see :data:`COLUMN_NAMES`); ``None``: the header line's names if they are all
-      known, or ``tooth_time_s`` for a one-column file.
+      list; see :data:`COLUMN_NAMES`); or roles and the file's channel names,
+      ``"time=t,encoder_d=CRANK"`` (or a dict; :func:`channel_map`), the one form for a
+      measurement file; ``None``: the header line's names if they are all
+      known, or ``tooth_time_s`` for a one-column file; else the columns recognised by
+      their content (:func:`rotor.logs.channels.recognise_columns`), a measurement file's
+      channels too.
     - ``delimiter``: ``","``, ``"\\t"``, ``";"`` or ``" "`` (blanks); default: found
       from the first data line (tab, then semicolon, then comma, else blanks).
 
@@ -413,6 +476,17 @@ def read_log(
         path = os.fsdecode(path)
     if delimiter is not None and delimiter not in (",", "\t", ";", " "):
         raise LogError(f"delimiter = {delimiter!r}: ',', '\\t', ';' or ' ' (blanks)")
+    spec = channel_map(columns)
+    fmt = _measurement_format(path)
+    if fmt is not None:
+        from .formats import log_from_groups, read_channels
+
+        if columns is not None and spec is None:
+            raise LogError(
+                f"{path}: a measurement file's columns are named by role and channel name (columns='time=t,"
+                f"encoder_d=CRANK'), not by their order; or leave the spec out to recognise them by content"
+            )
+        return log_from_groups(os.path.basename(path), read_channels(path, fmt), spec, [])
     text = _read_text(path)
     notes: list[str] = []
     lines = _data_lines(text)
@@ -442,6 +516,9 @@ def read_log(
             f"start a line with '#' to make it a comment"
         )
     ncols = len(tokens)
+    if spec is not None:
+        return _named(path, text, sep, header, tokens, ncols, first, notes, spec)
+    assert not isinstance(columns, Mapping)  # a dict is a spec of channel names (channel_map)
     known = _known_header(tokens) if header else None
     if columns is None and known is not None:
         notes.append(f"header line {first[0]} ({_short(first[1])}) read as a {known[0]} export")
@@ -454,10 +531,10 @@ def read_log(
         else:
             return _recognised(path, text, sep, header, tokens, ncols, first, notes)
     elif header and known is None:
-        spec = parse_columns(columns)
+        order = parse_columns(columns)
         clash = [
             (i, h, n)
-            for i, (h, n) in enumerate(zip(tokens, spec))
+            for i, (h, n) in enumerate(zip(tokens, order))
             if h in COLUMN_NAMES and h != "-" and n != "-" and h != n
         ]
         if clash:
@@ -469,7 +546,7 @@ def read_log(
         if not all(t in COLUMN_NAMES for t in tokens):
             notes.append(
                 f"header line {first[0]} ({_short(first[1])}) skipped: the columns are named by the spec "
-                f"({', '.join(spec)})"
+                f"({', '.join(order)})"
             )
     names = parse_columns(columns)
     if len(names) > ncols:
@@ -495,6 +572,36 @@ def _recognised(path, text, sep, header, tokens, ncols, first, notes) -> Log:
     then named by its content (:func:`rotor.logs.channels.recognise_columns`)."""
     from .channels import recognise_columns
 
+    units, data, nums = _table(path, text, sep, header, ncols, first)
+    finite = data[np.all(np.isfinite(data), axis=1)]  # a row that is not numbers is named by the checks below
+    names, said = recognise_columns(tokens if header else None, finite, units=units, source=os.path.basename(path))
+    if units is not None:
+        said.insert(0, f"line {first[0] + 1} read as the columns' units ({_short(', '.join(units))})")
+    use = [i for i, n in enumerate(names) if n != "-"]
+    cols = _to_seconds({names[i]: data[:, i] for i in use}, notes)
+    return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes + said))
+
+
+def _named(path, text, sep, header, tokens, ncols, first, notes, spec: dict[str, str]) -> Log:
+    """A log whose spec names the file's columns by role (``time=t,encoder_d=CRANK``): the
+    header's names, or the columns' numbers (1, 2, …) in a file without a header line."""
+    from .formats import Channel, ChannelGroup, log_from_groups
+
+    units, data, nums = _table(path, text, sep, header, ncols, first)
+    names = tokens if header else [str(j + 1) for j in range(ncols)]
+    chans = tuple(Channel(str(n), data[:, j], units[j] if units else "") for j, n in enumerate(names))
+    what = "its header's names" if header else "their numbers (no header line)"
+    return log_from_groups(
+        os.path.basename(path),
+        [ChannelGroup(f"columns named by {what}", chans)],
+        spec,
+        notes,
+        lines=nums[: data.shape[0]],
+    )
+
+
+def _table(path, text, sep, header, ncols, first) -> tuple[list | None, np.ndarray, np.ndarray]:
+    """(a units row's entries or None, every column as floats, each row's line number)."""
     units = None
     lines = _data_lines(text)
     if header:
@@ -511,13 +618,17 @@ def _recognised(path, text, sep, header, tokens, ncols, first, notes) -> Log:
     nums = np.fromiter((n for n, _ in _data_lines(text)), dtype=np.int64)
     if header:
         nums = nums[1:]
-    finite = data[np.all(np.isfinite(data), axis=1)]  # a row that is not numbers is named by the checks below
-    names, said = recognise_columns(tokens if header else None, finite, units=units, source=os.path.basename(path))
-    if units is not None:
-        said.insert(0, f"line {first[0] + 1} read as the columns' units ({_short(', '.join(units))})")
-    use = [i for i, n in enumerate(names) if n != "-"]
-    cols = _to_seconds({names[i]: data[:, i] for i in use}, notes)
-    return Log(cols, nums[: data.shape[0]], source=os.path.basename(path), notes=tuple(notes + said))
+    return units, data, nums
+
+
+def _measurement_format(path: str) -> str | None:
+    """The :data:`rotor.logs.formats.FORMATS` key of a measurement file at ``path``, None
+    for a text log (or no file: :func:`_read_text` says why)."""
+    if not os.path.isfile(path):
+        return None
+    from .formats import detect_format
+
+    return detect_format(path)
 
 
 def _raw_lines(text: str):
