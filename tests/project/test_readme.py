@@ -25,6 +25,7 @@ from __future__ import annotations
 import ast
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -37,21 +38,36 @@ DOCS = ROOT / "docs"
 HOW_TO = DOCS / "how-to"
 NO_TEST = "<!-- no-test -->"
 FILE = re.compile(r"^<!-- file: ([\w.-]+) -->$")
+SHELL_FENCES = ("```sh", "```bash")
+"""The fences of the shell blocks the suite runs; a synopsis (``rotor analyze LOG [--json]``)
+is a ```text block, shown and never run."""
+
+
+@dataclass(frozen=True)
+class Block:
+    """A block of a page to run: ``kind`` "python" (run in the page's namespace), "sh" (each
+    command run in the page's folder) or "file" (``source`` written to ``file`` there);
+    ``line`` is the page's line of its first line of code."""
+
+    line: int
+    source: str
+    kind: str
+    file: str | None = None
 
 
 def _previous(lines: list[str], i: int) -> str:
     return next((ln.strip() for ln in reversed(lines[:i]) if ln.strip()), "")
 
 
-def blocks(text: str, name: str = "README.md") -> list[tuple[int, str, str | None]]:
-    """(first line number, source, file name) of every block to run: a ```python block not
-    marked ``<!-- no-test -->`` (file name None), or a ```toml block marked
-    ``<!-- file: NAME -->`` (its text is written to NAME)."""
+def blocks(text: str, name: str = "README.md") -> list[Block]:
+    """Every block to run, in page order: a ```python or ```sh block not marked
+    ``<!-- no-test -->``, or a ```toml block marked ``<!-- file: NAME -->`` (its text is
+    written to NAME)."""
     lines = text.splitlines()
     out, i = [], 0
     while i < len(lines):
         fence = lines[i].strip()
-        if fence in ("```python", "```toml"):
+        if fence in ("```python", "```toml", *SHELL_FENCES):
             j = i + 1
             while j < len(lines) and lines[j].strip() != "```":
                 j += 1
@@ -59,9 +75,11 @@ def blocks(text: str, name: str = "README.md") -> list[tuple[int, str, str | Non
             previous = _previous(lines, i)
             body = "\n".join(lines[i + 1 : j])
             if fence == "```python" and previous != NO_TEST:
-                out.append((i + 2, body, None))
+                out.append(Block(i + 2, body, "python"))
+            elif fence in SHELL_FENCES and previous != NO_TEST:
+                out.append(Block(i + 2, body, "sh"))
             elif fence == "```toml" and (m := FILE.match(previous)):
-                out.append((i + 2, body + "\n", m.group(1)))
+                out.append(Block(i + 2, body + "\n", "file", m.group(1)))
             i = j
         i += 1
     return out
@@ -69,10 +87,87 @@ def blocks(text: str, name: str = "README.md") -> list[tuple[int, str, str | Non
 
 def python_blocks(text: str) -> list[tuple[int, str]]:
     """(first line number, source) of every ```python block not marked ``<!-- no-test -->``."""
-    return [(line, src) for line, src, file in blocks(text) if file is None]
+    return [(b.line, b.source) for b in blocks(text) if b.kind == "python"]
 
 
-PAGES = [README, DOCS / "getting-started.md", *sorted(p for p in HOW_TO.glob("*.md") if p.name != "index.md")]
+def shell_commands(source: str, first_line: int = 1) -> list[tuple[int, str]]:
+    """(line number, command) of each command of a shell block: continuation lines joined,
+    comments and blank lines dropped."""
+    out, buf, start = [], "", None
+    for n, raw in enumerate(source.splitlines(), first_line):
+        line = raw.strip()
+        if not buf and (not line or line.startswith("#")):
+            continue
+        start = n if not buf else start
+        if line.endswith("\\"):
+            buf += line[:-1].strip() + " "
+            continue
+        command = (buf + line).split(" #")[0].strip()
+        buf = ""
+        if command:
+            out.append((start, command))
+    return out
+
+
+def run_command(command: str) -> tuple[int, str, str]:
+    """Run one command of a shell block in the working directory: (exit status, stdout,
+    stderr). ``rotor …`` runs in this process through :func:`rotor.cli.app.main` (the
+    compiled kernels of the pages' Python blocks and of the commands before it are reused),
+    with a leading ``cat FILE |`` as its standard input and a trailing ``> FILE`` as its
+    standard output; any other command runs in ``bash``, with the virtualenv's ``rotor``
+    first on the PATH."""
+    import contextlib
+    import io
+    import shlex
+    import subprocess
+    import sys
+
+    words = shlex.split(command)
+    stdin = stdout = None
+    if len(words) > 3 and words[0] == "cat" and words[2] == "|":
+        stdin, words = words[1], words[3:]
+    if len(words) > 2 and words[-2] == ">":
+        stdout, words = words[-1], words[:-2]
+    if words[0] != "rotor" or any(w in ("|", ">", ">>", "<", "&&", ";") for w in words):
+        env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+        done = subprocess.run(["bash", "-c", command], capture_output=True, text=True, env=env, timeout=600)
+        return done.returncode, done.stdout, done.stderr
+    from rotor.cli.app import main
+
+    out, err = io.StringIO(), io.StringIO()
+    saved = sys.stdin
+    try:
+        with contextlib.ExitStack() as stack:
+            if stdin is not None:
+                sys.stdin = stack.enter_context(open(stdin, encoding="utf-8"))  # noqa: SIM115
+            stack.enter_context(contextlib.redirect_stdout(out))
+            stack.enter_context(contextlib.redirect_stderr(err))
+            try:
+                rc = main(words[1:])
+            except SystemExit as e:  # argparse's own usage errors
+                rc = 0 if e.code is None else int(e.code)
+    finally:
+        sys.stdin = saved
+    if stdout is not None:
+        Path(stdout).write_text(out.getvalue(), encoding="utf-8")
+    return rc, out.getvalue(), err.getvalue()
+
+
+def _other_pages() -> list[Path]:
+    """The pages of docs/ outside the tutorial and the guides that hold a block to run."""
+    return [
+        p
+        for p in sorted(DOCS.rglob("*.md"))
+        if p.parent != HOW_TO and p.name != "getting-started.md" and blocks(p.read_text(encoding="utf-8"), str(p))
+    ]
+
+
+PAGES = [
+    README,
+    DOCS / "getting-started.md",
+    *sorted(p for p in HOW_TO.glob("*.md") if p.name != "index.md"),
+    *_other_pages(),
+]
 
 
 def _id(path: Path) -> str:
@@ -80,6 +175,28 @@ def _id(path: Path) -> str:
 
 
 _RUN: dict[Path, dict] = {}
+OUTPUTS = "__commands__"
+"""The namespace's key of what each shell command printed: {command: (stdout, stderr)}."""
+
+
+def _run_block(block: Block, path: Path, ns: dict) -> None:
+    name = _id(path)
+    if block.kind == "file":
+        Path(block.file).write_text(block.source, encoding="utf-8")
+    elif block.kind == "sh":
+        for line, command in shell_commands(block.source, block.line):
+            rc, out, err = run_command(command)
+            if rc != 0:
+                tail = "\n".join((err or out).strip().splitlines()[-5:])
+                raise AssertionError(f"{name}:{line}: `{command}` exits with {rc}:\n{tail}")
+            ns[OUTPUTS][command] = (out, err)
+    else:
+        # padded so that a traceback names the page's own line
+        code = compile("\n" * (block.line - 1) + block.source, str(path), "exec")
+        try:
+            exec(code, ns)
+        except Exception as e:
+            raise AssertionError(f"{name}: the python block at line {block.line} fails: {e!r}") from e
 
 
 def run_page(path: Path, tmp_path_factory) -> dict:
@@ -90,19 +207,11 @@ def run_page(path: Path, tmp_path_factory) -> dict:
     folder = tmp_path_factory.mktemp(path.stem)
     old = os.getcwd()
     os.chdir(folder)
-    ns: dict = {"__name__": "__docs__"}
-    name = _id(path)
+    ns: dict = {"__name__": "__docs__", OUTPUTS: {}}
     try:
-        for line, src, file in blocks(path.read_text(encoding="utf-8"), name):
-            if file is not None:
-                Path(file).write_text(src, encoding="utf-8")
-                continue
-            # padded so that a traceback names the page's own line
-            code = compile("\n" * (line - 1) + src, str(path), "exec")
+        for block in blocks(path.read_text(encoding="utf-8"), _id(path)):
             try:
-                exec(code, ns)
-            except Exception as e:
-                raise AssertionError(f"{name}: the python block at line {line} fails: {e!r}") from e
+                _run_block(block, path, ns)
             finally:
                 plt.close("all")
     finally:
@@ -127,15 +236,15 @@ def test_blocks_are_found():
     assert len(readme) >= 3
     assert len(PAGES) >= 9
     for path in PAGES:
-        for line, src, file in blocks(path.read_text(encoding="utf-8"), _id(path)):
-            if file is None:
-                ast.parse(src, f"{_id(path)}:{line}")
+        for b in blocks(path.read_text(encoding="utf-8"), _id(path)):
+            if b.kind == "python":
+                ast.parse(b.source, f"{_id(path)}:{b.line}")
 
 
 @pytest.mark.parametrize("path", PAGES, ids=_id)
 def test_page_blocks_run(path, tmp_path_factory):
     ns = run_page(path, tmp_path_factory)
-    assert "rotor" in ns
+    assert ns[OUTPUTS] or "rotor" in ns
 
 
 def test_readme_figures(page):
@@ -178,6 +287,16 @@ def test_diagnosis_figures(page):
     assert np.max(np.abs(np.asarray(ident.imep_pa)[fired] / np.asarray(mis.imep_pa)[fired] - 1)) < 1e-8
     m, run = ns["m"], ns["run"]
     assert m.torque.shape[0] == 6 and run is not None
+
+
+def test_simulation_figures(page):
+    import json
+
+    ns = page("how-to/simulate-and-record.md")
+    out, _ = ns[OUTPUTS]["rotor simulate 4chn15 --cycles 50 --load 3000 --json"]
+    stall = json.loads(out)
+    assert stall["stalled"] and stall["stall_cycle"] == 4  # "stall_cycle": 4
+    assert stall["stall_angle_deg"] == pytest.approx(530.4, abs=0.05)  # "stall_angle_deg": 530.4
 
 
 def test_monitor_figures(page):
@@ -358,7 +477,24 @@ def test_a_block_marked_no_test_is_left_out():
 
 def test_a_file_block_is_written():
     text = "<!-- file: e.toml -->\n```toml\na = 1\n```\n\n```toml\nb = 2\n```\n"
-    assert blocks(text) == [(3, "a = 1\n", "e.toml")]
+    assert blocks(text) == [Block(3, "a = 1\n", "file", "e.toml")]
+
+
+def test_a_shell_block_is_run_command_by_command():
+    text = "```sh\nrotor a \\\n    --b 1   # c\n# a comment\n\nls > x\n```\n\n```text\nrotor LOG [--json]\n```\n"
+    (block,) = blocks(text)
+    assert block.kind == "sh"
+    assert shell_commands(block.source, block.line) == [(2, "rotor a --b 1"), (6, "ls > x")]
+    assert blocks(text.replace("```sh", "<!-- no-test -->\n```sh")) == []
+
+
+def test_a_shell_command_runs_and_redirects(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert run_command("rotor presets > presets.txt")[0] == 0
+    assert "4chn15" in (tmp_path / "presets.txt").read_text(encoding="utf-8")
+    rc, out, _ = run_command("cat presets.txt | wc -l")
+    assert rc == 0 and int(out) >= 4
+    assert run_command("rotor table no-such-engine")[0] == 2
 
 
 @pytest.mark.parametrize("path", PAGES, ids=_id)
@@ -367,7 +503,7 @@ def test_every_marker_sits_on_a_block(path):
     for i, line in enumerate(lines):
         if line.strip() == NO_TEST:
             after = next(ln.strip() for ln in lines[i + 1 :] if ln.strip())
-            assert after == "```python", f"{_id(path)}:{i + 1}: {NO_TEST} is not right above a python block"
+            assert after in ("```python", *SHELL_FENCES), f"{_id(path)}:{i + 1}: {NO_TEST} is not right above a block"
         if FILE.match(line.strip()):
             after = next(ln.strip() for ln in lines[i + 1 :] if ln.strip())
             assert after == "```toml", f"{_id(path)}:{i + 1}: a file marker is not right above a toml block"
