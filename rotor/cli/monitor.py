@@ -8,7 +8,7 @@ import sys
 import time
 from typing import Any
 
-from .args import add_json, angle_deg, positive_float
+from .args import add_json, angle_deg, positive_float, whole
 
 __all__ = ["add_parsers", "cmd_monitor", "CHUNK_BYTES", "FOLLOW_POLL_S"]
 
@@ -74,6 +74,42 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="a misfire where the index falls below -X baseline spreads (default 8)",
     )
     p.add_argument(
+        "--emission-rate",
+        type=_percent,
+        metavar="PCT",
+        help="the emission threshold: misfires in %% of the firings over an emission window (default 1)",
+    )
+    p.add_argument(
+        "--catalyst-table",
+        metavar="FILE",
+        help="the catalyst-damage misfire rate over speed and load, a JSON file {\"rpm\": [...], \"load\": [...], "
+        "\"rate_pct\": [[...], ...]} (a row per speed, load 0 … 1 of full; default an example table, not an "
+        "engine's calibration)",
+    )
+    p.add_argument(
+        "--catalyst-revolutions",
+        type=whole,
+        metavar="N",
+        help="revolutions of the catalyst-damage window (default 200)",
+    )
+    p.add_argument(
+        "--emission-revolutions", type=whole, metavar="N", help="revolutions of the emission window (default 1000)"
+    )
+    p.add_argument(
+        "--window-step",
+        type=whole,
+        metavar="N",
+        help="the windows are judged every N revolutions (default 200: consecutive catalyst windows, emission "
+        "windows sliding by 200)",
+    )
+    p.add_argument(
+        "--last-cycle",
+        type=whole,
+        metavar="K",
+        help="the log's last cycle: firings after it are not judged (default: the cycles of the truth file "
+        "`rotor simulate --record` writes beside its log, else none)",
+    )
+    p.add_argument(
         "--follow",
         action="store_true",
         help="at the end of the file, wait for more (a file truncated or replaced is read again from its start, "
@@ -81,6 +117,65 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     add_json(p)
     p.set_defaults(func=cmd_monitor)
+
+
+def _percent(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (0 < v <= 100):
+        raise argparse.ArgumentTypeError(f"{text!r}: a percentage of the firings, above 0 and up to 100")
+    return v
+
+
+def _thresholds(args: argparse.Namespace) -> Any:
+    """The windows and thresholds of the options (the defaults where none is given)."""
+    import dataclasses
+    import json
+
+    from ..diagnostics.misfire_rate import CatalystTable, MisfireThresholds
+    from ..errors import EngineError
+
+    given: dict[str, Any] = {}
+    if args.catalyst_table is not None:
+        try:
+            with open(args.catalyst_table, encoding="utf-8") as f:
+                data = json.load(f)
+        except json.JSONDecodeError as e:
+            raise EngineError(f"--catalyst-table {args.catalyst_table}: not JSON ({e.msg}, line {e.lineno})") from None
+        try:
+            given["catalyst"] = CatalystTable.from_dict(data)
+        except EngineError as e:
+            raise EngineError(f"--catalyst-table {args.catalyst_table}: {e}") from None
+    for flag, field in (
+        ("emission_rate", "emission_pct"),
+        ("catalyst_revolutions", "catalyst_revolutions"),
+        ("emission_revolutions", "emission_revolutions"),
+        ("window_step", "step_revolutions"),
+    ):
+        if getattr(args, flag) is not None:
+            given[field] = getattr(args, flag)
+    return dataclasses.replace(MisfireThresholds(), **given)
+
+
+def _truth_cycles(path: str) -> tuple[int, str] | None:
+    """The run's last cycle from the truth file ``rotor simulate --record`` writes beside its
+    log (cycles counted from 1), and the file's name; None where there is none."""
+    import json
+
+    from ..diagnostics.record import truth_path
+
+    try:
+        truth = truth_path(path)
+        with open(truth, encoding="utf-8") as f:
+            d = json.load(f)
+    except (OSError, ValueError):
+        return None
+    cycles, first = d.get("cycles"), d.get("cycles_counted_from", 1)
+    if isinstance(cycles, int) and cycles >= 1 and first == 1 and d.get("log") == os.path.basename(path):
+        return cycles, os.fspath(truth)
+    return None
 
 
 def _cylinders(text: str) -> int:
@@ -266,7 +361,13 @@ def _monitor(args: argparse.Namespace) -> None:
         engine = load_engine(args.engine)
     _check_input(args)
     name = "standard input" if args.log == "-" else args.log
-    # the wheel and the firings checked before anything is read (a wheel too coarse for the
+    thresholds = _thresholds(args)
+    show = _Notes()
+    last_cycle = args.last_cycle
+    if last_cycle is None and args.log != "-" and os.path.isfile(args.log):
+        stated = _truth_cycles(args.log)
+        if stated is not None:  # the summary says how many firings after it were not judged
+            last_cycle = stated[0]    # the wheel and the firings checked before anything is read (a wheel too coarse for the
     # monitor refused at once, not at the first edges)
     auto = args.wheel.strip().lower() == "auto"
     if not auto:
@@ -277,15 +378,18 @@ def _monitor(args: argparse.Namespace) -> None:
     source = _Source(args.log, args.follow)
     lines = ToothLines(name=name)
     monitor: MisfireMonitor | None = None
-    show = _Notes()
 
     def emit(verdicts: list) -> None:
-        for v in verdicts:
-            sys.stdout.write(json_line(v.to_json_dict(), "a verdict") if args.json else v.line() + "\n")
-            sys.stdout.flush()
+        # the notes first: what was met on the stream comes before the verdicts it bears on
         if monitor is not None:
             for note in monitor.pop_notes():
                 show(note.kind.value, note.text, "note" if note.kind is NoteKind.FOUND else "warning")
+        for v in verdicts:
+            sys.stdout.write(json_line(v.to_json_dict(), "a verdict") if args.json else v.line() + "\n")
+        if monitor is not None:
+            for w in monitor.pop_windows():
+                sys.stdout.write(json_line({"window": w.to_json_dict()}) if args.json else w.line() + "\n")
+        sys.stdout.flush()
 
     def found_wheel(times) -> str:
         """The wheel of the edges read so far, found as ``rotor analyze`` finds it; a note says which."""
@@ -328,6 +432,8 @@ def _monitor(args: argparse.Namespace) -> None:
             firing_parity=parity,
             threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
             log_name=name,
+            thresholds=thresholds,
+            last_cycle=last_cycle,
         )
 
     def take(text: str, final: bool) -> None:

@@ -9,7 +9,15 @@ from typing import Any
 from .args import Parser, add_dynamics_options, add_engine, add_quiet, positive_float, speed, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
-__all__ = ["add_parsers", "cmd_simulate", "cmd_steady", "parse_misfires", "speed_plots", "KEEP_CYCLES"]
+__all__ = [
+    "add_parsers",
+    "cmd_simulate",
+    "cmd_steady",
+    "parse_misfires",
+    "random_misfires",
+    "speed_plots",
+    "KEEP_CYCLES",
+]
 
 #: cycles whose samples ``rotor simulate`` keeps by default (it prints summaries, the last
 #: cycle's orders and plots): 100 cycles of 720 samples, about 9 MB
@@ -94,6 +102,26 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default="",
         help="misfiring firings, e.g. 3:1,7:2: cycle CYCLE (1 … --cycles) of cylinder CYL (1 … cylinders), "
         "both counted from 1",
+    )
+    p.add_argument(
+        "--misfire-rate",
+        type=_percent,
+        metavar="PCT",
+        help="random misfires on PCT %% of all the firings of cycles 1 … --cycles (the rate an OBD monitor counts): "
+        "on --misfire-cylinder alone, else on any cylinder; with --misfire's firings",
+    )
+    p.add_argument(
+        "--misfire-cylinder",
+        type=whole,
+        metavar="CYL",
+        help="the cylinder (from 1) that --misfire-rate's misfires fall on (default: spread over all)",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        metavar="N",
+        help="the random draw of --misfire-rate: the same N gives the same misfires (default 0)",
     )
     p.add_argument("--governor", type=positive_float, metavar="RPM", help="PI speed governor set to RPM")
     p.add_argument(
@@ -216,6 +244,43 @@ def cmd_steady(args: argparse.Namespace) -> None:
     _report(res, args, "steady")
 
 
+def _percent(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (0 < v <= 100):
+        raise argparse.ArgumentTypeError(f"{text!r}: a percentage of the firings, above 0 and up to 100")
+    return v
+
+
+def random_misfires(
+    cycles: int, cylinders: int, rate_pct: float, cylinder: int | None = None, seed: int = 0
+) -> list[tuple[int, int]]:
+    """Random misfires on ``rate_pct`` % of all the firings of ``cycles`` cycles of a
+    ``cylinders``-cylinder engine, as (cycle, cylinder) pairs from 1: on ``cylinder`` alone
+    (each of its firings with probability ``cylinders``·rate, so that the rate over all the
+    firings is ``rate_pct``), else on every firing alike; drawn by
+    ``numpy.random.default_rng(seed)``."""
+    import numpy as np
+
+    from ..errors import EngineError
+
+    rng = np.random.default_rng(seed)
+    if cylinder is None:
+        hit = rng.random((cycles, cylinders)) < rate_pct / 100.0
+        return [(int(k) + 1, int(c) + 1) for k, c in zip(*np.nonzero(hit), strict=True)]
+    if not 1 <= cylinder <= cylinders:
+        raise EngineError(f"--misfire-cylinder {cylinder}: cylinders count from 1: give 1 … {cylinders}")
+    p = cylinders * rate_pct / 100.0
+    if p > 1.0:
+        raise EngineError(
+            f"--misfire-rate {rate_pct:g} on one cylinder of {cylinders}: at most {100.0 / cylinders:g} % of all the "
+            "firings fall on one cylinder (every one of its firings); give a lower rate or leave out --misfire-cylinder"
+        )
+    return [(int(k) + 1, cylinder) for k in np.flatnonzero(rng.random(cycles) < p)]
+
+
 def parse_misfires(text: str, cycles: int | None = None, cylinders: int | None = None) -> list[tuple[int, int]]:
     """``--misfire 3:1,7:2`` as (cycle, cylinder) pairs, both counted from 1 as in
     :func:`rotor.combustion_pattern`; each checked against ``cycles`` and ``cylinders`` when
@@ -271,9 +336,13 @@ def _operating_point(engine: Any, args: argparse.Namespace) -> tuple[Any, float,
         if args.fuel_scale is not None:
             _check_given_fuel(engine, fuel)
         return None, fuel, None, "no --load given: a start from rest, no load"
-    st = steady_state(engine, rpm=rpm, fidelity=args.fidelity, imep_scale=fuel)
+    # with random misfires, the mean torque of the firings that burn (a share 1 − rate of them)
+    burning = 1.0 - (getattr(args, "misfire_rate", None) or 0.0) / 100.0
+    st = steady_state(engine, rpm=rpm, fidelity=args.fidelity, imep_scale=fuel * burning)
     torque = float(np.asarray(st.load_torque_Nm))
     note = f"no --load given: the constant load balancing the mean engine torque at {rpm:g} rpm, {torque:.2f} N·m"
+    if burning < 1.0:
+        note += f" (with {100 * (1 - burning):g} % of the firings misfiring at random)"
     return ConstantLoad(as_f64(torque)), fuel, "load", note
 
 
@@ -298,12 +367,17 @@ def cmd_simulate(args: argparse.Namespace) -> None:
     from ..dynamics.transient import simulate
     from ..engine.file import load_engine
 
-    if args.record and args.cycles < 2:
-        from ..errors import EngineError
+    from ..errors import EngineError
 
+    if args.record and args.cycles < 2:
         raise EngineError(f"--record needs --cycles 2 or more (a whole cycle and a revolution), not {args.cycles}")
     engine = load_engine(args.engine)
     pairs = parse_misfires(args.misfire, args.cycles, engine.cylinders)
+    if args.misfire_cylinder is not None and args.misfire_rate is None:
+        raise EngineError("--misfire-cylinder names the cylinder of --misfire-rate's misfires: give a --misfire-rate")
+    if args.misfire_rate is not None:
+        drawn = random_misfires(args.cycles, engine.cylinders, args.misfire_rate, args.misfire_cylinder, args.seed)
+        pairs = sorted(set(pairs) | set(drawn))
     load, fuel, solved, note = _operating_point(engine, args)
     pattern = None
     if pairs or fuel != 1.0:

@@ -53,8 +53,9 @@ robust baselines: the median m_c of the cylinder's own last :data:`OWN_HISTORY` 
 firing order), less the deviation common to the firings around it: after a misfire or a
 load change the speed settles over several cycles and moves every firing's e alike, which
 the cylinders' medians follow only with a lag. With d = e − m_c, c is the mean d of the
-next ⌊n/2⌋ firings of an n-cylinder engine (losses below
-−:data:`COMMON_OUTLIER`·s left out), taken off only where it stands out of its own noise:
+next ⌊n/2⌋ firings of an n-cylinder engine (deviations beyond
+±:data:`COMMON_OUTLIER`·s left out: a loss, or a gain against a baseline that a misfire in
+the first cycles holds), taken off only where it stands out of its own noise:
 beyond :data:`COMMON_DEAD` standard errors, by the excess (a steady run keeps every
 firing's whole signal; a single cylinder has no others, and c = 0). The spread s is that of
 all cylinders' last :data:`HISTORY` deviations d − c (interquartile range / 1.349, never
@@ -187,7 +188,8 @@ OWN_HISTORY = 8
 MIN_OWN = 3
 """Firings of every cylinder before verdicts are given (the earlier firings wait for them)."""
 COMMON_OUTLIER = 5.0
-"""Deviations below minus this many spreads (losses) are left out of the common deviation."""
+"""Deviations beyond this many spreads (a loss, or a gain against a baseline that a misfire
+holds) are left out of the common deviation."""
 COMMON_DEAD = 1.0
 """The common deviation is taken off only beyond this many of its standard errors."""
 DEFAULT_THRESHOLD = 8.0
@@ -241,6 +243,21 @@ class NoteKind(enum.Enum):
     ENGINE_FIT = "engine_fit"  # the speed's orders do not show the engine's firings: the verdicts flagged from then
 
 
+NOTE_MEANING = {
+    "found": "the wheel's gap found: edges placed from there",
+    "lost": "an edge broke the wheel's pattern: the wheel lost",
+    "no_wheel": "edges that do not follow the wheel: dropped",
+    "backwards": "edge times not after the one before: skipped",
+    "not_time": "values that are not finite times: skipped",
+    "bad_line": "lines that are not a time: skipped",
+    "not_judged": "firings whose segment fell into a loss of the wheel",
+    "units": "the times converted to seconds from the unit the header names",
+    "time_base": "time stamps that resolve the tooth period coarsely",
+    "engine_fit": "the speed's orders do not show the engine's firings",
+}
+"""What each :class:`NoteKind` reports, in words (the summary's list of notes)."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Note:
     """Something the monitor met in the stream: ``kind``, the log time ``t_s`` [s] (None
@@ -280,6 +297,10 @@ class Verdict:
     misfire's swing falls below every fired one's. The misfire verdict does not use it.
     ``engine_doubt``: the speed's orders did not show the engine's firings (see
     :class:`MisfireMonitor`, **The engine's fit**): the verdict may be on the wrong angles.
+    ``claimed_by``: ``"previous"`` or ``"next"`` where the index is below −threshold but the
+    firing is not called a misfire because that neighbour lost more than twice as much (its
+    index ``neighbour_index``: the loss is the neighbour's, spilt into this segment); None
+    where the neighbour rule did not decide the verdict.
     """
 
     cycle: int
@@ -295,6 +316,8 @@ class Verdict:
     imep_std_pa: float = math.nan
     swing: float = math.nan
     engine_doubt: bool = False
+    claimed_by: str | None = None
+    neighbour_index: float = math.nan
 
     def to_json_dict(self) -> dict:
         return {
@@ -311,6 +334,8 @@ class Verdict:
             "imep_std_bar": _num(self.imep_std_pa / PA_PER_BAR),
             "swing": _num(self.swing),
             "engine_doubt": self.engine_doubt,
+            "claimed_by_neighbour": self.claimed_by,
+            "neighbour_index": _num(self.neighbour_index),
         }
 
     def line(self) -> str:
@@ -326,6 +351,12 @@ class Verdict:
             f"cycle {self.cycle:5d} cylinder {self.cylinder:2d}: {what} index {self.index:+9.2f} ± "
             f"{self.index_std:.2f}{imep}  decided at {self.decided_at_s:.6f} s, cycle end {end}"
             + ("  (engine doubtful: its firings are not seen in the speed)" if self.engine_doubt else "")
+            + (
+                f"  (below -threshold, not called: the {self.claimed_by} firing lost more than twice as much, "
+                f"index {self.neighbour_index:+.2f}: the loss is that firing's, spilt into this segment)"
+                if self.claimed_by
+                else ""
+            )
         )
 
 
@@ -370,11 +401,21 @@ class MonitorResult(Result):
     engine_doubt: bool = False
     """The speed's orders did not show the engine's firings: the verdicts are flagged
     (:attr:`Verdict.engine_doubt`)."""
+    windows: dict | None = None
+    """The misfire-rate windows (:meth:`rotor.diagnostics.misfire_rate.WindowCounter.summary_dict`):
+    the thresholds, the windows judged and exceeded per kind, the exceeded ones; None where
+    the monitor keeps no windows."""
+    after_last_cycle: int = 0
+    """Firings after the log's last cycle (``last_cycle``), not judged."""
+    last_cycle: int | None = None
+    """The log's last cycle, where it was given."""
 
     def summary(self) -> str:
         lines = [
             f"misfire monitor ({self.source}): {int(self.judged.sum())} firings judged, "
-            f"{int(self.misfires.sum())} misfire(s), {self.edges} tooth edges, threshold index < -{self.threshold:g}",
+            f"{int(self.misfires.sum())} misfire(s), {self.edges} tooth edges",
+            f"  a misfire: index < -{self.threshold:g}, unless a neighbouring firing's index is more than twice as "
+            "low (the loss is then that firing's, spilt into this segment)",
             f"  {'cylinder':>8} {'judged':>7} {'misfires':>9} {'median index':>13} {'lowest index':>13}"
             f" {'median swing':>13}" + (f" {'IMEP [bar]':>11}" if self.median_imep_pa is not None else ""),
         ]
@@ -406,9 +447,41 @@ class MonitorResult(Result):
                 "  the engine may not fit the log: the speed's strongest order is not of its firings "
                 "(the verdicts are flagged; the note 'engine_fit' says more)"
             )
-        for kind, n in self.note_counts.items():
-            lines.append(f"  {n} note(s) '{kind}'")
+        if self.after_last_cycle:
+            lines.append(
+                f"  {self.after_last_cycle} firing(s) after the log's last cycle ({self.last_cycle}) not judged"
+            )
+        lines += self._window_lines()
+        if self.note_counts:
+            lines.append("  notes on the stream (each also given as it came, on stderr):")
+            for kind, n in self.note_counts.items():
+                last = next((x.text for x in reversed(self.notes) if x.kind.value == kind), "")
+                lines.append(f"    {kind} ({NOTE_MEANING.get(kind, kind)}) ×{n}" + (f"; the last: {last}" if last else ""))
         return "\n".join(lines)
+
+    def _window_lines(self) -> list[str]:
+        w = self.windows
+        if w is None:
+            return []
+        th = w["thresholds"]
+        judged, exceeded = w["windows_judged"], w["windows_exceeded_count"]
+        lines = [
+            f"  misfire-rate windows: catalyst {th['catalyst_revolutions']} revolutions (its table's rate at the "
+            f"window's speed and load), {judged['catalyst']} judged, {exceeded['catalyst']} exceeded; emission "
+            f"{th['emission_revolutions']} revolutions ({th['emission_pct']:g} % of the firings), "
+            f"{judged['emission']} judged, {exceeded['emission']} exceeded; every {th['step_revolutions']} revolutions"
+        ]
+        shown = w["windows_exceeded"][-20:]
+        for x in shown:
+            part = " (partial: the recording is shorter than the window)" if x["partial"] else ""
+            lines.append(
+                f"    exceeded: {x['kind']} cycles {x['first'][0]}–{x['last'][0]}: {x['rate_pct']:.2f} % > "
+                f"{x['threshold_pct']:.2f} %, {x['code']}{part}"
+            )
+        more = sum(exceeded.values()) - len(shown)
+        if more > 0:
+            lines.append(f"    and {more} more exceeded (the JSON keeps the last {len(w['windows_exceeded'])})")
+        return lines
 
     def _swing(self, c: int) -> float:
         return math.nan if self.median_swing is None else float(self.median_swing[c])
@@ -426,6 +499,11 @@ class MonitorResult(Result):
                 "misfires": [list(p) for p in self.misfire_list],
                 "not_judged": self.not_judged,
                 "engine_doubt": self.engine_doubt,
+                "misfire_rule": f"index < -{self.threshold:g}, unless a neighbouring firing's index is more than "
+                "twice as low (the loss is then that firing's)",
+                "last_cycle": self.last_cycle,
+                "after_last_cycle": self.after_last_cycle,
+                "windows": self.windows,
                 "segments": [
                     {"cylinder": c, "segment_deg": seg, "start_after_tdc_deg": start} for c, seg, start in self.segments
                 ],
@@ -646,8 +724,12 @@ class MisfireMonitor:
         min_spread: float = DEFAULT_MIN_SPREAD,
         check_fit: bool = True,
         log_name: str | None = None,
+        thresholds: Any = None,
+        windows: bool = True,
+        last_cycle: int | None = None,
     ) -> None:
         from ..logs.wheel import parse_wheel
+        from .misfire_rate import MisfireThresholds, WindowCounter
 
         self.log_name = log_name
         self.check_fit = bool(check_fit)
@@ -673,6 +755,19 @@ class MisfireMonitor:
         self.segment_rad = segs  # per firing slot (firing angles sorted)
         _check_teeth(self.wheel, segs, n, strokes)
         self._model = None if engine is None else _ModelIndex(engine, self._fire, self._fire_cyl)
+        if last_cycle is not None and not (
+            isinstance(last_cycle, (int, np.integer)) and not isinstance(last_cycle, bool) and last_cycle >= 1
+        ):
+            raise EngineError(f"last_cycle = {last_cycle!r}: the log's last cycle, a whole number from 1")
+        self.last_cycle = None if last_cycle is None else int(last_cycle)
+        self._after_last = 0
+        if thresholds is not None and not isinstance(thresholds, MisfireThresholds):
+            raise EngineError(f"thresholds = {thresholds!r}: a rotor.diagnostics.misfire_rate.MisfireThresholds")
+        full = None
+        if self._model is not None:
+            full = float(np.mean([m + c for m, c, _ in self._model.figures]))
+        self._windows = WindowCounter(n, strokes, thresholds, full) if windows else None
+        self._new_windows: list = []
         # the firing pattern repeats this many times a cycle: the speed's orders that fit it
         self._pattern = _pattern_repeats(self._fire, cycle)
         # from TDC + (180° − segment)/8: where the most of the firing's own combustion work
@@ -769,6 +864,13 @@ class MisfireMonitor:
         out, self._new_notes = self._new_notes, []
         return out
 
+    def pop_windows(self) -> list:
+        """The misfire-rate windows judged since the last call
+        (:class:`rotor.diagnostics.misfire_rate.MisfireWindow`, in the order judged; none
+        where the monitor was made with ``windows=False``)."""
+        out, self._new_windows = self._new_windows, []
+        return out
+
     def feed(self, times: Any) -> list[Verdict]:
         """Take the next tooth edge times [s] (any number, in order) and return the verdicts
         decided by them. A value that is not a finite number, or an edge not after the one
@@ -810,6 +912,8 @@ class MisfireMonitor:
         there is), and the monitor closed."""
         self._end_backwards()
         out = self._release_waiting(force=True)
+        if self._windows is not None and not self._closed:
+            self._new_windows += self._windows.close()
         self._closed = True
         return out
 
@@ -841,6 +945,9 @@ class MisfireMonitor:
                 for c, seg, off in zip(self._fire_cyl, self._seg_list, self._off_list)
             ],
             engine_doubt=self._doubt,
+            windows=None if self._windows is None else self._windows.summary_dict(),
+            after_last_cycle=self._after_last,
+            last_cycle=self.last_cycle,
         )
 
     # ------------------------------------------------------------------ notes
@@ -1315,8 +1422,9 @@ class MisfireMonitor:
         if not fed:
             d = e - own.median() if n_own else 0.0
             own.append(e)
-        # a loss (another misfire) is not part of the deviation common to its neighbours
-        inlier = d > -COMMON_OUTLIER * self._s_now
+        # a loss (another misfire) or a gain of as many spreads (a firing against a baseline a
+        # misfire holds) is not part of the deviation common to its neighbours
+        inlier = abs(d) < COMMON_OUTLIER * self._s_now
         self._pending.append((k, c0, d, e, end_s, predicted, figures, n_own, fed, inlier))
         if inlier:
             self._wsum += d
@@ -1376,9 +1484,12 @@ class MisfireMonitor:
             # held until the next firing is judged: a loss that is mostly a neighbour's (the
             # tail of its expansion stroke in this segment) is not this firing's misfire; a
             # firing before cycle 1 only feeds the baselines
+            after = self.last_cycle is not None and k > self.last_cycle
+            if after:
+                self._after_last += 1
             self._held = (
                 (k, c0 + 1, index, self._index_std[n_own], e, end_s, predicted, prev, t_dec, figures)
-                if k >= 1
+                if k >= 1 and not after
                 else None
             )
         self._wsum, self._wcnt = wsum, wcnt
@@ -1386,16 +1497,24 @@ class MisfireMonitor:
     def _verdict(self, held: tuple, next_index: float, t_dec: float) -> Verdict:
         k, c, index, index_std, e, end_s, predicted, prev, _, (imep, imep_std, swing) = held
         # a loss that a neighbour has more than twice over is that neighbour's
-        if math.isfinite(prev):
-            lowest = min(prev, next_index) if math.isfinite(next_index) else prev
-            spill = index > 0.5 * lowest
+        side, lowest = None, math.nan
+        if math.isfinite(prev) and not (math.isfinite(next_index) and next_index < prev):
+            side, lowest = "previous", prev
         elif math.isfinite(next_index):
-            spill = index > 0.5 * next_index
-        else:
-            spill = False
-        misfire = index < -self.threshold and not spill
+            side, lowest = "next", next_index
+        spill = side is not None and index > 0.5 * lowest
+        below = index < -self.threshold
+        misfire = below and not spill
         doubt = t_dec >= self._doubt_t
         v = Verdict(k, c, misfire, index, index_std, e, end_s, t_dec, predicted, imep, imep_std, swing, doubt)
+        if below and spill:
+            v.claimed_by, v.neighbour_index = side, lowest
+        if self._windows is not None:
+            judged = self._windows.add(k, c, misfire, end_s, imep)
+            if judged:
+                self._new_windows += judged
+                if len(self._new_windows) > MAX_NOTES:  # not popped: the oldest dropped
+                    del self._new_windows[: len(self._new_windows) - MAX_NOTES]
         c0 = c - 1
         self._judged[c0] += 1
         self._index_sketch[c0].append(index)
