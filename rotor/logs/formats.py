@@ -410,20 +410,44 @@ def _listing(groups: list[ChannelGroup]) -> str:
     return "; ".join(parts)
 
 
-def _find(source: str, groups: list[ChannelGroup], name: str, role: str) -> tuple[int, Channel]:
-    """(group index, channel) of the channel ``name``: its exact name, else the only one of
-    that name in another case; a LogError listing the file's channels where there is none."""
+def _find(source: str, groups: list[ChannelGroup], name: str, role: str) -> list[tuple[int, Channel]]:
+    """(group index, channel) of each channel called ``name``: by its exact name, else in
+    another case (a group's time base too); a LogError listing the file's channels where
+    there is none."""
     hits = [(i, c) for i, g in enumerate(groups) for c in g.channels if c.name == name]
     if not hits:
         hits = [(i, c) for i, g in enumerate(groups) for c in g.channels if c.name.lower() == name.lower()]
     if not hits:
-        hits = [(i, g.time) for i, g in enumerate(groups) if g.time is not None and g.time.name == name]
+        hits = [(i, g.time) for i, g in enumerate(groups) if g.time is not None and g.time.name.lower() == name.lower()]
     if not hits:
         raise LogError(f"{source}: no channel {name!r} (named for {role}); the file's channels: {_listing(groups)}")
-    if len(hits) > 1 and len({i for i, _ in hits}) > 1:
-        where = ", ".join(groups[i].name for i, _ in hits)
-        raise LogError(f"{source}: channel {name!r} is in several groups ({where}); export the one needed")
-    return hits[0]
+    return hits
+
+
+def _one_group(source: str, groups: list[ChannelGroup], spec: dict[str, str]) -> tuple[int, dict[str, Channel]]:
+    """The group of the channels ``spec`` names and each role's channel: a name found in
+    several groups (an MDF file's master channels are all ``time``) is the one in the group
+    of the others."""
+    found = {role: _find(source, groups, name, role) for role, name in spec.items()}
+    sure = {role: hits[0][0] for role, hits in found.items() if len({i for i, _ in hits}) == 1}
+    where = set(sure.values())
+    if len(where) > 1:
+        shown = "; ".join(f"{spec[r]!r} in {groups[i].name}" for r, i in sure.items())
+        raise LogError(
+            f"{source}: the channels named are sampled on different time bases ({shown}); name channels of one "
+            f"group, or resample them onto one time base when exporting"
+        )
+    common = set.intersection(*({i for i, _ in hits} for hits in found.values()))
+    gi = where.pop() if where else min(common) if len(common) == 1 else None
+    if gi is None or gi not in common:
+        role = next(r for r, hits in found.items() if gi is None or gi not in {i for i, _ in hits})
+        shown = ", ".join(groups[i].name for i, _ in found[role])
+        raise LogError(
+            f"{source}: channel {spec[role]!r} is in "
+            + (f"several groups ({shown})" if len(found[role]) > 1 else f"{shown}, the other channels named in another")
+            + "; name channels of one group"
+        )
+    return gi, {role: next(c for i, c in hits if i == gi) for role, hits in found.items()}
 
 
 def _role_of(role: str, channel: Channel) -> str:
@@ -498,17 +522,9 @@ def _time_of(source: str, group: ChannelGroup, taken: set[str]) -> Channel:
 
 def _pinned(source: str, groups: list[ChannelGroup], spec: dict[str, str], notes: list[str]) -> dict[str, np.ndarray]:
     """The columns a spec of roles and channel names gives."""
-    found = {role: _find(source, groups, name, role) for role, name in spec.items()}
-    where = {i for i, _ in found.values()}
-    if len(where) > 1:
-        shown = "; ".join(f"{spec[r]!r} in {groups[i].name}" for r, (i, _) in found.items())
-        raise LogError(
-            f"{source}: the channels named are sampled on different time bases ({shown}); name channels of one "
-            f"group, or resample them onto one time base when exporting"
-        )
-    gi = where.pop()
+    gi, found = _one_group(source, groups, spec)
     group = groups[gi]
-    columns = {_role_of(role, ch): ch for role, (_, ch) in found.items()}
+    columns = {_role_of(role, ch): ch for role, ch in found.items()}
     canon = {_unit_factor(source, ch, col, notes)[0] for col, ch in columns.items()}
     if not canon & {"time", "tooth_time_s"}:
         t = _time_of(source, group, {c.name for c in columns.values()})
