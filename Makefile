@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo lint lint-quick docs docs-build test fuzz wheel-check notebooks bench bench-quick clean
+.PHONY: install demo lint lint-quick docs docs-build reference test fuzz wheel-check notebooks bench bench-quick clean
 
 # uv installs the same versions as pip, several times faster (its downloads in parallel);
 # pip does it where uv cannot be installed. Where Python is told not to write bytecode
@@ -43,6 +43,12 @@ docs: $(STAMP)
 
 docs-build: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+
+# the generated text of docs/cli.md, docs/reference/engine-file.md and docs/reference/wheels.md
+# (the commands' help, the table of commands, the engine-file keys, the standard wheels)
+# written afresh from the code into the pages
+reference: $(STAMP)
+	$(PY) docs/hooks.py
 
 # two worker processes (the CI machine has two cores), each taking whole test files, so that
 # a file's fixtures are computed once, in the order of the folders (a worker's next file is

@@ -2,10 +2,13 @@
 notebooks` and the tests run them); they become pages under notebooks/ here, before
 mkdocs-jupyter turns them into HTML; CHANGELOG.md becomes changelog.md (without the
 project's work-item numbers); the figures of benchmarks/figures/ become files of the site;
-``<!-- rotor COMMAND --help -->`` in a page becomes what that command prints, so that
-the command-line page never falls behind the parser; and ``<!-- rotor commands -->``,
-``<!-- engine-file keys -->`` and ``<!-- standard wheels -->`` become the reference tables
-generated from the parser, the engine-file loader and the wheel reader."""
+``<!-- rotor COMMAND --help -->`` in a page is followed by what that command prints, so
+that the command-line page never falls behind the parser; and ``<!-- rotor commands -->``,
+``<!-- engine-file keys -->`` and ``<!-- standard wheels -->`` by the reference tables
+generated from the parser, the engine-file loader and the wheel reader. The generated text
+is written into the pages of the repository too (``make reference``, which runs this file;
+tests/project/test_docs.py fails while a page lags the code), so that they read there as
+on the site."""
 
 from __future__ import annotations
 
@@ -50,6 +53,7 @@ def on_files(files: Files, config) -> Files:
 
 
 HELP = re.compile(r"^<!-- (rotor(?: [a-z-]+)? --help) -->$", re.MULTILINE)
+"""A marker line whose generated text is what that command prints for ``--help``."""
 
 
 def rotor_help(command: str) -> str:
@@ -296,17 +300,55 @@ def changelog_for_users(markdown: str) -> str:
     return docstring_markdown(markdown)
 
 
+MARKER = re.compile(
+    r"^(<!-- (?:rotor(?: [a-z-]+)? --help|rotor commands|engine-file keys|standard wheels) -->)\n"
+    r"(?:.*?^<!-- end of generated text -->\n)?",
+    re.MULTILINE | re.DOTALL,
+)
+END = "<!-- end of generated text -->"
+GENERATED_PAGES = ("cli.md", "reference/engine-file.md", "reference/wheels.md")
+"""The pages of docs/ whose generated text is written into the page itself."""
+
+
+def _generated(marker: str) -> str:
+    """What a marker line stands for: a command's help, or one of the reference tables."""
+    if m := HELP.match(marker):
+        return f"```text\n$ {m.group(1)}\n{rotor_help(m.group(1))}\n```"
+    if COMMANDS.match(marker):
+        return command_table()
+    if ENGINE_KEYS.match(marker):
+        return engine_file_reference()
+    return wheel_reference()
+
+
+def fill(markdown: str) -> str:
+    """``markdown`` with the text after each marker line (``<!-- rotor COMMAND --help -->``,
+    ``<!-- rotor commands -->``, ``<!-- engine-file keys -->``, ``<!-- standard wheels -->``)
+    generated afresh from the code, up to the line ``<!-- end of generated text -->``
+    (written where it is missing). A page whose text is current is returned unchanged."""
+    return MARKER.sub(lambda m: f"{m.group(1)}\n{_generated(m.group(1))}\n{END}\n", markdown)
+
+
+def write_generated_pages() -> list[str]:
+    """Rewrite the generated text of :data:`GENERATED_PAGES` in docs/ (``make reference``);
+    the pages that changed."""
+    changed = []
+    for name in GENERATED_PAGES:
+        path = ROOT / "docs" / name
+        text = path.read_text(encoding="utf-8")
+        if fill(text) != text:
+            path.write_text(fill(text), encoding="utf-8")
+            changed.append(name)
+    return changed
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    """``<!-- rotor COMMAND --help -->`` on a line of its own becomes that help text;
-    ``<!-- rotor commands -->``, ``<!-- engine-file keys -->`` and ``<!-- standard wheels -->``
-    become the tables generated from the parser, the engine-file loader and the wheel reader."""
-    markdown = HELP.sub(lambda m: f"```text\n$ {m.group(1)}\n{rotor_help(m.group(1))}\n```", markdown)
+    """The generated text of every marker (:func:`fill`), so that the site shows the code as it
+    is even where a page in the repository lags it; CHANGELOG.md for users."""
     if page is not None and page.file.src_uri == "changelog.md":
         markdown = changelog_for_users(markdown)
-    if COMMANDS.search(markdown):
-        markdown = COMMANDS.sub(lambda m: command_table(), markdown)
-    if ENGINE_KEYS.search(markdown):
-        markdown = ENGINE_KEYS.sub(lambda m: engine_file_reference(), markdown)
-    if WHEELS.search(markdown):
-        markdown = WHEELS.sub(lambda m: wheel_reference(), markdown)
-    return markdown
+    return fill(markdown)
+
+
+if __name__ == "__main__":
+    print("\n".join(f"docs/{name} rewritten" for name in write_generated_pages()) or "docs/: generated text current")

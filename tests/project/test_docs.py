@@ -174,8 +174,23 @@ def test_help_blocks_come_from_the_parser():
     pytest.importorskip("mkdocs")
     hooks = load_docs_module("hooks")
     text = hooks.on_page_markdown("a\n<!-- rotor simulate --help -->\nb", page=None, config=None, files=None)
-    assert text.startswith("a\n```text\n$ rotor simulate --help\nusage: rotor simulate")
-    assert "--misfire" in text and text.endswith("```\nb")
+    assert text.startswith("a\n<!-- rotor simulate --help -->\n```text\n$ rotor simulate --help\nusage: rotor simulate")
+    assert "--misfire" in text and text.endswith("```\n<!-- end of generated text -->\nb")
+    assert hooks.fill(text) == text  # written once, the same text again
+    stale = text.replace("--misfire", "--misfires")
+    assert hooks.fill(stale) == text
+
+
+@pytest.mark.parametrize("name", ["cli.md", "reference/engine-file.md", "reference/wheels.md"])
+def test_the_generated_reference_is_written_into_the_repository(name):
+    """The command-line and engine-file reference pages hold their generated text in the
+    repository too, as the site shows it (the README links to them there)."""
+    pytest.importorskip("mkdocs")
+    hooks = load_docs_module("hooks")
+    assert name in hooks.GENERATED_PAGES
+    text = (DOCS / name).read_text(encoding="utf-8")
+    assert hooks.END in text
+    assert hooks.fill(text) == text, f"docs/{name} lags the code: run `make reference` (python docs/hooks.py)"
 
 
 def test_docstrings_become_markdown():
