@@ -53,6 +53,15 @@ def test_every_public_name_has_one_api_entry_on_its_subpackages_page():
     assert not misplaced, f"(page, subpackage) of names on another subpackage's page: {misplaced}"
 
 
+def test_every_plotting_function_has_its_entry():
+    import rotor.plotting
+
+    page = (API / "plotting.md").read_text(encoding="utf-8")
+    for name in rotor.plotting.__all__:
+        module = getattr(rotor.plotting, name).__module__
+        assert f"::: {module}.{name}\n" in page, f"docs/api/plotting.md has no entry for rotor.plotting.{name}"
+
+
 def test_every_api_page_is_in_the_navigation():
     for page in API.glob("*.md"):
         assert f"api/{page.name}" in MKDOCS, page
