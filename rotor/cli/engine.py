@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .args import add_engine, add_json, add_plot, positive_float
 from .output import csv_text, json_text, plot_folder, print_json, print_text, print_written, save_plot
@@ -76,12 +76,50 @@ def cmd_table(args: argparse.Namespace) -> None:
         elif args.format == "csv":
             text = csv_text(TABLE_COLUMNS, zip(*(table.columns[c] for c in TABLE_COLUMNS)), what="the crank table")
         else:
-            text = table.to_text()
+            text = table.to_text() + same_table_note(engine, table, args)
         keep_output(key, text)
     if args.output and args.output != "-":
         write_text_atomic(args.output, text)
     else:
         print_text(text)
+
+
+def same_table_note(engine: Engine, table: Any, args: argparse.Namespace) -> str:
+    """The line under a multi-cylinder engine's table that names the cylinders whose table
+    is the same (every column equal to 1e-9 of its largest magnitude), and why: each table
+    is in its own cylinder's cycle angle, so cylinders with the same crank-throw kinematics,
+    masses and pressure cycle differ only in their phase on the crankshaft. Empty for one
+    cylinder."""
+    import numpy as np
+
+    from ..engine.table import TABLE_COLUMNS, crank_table
+
+    if engine.cylinders < 2:
+        return ""
+    ours = {c: np.asarray(table.columns[c], dtype=float) for c in TABLE_COLUMNS}
+    same = []
+    for cylinder in range(1, engine.cylinders + 1):
+        other = (
+            table
+            if cylinder == table.cylinder
+            else crank_table(engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics, cylinder=cylinder)
+        )
+        if all(
+            np.allclose(np.asarray(other.columns[c], dtype=float), v, rtol=0.0, atol=1e-9 * max(np.abs(v).max(), 1e-300))
+            for c, v in ours.items()
+        ):
+            same.append(cylinder)
+    why = (
+        "each table is in its own cylinder's cycle angle (0° at its TDC at the start of its cycle), and these "
+        "cylinders share the crank-throw kinematics, masses and pressure cycle; they differ only in their phase "
+        "on the crankshaft (the firing order and the throw angles)"
+    )
+    if len(same) == engine.cylinders:
+        return f"note: every cylinder (1–{engine.cylinders}) has this table: {why}\n"
+    if len(same) > 1:
+        names = ", ".join(str(c) for c in same)
+        return f"note: cylinders {names} have this table: {why}; the others differ\n"
+    return f"note: no other cylinder has this table (cylinder {table.cylinder}'s mechanism or pressure differs)\n"
 
 
 def cmd_info(args: argparse.Namespace) -> None:
