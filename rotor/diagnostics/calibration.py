@@ -73,9 +73,11 @@ import numpy as np
 from ..errors import EngineError
 from ..logs.analysis import LogAnalysis, PhaseSource
 from ..logs.wheel import ToothErrors
+from ..results import json_safe
 from ..units import PA_PER_BAR
 from .calibration_record import Calibration, check_argument_types, engine_geometry
 from .charge import check_scaling, scaled
+from .phase import tdc_bias_of
 from .pressure_work import check_single_cylinder, piston_displacement, signal_work
 
 if TYPE_CHECKING:
@@ -90,7 +92,7 @@ DEFAULT_MAX_ORDER = 4.0
 # ----------------------------------------------------------------------------- calibrate
 def calibrate(
     engine: Engine,
-    log: str | os.PathLike | LogAnalysis,
+    log: str | os.PathLike | LogAnalysis | Sequence[str | os.PathLike | LogAnalysis],
     *,
     wheel: str | None = None,
     columns: str | Sequence[str] | None = None,
@@ -110,7 +112,13 @@ def calibrate(
     - ``engine``: a single-cylinder :class:`rotor.Engine` (geometry, masses; its pressure's
       compression ratio for the TDC fit).
     - ``log``: a file (read with ``wheel`` and ``columns``, e.g. ``"time,pressure_v,encoder_v"``)
-      or a :class:`rotor.LogAnalysis` with a pressure channel and TDC from it.
+      or a :class:`rotor.LogAnalysis` with a pressure channel and TDC from it; or a list of
+      them, recordings of the same installation at several loads or speeds: the inertia is
+      the mean of their energy balances', refined on all of them at once (the mean of the
+      log ratios of identified to measured IMEP), TDC the circular mean of their pressure
+      TDCs, the sensor and wheel the first's; the calibration states each recording
+      (``recordings``), the loads and speeds they cover (:meth:`Calibration.coverage`) and
+      the speed-based TDC's bias they measure (``tdc_bias``).
     - ``pressure_gain``: pascal per unit of the pressure signal; ``"motored"``: from the
       recording's motored cycles (:func:`rotor.diagnostics.pegging.pressure_gain_from_motored`:
       their compression polytropic, pegged at the intake pressure; refused where there are
@@ -130,7 +138,11 @@ def calibrate(
     **Returns:** :class:`Calibration`. Raises :class:`rotor.EngineError` /
     :class:`rotor.LogError` for what cannot be calibrated.
     """
-    check_argument_types("calibrate", engine, log, None, wheel, None)
+    logs = list(log) if isinstance(log, (list, tuple)) else [log]
+    if not logs:
+        raise EngineError("calibrate: no recording given (a log file, an analysis, or a list of them)")
+    for one in logs:
+        check_argument_types("calibrate", engine, one, None, wheel, None)
     motored = isinstance(pressure_gain, str) and pressure_gain == "motored"
     _check_gain_type(pressure_gain, motored)
     check_single_cylinder(engine, "calibrate")
@@ -141,9 +153,83 @@ def calibrate(
         raise EngineError(
             f"pressure_gain={pressure_gain!r}: must be a positive number [Pa per signal unit]", argument="pressure_gain"
         )
+    parts = [
+        _measured(engine, one, wheel, columns, tooth_errors, edge, pressure_gain, motored, intake_pa, max_order)
+        for one in logs
+    ]
+    first = parts[0]
+    sigmas = [p.imep_mean / p.gain.nominal_imep_pa if scaling == "charge" else 1.0 for p in parts]
+    sigma = float(np.exp(np.mean(np.log(sigmas))))
+    fit = dict(first.fit)
+    J = float(np.mean([p.inertia for p in parts]))
+    if len(parts) > 1:
+        fit["energy_balance_inertia_kgm2"] = J
+        fit["recordings"] = len(parts)
+    if refine:
+        engines = [scaled(engine, s) if scaling == "charge" else engine for s in sigmas]
+        J, refined = _refine_inertia(engines, [p.analysis for p in parts], J, [p.imep_mean for p in parts], load_per)
+        fit.update(refined)
+    calibrated = eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, float(J))
+    biases = [_speed_tdc_bias(calibrated, p.analysis) for p in parts]
+    a = first.analysis
+    return Calibration(
+        engine=engine.name,
+        inertia_kgm2=float(J),
+        tdc_after_gap_deg=_mean_angle_deg([float(np.rad2deg(p.analysis.tdc_rad)) for p in parts]),
+        pressure_gain_pa=float(first.gain.gain_pa),
+        pressure_offset_pa=float(np.mean([p.offset for p in parts])),
+        loss_torque_Nm=float(np.mean(first.loss_torque)),
+        scaling=scaling,
+        charge_scale=sigma,
+        wheel=a.track.wheel.spec if a.track is not None else "",
+        tooth_errors=a.tooth_errors,
+        source=", ".join(p.analysis.source for p in parts),
+        fit=fit,
+        cylinders=int(engine.cylinders),
+        strokes=int(engine.strokes),
+        geometry=engine_geometry(engine),
+        reading=_reading_of(a),
+        tdc_bias=tdc_bias_of([b for b in biases if b is not None]),
+        recordings=tuple(p.record(b) for p, b in zip(parts, biases)),
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class _Measured:
+    """What one calibration recording gives: its analysis, the pressure gain, the mean
+    measured IMEP [Pa], the energy balance's inertia [kg·m²], offset [Pa] and losses per
+    cycle [N·m], the pumping loop's mean pressure [Pa] and the fit's figures."""
+
+    analysis: LogAnalysis
+    gain: _Gain
+    imep_mean: float
+    inertia: float
+    offset: float
+    loss_torque: np.ndarray
+    pumping_mep: float
+    fit: dict
+
+    def record(self, bias: tuple[float, float] | None) -> dict:
+        """The recording as a :class:`Calibration` states it (``recordings``)."""
+        return {
+            "source": self.analysis.source,
+            "mean_rpm": self.fit["mean_rpm"],
+            "imep_measured_pa": self.imep_mean,
+            "pumping_mep_pa": self.pumping_mep,
+            "loss_torque_Nm": float(np.mean(self.loss_torque)),
+            "tdc_after_gap_deg": float(np.rad2deg(self.analysis.tdc_rad)),
+            "energy_balance_inertia_kgm2": self.inertia,
+            "speed_tdc_bias_deg": None if bias is None else bias[0],
+            "speed_tdc_model_std_deg": None if bias is None else bias[1],
+        }
+
+
+def _measured(engine, log, wheel, columns, tooth_errors, edge, pressure_gain, motored, intake_pa, max_order):
+    """One calibration recording analysed and its energy balance fitted (:class:`_Measured`)."""
     a = _calibration_analysis(engine, log, wheel, columns, tooth_errors, edge)
     vh = float(engine.geometry.displacement_m3)
-    w_cycle = signal_work(engine, a)[:, -1]
+    work = signal_work(engine, a)
+    w_cycle = work[:, -1]
     gain = _pressure_gain(engine, a, pressure_gain, motored, intake_pa, w_cycle)
     imep_cycles = gain.gain_pa * w_cycle / vh
     J_e, b_rel, a_k, figs = _energy_balance(engine, a, gain.gain_pa, max_order)
@@ -154,7 +240,9 @@ def calibrate(
             f"{a.source}: no firing in the recording (mean IMEP {imep_mean / PA_PER_BAR:.3g} bar from the pressure "
             f"channel): the calibration needs fired cycles"
         )
-    sigma = imep_mean / gain.nominal_imep_pa if scaling == "charge" else 1.0
+    P = work.shape[1] - 1
+    # the gas exchange: intake (0 … 180°) and exhaust (540 … 720°) strokes of the cycle from TDC before intake
+    pumping = gain.gain_pa * float(np.mean(work[:, P // 4] + work[:, P] - work[:, 3 * P // 4])) / vh
     fit = {
         "energy_balance_inertia_kgm2": J_e,
         "max_order": float(max_order),
@@ -167,31 +255,50 @@ def calibrate(
         **({} if gain.pegged is None else {"motored": gain.pegged.to_json_dict()}),
         "mean_rpm": float(np.mean(a.mean_rpm)),
         "loss_mep_pa": float(np.mean(a_k)) * float(engine.cycle_rad) / vh,  # friction + load as a mean pressure
+        "pumping_mep_pa": pumping,
         **figs,
     }
-    J = J_e
-    if refine:
-        J, refined = _refine_inertia(
-            scaled(engine, sigma) if scaling == "charge" else engine, a, J_e, imep_mean, load_per
-        )
-        fit.update(refined)
-    return Calibration(
-        engine=engine.name,
-        inertia_kgm2=float(J),
-        tdc_after_gap_deg=float(np.rad2deg(a.tdc_rad)),
-        pressure_gain_pa=float(gain.gain_pa),
-        pressure_offset_pa=float(offset if gain.pegged is None else gain.pegged.offset_pa),
-        loss_torque_Nm=float(np.mean(a_k)),
-        scaling=scaling,
-        charge_scale=float(sigma),
-        wheel=a.track.wheel.spec if a.track is not None else "",
-        tooth_errors=a.tooth_errors,
-        source=a.source,
+    return _Measured(
+        analysis=a,
+        gain=gain,
+        imep_mean=imep_mean,
+        inertia=float(J_e),
+        offset=float(offset if gain.pegged is None else gain.pegged.offset_pa),
+        loss_torque=a_k,
+        pumping_mep=pumping,
         fit=fit,
-        cylinders=int(engine.cylinders),
-        strokes=int(engine.strokes),
-        geometry=engine_geometry(engine),
     )
+
+
+def _mean_angle_deg(angles: list[float]) -> float:
+    """The circular mean of angles [deg], in the range of the first (an angle after the gap)."""
+    z = np.mean(np.exp(1j * np.deg2rad(angles)))
+    mean = float(np.rad2deg(np.angle(z)))
+    return angles[0] + ((mean - angles[0] + 180.0) % 360.0 - 180.0)
+
+
+def _speed_tdc_bias(engine, analysis) -> tuple[float, float] | None:
+    """The speed-based TDC's bias on a recording whose TDC the pressure gave: (speed's TDC −
+    pressure's [deg], the fit's model term [deg]); None where the speed does not determine it."""
+    from .phase import R2_MIN, tdc_from_speed
+
+    try:
+        fit = tdc_from_speed(engine, analysis)
+    except (EngineError, ArithmeticError, ValueError):
+        return None
+    if fit.tdc_after_gap_deg is None or fit.r2 < R2_MIN or not fit.determined:
+        return None
+    bias = (float(fit.tdc_after_gap_deg) - float(np.rad2deg(analysis.tdc_rad)) + 180.0) % 360.0 - 180.0
+    return float(bias), float(fit.std_model_deg)
+
+
+def _reading_of(analysis) -> dict | None:
+    """How the wheel of ``analysis`` was read, as a JSON-safe dict (None where not stated)."""
+    reading = getattr(analysis, "reading", None)
+    if reading is None or isinstance(reading, dict):
+        return reading
+    to_json = getattr(reading, "to_json_dict", None)
+    return json_safe(to_json()) if callable(to_json) else None
 
 
 def _check_gain_type(pressure_gain, motored: bool) -> None:
@@ -266,33 +373,38 @@ def _pressure_gain(engine, a, pressure_gain, motored, intake_pa, w_cycle) -> _Ga
     return _Gain(float(pressure_gain), "given", None, nominal)
 
 
-def _refine_inertia(engine, a, J_e, imep_mean, load_per) -> tuple[float, dict]:
+def _refine_inertia(engines, analyses, J_e, imep_means, load_per) -> tuple[float, dict]:
     """The inertia with which the identification from the speed alone reproduces the
-    measured mean IMEP ``imep_mean`` (a secant iteration on log J from the energy
-    balance's ``J_e``), and the fit's figures of it."""
+    measured mean IMEPs ``imep_means`` of the recordings ``analyses`` (each identified on its
+    engine of ``engines``), in the mean of their log ratios (a secant iteration on log J
+    from the energy balance's ``J_e``), and the fit's figures of it."""
     from .identification import identify
 
     def g(logJ):
-        ident = identify(
-            eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, float(np.exp(logJ))), a, load_per=load_per
-        )
-        ident_mean = float(np.mean(ident.imep_pa[:, 0]))
-        return math.log(max(ident_mean, 1.0)) - math.log(max(imep_mean, 1.0)), ident_mean
+        means = []
+        for eng, a in zip(engines, analyses):
+            ident = identify(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, eng, float(np.exp(logJ))), a, load_per=load_per)
+            means.append(float(np.mean(ident.imep_pa[:, 0])))
+        errs = [math.log(max(m, 1.0)) - math.log(max(t, 1.0)) for m, t in zip(means, imep_means)]
+        return float(np.mean(errs)), means
 
     x0 = math.log(J_e)
     g0, first = g(x0)
     x1 = x0 - g0
-    g1, _ = g(x1)
+    g1, last = g(x1)
     steps = 2
     while abs(g1) > 1e-4 and steps < 8 and g1 != g0:
         x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
-        g1, _ = g(x1)
+        g1, last = g(x1)
         steps += 1
-    return float(np.exp(x1)), {
-        "identified_imep_with_energy_balance_inertia_pa": first,
+    figs = {
+        "identified_imep_with_energy_balance_inertia_pa": first[0] if len(first) == 1 else first,
         "refine_steps": steps,
         "identified_imep_mismatch": float(math.expm1(g1)),
     }
+    if len(last) > 1:
+        figs["identified_imep_pa"] = last
+    return float(np.exp(x1)), figs
 
 
 def _lowpass(x, max_order, P, revs):

@@ -30,6 +30,7 @@ from ..logs.wheel import ToothErrors
 from ..results import Result, json_safe
 from ..units import PA_PER_BAR
 from .charge import SCALINGS
+from .phase import TdcBias
 
 if TYPE_CHECKING:
     from ..engine.model import Engine
@@ -43,11 +44,22 @@ __all__ = [
     "CALIBRATION_VERSION",
     "GEOMETRY_KEYS",
     "PRESETS_DIR",
+    "READS_VERSIONS",
+    "COVERAGE_RPM_MARGIN",
+    "COVERAGE_IMEP_MARGIN",
 ]
 
 CALIBRATION_FORMAT = "rotor-calibration"
-CALIBRATION_VERSION = 1
+CALIBRATION_VERSION = 2
+READS_VERSIONS = (1, 2)  # version 1: no reading, TDC bias, recordings or coverage
 GEOMETRY_KEYS = ("bore_m", "stroke_m", "rod_length_m")  # the geometry a calibration stores
+COVERAGE_RPM_MARGIN = 0.1
+"""A diagnosis whose mean speed lies more than this fraction outside the calibration
+recordings' speeds is outside what the calibration covers [-]."""
+COVERAGE_IMEP_MARGIN = 0.25
+"""… and one whose mean IMEP lies more than this fraction below the lowest or above the
+highest calibration recording's [-] (on the tue-4gb10 bench a full-load calibration reads
+half load 3 % high and no load 19 % low: the engine file's cycle is not the engine's there)."""
 PRESETS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "presets")
 
 
@@ -65,6 +77,14 @@ class Calibration(Result):
     calibration recording (its IMEP over the engine file's) [-]; ``wheel`` (spec);
     ``tooth_errors``: a :class:`rotor.ToothErrors` or None; ``source``: the recording;
     ``fit``: figures of the fit (energy-balance inertia, residuals, IMEP measured).
+    Version 2 adds: ``reading``: how the wheel signal was read (a JSON-safe dict, the
+    recording's :attr:`rotor.LogAnalysis.reading`; None where unknown), which
+    :func:`rotor.diagnose` reads its logs with; ``tdc_bias``: the speed-based TDC's bias as
+    the calibration recordings measured it (:class:`rotor.diagnostics.phase.TdcBias`, or
+    None); ``recordings``: one dict per calibration recording (``source``, ``mean_rpm``,
+    ``imep_measured_pa``, ``pumping_mep_pa``, ``loss_torque_Nm``, ``tdc_after_gap_deg``,
+    ``energy_balance_inertia_kgm2``, ``speed_tdc_bias_deg``); from them :meth:`coverage`
+    (the speeds and loads covered) and :meth:`outside` (why a diagnosis lies outside them).
     """
 
     engine: str
@@ -82,6 +102,9 @@ class Calibration(Result):
     cylinders: int = 0  # of the calibrated engine (0: not stored, an older file)
     strokes: int = 0
     geometry: dict = dataclasses.field(default_factory=dict)  # bore_m, stroke_m, rod_length_m (empty: not stored)
+    reading: dict | None = None
+    tdc_bias: TdcBias | None = None
+    recordings: tuple = ()
 
     def __post_init__(self):
         for key in ("inertia_kgm2", "pressure_gain_pa", "charge_scale"):
@@ -121,6 +144,44 @@ class Calibration(Result):
                 f"not apply; calibrate this engine"
             )
 
+    def coverage(self) -> dict | None:
+        """The speeds [rpm] and mean IMEPs [Pa] of the calibration recordings, as
+        ``{"rpm": (lo, hi), "imep_pa": (lo, hi), "recordings": n}`` (None for a version-1
+        file, which does not state them)."""
+        rec = [r for r in self.recordings if isinstance(r, dict)]
+        try:
+            rpm = [float(r["mean_rpm"]) for r in rec]
+            imep = [float(r["imep_measured_pa"]) for r in rec]
+        except (KeyError, TypeError, ValueError):
+            return None
+        if not rec:
+            return None
+        return {"rpm": (min(rpm), max(rpm)), "imep_pa": (min(imep), max(imep)), "recordings": len(rec)}
+
+    def outside(self, rpm: float, imep_pa: float) -> str:
+        """Why a diagnosis at mean speed ``rpm`` [rpm] and mean IMEP ``imep_pa`` [Pa] lies
+        outside what the calibration covers (:data:`COVERAGE_RPM_MARGIN`,
+        :data:`COVERAGE_IMEP_MARGIN`), or "" where it lies inside (or the calibration states
+        no coverage)."""
+        cov = self.coverage()
+        if cov is None:
+            return ""
+        (r_lo, r_hi), (p_lo, p_hi) = cov["rpm"], cov["imep_pa"]
+        why = []
+        if not (r_lo * (1 - COVERAGE_RPM_MARGIN) <= rpm <= r_hi * (1 + COVERAGE_RPM_MARGIN)):
+            why.append(f"{rpm:.0f} rpm, the calibration's recordings {r_lo:.0f}–{r_hi:.0f} rpm")
+        if not (p_lo * (1 - COVERAGE_IMEP_MARGIN) <= imep_pa <= p_hi * (1 + COVERAGE_IMEP_MARGIN)):
+            why.append(
+                f"IMEP {imep_pa / PA_PER_BAR:.3g} bar, the calibration's recordings "
+                f"{p_lo / PA_PER_BAR:.3g}–{p_hi / PA_PER_BAR:.3g} bar"
+            )
+        if not why:
+            return ""
+        return (
+            f"outside what the calibration covers ({'; '.join(why)}): the engine model's error there is not "
+            "measured; calibrate on a recording at this operating point too"
+        )
+
     def apply(self, engine: Engine) -> Engine:
         """``engine`` with the calibrated crankshaft inertia [kg·m²]."""
         return eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, float(self.inertia_kgm2))
@@ -146,6 +207,10 @@ class Calibration(Result):
             "cylinders": int(self.cylinders),
             "strokes": int(self.strokes),
             "geometry": json_safe(self.geometry),
+            "reading": json_safe(self.reading),
+            "tdc_bias": None if self.tdc_bias is None else self.tdc_bias.to_json_dict(),
+            "recordings": json_safe(list(self.recordings)),
+            "coverage": json_safe(self.coverage()),
         }
 
     @classmethod
@@ -155,9 +220,10 @@ class Calibration(Result):
             raise EngineError(f"{where}: not a calibration (a JSON object is needed)")
         if d.get("format") != CALIBRATION_FORMAT:
             raise EngineError(f"{where}: key 'format' must be {CALIBRATION_FORMAT!r} (not a rotor calibration file)")
-        if d.get("version") != CALIBRATION_VERSION:
+        if d.get("version") not in READS_VERSIONS or isinstance(d.get("version"), bool):
             raise EngineError(
-                f"{where}: key 'version' = {d.get('version')!r}: this rotor reads version {CALIBRATION_VERSION}"
+                f"{where}: key 'version' = {d.get('version')!r}: this rotor reads versions "
+                f"{', '.join(str(v) for v in READS_VERSIONS)}"
             )
 
         def num(key, positive=False):
@@ -232,6 +298,7 @@ class Calibration(Result):
             cylinders=whole("cylinders"),
             strokes=whole("strokes"),
             geometry=dict(geo),
+            **_version_2_fields(d, where),
         )
 
     def save(self, path: str | os.PathLike) -> None:
@@ -303,6 +370,21 @@ class Calibration(Result):
             f"scaling {self.scaling} (σ {self.charge_scale:.4f})",
         ]
         return "\n".join(lines) + "\n"
+
+
+def _version_2_fields(d: dict, where: str) -> dict:
+    """The keys version 2 added (absent from a version-1 file: their defaults), checked."""
+    reading = d.get("reading")
+    if reading is not None and not isinstance(reading, dict):
+        raise EngineError(f"{where}: key 'reading' must be null or an object (how the wheel was read)")
+    bias = d.get("tdc_bias")
+    parsed = TdcBias.from_json_dict(bias) if bias is not None else None
+    if bias is not None and parsed is None:
+        raise EngineError(f"{where}: key 'tdc_bias' must be null or an object with numbers 'kappa' and 'kappa_std'")
+    rec = d.get("recordings", [])
+    if not isinstance(rec, list) or not all(isinstance(r, dict) for r in rec):
+        raise EngineError(f"{where}: key 'recordings' must be a list of objects")
+    return {"reading": reading, "tdc_bias": parsed, "recordings": tuple(rec)}
 
 
 def engine_geometry(engine: Engine) -> dict:

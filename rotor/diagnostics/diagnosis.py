@@ -154,7 +154,9 @@ class Diagnosis(Result):
     else ``""``; ``verdict``: :class:`DiagnosisVerdict` — where the model does not explain
     the speed (a poor fit, an implausible IMEP, speed or firing pattern), the misfire flags
     are not judged (all ``False``) and no firing is concluded, and ``verdict_reason`` says
-    what to check.
+    what to check; ``coverage``: where the recording lies outside the speeds and loads its
+    calibration's recordings cover (:meth:`rotor.Calibration.outside`), the line that says
+    so (also among ``warnings``, every cycle flagged, ``supported: false`` in the JSON), else ``""``.
 
     ``summary()`` and ``to_json_dict()`` are what ``rotor diagnose`` prints.
     """
@@ -175,6 +177,7 @@ class Diagnosis(Result):
     phase_warning: str = ""
     verdict: DiagnosisVerdict = DiagnosisVerdict.FITS
     verdict_reason: str = ""
+    coverage: str = ""
 
     # the identification's figures, read as the diagnosis's own
     scale = _Identified[np.ndarray]()
@@ -239,7 +242,19 @@ class Diagnosis(Result):
             )
         own = (chk.message,) if chk is not None and chk.corrected else ()
         phase = (self.phase_warning,) if self.phase_warning else ()
-        return tuple(base) + own + phase + tuple(self.mismatch)
+        cover = (self.coverage,) if self.coverage else ()
+        return tuple(base) + own + phase + tuple(self.mismatch) + cover
+
+    def cylinder_imep_pa(self) -> np.ndarray:
+        """Each cylinder's mean identified IMEP over its normal firings (identified, not a
+        misfire), the figure the text's table shows [Pa], (cylinders,) (NaN where none)."""
+        return _cylinder_means(self.identification, self.misfire)
+
+    def mean_rpm(self) -> np.ndarray:
+        """Each cycle's time-mean speed [rpm], (cycles,): the harmonic mean of the speed on the
+        uniform angle grid (the cycle's angle over its duration), not the angle mean
+        (:attr:`mean_omega`)."""
+        return _time_mean_rpm(self.identification)
 
     @property
     def supported(self) -> np.ndarray:
@@ -265,6 +280,8 @@ class Diagnosis(Result):
         if self.verdict is DiagnosisVerdict.MODEL_DOES_NOT_FIT:
             text += f"  verdict: {self.verdict.value}: {self.verdict_reason}\n"
         text += self.identification.summary(warnings=self.warnings)
+        if self.coverage:
+            text += f"  not supported: {self.coverage}\n"
         flagged = [(k, f) for k, f in enumerate(self.cycle_flags, start=1) if f]  # cycles from 1
         if flagged:
             text += f"  {len(flagged)} of {self.cycles} cycles not supported by the data:\n" + "".join(
@@ -308,12 +325,14 @@ class Diagnosis(Result):
         command wrote, listed last. ``None``, never NaN."""
         a = self.analysis
         t0 = self.t_start_s
+        rpm = self.mean_rpm()
         cycles = []
         for k in range(self.cycles):
             row = {
                 "cycle": k + 1,
                 "t_start_s": None if t0 is None else t0[k],
-                "mean_rpm": self.mean_omega[k] * RPM_PER_RAD_S,
+                "mean_rpm": rpm[k],
+                "angle_mean_rpm": self.mean_omega[k] * RPM_PER_RAD_S,
                 "imep_pa": self.imep_pa[k],
                 "imep_std_pa": self.imep_std_pa[k],
                 "misfire": self.misfire[k],
@@ -332,6 +351,11 @@ class Diagnosis(Result):
                 "engine": self.engine_name,
                 "source": self.source,
                 "cylinders": self.cylinders,
+                "cylinder_imep_pa": self.cylinder_imep_pa(),
+                "cylinder_imep_over": "normal firings (identified, not misfires), as the text's table",
+                "mean_rpm": float(np.mean(rpm)) if rpm.size else None,
+                "supported": not self.coverage,
+                "unsupported_reason": self.coverage or None,
                 "cycles": cycles,
                 "misfires": self.misfires(),
                 "verdict": self.verdict.name.lower(),
@@ -589,7 +613,8 @@ def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan)
         )
     if analysis.kind != "speed" and (from_speed or (from_calibration and plan.check_tdc)):
         given = None if from_speed else float(tdc_deg)  # type: ignore[arg-type]
-        return _checked_phase(eng, analysis, read, given, firing, te, phase_note)
+        bias = calibration.tdc_bias if calibration is not None else None
+        return _checked_phase(eng, analysis, read, given, firing, te, phase_note, bias)
     return _Phased(analysis, phase_note=phase_note)
 
 
@@ -621,11 +646,11 @@ def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source) -> _Reader:
     return _Reader(engine, source_log, reading, wheel, plan.columns, plan.edge)
 
 
-def _checked_phase(eng, analysis, read, given_deg, firing, te, phase_note) -> _Phased:
+def _checked_phase(eng, analysis, read, given_deg, firing, te, phase_note, bias=None) -> _Phased:
     """The calibration's TDC checked against the speed (``given_deg``), or TDC found from it
     (``given_deg`` None), and the recording re-read at the TDC and firing revolution used:
     a firing revolution from a cam or pressure channel, or given, stands."""
-    check = _speed_check(eng, analysis, given_deg, te, read)
+    check = _speed_check(eng, analysis, given_deg, te, read, bias)
     own_phase = firing not in ("auto", "speed") or analysis.firing_source in CHANNELS
     moved = check.verdict in (TdcVerdict.DISAGREES, TdcVerdict.FOUND)
     if own_phase and moved:
@@ -666,6 +691,16 @@ def _conclude(engine, charge: ChargeFit, phased: _Phased, calibration, cal_sourc
         no_firing = False  # about firing or misfires
         misfire = np.zeros_like(np.asarray(ident.misfire, dtype=bool))
         notes = tuple(n for n in notes if n != NO_FIRING_NOTE)
+        # the warning quotes the IMEP the table shows: over the firings left normal
+        mismatch = _mismatch(engine, ident, misfire) or mismatch
+    coverage = ""
+    if calibration is not None and ident.cycles:
+        ok = ident.identified & ~np.asarray(misfire)
+        imep = float(np.mean(ident.imep_pa[ok])) if ok.any() else float(np.mean(ident.imep_pa))
+        coverage = calibration.outside(float(np.mean(_time_mean_rpm(ident))), imep)
+    flags = _cycle_flags(ident, misfire)
+    if coverage:
+        flags = tuple(f"{f}; {coverage}" if f else coverage for f in flags)
     return Diagnosis(
         identification=dataclasses.replace(ident, misfire=misfire, notes=notes),
         calibration=calibration,
@@ -678,11 +713,12 @@ def _conclude(engine, charge: ChargeFit, phased: _Phased, calibration, cal_sourc
         measured_imep_pa=measured,
         mismatch=mismatch,
         tdc_check=check,
-        cycle_flags=_cycle_flags(ident, misfire),
+        cycle_flags=flags,
         partial_deg=_partial(analysis),
         phase_warning=phased.phase_warning,
         verdict=verdict,
         verdict_reason=verdict_reason,
+        coverage=coverage,
     )
 
 
@@ -704,29 +740,43 @@ def _verdict(engine, ident, no_firing: bool, mismatch: tuple) -> tuple[Diagnosis
     )
 
 
+def _cylinder_means(ident, misfire) -> np.ndarray:
+    """Each cylinder's mean identified IMEP over its normal firings [Pa] (NaN where none)."""
+    ok = np.asarray(ident.identified, dtype=bool) & ~np.asarray(misfire, dtype=bool)
+    out = np.full(ident.cylinders, np.nan)
+    for c in range(ident.cylinders):
+        if ok[:, c].any():
+            out[c] = float(np.mean(ident.imep_pa[ok[:, c], c]))
+    return out
+
+
+def _time_mean_rpm(ident) -> np.ndarray:
+    """Each cycle's time-mean speed [rpm]: the harmonic mean of ω on the uniform angle grid."""
+    omega = np.asarray(ident.omega, dtype=np.float64)
+    return RPM_PER_RAD_S / np.mean(1.0 / omega, axis=1)
+
+
 def _mismatch(engine, ident, misfire):
     """Lines saying where ``engine`` does not match the log it identified (see the module doc)."""
     from ..engine.forces import imep_pa
 
     out = []
     nominal = float(imep_pa(engine))
-    ok = ident.identified & ~np.asarray(misfire)
-    bad = []
-    for c in range(ident.cylinders):
-        if ok[:, c].any():
-            m = float(np.mean(ident.imep_pa[ok[:, c], c]))
-            if m > IMEP_MAX_PA or (nominal > 0 and m > IMEP_FACTOR_MAX * nominal):
-                bad.append((c + 1, m))
+    bad = [
+        (c + 1, float(m))
+        for c, m in enumerate(_cylinder_means(ident, misfire))
+        if np.isfinite(m) and (m > IMEP_MAX_PA or (nominal > 0 and m > IMEP_FACTOR_MAX * nominal))
+    ]
     if bad:
-        shown = ", ".join(f"cylinder {c} {m / PA_PER_BAR:.3g} bar" for c, m in bad[:4]) + (
+        shown = ", ".join(f"cylinder {c} {m / PA_PER_BAR:.3f} bar" for c, m in bad[:4]) + (
             ", …" if len(bad) > 4 else ""
         )
         out.append(
-            f"implausible IMEP for {engine.name!r}: {shown}, against the engine file's {nominal / PA_PER_BAR:.3g} bar "
+            f"implausible IMEP for {engine.name!r} (mean over the normal firings, as the table): {shown}, against the engine file's {nominal / PA_PER_BAR:.3g} bar "
             f"(over {IMEP_FACTOR_MAX:g}× it, or over {IMEP_MAX_PA / PA_PER_BAR:g} bar, which no engine reaches): "
             f"is it the engine of this log?"
         )
-    rpm = float(np.mean(ident.mean_omega)) * RPM_PER_RAD_S
+    rpm = float(np.mean(_time_mean_rpm(ident)))
     op = float(engine.operating.rpm)
     piston = 2.0 * float(engine.geometry.stroke_m) * rpm / 60.0
     if rpm > SPEED_FACTOR_MAX * op or piston > PISTON_SPEED_MAX_M_S:
@@ -766,7 +816,7 @@ def _residual_structure(ident, strokes: int) -> float:
         return float(np.nanmedian(lo / hi))
 
 
-def _speed_check(eng, analysis, given_deg, te, read):
+def _speed_check(eng, analysis, given_deg, te, read, bias=None):
     """Check (or find, ``given_deg`` None) TDC from the speed of ``analysis``: the fit on the
     recording's own tooth-error estimate where the given ones are another wheel's."""
     from ..logs.wheel import ToothErrors
@@ -783,7 +833,7 @@ def _speed_check(eng, analysis, given_deg, te, read):
             if not te_mismatch <= TOOTH_MISMATCH:
                 fit_on = own
     fit = tdc_from_speed(eng, fit_on)
-    return check_tdc(fit, given_deg, what="the calibration's", tooth_mismatch=te_mismatch)
+    return check_tdc(fit, given_deg, what="the calibration's", tooth_mismatch=te_mismatch, bias=bias)
 
 
 def _phase_agreement(check, analysis):
