@@ -6,7 +6,9 @@ tables ``[geometry]``, ``[masses]``, ``[crankshaft]``, ``[layout]``, ``[pressure
 multi-mass torsional chain, :class:`rotor.Torsion`) and the list ``[[counterweights]]``
 (one table per counterweight: ``web``, ``mass_kg``, ``radius_m``, ``angle_deg``); each
 becomes the module of the same name on :class:`rotor.Engine`. Unknown keys and tables are
-errors (a typo must not be ignored), and so are values of the wrong type.
+errors (a typo must not be ignored), and so are values of the wrong type, and values
+outside the ranges of real engines, naming the unit a value reads as (a pressure in bar,
+a table in MPa, a stroke in mm, a mass in grams: :func:`rotor.engine.plausible.check_engine_file_units`).
 
 ``[torsion]``'s constant inertias must sum to ``[crankshaft] inertia_kgm2`` (to 1e-6
 relative): the chain is the same crankshaft, flywheel and attachments split into masses,
@@ -29,6 +31,7 @@ import numpy as np
 from ..errors import EngineError
 from .friction import Friction
 from .model import Articulated, Counterweights, Crankshaft, Engine, Geometry, Layout, Masses, Operating, Torsion
+from .plausible import check_engine_file_units
 from .pressure import PRESSURE_KINDS
 
 __all__ = ["load_engine", "engine_from_dict", "preset_names", "preset_path", "MAX_FILE_BYTES"]
@@ -269,6 +272,7 @@ def engine_from_dict(data: dict) -> Engine:
         parts["counterweights"] = _build_counterweights(data["counterweights"])
     if "torsion" in data:
         _check_torsion_sum(parts["torsion"], parts["crankshaft"])
+    check_engine_file_units(data)
     return Engine(**top, **parts)
 
 

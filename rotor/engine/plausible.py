@@ -53,11 +53,37 @@ than a mistake of units can hide in:
 - ``[torsion] modal_damping_ratio``: 0 … 0.99
 
 Whether a key may be zero is decided by the table's own check (a bore must be > 0, a
-rotating mass may be 0); the range bounds what is finite but absurd.
+rotating mass may be 0); the range bounds what is finite but absurd. A value outside its
+range that reads as another unit (a bore of 92: 92 mm) is refused naming that unit
+(:func:`unit_slips`).
+
+**Units at the edge** (:data:`EDGE_RANGES`, :func:`check_engine_file_units`,
+:func:`check_edge`). An engine file (and a calibration file, whose reader calls
+:func:`check_edge`) is held to the ranges of real engines, narrow enough that a value in
+another unit falls outside them and is refused naming the unit it looks like:
+
+- intake pressure 0.1 … 5 bar absolute (``intake_pa = 0.95`` is bar); exhaust 0.1 … 10 bar;
+  crankcase 0, or 0.1 … 10 bar;
+- a pressure table's peak 5 … 300 bar, its points 0.01 … 300 bar (a table in MPa peaks
+  below 1000 Pa);
+- IMEP up to 40 bar in magnitude; 0 and negative values (a motored or idling engine)
+  pass, but a magnitude under 1000 Pa (``imep_pa = 12.5``: bar) is refused;
+- FMEP 0, or 0.01 … 20 bar;
+- lengths against each other: the stroke 0.2 … 5 bores, the rod 10 strokes at most (a
+  stroke in mm beside a bore in m, a rod in cm);
+- masses against the bore: a piston group, rod or rotating mass of at most
+  :data:`MAX_MASS_PER_BORE3` × bore³ (a mass in grams);
+- inertia: the crankshaft's at most :data:`MAX_INERTIA_PER_BORE5` × cylinders × bore⁵, a
+  rod's about its centre of mass at most its mass × its length² (an inertia in kg·cm²).
+
+These ranges are not applied to tables built in Python (``WiebeCycle(...)``), which keep
+the wide ranges above: a charge scaled by σ (:meth:`rotor.WiebeCycle.scale_charge`) may take
+an intake pressure below 0.1 bar.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from typing import Any, Literal, overload
@@ -83,6 +109,14 @@ __all__ = [
     "checked_angle",
     "what_it_is",
     "require_whole",
+    "EDGE_RANGES",
+    "MAX_MASS_PER_BORE3",
+    "MAX_INERTIA_PER_BORE5",
+    "UNIT_SLIPS",
+    "unit_slips",
+    "check_edge",
+    "check_pressure_table",
+    "check_engine_file_units",
 ]
 
 _PRESSURE = (
@@ -183,6 +217,7 @@ def check_plausible(table: str, key: str, value: Any) -> None:
         u = f" {unit}" if unit else ""
         raise EngineError(
             f"{where(table, key)}{shown} lies outside the plausible {lo:g} … {hi:g}{u} of any piston engine ({hint})"
+            + _slip_text(b, lo, hi, unit, _typical(hint))
         )
 
 
@@ -348,3 +383,237 @@ def check_results_finite(what: str, values: dict[str, Any]) -> None:
                 f"{what}: {key} is {shown:g}, not a finite number; the engine's inputs are outside what its "
                 "equations can carry (check their units)"
             )
+
+
+# ----------------------------------------------------------------------------- units at the edge
+UNIT_SLIPS: dict[str, tuple[tuple[str, float], ...]] = {
+    "m": (("mm", 1e-3), ("cm", 1e-2), ("in", 0.0254)),
+    "Pa": (("bar", 1e5), ("MPa", 1e6), ("kPa", 1e3)),
+    "kg": (("g", 1e-3),),
+    "kg·m²": (("kg·cm²", 1e-4), ("kg·mm²", 1e-6), ("g·cm²", 1e-7)),
+    "Pa/unit": (("bar/unit", 1e5), ("MPa/unit", 1e6)),
+}
+"""An SI unit → the units a value in it is often given in by mistake, each with its size
+in the SI unit."""
+
+
+@dataclasses.dataclass(frozen=True)
+class EdgeRange:
+    """The plausible range of a quantity at the edge (a file): ``lo`` … ``hi`` in ``unit``
+    (the magnitude, with ``signed``), ``zero``: 0 passes; ``what`` says it in words with its
+    range in the unit people write it in; ``typical``: a value in the middle [unit], which
+    ranks the units a slip may be in."""
+
+    lo: float
+    hi: float
+    unit: str
+    what: str
+    typical: float
+    zero: bool = False
+    signed: bool = False
+
+
+EDGE_RANGES: dict[str, EdgeRange] = {
+    "intake_pa": EdgeRange(1e4, 5e5, "Pa", "an absolute intake pressure, 0.1 … 5 bar", 1e5),
+    "exhaust_pa": EdgeRange(1e4, 1e6, "Pa", "an absolute exhaust pressure, 0.1 … 10 bar", 1.1e5),
+    "crankcase_pa": EdgeRange(1e4, 1e6, "Pa", "an absolute crankcase pressure, 0.1 … 10 bar (or 0)", 1e5, zero=True),
+    "peak_pa": EdgeRange(5e5, 3e7, "Pa", "a peak cylinder pressure, 5 … 300 bar", 5e6),
+    "cylinder_pa": EdgeRange(1e3, 3e7, "Pa", "an absolute cylinder pressure, 0.01 … 300 bar", 1e6),
+    "imep_pa": EdgeRange(
+        1e3,
+        4e6,
+        "Pa",
+        "an IMEP of at most 40 bar in magnitude; 0 and below pass, for a motored engine",
+        1e6,
+        zero=True,
+        signed=True,
+    ),
+    "fmep_pa": EdgeRange(1e3, 2e6, "Pa", "a friction mean effective pressure, 0.01 … 20 bar (or 0)", 1e5, zero=True),
+    "pressure_gain_pa": EdgeRange(1e3, 1e10, "Pa/unit", "a pressure sensor's gain in Pa per unit of its signal", 1e6),
+    "inertia_kgm2": EdgeRange(1e-7, 1e8, "kg·m²", "an inertia in kg·m²", 0.3),
+}
+"""A quantity's name → its :class:`EdgeRange`: the ranges of the module doc, for the
+engine-file keys and a calibration file's values (:func:`check_edge`)."""
+
+MAX_MASS_PER_BORE3 = 2e5
+"""The heaviest piston group, rod or rotating mass of one cylinder per bore³ [kg/m³]: car
+engines carry about 1000, the largest two-stroke crosshead engines about 30 000; a mass in
+grams gives 10⁶ and more."""
+MAX_INERTIA_PER_BORE5 = 1e7
+"""The largest crankshaft and flywheel inertia per cylinder per bore⁵ [kg·m²/m⁵]: the
+presets carry 3e3 … 3e4, a single cylinder with a heavy flywheel about 3e5; an inertia in
+kg·cm² gives 3e7 and more."""
+STROKE_PER_BORE = (0.2, 5.0)
+"""The plausible stroke/bore ratio [-]: short-stroke racing engines about 0.5, long-stroke
+marine two-strokes about 4."""
+MAX_ROD_PER_STROKE = 10.0
+"""The longest connecting rod in strokes [-]: rods are 1.5 … 2.5 strokes; 10 is room for a
+crosshead's."""
+
+
+def _typical(hint: str) -> float | None:
+    """The example value of a :data:`PLAUSIBLE` hint (``"…, e.g. 0.092"``)."""
+    import re
+
+    m = re.search(r"e\.g\. (-?[\d.]+(?:e-?\d+)?)", hint)
+    return float(m.group(1)) if m else None
+
+
+def unit_slips(value: float, lo: float, hi: float, unit: str, typical: float | None = None) -> list[tuple[str, float]]:
+    """The units of :data:`UNIT_SLIPS` in which ``value`` (its magnitude) lies within
+    ``lo`` … ``hi`` [``unit``]: (the unit, the value in ``unit``), the one nearest
+    ``typical`` (on a log scale) first."""
+    x = abs(float(value))
+    out = [(u, x * f) for u, f in UNIT_SLIPS.get(unit, ()) if lo <= x * f <= hi and x > 0]
+    if typical:
+        out.sort(key=lambda uv: abs(math.log(uv[1] / abs(typical))))
+    return out
+
+
+def _slip_text(value: float, lo: float, hi: float, unit: str, typical: float | None) -> str:
+    """``"; it reads as mm (92 mm = 0.092 m): give it in m"`` for a value that fits another
+    unit (:func:`unit_slips`), else ``""``."""
+    slips = unit_slips(value, lo, hi, unit, typical)
+    if not slips:
+        return ""
+    sign = -1.0 if value < 0 else 1.0
+    shown = " or ".join(f"{u} ({value:g} {u} = {sign * v:.4g} {unit})" for u, v in slips[:2])
+    return f"; it reads as {shown}: give it in {unit}"
+
+
+def check_edge(where_: str, value: Any, quantity: str) -> None:
+    """Raise :class:`rotor.EngineError` where the number ``value`` of ``quantity`` (a key of
+    :data:`EDGE_RANGES`, e.g. ``"intake_pa"``) lies outside its plausible range, naming
+    ``where_`` (e.g. ``"[pressure] intake_pa"`` or ``"calibration.json: imep_measured_pa"``)
+    and the unit it reads as where one fits (``intake_pa = 0.95``: bar). For the readers of
+    files (engine files, calibrations); ``None`` passes."""
+    if value is None:
+        return
+    r = EDGE_RANGES[quantity]
+    v = float(value)
+    if not math.isfinite(v):
+        raise EngineError(f"{where_} = {v:g}: not a finite number ({r.what})")
+    if v == 0 and r.zero:
+        return
+    mag = abs(v) if r.signed else v
+    if r.lo <= mag <= r.hi:
+        return
+    shown = f"{r.lo:g} … {r.hi:g} {r.unit}" if not r.signed else f"±({r.lo:g} … {r.hi:g}) {r.unit}"
+    raise EngineError(
+        f"{where_} = {v:g} lies outside the plausible {shown} ({r.what})" + _slip_text(v, r.lo, r.hi, r.unit, r.typical)
+    )
+
+
+def check_pressure_table(where_: str, values: Any) -> None:
+    """Raise :class:`rotor.EngineError` where a cylinder-pressure trace ``values`` [Pa]
+    peaks outside 5 … 300 bar or has a point outside 0.01 … 300 bar, naming the unit it
+    reads as (a table in MPa or bar)."""
+    p = np.asarray(values, dtype=np.float64).reshape(-1)
+    if p.size == 0:
+        return
+    peak = float(np.max(p))
+    check_edge(f"{where_}: its peak", peak, "peak_pa")
+    low = float(np.min(p))
+    check_edge(f"{where_}: its lowest point", low, "cylinder_pa")
+
+
+def _ratio_slip(
+    what: str, a: tuple[str, float, str, float], b: tuple[str, float, str, float], lo: float, hi: float, typical: float
+) -> None:
+    """Refuse a ratio ``a/b`` of two lengths (or masses, …) outside ``lo`` … ``hi`` (about
+    ``typical``), naming which of the two reads as another unit: ``a``, ``b``: (where,
+    value, SI unit, a typical value), the unit named only where the value in it lies within
+    a factor of 30 of the typical one."""
+    (wa, va, _, _), (wb, vb, _, _) = a, b
+    if vb <= 0 or va <= 0:
+        return
+    ratio = va / vb
+    if lo <= ratio <= hi:
+        return
+    fixes = []
+    for side, (w, v, u, usual) in (("a", a), ("b", b)):
+        for unit, f in UNIT_SLIPS.get(u, ()):
+            r = (va * f / vb) if side == "a" else (va / (vb * f))
+            if lo <= r <= hi and abs(math.log10(v * f / usual)) < math.log10(30.0):
+                fixes.append((abs(math.log(r / typical)), w, v, unit, v * f, u))
+    fixes.sort(key=lambda x: x[0])
+    hint = ""
+    if fixes:
+        _, w, v, unit, si, u = fixes[0]
+        hint = f"; {w} reads as {unit} ({v:g} {unit} = {si:.4g} {u}): give it in {u}"
+    raise EngineError(f"{wa} = {va:g} and {wb} = {vb:g}: {what} is {ratio:.3g} (plausible {lo:g} … {hi:g}){hint}")
+
+
+def check_engine_file_units(data: dict) -> None:
+    """Raise :class:`rotor.EngineError` where an engine file's values (``data``: the parsed
+    file, its types already checked) lie outside the ranges of real engines (the module
+    doc's "Units at the edge"), naming the key and the unit a value reads as."""
+    pressure = data.get("pressure") or {}
+    for key in ("intake_pa", "exhaust_pa", "crankcase_pa", "imep_pa"):
+        if key in pressure:
+            check_edge(where("pressure", key), pressure[key], key)
+    if "pressure_pa" in pressure:
+        check_pressure_table(where("pressure", "pressure_pa"), pressure["pressure_pa"])
+    friction = data.get("friction") or {}
+    if "fmep_pa" in friction:
+        check_edge(where("friction", "fmep_pa"), friction["fmep_pa"], "fmep_pa")
+    g, m = data.get("geometry", {}), data.get("masses", {})
+    bore, stroke, rod = (float(g[k]) if k in g else None for k in ("bore_m", "stroke_m", "rod_length_m"))
+    if bore and stroke:
+        _ratio_slip(
+            "the stroke/bore ratio",
+            (where("geometry", "stroke_m"), stroke, "m", 0.09),
+            (where("geometry", "bore_m"), bore, "m", 0.09),
+            *STROKE_PER_BORE,
+            1.0,
+        )
+    if stroke and rod:
+        _ratio_slip(
+            "the rod/stroke ratio",
+            (where("geometry", "rod_length_m"), rod, "m", 0.15),
+            (where("geometry", "stroke_m"), stroke, "m", 0.09),
+            0.0,
+            MAX_ROD_PER_STROKE,
+            1.8,
+        )
+    if bore:
+        for key in ("reciprocating_kg", "rotating_kg", "rod_kg", "rod_big_end_kg"):
+            if key in m:
+                _per_bore(where("masses", key), float(m[key]), bore**3, MAX_MASS_PER_BORE3, "kg", "bore³ [kg/m³]")
+        J = (data.get("crankshaft") or {}).get("inertia_kgm2")
+        n = data.get("cylinders")
+        if J is not None and isinstance(n, int) and n > 0:
+            _per_bore(
+                where("crankshaft", "inertia_kgm2"),
+                float(J),
+                n * bore**5,
+                MAX_INERTIA_PER_BORE5,
+                "kg·m²",
+                "cylinders × bore⁵ [kg·m²/m⁵]",
+            )
+    rod_kg, rod_J = m.get("rod_kg"), m.get("rod_inertia_kgm2")
+    if rod_J and rod_kg and rod:
+        _per_bore(
+            where("masses", "rod_inertia_kgm2"),
+            float(rod_J),
+            float(rod_kg) * rod**2,
+            1.0,
+            "kg·m²",
+            "rod_kg × rod_length_m²",
+        )
+
+
+def _per_bore(where_: str, value: float, scale: float, limit: float, unit: str, per: str) -> None:
+    """Refuse ``value`` [``unit``] over ``limit`` × ``scale`` (a mass per bore³, an inertia
+    per bore⁵), naming the unit it reads as."""
+    if value <= limit * scale:
+        return
+    slips = [(u, value * f) for u, f in UNIT_SLIPS[unit] if value * f <= limit * scale]
+    hint = (
+        f"; it reads as {slips[0][0]} ({value:g} {slips[0][0]} = {slips[0][1]:.4g} {unit}): give it in {unit}"
+        if slips
+        else ""
+    )
+    raise EngineError(
+        f"{where_} = {value:g} is {value / scale:.3g} × {per}, over the {limit:g} of any piston engine{hint}"
+    )
