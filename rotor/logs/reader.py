@@ -1,5 +1,11 @@
 """Reading logged crankshaft signals: CSV/TSV files, the column spec, clear errors.
 
+Measurement files (MDF 3/4, TDMS, MATLAB ``.mat``, Parquet, Arrow) are told by their
+first bytes and read through their own libraries (:mod:`rotor.logs.formats`) into the
+same :class:`Log`; their channels are named by role and channel name
+(``columns="time=t,encoder_d=CRANK"``, :func:`channel_map`), the form a text file takes
+too (its header's names, or its columns' numbers), or recognised by their content.
+
 A log is a table of numbers, one row per sample or per tooth edge, separated by commas,
 tabs, semicolons or blanks, with an optional header line; lines starting with ``#``
 are comments. The header is the first line that is not a comment, and it holds names
