@@ -52,10 +52,11 @@ __all__ = [
     "ChannelGroup",
     "ROLE_ALIASES",
     "TIME_UNITS",
+    "UNIT_COLUMNS",
     "SPEED_UNITS",
     "detect_format",
     "read_channels",
-    "log_from_groups",
+    "columns_from_groups",
 ]
 
 
@@ -115,6 +116,15 @@ SPEED_UNITS = {
     "rad/s": 30.0 / math.pi,
 }
 """A speed channel's unit (lower case) → rpm per unit."""
+
+UNIT_COLUMNS = {
+    "time_ms": ("time", 1e-3),
+    "time_us": ("time", 1e-6),
+    "tooth_time_ms": ("tooth_time_s", 1e-3),
+    "tooth_time_us": ("tooth_time_s", 1e-6),
+}
+"""Column names of a time in other units (:data:`rotor.logs.reader.COLUMN_NAMES`): name →
+(the name it is read as, seconds per unit)."""
 
 ROLE_ALIASES = {
     "crank": ("encoder_v", "encoder_d"),
@@ -464,8 +474,6 @@ def _role_of(role: str, channel: Channel) -> str:
 
 def _unit_factor(source: str, channel: Channel, column: str, notes: list[str]) -> tuple[str, float]:
     """(the column's SI name, the factor to it) of a time or speed channel by its unit."""
-    from .reader import UNIT_COLUMNS
-
     unit = channel.unit.strip()
     low = unit.lower()
     canon = UNIT_COLUMNS[column][0] if column in UNIT_COLUMNS else column
@@ -587,20 +595,12 @@ def _recognised(source: str, groups: list[ChannelGroup], notes: list[str]) -> di
     )
 
 
-def log_from_groups(
-    source: str,
-    groups: list[ChannelGroup],
-    spec: dict[str, str] | None,
-    notes: list[str],
-    *,
-    lines: np.ndarray | None = None,
-):
-    """The :class:`rotor.logs.reader.Log` of a file's channel groups: the channels ``spec``
-    (role → channel name, :func:`rotor.logs.reader.channel_map`) names, or with ``spec``
-    None those recognised by their content (see the module doc). ``source``: the file's
-    name for messages; ``notes``: the reader's notes so far; ``lines``: a text file's line
-    number of each row."""
-    from .reader import Log
-
-    cols = _pinned(source, groups, spec, notes) if spec else _recognised(source, groups, notes)
-    return Log(cols, lines, source=source, notes=tuple(notes))
+def columns_from_groups(
+    source: str, groups: list[ChannelGroup], spec: dict[str, str] | None, notes: list[str]
+) -> dict[str, np.ndarray]:
+    """The columns (:data:`rotor.logs.reader.COLUMN_NAMES`, times in seconds, speeds in
+    rpm) of a file's channel groups, for a :class:`rotor.logs.reader.Log`: the channels
+    ``spec`` (role → channel name, :func:`rotor.logs.reader.channel_map`) names, or with
+    ``spec`` None those recognised by their content (see the module doc). ``source``: the
+    file's name for messages; what was read as what is appended to ``notes``."""
+    return _pinned(source, groups, spec, notes) if spec else _recognised(source, groups, notes)

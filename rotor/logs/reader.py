@@ -67,6 +67,7 @@ from numpy.typing import ArrayLike
 
 from ..checks import check_size
 from ..errors import LogError
+from .formats import ROLE_ALIASES, UNIT_COLUMNS
 
 __all__ = [
     "COLUMN_NAMES",
@@ -99,14 +100,6 @@ COLUMN_NAMES = {
     "tooth_time_us": "tooth edge time [µs] (read as 'tooth_time_s')",
     "-": "skipped",
 }
-
-UNIT_COLUMNS = {
-    "time_ms": ("time", 1e-3),
-    "time_us": ("time", 1e-6),
-    "tooth_time_ms": ("tooth_time_s", 1e-3),
-    "tooth_time_us": ("tooth_time_s", 1e-6),
-}
-"""Column names of a time in other units: name → (the name it is read as, seconds per unit)."""
 
 
 KNOWN_HEADERS = {
@@ -184,8 +177,6 @@ def channel_map(spec: str | Sequence[str] | Mapping[str, str] | None) -> dict[st
     file's header names, or its columns' numbers 1, 2, … where it has no header line).
     Raises :class:`LogError` naming an unknown or repeated role, a spec that mixes both
     forms, or a role without a name."""
-    from .formats import ROLE_ALIASES
-
     if spec is None:
         return None
     if isinstance(spec, Mapping):
@@ -485,16 +476,20 @@ def read_log(
     spec = channel_map(columns)
     fmt = _measurement_format(path)
     if fmt is not None:
-        from .formats import log_from_groups, read_channels
+        from .formats import columns_from_groups, read_channels
 
         if columns is not None and spec is None:
             raise LogError(
                 f"{path}: a measurement file's columns are named by role and channel name (columns='time=t,"
                 f"encoder_d=CRANK'), not by their order; or leave the spec out to recognise them by content"
             )
-        return log_from_groups(os.path.basename(path), read_channels(path, fmt), spec, [])
+        notes: list[str] = []
+        source = os.path.basename(path)
+        return Log(
+            columns_from_groups(source, read_channels(path, fmt), spec, notes), source=source, notes=tuple(notes)
+        )
     text = _read_text(path)
-    notes: list[str] = []
+    notes = []
     lines = _data_lines(text)
     first = next(lines, None)
     if first is None:
@@ -591,19 +586,15 @@ def _recognised(path, text, sep, header, tokens, ncols, first, notes) -> Log:
 def _named(path, text, sep, header, tokens, ncols, first, notes, spec: dict[str, str]) -> Log:
     """A log whose spec names the file's columns by role (``time=t,encoder_d=CRANK``): the
     header's names, or the columns' numbers (1, 2, …) in a file without a header line."""
-    from .formats import Channel, ChannelGroup, log_from_groups
+    from .formats import Channel, ChannelGroup, columns_from_groups
 
     units, data, nums = _table(path, text, sep, header, ncols, first)
     names = tokens if header else [str(j + 1) for j in range(ncols)]
     chans = tuple(Channel(str(n), data[:, j], units[j] if units else "") for j, n in enumerate(names))
     what = "its header's names" if header else "their numbers (no header line)"
-    return log_from_groups(
-        os.path.basename(path),
-        [ChannelGroup(f"columns named by {what}", chans)],
-        spec,
-        notes,
-        lines=nums[: data.shape[0]],
-    )
+    source = os.path.basename(path)
+    cols = columns_from_groups(source, [ChannelGroup(f"columns named by {what}", chans)], spec, notes)
+    return Log(cols, nums[: data.shape[0]], source=source, notes=tuple(notes))
 
 
 def _table(path, text, sep, header, ncols, first) -> tuple[list | None, np.ndarray, np.ndarray]:
