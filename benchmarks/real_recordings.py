@@ -36,11 +36,18 @@ DOCUMENTED = [
     ("ecu-triggers/nb2_rev-d-1.csv", "time,encoder_d,-,-,-", "mazda-nb-crank", "rising", 240, 250),
     ("ecu-triggers/nb2_rev-d-2.csv", "time,-,encoder_d,-,-", "mazda-nb-cam", "rising", 235, 235),
     ("ecu-triggers/cas_nissan_24_plus_1.csv", "time,encoder_d,-", "12-tooth", "rising", 806, 1063),
-    ("ecu-triggers/chrysler-phaser.csv", "time,encoder_d", None, "rising", 787, 821),
+    ("ecu-triggers/chrysler-phaser.csv", "time,encoder_d", "chrysler-phaser-cam", "rising", 787, 821),
     ("ecu-triggers/neonsrt4.csv", "time,-,encoder_d", "36-2-2", "falling", 147, 225),
     ("ecu-triggers/noisy-trigger-2.csv", "time,encoder_d", "36-2", "rising", 215, 420),
     ("ecu-triggers/arctic-cat.csv", "time,encoder_d", "arctic-cat", "falling", 528, 2129),
-    ("ecu-triggers/BQS-1.csv", "time,encoder_d", "bosch-quick-start-cam", "falling", None, None),
+    (
+        "ecu-triggers/BQS-1.csv",
+        "time,encoder_d",
+        "bosch-quick-start-cam",
+        "rising",
+        235,
+        444,
+    ),  # teeth low: their ends rise
     ("ecu-triggers/hr12-vvt-in-16s.csv", "time,encoder_d", "nissan-hr-cam-in", "falling", 196, 202),
 ]
 

@@ -46,6 +46,9 @@ _TOYOTA = "rusEFI trigger decoders, trigger_toyota.cpp"
 _SPEEDUINO = "Speeduino (Josh Stewart et al.) trigger decoders, decoders.cpp"
 
 
+_PHASER_RISING = tuple(22.5 * k for k in (0, 4, 8, 9, 12, 13, 14, 16, 17, 20, 21, 24, 28, 29, 30))
+
+
 def _cam(x: float) -> float:
     """Cam degrees as crankshaft degrees."""
     return 2.0 * x
@@ -235,6 +238,19 @@ _PATTERNS = (
         "cam",
         _UNIVERSAL,
         ("TT_VVT_BOSCH_QUICK_START",),
+    ),
+    TriggerPattern(
+        "chrysler-phaser-cam",
+        "Chrysler phaser cam (5.7/6.2/6.4 l OHV V8): 15 narrow teeth on a grid of 32 places (22.5°)",
+        720.0,
+        _PHASER_RISING,
+        tuple(x + 10.0 for x in _PHASER_RISING),
+        "rising",
+        "cam",
+        "inferred from a production capture (rusEFI's test capture of TT_CHRYSLER_PHASER, cam part 53022243AF): "
+        "its rising edges sit on a grid of 22.5° within 4°; rusEFI's decoder, configureChryslerVtt15 in "
+        "trigger_chrysler.cpp, not consulted",
+        ("TT_CHRYSLER_PHASER", "chrysler-phaser", "chrysler-vtt15"),
     ),
     TriggerPattern(
         "nissan-hr-cam-in",
@@ -596,6 +612,9 @@ class AmbiguousPattern(LogError):
 AMBIGUOUS = 0.85
 """Two patterns of different geometry whose scores are within this ratio explain the edges
 about equally: the choice is refused, naming both [-]."""
+RIVAL_RMS = 3.0
+"""A pattern whose placement leaves log-ratio residuals more than this many times the best's
+(beyond the decoder's close fit) is no rival to it [-]."""
 MIN_EVIDENCE = 0.004
 """The least evidence per edge (:attr:`rotor.logs.patterns.PatternFit.evidence`) that a
 pattern's placement must show, times the share of the edges it keeps [-]."""
@@ -694,6 +713,16 @@ def _clearly(ranked: tuple) -> bool:
     return score >= MIN_EVIDENCE and fit.kept >= MIN_KEPT and fit.turns >= MIN_TURNS
 
 
+def _rivals(best, other) -> bool:
+    """Whether ``other`` (a fit) explains the edges about as closely as ``best``: its log-ratio
+    RMS within :data:`RIVAL_RMS` times the best's, or both within the decoder's close fit (a
+    pattern that leaves residuals several times the best's explains the edges worse, whatever
+    the structure its score credits it with)."""
+    from .patterns import FIT_RMS
+
+    return other.rms <= max(RIVAL_RMS * best.rms, FIT_RMS)
+
+
 def best_pattern(
     t,
     v,
@@ -721,7 +750,7 @@ def best_pattern(
             argument="wheel",
         )
     best = ranked[0]
-    rival = next((r for r in ranked[1:] if r[1].pattern.name != best[1].pattern.name), None)
+    rival = next((r for r in ranked[1:] if r[1].pattern.name != best[1].pattern.name and _rivals(best[1], r[1])), None)
     if rival is not None and rival[0] >= AMBIGUOUS * best[0]:
         raise AmbiguousPattern(
             f"{source}: {best[1].pattern.name} ({best[2]} edges, score {best[0]:.4f}) and "

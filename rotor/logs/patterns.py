@@ -56,19 +56,31 @@ FIT_RMS = 0.12
 
 BAD_RATIO = 0.33
 """A single scaled log-ratio residual beyond this breaks a stretch [-] (a missed or extra
-edge gives about log 2 = 0.69, clipped at :data:`CLIP`; a production wheel's edges, as captured while cranking,
-stray by up to about 0.3 from their description)."""
+edge gives about log 2 = 0.69; a production wheel's edges, as captured while cranking,
+stray by up to about 0.3 from their description) ..."""
+
+BAD_SPREAD = 2.5
+"""... or beyond this many times its window's RMS residual, where that is more [-]: a sensor
+whose every period jitters by a fifth (a noisy wheel signal) breaks only at a residual that
+no jitter of its own explains."""
 
 SAME_SPACING = 0.02
 """Two edge spacings that differ by less than this fraction of the mean spacing are taken as
 one [-] (a pattern whose halves differ by less repeats within its turn)."""
 
-CLEAR_AHEAD = 0.4
-"""... where the best placement's mean square is below this share of the next best's [-]."""
-
 LOOSE_RMS = 0.25
 """... or below this, where the best placement is clearly ahead (:data:`CLEAR_AHEAD`) [-]
 (a crank speed that swings within a turn while cranking distorts a sparse pattern's ratios)."""
+
+CLEAR_AHEAD = 0.4
+"""... clearly ahead: the best placement's mean square is below this share of the next best's [-] ..."""
+
+SPARSE_DEG = 180.0
+CLEAR_AHEAD_SPARSE = 0.6
+"""... or of this share for a pattern whose edges are :data:`SPARSE_DEG` or more apart on the
+mean [deg] (a cam wheel of four teeth or fewer): each of its periods spans a compression of a
+cranking engine, whose speed swings distort every ratio by up to 0.4 in log, and its window
+holds a few ratios only [-]."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -293,20 +305,20 @@ def _log_ratios(dt: np.ndarray) -> np.ndarray:
     return np.log(dt[1:] / dt[:-1])
 
 
-def _placement_costs(d: np.ndarray, ia: np.ndarray) -> np.ndarray:
+def _placement_costs(d: np.ndarray, ia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(log-ratios, K) robust costs of each observed log-ratio ``d[i]`` (period i+1 over
     period i) against the pattern's, with period 0 placed at pattern interval s: the
     residual scaled by the shorter of the two intervals over the median interval, at most 1
     (an edge displaced by some degrees moves a short interval's log more than a long one's),
-    squared, at most :data:`CLIP` ²."""
+    squared, at most :data:`CLIP` ²; and the scaled residuals' magnitudes, unclipped."""
     K = ia.size
     la = np.log(ia)
     rho = la - np.roll(la, 1)  # rho[j] = log(a_j / a_{j-1})
     scale = np.minimum(np.minimum(ia, np.roll(ia, 1)) / np.median(ia), 1.0)
     i = np.arange(d.size)[:, None] + 1
     j = (np.arange(K)[None, :] + i) % K
-    r = (d[:, None] - rho[j]) * scale[j]
-    return np.minimum(r * r, CLIP * CLIP)
+    r = np.abs((d[:, None] - rho[j]) * scale[j])
+    return np.minimum(r * r, CLIP * CLIP), r
 
 
 def _runs(good: np.ndarray, best: np.ndarray, bad: np.ndarray) -> list[tuple[int, int, int]]:
@@ -342,7 +354,9 @@ def decode_edges(
     signal's kinds flipped): a placement must put rising edges on the pattern's rising ones.
 
     Stretches of edges that follow one placement (log-ratio RMS below :data:`FIT_RMS` over
-    a window of two turns, no single ratio off by more than :data:`BAD_RATIO`) are kept; they are
+    a window of two turns, or below :data:`LOOSE_RMS` where that placement is clearly ahead
+    of the next, no single ratio off by more than :data:`BAD_RATIO` or :data:`BAD_SPREAD`
+    times the window's RMS) are kept; they are
     joined where the time between them, at the speed on either side, spans a whole number
     of pattern intervals within a quarter of the mean interval. Where a break cannot be
     bridged, the longest joined stretch is kept and the rest reported as dropped.
@@ -366,21 +380,23 @@ def decode_edges(
     ia = np.diff(np.concatenate([a, [a[0] + period]]))
     d = _log_ratios(dt)
     reps = pattern.repeats(polarity)
-    C = _placement_costs(d, ia)  # C[i, s]: log-ratio i of the log against placement s
+    C, R = _placement_costs(d, ia)  # C[i, s]: log-ratio i of the log against placement s
     if kinds is not None:
         ek = np.asarray(kinds, dtype=np.int8)
         if ek.shape != t.shape:
             raise LogError(f"kinds: {ek.size} for {t.size} edges")
         pk = pattern.kinds(polarity)
         j = (np.arange(K)[None, :] + np.arange(d.size)[:, None] + 1) % K
-        C = np.where(pk[j] != ek[1:-1, None], CLIP * CLIP, C)
-    bad = C > BAD_RATIO**2
+        wrong = pk[j] != ek[1:-1, None]
+        C = np.where(wrong, CLIP * CLIP, C)
+        R = np.where(wrong, np.inf, R)
     W = max(2 * K, 8)
     n = d.size
     cs = np.vstack([np.zeros((1, K)), np.cumsum(C, axis=0)])
     lo = np.clip(np.arange(n) - W // 2, 0, max(n - W, 0))
     hi = np.minimum(lo + W, n)
     win = (cs[hi] - cs[lo]) / (hi - lo)[:, None]
+    bad = R > np.maximum(BAD_RATIO, BAD_SPREAD * np.sqrt(win))
     unit_k = K // reps
     if reps > 1:  # equal placements: take the first of each class
         win = win[:, :unit_k]
@@ -392,7 +408,9 @@ def decode_edges(
     good = np.sqrt(b) < FIT_RMS
     if win.shape[1] > 1:
         second = win[np.arange(n), order[:, 1]]
-        good |= (np.sqrt(b) < LOOSE_RMS) & (b < CLEAR_AHEAD * second)
+        good |= (np.sqrt(b) < LOOSE_RMS) & (
+            b < (CLEAR_AHEAD_SPARSE if period / K >= SPARSE_DEG else CLEAR_AHEAD) * second
+        )
     min_edges = max(K // 2, 4)
     pieces = [(r0, r1 + 2, s) for r0, r1, s in _runs(good, best, bad) if r1 - r0 + 2 >= min_edges]
     if not pieces:

@@ -26,6 +26,8 @@ CAPTURES = [
     ("6g75-withsparkplugs-cranking.csv", "36-2-1-1", 135, 167),
     ("6g75-without-spark-crank.csv", "36-2-1-1", 128, 165),
     ("arctic-cat.csv", "arctic-cat", 528, 2129),
+    ("BQS-1.csv", "bosch-quick-start-cam", 235, 444),  # ≈0.51 s a cam revolution at first, ≈0.27 s in the middle
+    ("chrysler-phaser.csv", "chrysler-phaser-cam", 787, 821),
     ("cas_nissan_24_plus_1.csv", "12-tooth", 806, 1063),
     ("cranking_na_3.csv", "mazda-na-cas-1", 225, 1100),
     ("hr12-vvt-in-16s.csv", "nissan-hr-cam-in", 196, 202),
@@ -33,8 +35,9 @@ CAPTURES = [
     ("nb2_rev-d-2.csv", ("mazda-nb-crank", "mazda-nb-cam"), 235, 235),
     ("neonsrt4.csv", "36-2-2", 147, 225),
 ]
-# no catalogue pattern describes them (no published geometry, an irregular noisy stretch, under a cycle)
-REFUSED = ["chrysler-phaser.csv", "noisy-trigger-2.csv", "BQS-1.csv"]
+# its wheel signal: sparse irregular edges for a second, then every period jittering by a fifth,
+# broken by a dropout: no stretch long enough for the catalogue's gates
+REFUSED = ["noisy-trigger-2.csv"]
 
 
 def _wheel(a) -> str:
@@ -56,6 +59,13 @@ def test_a_capture_is_read_by_default_as_its_documented_pattern(name, pattern, l
 def test_a_capture_no_pattern_describes_is_refused(name):
     with pytest.raises(LogError):
         rotor.analyze_log(TRIGGERS / name)
+
+
+@needs_data
+def test_the_phaser_cam_capture_ends_at_the_speed_rusefi_asserts():
+    # rusEFI's test of this capture (realChryslerPhaser.phaser_cam_1) asserts a final 808.3 rpm
+    a = rotor.analyze_log(TRIGGERS / "chrysler-phaser.csv")
+    assert float(a.mean_rpm[-1]) == pytest.approx(808.3, rel=0.01)
 
 
 @needs_data
