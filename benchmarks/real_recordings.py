@@ -52,6 +52,13 @@ DOCUMENTED = [
 ]
 
 
+# the other pattern a README documents for a file of two sensors (crank and cam)
+ALSO_DOCUMENTED = {
+    "ecu-triggers/nb2_rev-d-1.csv": ("mazda-nb-cam",),
+    "ecu-triggers/nb2_rev-d-2.csv": ("mazda-nb-crank",),
+}
+
+
 def as_a_user(path: Path) -> dict:
     import rotor
 
@@ -138,7 +145,7 @@ def main() -> int:
     for r in rows:
         u, d = r["as_a_user"], r.get("documented", {})
         if u["read"] and d.get("pattern"):
-            u["as_documented"] = u["wheel"] == d["pattern"]
+            u["as_documented"] = u["wheel"] in (d["pattern"], *ALSO_DOCUMENTED.get(r["file"], ()))
             lo, hi = d.get("readme_rpm", [None, None])
             if lo is not None:
                 u["within_readme_range_2pct"] = bool(0.98 * lo <= u["median_cycle_rpm"] <= 1.02 * hi)
