@@ -19,8 +19,8 @@ vectors of one length of a ``.mat`` file (a matrix's columns are ``name[1]``, ``
 - with a spec of roles and the file's channel names, ``"time=t,encoder_d=CRANK"``
   (:func:`rotor.logs.reader.channel_map`), those channels; the time is the one named, else
   the group's time base, else the only channel named as a time (``time``, ``t``,
-  ``timestamp``, any case, a unit after it) or the only one that increases on every row.
-  The roles ``crank`` and ``cam`` take an analog or a digital channel as its content says
+  ``timestamp``, any case, a unit after it; a struct's field by its own name), else the
+  only one that increases on every row. The roles ``crank`` and ``cam`` take an analog or a digital channel as its content says
   (two levels: ``encoder_d``/``cam_d``), ``pressure`` is ``pressure_v``, ``speed`` is
   ``rpm``.
 
@@ -510,7 +510,7 @@ def _time_of(source: str, group: ChannelGroup, taken: set[str]) -> Channel:
     if group.time is not None:
         return group.time
     rest = [c for c in group.channels if c.name not in taken]
-    named = [c for c in rest if _TIME_NAME.fullmatch(c.name)]
+    named = [c for c in rest if _TIME_NAME.fullmatch(c.name.rsplit(".", 1)[-1])]  # a struct's field: its own name
     if len(named) == 1:
         return named[0]
     rising = [c for c in rest if c.values.size > 1 and bool(np.all(np.diff(c.values) > 0))]

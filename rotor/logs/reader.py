@@ -69,6 +69,9 @@ from ..checks import check_size
 from ..errors import LogError
 from .formats import ROLE_ALIASES, UNIT_COLUMNS
 
+MEASUREMENT_FORMATS = "MDF 3/4 .mf4/.mdf, TDMS .tdms, MATLAB .mat, Parquet .parquet, Arrow .arrow/.feather"
+"""The measurement files read besides text, in words (:mod:`rotor.logs.formats`)."""
+
 __all__ = [
     "COLUMN_NAMES",
     "UNIT_COLUMNS",
@@ -688,7 +691,7 @@ def _read_text(path: str) -> str:
     if b"\0" in head:
         raise LogError(
             f"{path}: not a text log: it holds NUL bytes (a binary or zero-filled file); give a CSV/TSV/text "
-            f"table of numbers"
+            f"table of numbers, or a measurement file ({MEASUREMENT_FORMATS})"
         )
     if head.startswith((b"\xff\xfe", b"\xfe\xff")):
         raise LogError(f"{path}: is UTF-16 text; save it as UTF-8 (or ASCII)")

@@ -304,3 +304,60 @@ def test_rotor_analyze_reads_an_mf4_file_by_channel_name(recording, capsys):
     assert rc == 2
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "no channel 'CRANK2'" in lines[0] and "'CRANK'" in lines[0], err
+
+
+# ---------------------------------------------------------------- damaged and odd files
+def test_a_damaged_mdf_file_is_refused_in_one_line(recording):
+    folder, t, v, _ = recording
+    write_mdf(folder / "whole.mf4", t, v)
+    data = (folder / "whole.mf4").read_bytes()
+    (folder / "cut.mf4").write_bytes(data[:200])
+    with pytest.raises(LogError, match=r"cut.mf4: not a readable MDF file") as e:
+        read_log(folder / "cut.mf4")
+    assert "\n" not in str(e.value)
+
+
+def test_an_empty_table_and_a_table_of_text_have_no_channel(tmp_path):
+    pq.write_table(pa.table({"t": pa.array([], pa.float64())}), tmp_path / "empty.parquet")
+    with pytest.raises(LogError, match=r"empty.parquet: a Parquet file without a channel of numbers"):
+        read_log(tmp_path / "empty.parquet")
+    pq.write_table(pa.table({"label": ["a", "b", "c"]}), tmp_path / "words.parquet")
+    with pytest.raises(LogError, match=r"without a channel of numbers"):
+        read_log(tmp_path / "words.parquet")
+
+
+def test_a_missing_value_is_refused_naming_its_row(recording):
+    folder, t, v, _ = recording
+    crank = pa.array(v.tolist()[:500] + [None] + v.tolist()[501:], pa.float64())
+    pq.write_table(pa.table({"t": t, "CRANK": crank}), folder / "gap.parquet")
+    with pytest.raises(LogError, match=r"row 500, column 'encoder_v': nan is not a finite number"):
+        read_log(folder / "gap.parquet", "time=t,encoder_v=CRANK")
+
+
+def test_a_file_over_the_memory_budget_is_refused_before_reading(recording, monkeypatch):
+    folder, t, v, _ = recording
+    write_tdms(folder / "big.tdms", t, v)
+    monkeypatch.setenv("ROTOR_MEMORY_LIMIT_GB", "1e-6")
+    with pytest.raises(LogError, match=r"big.tdms: reading this .* MB TDMS \(NI LabVIEW\) file needs"):
+        read_log(folder / "big.tdms")
+
+
+def test_a_mat_struct_and_matrix_name_their_fields_and_columns(recording):
+    folder, t, v, ref = recording
+    sio.savemat(folder / "struct.mat", {"bench": {"t": t, "crank": v}, "data": np.column_stack([t, v]), "n": 3.0})
+    log = read_log(folder / "struct.mat", "time=bench.t,encoder_v=bench.crank")
+    np.testing.assert_array_equal(log["encoder_v"], v)
+    log = read_log(folder / "struct.mat", "time=data[1],encoder_v=data[2]")
+    np.testing.assert_array_equal(log["time"], t)
+    with pytest.raises(LogError, match=r"no channel 'data\[3\]'.*'bench.t', 'bench.crank', 'data\[1\]', 'data\[2\]'"):
+        read_log(folder / "struct.mat", "time=data[1],encoder_v=data[3]")
+    np.testing.assert_array_equal(read_log(folder / "struct.mat", "encoder_v=data[2]")["time"], t)  # bench.t
+    sio.savemat(folder / "two.mat", {"a": t, "b": t + 1.0, "crank": v})
+    with pytest.raises(LogError, match=r"'a', 'b' could each be it; name it \(time=…\)"):
+        read_log(folder / "two.mat", "encoder_v=crank")
+
+
+def test_a_binary_file_of_no_known_format_names_the_formats_read(tmp_path):
+    (tmp_path / "blob.bin").write_bytes(b"\x00\x01\x02" * 100)
+    with pytest.raises(LogError, match=r"NUL bytes .* or a measurement file \(MDF 3/4 .mf4/.mdf, TDMS"):
+        read_log(tmp_path / "blob.bin")
