@@ -52,7 +52,7 @@ from .phasing import (
     tdc_from_pressure,
 )
 from .reader import Log, read_log
-from .recording import PatternReading, read_wheel
+from .recording import PatternReading, ReadingRecord, read_wheel, reading_record
 from .track import ChoiceSource, WheelReading
 from .wheel import ToothErrors, ToothTrack, Wheel
 
@@ -133,6 +133,13 @@ class LogAnalysis(Result):
     pattern: PatternReading | None = None
 
     # ------------------------------------------------------------------ numbers
+    @property
+    def reading_record(self) -> ReadingRecord | None:
+        """How the wheel was read (:class:`rotor.logs.recording.ReadingRecord`; None for a
+        speed log): ``analyze_log(other, as_read=…)`` reads another recording the same way."""
+        placed = self.pattern if self.pattern is not None else self.reading
+        return None if placed is None else reading_record(placed)
+
     @property
     def cycles(self) -> int:
         """Complete cycles analysed."""
@@ -371,6 +378,7 @@ def analyze_log(
     rod_ratio: float | None = None,
     denoise: bool = True,
     engine: Engine | None = None,
+    as_read: ReadingRecord | None = None,
 ) -> LogAnalysis:
     """Per-cycle mean speed, δ and order spectrum of a logged recording.
 
@@ -418,6 +426,9 @@ def analyze_log(
     - ``compression_ratio``, ``rod_ratio`` (crank radius / rod length): the engine's,
       for TDC from the pressure by a polytropic fit (:func:`tdc_from_pressure`);
       without them TDC is the pressure peak, some degrees late when the engine fires.
+    - ``as_read``: a :class:`rotor.logs.recording.ReadingRecord` (a calibration's, or
+      :attr:`LogAnalysis.reading_record` of another recording of the installation): the wheel
+      is read the same way (its wheel and edges), or refused naming what differs.
 
     **Plausibility** (:mod:`rotor.logs.plausibility`): a time base that implies under 10 or
     over 30,000 rpm (a time column in ms or µs), and time stamps too coarse for the tooth
@@ -434,6 +445,8 @@ def analyze_log(
     argument of the wrong type.
     """
     _check_types(source, wheel, tdc_deg, max_order, points_per_cycle, engine, tooth_errors, denoise)
+    if as_read is not None and not isinstance(as_read, ReadingRecord):
+        raise TypeError(f"as_read: a ReadingRecord (a LogAnalysis's reading_record), not {type(as_read).__name__}")
     _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle)
     reading: WheelReading | None = source if isinstance(source, WheelReading) else None
     pattern_reading: PatternReading | None = source if isinstance(source, PatternReading) else None
@@ -449,7 +462,7 @@ def analyze_log(
         angle = speed_angle(log, name, revs)
     else:
         if reading is None and pattern_reading is None:
-            placed = read_wheel(log, wheel, edge=edge, name=name)
+            placed = read_wheel(log, wheel, edge=edge, name=name, as_read=as_read)
             if isinstance(placed, PatternReading):
                 pattern_reading, log = placed, placed.log
             else:

@@ -41,7 +41,7 @@ from .reader import Log
 from .track import ChoiceSource, WheelReading, read_track
 from .wheel import Wheel
 
-__all__ = ["PatternReading", "read_wheel"]
+__all__ = ["PatternReading", "ReadingRecord", "read_wheel", "reading_record"]
 
 _NM = re.compile(r"^\d+(-\d+)*$")
 
@@ -106,6 +106,60 @@ class PatternReading:
             "dropped_s": [[float(a), float(b)] for a, b in f.dropped],
             "pins": self.pins(),
         }
+
+
+@dataclasses.dataclass(frozen=True)
+class ReadingRecord:
+    """How a recording's wheel signal was read, to read another recording of the same
+    installation the same way (a calibration keeps it: :func:`read_wheel` with ``as_read``).
+
+    **Fields:** ``wheel``: the wheel's spec or the catalogue pattern's name; ``edge``: the
+    edges read (``"rising"``, ``"falling"``, a pattern's ``"falling (inverted)"``, …, or None
+    for tooth times); ``channel``: the column read (``encoder_v``, ``encoder_d``, ``cam_d``,
+    ``tooth_time_s``); ``levels``: how an analog signal's edges were found (``"global
+    levels"``, ``"adaptive levels"``, ``"zero crossings"``), else None."""
+
+    wheel: str
+    edge: str | None
+    channel: str
+    levels: str | None = None
+
+    def to_json_dict(self) -> dict:
+        return {"wheel": self.wheel, "edge": self.edge, "channel": self.channel, "levels": self.levels}
+
+    @classmethod
+    def from_json_dict(cls, d: object) -> ReadingRecord:
+        """The record from its JSON (:meth:`to_json_dict`); LogError naming what is missing."""
+        if not isinstance(d, dict) or not isinstance(d.get("wheel"), str) or not isinstance(d.get("channel"), str):
+            raise LogError(
+                f"a reading record needs the wheel and the channel read (strings); got {d!r:.120}", argument="reading"
+            )
+        edge, levels = d.get("edge"), d.get("levels")
+        if not (edge is None or isinstance(edge, str)) or not (levels is None or isinstance(levels, str)):
+            raise LogError(
+                f"a reading record's edge and levels are strings or null; got {d!r:.120}", argument="reading"
+            )
+        return cls(d["wheel"], edge, d["channel"], levels)
+
+    def differences(self, other: ReadingRecord) -> list[str]:
+        """What ``other`` reads otherwise than this record, in words (empty where the same)."""
+        out = []
+        for field, what in (("wheel", "wheel"), ("channel", "channel"), ("edge", "edges"), ("levels", "levels")):
+            a, b = getattr(self, field), getattr(other, field)
+            if a != b and not (field == "levels" and (a is None or b is None)):
+                out.append(f"{what} {a} there, {b} here")
+        return out
+
+
+def reading_record(reading: WheelReading | PatternReading) -> ReadingRecord:
+    """The :class:`ReadingRecord` of a reading."""
+    if isinstance(reading, PatternReading):
+        return ReadingRecord(reading.pattern.name, reading.edges, reading.channel)
+    channel = {"teeth": "tooth_time_s", "digital": "encoder_d", "encoder": "encoder_v"}.get(
+        reading.log.kind, reading.log.kind
+    )
+    levels = reading.edges.method if reading.edges is not None and reading.log.kind == "encoder" else None
+    return ReadingRecord(reading.wheel.spec, reading.edge, channel, levels)
 
 
 def _catalogue_only(spec: object) -> TriggerPattern | None:
@@ -223,16 +277,26 @@ def _even_wheel_by_cam(log: Log, name: str) -> PatternReading | None:
 
 
 def read_wheel(
-    log: Log, wheel: str | Wheel | None, *, edge: str = "auto", name: str = ""
+    log: Log,
+    wheel: str | Wheel | None,
+    *,
+    edge: str = "auto",
+    name: str = "",
+    as_read: ReadingRecord | None = None,
 ) -> WheelReading | PatternReading:
     """The log's wheel signal placed on its wheel, once, for every command (module doc).
 
     **Arguments:** ``log``; ``wheel``: a missing-tooth spec (``"60-2"``, ``"36-2-1"``), a
     wheel file, a catalogue name (``rotor wheels``), ``"auto"`` or None (the same: found);
-    ``edge``: ``"auto"``, ``"rising"`` or ``"falling"``; ``name``: the recording, for messages.
+    ``edge``: ``"auto"``, ``"rising"`` or ``"falling"``; ``name``: the recording, for messages;
+    ``as_read``: the :class:`ReadingRecord` of another recording of the installation (a
+    calibration's): this one is read with its wheel and edges, and refused, naming the
+    difference, where it reads otherwise (another channel, other levels).
 
     **Returns** a :class:`rotor.logs.track.WheelReading` or a :class:`PatternReading`.
     **Raises** :class:`LogError` where the wheel does not fit, naming what was tried."""
+    if as_read is not None:
+        return _read_as_recorded(log, as_read, name or log.source)
     name = name or log.source
     if wheel is None:
         wheel = "auto"
@@ -266,6 +330,26 @@ def read_wheel(
         _refuse_where_a_pattern_explains_better(reading, name, ranked.get("encoder_d"))
         return reading
     return read_track(log, wheel, edge=edge, name=name)
+
+
+def _read_as_recorded(log: Log, record: ReadingRecord, name: str) -> WheelReading | PatternReading:
+    edge = record.edge if record.edge in ("rising", "falling") else "auto"
+    try:
+        reading = read_wheel(log, record.wheel, edge=edge, name=name)
+    except LogError as e:
+        raise LogError(
+            f"{name}: not read as the calibration's recording was ({record.wheel}, {record.edge} edges of "
+            f"{record.channel}): {e}",
+            argument="reading",
+        ) from None
+    diff = record.differences(reading_record(reading))
+    if diff:
+        raise LogError(
+            f"{name}: read otherwise than the calibration's recording ({'; '.join(diff)}): another installation, "
+            "or another sensor; calibrate on a recording of this one",
+            argument="reading",
+        )
+    return reading
 
 
 RIVAL_SHARE = 0.6
