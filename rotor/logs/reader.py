@@ -69,7 +69,7 @@ from ..checks import check_size
 from ..errors import LogError
 from .formats import ROLE_ALIASES, UNIT_COLUMNS
 
-MEASUREMENT_FORMATS = "MDF 3/4 .mf4/.mdf, TDMS .tdms, MATLAB .mat, Parquet .parquet, Arrow .arrow/.feather"
+MEASUREMENT_FORMATS = "MDF, TDMS, MATLAB .mat, Parquet, Arrow"
 """The measurement files read besides text, in words (:mod:`rotor.logs.formats`)."""
 
 __all__ = [

@@ -359,5 +359,7 @@ def test_a_mat_struct_and_matrix_name_their_fields_and_columns(recording):
 
 def test_a_binary_file_of_no_known_format_names_the_formats_read(tmp_path):
     (tmp_path / "blob.bin").write_bytes(b"\x00\x01\x02" * 100)
-    with pytest.raises(LogError, match=r"NUL bytes .* or a measurement file \(MDF 3/4 .mf4/.mdf, TDMS"):
+    with pytest.raises(
+        LogError, match=r"NUL bytes .* or a measurement file \(MDF, TDMS, MATLAB .mat, Parquet, Arrow\)"
+    ):
         read_log(tmp_path / "blob.bin")
