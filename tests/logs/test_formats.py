@@ -307,6 +307,7 @@ def test_rotor_analyze_reads_an_mf4_file_by_channel_name(recording, capsys):
 
 
 # ---------------------------------------------------------------- damaged and odd files
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # asammdf's half-made reader, freed
 def test_a_damaged_mdf_file_is_refused_in_one_line(recording):
     folder, t, v, _ = recording
     write_mdf(folder / "whole.mf4", t, v)
