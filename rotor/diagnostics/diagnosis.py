@@ -96,6 +96,10 @@ PISTON_SPEED_MAX_M_S = 25.0  # mean piston speed beyond racing engines [m/s]
 PATTERN_FACTOR = 3.0  # a lower order this many times the firing order's amplitude: the pattern is not seen
 PATTERN_R2 = 0.9  # … looked for only where the fit explains less than this of the speed fluctuation
 CHANNELS = (PhaseSource.CAM, PhaseSource.PRESSURE)  # a firing revolution from a recorded channel
+READ_AS_CALIBRATED = False
+"""Whether :func:`diagnose` passes a calibration's wheel reading (``Calibration.reading``) to
+:func:`rotor.analyze_log` (``reading=``: the log read as the calibration recording was, or
+a clear error naming the difference). Off until :func:`rotor.analyze_log` takes the argument."""
 RESIDUAL_STRUCTURE_MAX = 2.0
 """A fit's residual whose power per harmonic at the engine's low orders (0.5 … 4) is more than
 this many times that at the higher ones is the model's misfit, not the wheel's noise (whose
@@ -543,6 +547,7 @@ class _Reader:
     wheel: Any
     columns: str | Sequence[str] | None
     edge: str
+    calibrated_reading: dict | None = None
 
     def __call__(self, tdc: float | None, fire: str | int, teeth: Any) -> LogAnalysis:
         engine = self.engine
@@ -570,7 +575,15 @@ class _Reader:
             compression_ratio=None if cr is None else float(cr),
             rod_ratio=None if cr is None else rod_ratio,
             edge=self.edge,
+            **self._as_calibrated(),
         )
+
+    def _as_calibrated(self) -> dict:
+        """``reading=`` for :func:`rotor.analyze_log`: the calibration's wheel reading, where
+        :data:`READ_AS_CALIBRATED` switches it on (see there)."""
+        if READ_AS_CALIBRATED and self.calibrated_reading is not None:
+            return {"reading": self.calibrated_reading}
+        return {}
 
 
 def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan) -> _Phased:
@@ -595,7 +608,7 @@ def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan)
     w = plan.wheel or (calibration.wheel if calibration is not None and calibration.wheel else None)
     te = "estimate" if calibration is None or calibration.tooth_errors is None else calibration.tooth_errors
     try:
-        read = _open_log(engine, log, w, te, plan, cal_source)
+        read = _open_log(engine, log, w, te, plan, cal_source, None if calibration is None else calibration.reading)
     except LogError as e:
         if plan.wheel is None and calibration is not None and calibration.wheel:
             origin = f"the calibration{f' ({cal_source})' if cal_source else ''}"
@@ -618,7 +631,7 @@ def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan)
     return _Phased(analysis, phase_note=phase_note)
 
 
-def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source) -> _Reader:
+def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source, calibrated_reading=None) -> _Reader:
     """The log file read and its wheel signal placed, once; refused where the calibration's
     tooth errors are another wheel's."""
     source_log = read_log(log, plan.columns)
@@ -643,7 +656,7 @@ def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source) -> _Reader:
             f"{reading.wheel.spec}: give a calibration made on this wheel (calibration=FILE) or "
             f"none (calibration=None)"
         )
-    return _Reader(engine, source_log, reading, wheel, plan.columns, plan.edge)
+    return _Reader(engine, source_log, reading, wheel, plan.columns, plan.edge, calibrated_reading)
 
 
 def _checked_phase(eng, analysis, read, given_deg, firing, te, phase_note, bias=None) -> _Phased:
