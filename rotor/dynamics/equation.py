@@ -260,6 +260,20 @@ def is_zero(x):
     return bool(np.all(np.asarray(x) == 0))  # numpy: under a jit trace jnp would give a tracer
 
 
+def quadratic_losses(load, friction_abc):
+    """(a, c): the part a + c·ω² of friction plus a load that is not time dependent
+    (friction's and a polynomial load's constant and ω² terms); the rest (friction's
+    speed-linear term, the load's) is what :func:`rotor.dynamics.steady.speed_remainder` gives."""
+    fa, _, fc = friction_abc
+    poly = None if load is None else load.polynomial()
+    if poly is None:
+        return fa, fc
+    parts = (fa, fc, 0.0 if poly[0] is None else poly[0], 0.0 if poly[2] is None else poly[2])
+    xp = array_module(*parts)  # NumPy where concrete: no JAX operation
+    fa, fc, la, lc = (xp.asarray(v, dtype=xp.float64) for v in parts)
+    return fa + la, fc + lc
+
+
 def linear_losses(load, friction_abc):
     """(a, c) when friction plus load is a + c·ω² with no speed-linear term and nothing
     changing in time (the closed form applies), else None."""

@@ -323,7 +323,8 @@ class SpeedResult(Result):
     I(θ)·dω/dt = total − load − friction);
     ``excess_work_J`` (Shishkov, "Dinamika dvigatelei", SUSU 2014, §3.2.12: the largest swing of the work of the textbook
     total torque) [J] and ``textbook_delta`` (its δ ≈ L_excess/(J·ω²)) [-];
-    ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting only) [-]; ``converged``: whether
+    ``periodicity_error`` (|E(Θ) − E(0)|/E(0), shooting only) [-]; ``note``: why the
+    method is what it is, where ``method="auto"`` did not take the closed form; ``converged``: whether
     the solver reached the periodic solution and the kinetic energy stays above 10⁻⁴ of
     its mean (a JAX bool under ``jit``/``vmap``; False only where the steady state was
     asked for with ``throw=False``, which returns the finding instead of raising it).
@@ -369,6 +370,7 @@ class SpeedResult(Result):
     textbook_delta: ArrayLike | None = None
     periodicity_error: ArrayLike | None = None
     converged: ArrayLike = True
+    note: str | None = None
     # a transient run
     steps_per_cycle: int | None = None
     solver_steps: int | None = None
@@ -632,6 +634,8 @@ class SpeedResult(Result):
         out["load_torque_Nm"] = None
         out["fuel_scale"] = None
         out["solved_for"] = self.solved_for
+        if self.note:
+            out["note"] = self.note
         for key in ("load_torque_Nm", "fuel_scale", "excess_work_J", "textbook_delta", "periodicity_error"):
             v = getattr(self, key)
             if v is not None:
@@ -676,6 +680,8 @@ class SpeedResult(Result):
             )
         if self.incomplete:
             lines.append(f"  note: {self.incomplete}")
+        if self.note:
+            lines.append(f"  note: {self.note}")
         if self._streamed:
             lines.append(
                 f"  samples kept    the last {_plural(self.kept_cycles, 'cycle')} of {s['cycles']} (keep_cycles; "
@@ -806,6 +812,7 @@ _SPEED_RESULT_META = (
     "solved_for",
     "steps_per_cycle",
     "incomplete",
+    "note",
     "first_kept_cycle_index",
 )
 jax.tree_util.register_dataclass(

@@ -49,7 +49,7 @@ from ..cycles import array_module, cycle_delta, extreme_index
 from ..engine.friction import Friction
 from ..engine.model import Engine, guard_engine, require_engine
 from ..engine.plausible import PLAUSIBLE, guard_fields, what_it_is
-from ..errors import EngineError, NoSteadyStateError
+from ..errors import EngineError, NoSteadyStateError, SolverError
 from ..programs import kept_program
 from ..units import RPM_PER_RAD_S
 from .crank_train import (
@@ -71,6 +71,7 @@ from .equation import (
     linear_cycle,
     linear_losses,
     linear_parts,
+    quadratic_losses,
     wrap_periodic,
 )
 from .invariants import check_speed_result, steady_invariants_hold
@@ -217,9 +218,13 @@ FUEL_SCALE_TRACED = (
 """The run-time error of a traced steady state whose solved fuel scale is no operating point."""
 
 
-def _closed_solution(train, s_nodes, a, c, omega_m, balance):
-    """E on the nodes 0…N, t on the nodes, x (load or fuel), whether Newton converged."""
-    parts0 = linear_parts(train, s_nodes, a, c)
+def _closed_solution(train, s_nodes, a, c, omega_m, balance, rest=None, passes=0):
+    """E on the nodes 0…N, t on the nodes, x (load or fuel), whether Newton converged and
+    the fixed point's last change: losses a + c·ω² + R(ω) (``rest``,
+    :func:`speed_remainder`), R first at the mean speed, then ``passes`` times at the last
+    pass's ω(θ) (as :func:`flat_fixed_point`; the last output its estimated error)."""
+    r_mean = 0.0 if rest is None else rest(omega_m)
+    parts0 = linear_parts(train, s_nodes, a + r_mean, c)
     inertia, dinertia, F, dF, G, dG = parts0
     v, d = wrap_periodic(train.values), wrap_periodic(train.slopes)
     comb = jnp.sum(s_nodes * v[:, COL_COMBUSTION:], axis=1)
@@ -230,39 +235,56 @@ def _closed_solution(train, s_nodes, a, c, omega_m, balance):
         F0, dF0, F1, dF1 = F - comb, dF - dcomb, comb, dcomb
     h = train.step_rad
     phi = jnp.exp(-hermite_cumulative(G, dG, h))
-    Q0 = hermite_cumulative(F0 / phi, (dF0 + F0 * G) / phi, h)
     Q1 = hermite_cumulative(F1 / phi, (dF1 + F1 * G) / phi, h)
     # periodicity: Φ_N·(E0 + Q0_N + x·Q1_N) = E0  →  x = (E0·(1/Φ_N − 1) − Q0_N)/Q1_N
     p = 1.0 / phi[-1] - 1.0
     alpha = phi * (1.0 + p * Q1 / Q1[-1])
-    beta = phi * (Q0 - Q0[-1] * Q1 / Q1[-1])
     e_ref = 0.5 * train.mean_inertia * omega_m**2
-    e_star = jnp.max(jnp.where(alpha > 0, -beta / alpha, -jnp.inf))
-    e_star = jax.lax.stop_gradient(jnp.maximum(e_star, 0.0)) + 0.0 * e_star
     period = train.cycle_rad / omega_m
-    # E and dE/dθ = F − G·E are affine in E0 too (x is): only the time integral is nonlinear
-    x0, x1 = -Q0[-1] / Q1[-1], p / Q1[-1]  # x = x0 + x1·E0
-    dE_a = x1 * F1 - G * alpha
-    dE_b = F0 + x0 * F1 - G * beta
     i_ratio = dinertia / inertia
+    x1 = p / Q1[-1]  # x = x0 + x1·E0
+    dE_a = x1 * F1 - G * alpha
 
-    def period_of(E0):
-        E = alpha * E0 + beta
-        omega = jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
-        r = 1.0 / omega
-        dr = -0.5 * r * ((dE_a * E0 + dE_b) / jnp.maximum(E, 1e-300) - i_ratio)
-        return hermite_sum(r, dr, h)
+    def solve(F0, dF0, eta0):
+        Q0 = hermite_cumulative(F0 / phi, (dF0 + F0 * G) / phi, h)
+        beta = phi * (Q0 - Q0[-1] * Q1 / Q1[-1])
+        e_star = jnp.max(jnp.where(alpha > 0, -beta / alpha, -jnp.inf))
+        e_star = jax.lax.stop_gradient(jnp.maximum(e_star, 0.0)) + 0.0 * e_star
+        # E and dE/dθ = F − G·E are affine in E0 too (x is): only the time integral is nonlinear
+        x0 = -Q0[-1] / Q1[-1]
+        dE_b = F0 + x0 * F1 - G * beta
 
-    def residual(eta):
-        return jnp.log(period_of(e_star + e_ref * jnp.exp(eta)) / period)
+        def period_of(E0):
+            E = alpha * E0 + beta
+            omega = jnp.sqrt(2 * jnp.maximum(E, 1e-300) / inertia)
+            r = 1.0 / omega
+            dr = -0.5 * r * ((dE_a * E0 + dE_b) / jnp.maximum(E, 1e-300) - i_ratio)
+            return hermite_sum(r, dr, h)
 
-    eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
-    eta, ok = scalar_newton(residual, eta0)
-    E0 = e_star + e_ref * jnp.exp(eta)
-    x = x0 + x1 * E0
+        def residual(eta):
+            return jnp.log(period_of(e_star + e_ref * jnp.exp(eta)) / period)
+
+        if eta0 is None:
+            eta0 = jnp.log(jnp.maximum(e_ref - e_star, 1e-6 * e_ref) / e_ref)
+        eta, ok = scalar_newton(residual, eta0)
+        E0 = e_star + e_ref * jnp.exp(eta)
+        return E0, x0 + x1 * E0, alpha * E0 + beta, (dE_a * E0 + dE_b), eta, ok
+
+    E0, x, E, dE, eta, ok = solve(F0, dF0, None)
+    error = jnp.zeros(())
+    if rest is not None and passes:
+        changes = []
+        for _ in range(passes):
+            omega, domega = speed_of_energy(E, dE, 1.0 / inertia, dinertia)
+            X, dX = jax.jvp(rest, (omega,), (domega,))
+            E_last = E
+            E0, x, E, dE, eta, ok = solve(F0 + r_mean - X, dF0 - dX, eta)
+            changes.append(jnp.max(jnp.abs(E - E_last)) / jnp.mean(E_last))
+        F0, dF0 = F0 + r_mean - X, dF0 - dX
+        error = _estimated_error(changes)
     parts = (inertia, dinertia, F0 + x * F1, dF0 + x * dF1, G, dG)
     E, omega, t, _ = linear_cycle(train, parts, E0, 0.0)
-    return E, t, x, ok
+    return E, t, x, ok, error
 
 
 def scalar_newton(residual: Any, x0: Any, tol: float = 1e-14, max_steps: int = 60) -> tuple[Any, Any]:
@@ -350,8 +372,9 @@ def energy_moments(train, beta):
     on the fuelling but on neither the speed nor the crankshaft inertia, so that a sweep
     over those computes them once."""
     d = train.values[:, COL_I] - train.mean_inertia  # the node mean (with the tables)
-    beta_mean = jnp.mean(beta[:-1])
-    b = beta[:-1] - beta_mean
+    beta = beta[: train.points]  # the cycle's nodes (β on 0…N or 0…N−1)
+    beta_mean = jnp.mean(beta)
+    b = beta - beta_mean
     powers_d = jnp.stack([d**j for j in range(_SERIES_ORDER + 1)])  # (5, N) times (N, 5): no transposed product
     powers_b = jnp.stack([b**k for k in range(_SERIES_ORDER + 1)], axis=1)
     return powers_d @ powers_b / d.shape[0], beta_mean
@@ -373,7 +396,7 @@ def mean_energy_estimate(moments, mean_inertia, omega_m):
     return e
 
 
-def flat_energy(train, d_inertia, beta, omega_m):
+def flat_energy(train, d_inertia, beta, omega_m, guess=None):
     """E(0) [J] of the flat closed form with β(θ) (:func:`flat_balance`) at time-mean
     speed ``omega_m`` [rad/s], whether Newton converged, and the blocks of
     :func:`coarse_stride` nodes where ω is largest and smallest at the first estimate
@@ -385,7 +408,9 @@ def flat_energy(train, d_inertia, beta, omega_m):
     pass over the nodes where δ is small (the step then leaves an error of order step²),
     more where the fluctuation is large or near a stall. T′ is summed in the same pass as
     T. The derivatives of E(0) are those of the first pass (the implicit function theorem,
-    as in :func:`scalar_newton`), exact where its step is small."""
+    as in :func:`scalar_newton`), exact where its step is small. ``guess``: a first E(0)
+    [J] instead of the estimate (the fixed point on the speed-dependent losses starts each
+    pass from the one before)."""
     h = train.step_rad
     inertia = train.values[:, COL_I] + d_inertia  # the N nodes of the cycle (periodic)
     mean_inertia = train.mean_inertia + d_inertia
@@ -393,13 +418,12 @@ def flat_energy(train, d_inertia, beta, omega_m):
     e_star = jax.lax.stop_gradient(jnp.maximum(jnp.max(-beta), 0.0))
     period = train.cycle_rad / omega_m
     k = coarse_stride(train.points)
-    mom, beta_mean = energy_moments(train, beta)  # once per batch under vmap over speed or inertia
 
     def energy(eta):
         return e_star + e_ref * jnp.exp(eta)
 
     def fine(eta):  # the residual and its slope in η, in one pass over the nodes
-        E = jnp.maximum(energy(eta) + beta[:-1], 1e-300)
+        E = jnp.maximum(energy(eta) + beta[: train.points], 1e-300)
         inv_e = 1.0 / E
         q = 0.5 * inertia * inv_e  # 1/ω²
         r = jnp.sqrt(q)
@@ -418,8 +442,11 @@ def flat_energy(train, d_inertia, beta, omega_m):
         step = res / slope
         return eta - step, step, i + 1
 
-    guess = mean_energy_estimate(jax.lax.stop_gradient(mom), jax.lax.stop_gradient(mean_inertia), omega_m)
-    guess = jax.lax.stop_gradient(guess - beta_mean)
+    if guess is None:
+        mom, beta_mean = energy_moments(train, beta)  # once per batch under vmap over speed or inertia
+        guess = mean_energy_estimate(jax.lax.stop_gradient(mom), jax.lax.stop_gradient(mean_inertia), omega_m)
+        guess = guess - beta_mean
+    guess = jax.lax.stop_gradient(guess)
     eta_g = jnp.log(jnp.maximum(guess - e_star, 1e-6 * e_ref) / e_ref)
     eta_g = jax.lax.stop_gradient(jnp.where(jnp.isfinite(eta_g), eta_g, 0.0))
     res, slope, extremes = fine(eta_g)  # the derivatives of E(0) come from this pass
@@ -432,7 +459,81 @@ def flat_energy(train, d_inertia, beta, omega_m):
     return energy(eta), ok, extremes
 
 
-def _flat_solution(train, d_inertia, s, a, omega_m, balance):
+SPEED_TERM_PASSES = 3
+"""Passes of the fixed point on the losses that are not a + c·ω² (friction's speed-linear
+term, a load's) in :func:`steady_state`: each solves the closed form with them taken at
+the last pass's ω(θ). A pass shrinks the change of E(θ) by about 10⁻⁴ (the docs' friction
+on 4chn15) … 10⁻² (ten times it, at idle): two leave it near 10⁻¹⁴, and the derivatives
+through the passes are as exact. :func:`rotor.steady_sweep` takes two."""
+
+SPEED_TERM_TOL = 1e-12
+"""The largest error of E(θ) over its mean, estimated after the last pass as its change
+times the ratio of its last two changes (the passes contract geometrically), below which
+the fixed point is converged; else the steady state is found by shooting, and says why."""
+
+
+def speed_remainder(fr, load, a, c):
+    """The part R(ω) [N·m] of friction ``fr`` (a, b, c) plus ``load`` that is not ``a`` +
+    ``c``·ω² (those go into the closed form as they are), a function of ω [rad/s]."""
+
+    def rest(omega):
+        m = fr[0] + fr[1] * omega + fr[2] * omega**2 - a - c * omega**2
+        return m if load is None else m + load.torque(omega, 0.0)
+
+    return rest
+
+
+def _estimated_error(changes):
+    """The error left after fixed-point passes whose largest changes were ``changes`` (at
+    least two): the last change times the ratio of the last two (a geometric contraction)."""
+    last, before = changes[-1], changes[-2]
+    return jax.lax.stop_gradient(jnp.where(before > 0, last * last / jnp.where(before > 0, before, 1.0), 0.0))
+
+
+def speed_of_energy(E, dE, inv_inertia, dinertia):
+    """ω [rad/s] and dω/dθ on the nodes from E [J], dE/dθ, 1/I [1/(kg·m²)] and I′:
+    ω² = 2E/I, dω/dθ = (dE − ½·I′·ω²)/(I·ω); one reciprocal square root."""
+    q = 2 * jnp.maximum(E, 1e-300) * inv_inertia
+    r = jax.lax.rsqrt(q)
+    return q * r, (dE - 0.5 * dinertia * q) * r * inv_inertia
+
+
+def flat_fixed_point(train, d_inertia, s, a, omega_m, balance, rest, passes):
+    """The flat closed form (:func:`flat_balance`, :func:`flat_energy`) with losses a +
+    R(ω) (``rest``: :func:`speed_remainder`, or None: a alone): R first at the mean speed
+    ``omega_m`` [rad/s] (a constant, added to ``a``), then ``passes`` (two or more) times
+    at the last pass's ω(θ) (its cycle mean added to ``a``, the rest into β by the Hermite
+    rule with R′ = dR/dω·dω/dθ). Returns β, dE/dθ and x as :func:`flat_balance`'s, E(0),
+    whether Newton converged, the extreme blocks (as :func:`flat_energy`'s) and the
+    estimated error of E over its mean (:func:`_estimated_error`; 0 with no passes)."""
+    r_mean = 0.0 if rest is None else rest(omega_m)
+    if rest is None or passes == 0:
+        beta, dE, x = flat_balance(train, s, a + r_mean, balance)
+        E0, ok, extremes = flat_energy(train, d_inertia, beta, omega_m)
+        return beta, dE, x, E0, ok, extremes, jnp.zeros(())
+    # β, dE/dθ and x are affine in the constant loss: their values and slopes once
+    one = jnp.ones_like(a + r_mean)
+    base, slope = jax.jvp(lambda a_: flat_balance(train, s, a_, balance), (a + r_mean,), (one,))
+    (beta, dE, x), h = base, train.step_rad
+    E0, ok, extremes = flat_energy(train, d_inertia, beta, omega_m)
+    inv_inertia = 1.0 / (wrap_periodic(train.values[:, COL_I]) + d_inertia)
+    dinertia = wrap_periodic(train.slopes[:, COL_I])
+    E = E0 + beta
+    changes = []
+    for _ in range(passes):
+        omega, domega = speed_of_energy(E, dE, inv_inertia, dinertia)
+        X, dX = jax.jvp(rest, (omega,), (domega,))
+        X_mean = jnp.mean(X[:-1])
+        shift, wave = X_mean - r_mean, X - X_mean  # the cycle mean's change from R(ω_m); the rest
+        beta = base[0] + shift * slope[0] - hermite_cumulative(wave, dX, h)
+        dE, x = base[1] + shift * slope[1] - wave, base[2] + shift * slope[2]
+        E0, ok, extremes = flat_energy(train, d_inertia, beta, omega_m, guess=E0)
+        E_last, E = E, E0 + beta
+        changes.append(jnp.max(jnp.abs(E - E_last)) / jnp.mean(E_last))
+    return beta, dE, x, E0, ok, extremes, _estimated_error(changes)
+
+
+def _flat_solution(train, d_inertia, s, a, omega_m, balance, rest=None, passes=0):
     """The closed form where nothing in the losses grows with ω² and I(θ) carries the
     reciprocating inertia (G = 2(c − k)/I ≡ 0): E(θ) = E0 + β(θ), β the cumulative
     integral of the torque with its cycle mean balanced, β = B_mot + Σ w_c·B_c, where the
@@ -441,40 +542,45 @@ def _flat_solution(train, d_inertia, s, a, omega_m, balance):
     fourth-order expansion in the fluctuations (:func:`mean_energy_estimate`) and is
     finished by Newton's method on the full grid (:func:`flat_energy`). ``d_inertia`` [kg·m²] is added to I(θ) (another
     crankshaft inertia than the tables'). Returns E and t on the nodes 0…N, x (load [N·m]
-    or fuel scale [-]) and whether Newton converged."""
-    beta, dE, x = flat_balance(train, s, a, balance)
-    E0, ok, _ = flat_energy(train, d_inertia, beta, omega_m)
+    or fuel scale [-]), whether Newton converged and the fixed point's estimated error
+    (:func:`flat_fixed_point`: losses a + ``rest``(ω))."""
+    beta, dE, x, E0, ok, _, change = flat_fixed_point(train, d_inertia, s, a, omega_m, balance, rest, passes)
     inertia = wrap_periodic(train.values[:, COL_I]) + d_inertia  # the column alone, not the tables, wrapped
     dinertia = wrap_periodic(train.slopes[:, COL_I])
     E = E0 + beta
     omega = jnp.sqrt(2 * jnp.maximum(E, 0.0) / inertia)
     r = 1.0 / omega
     dr = -0.5 * r * (dE / jnp.maximum(E, 1e-300) - dinertia / inertia)
-    return E, hermite_cumulative(r, dr, train.step_rad), x, ok
+    return E, hermite_cumulative(r, dr, train.step_rad), x, ok, change
 
 
 @eqx.filter_jit
-def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat):
-    """E, t on the nodes 0…N, x and convergence: :func:`_flat_solution` where ``flat``
-    (static: G ≡ 0), else the general closed form (:func:`_closed_solution`)."""
+def _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat, rest=None, passes=0):
+    """E, t on the nodes 0…N, x, convergence and the fixed point's estimated error:
+    :func:`_flat_solution` where ``flat`` (static: G ≡ 0), else the general closed form
+    (:func:`_closed_solution`); losses a + c·ω² + ``rest``(ω) (:func:`speed_remainder`)."""
     if flat:
-        return _flat_solution(train, d_inertia, s, a, omega_m, balance)
+        return _flat_solution(train, d_inertia, s, a, omega_m, balance, rest, passes)
     train = shift_inertia(train, d_inertia)
     s_nodes = jnp.broadcast_to(s, (train.points + 1, train.cylinders))
-    return _closed_solution(train, s_nodes, a, c, omega_m, balance)
+    return _closed_solution(train, s_nodes, a, c, omega_m, balance, rest, passes)
 
 
-@kept_program(static_argnames=("balance", "flat"))
-@functools.partial(jax.jit, static_argnames=("balance", "flat"))
-def _closed_steady(train, numbers, load, balance, flat):
+@kept_program(static_argnames=("balance", "flat", "passes"))
+@functools.partial(jax.jit, static_argnames=("balance", "flat", "passes"))
+def _closed_steady(train, numbers, load, balance, flat, passes=0):
     """The whole closed-form steady state in one compiled call, solution and arrays packed
     in one vector (:func:`_pack`; ``jax.jit``: its dispatch is a quarter of
     ``eqx.filter_jit``'s on these arguments). ``numbers``: the crankshaft inertia's change
     [kg·m²], the fuelling per cylinder [-], the friction's (a, b, c), the losses' a [N·m]
-    and c [N·m·s²] and the mean speed [rad/s] in one vector (one transfer, not six)."""
+    and c [N·m·s²] and the mean speed [rad/s] in one vector (one transfer, not six).
+    ``passes`` (static): of the fixed point on the rest of the losses (:func:`speed_remainder`;
+    0: they are a + c·ω²)."""
     n = train.cylinders
     d_inertia, s, fr, (a, c, omega_m) = numbers[0], numbers[1 : 1 + n], numbers[1 + n : 4 + n], numbers[4 + n :]
-    E, t, x, ok = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat)
+    rest = speed_remainder(fr, load, a, c) if passes else None
+    E, t, x, ok, error = _closed_kernel(train, d_inertia, s, a, c, omega_m, balance, flat, rest, passes)
+    ok = ok & (error <= SPEED_TERM_TOL)
     scene = _balanced_scene(Scene(train, s[None, :], fr, load), x, balance)
     arrays = _finish_arrays(scene, E[:-1], t[:-1], omega_m, d_inertia)
     # δ and the invariants of every run, with the arrays: the host reads two numbers
@@ -487,6 +593,7 @@ def _closed_steady(train, numbers, load, balance, flat):
     arrays["invariants_hold"] = steady_invariants_hold(
         t[:-1], *(arrays[k] for k in keys), period, figures, cycle, omega_range=(lowest, highest)
     )
+    arrays["fixed_point_error"] = error
     return _pack(t[:-1], x, ok, arrays)
 
 
@@ -516,6 +623,7 @@ _NUMBERS = (
     "i_min",
     "delta",
     "invariants_hold",
+    "fixed_point_error",
 )
 
 
@@ -722,12 +830,11 @@ def steady_state(
     balance = "load" if load is None else "fuel"  # a given load is carried, never replaced
     speed_load = None if balance == "load" else load
     lin = linear_losses(speed_load, fr)
-    if method == "closed" and lin is None:
-        raise EngineError(
-            "method='closed' needs losses of the form a + c·ω² (no speed-linear friction term, no table load); "
-            "use method='auto' or 'shooting'"
-        )
-    if lin is not None and method != "shooting":
+    passes = 0 if lin is not None else SPEED_TERM_PASSES  # the rest of the losses by a fixed point
+    note = None
+    if lin is None:
+        lin = quadratic_losses(speed_load, fr)
+    if method != "shooting":
         a_lin, c_lin = lin
         flat = is_zero(c_lin) and fidelity != "constant"  # G ≡ 0: E = E0 + β(θ)
         # one number each (a load's one-element array too), the fuelling and friction whole
@@ -738,11 +845,24 @@ def steady_state(
         else:
             parts = ((d_inertia, 1), (s, n), (fr, 3), (a_lin, 1), (c_lin, 1), (omega_m, 1))
             numbers = xq.concatenate([xq.reshape(xq.asarray(v, dtype=xq.float64), (size,)) for v, size in parts])
-        pack = _closed_steady(train, numbers, speed_load, balance, flat)
+        pack = _closed_steady(train, numbers, speed_load, balance, flat, passes)
         t, x, ok, arrays = _unpack(pack, points, n)
         _check_combustion(train, balance)
-        return _finish(
-            engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays, throw, checks
+        error = arrays.pop("fixed_point_error")
+        if method == "closed" and not is_tracer(error) and error > SPEED_TERM_TOL:
+            raise SolverError(
+                f"method='closed': the fixed point on the speed-dependent losses left an estimated error of "
+                f"{float(error):.1e} of the kinetic energy after {passes} passes (the losses are large against "
+                "the engine's inertia torque at this speed); use method='auto' or 'shooting'"
+            )
+        if method == "closed" or is_tracer(error) or not error > SPEED_TERM_TOL:
+            return _finish(
+                engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays, throw, checks
+            )
+        note = (
+            f"found by shooting: the closed form's fixed point on the speed-dependent losses (friction's "
+            f"speed-linear term, the load's) left an estimated error of {float(error):.1e} of the kinetic "
+            f"energy after {passes} passes (they are large against the engine's inertia torque at this speed)"
         )
     _check_combustion(train, balance)
     train = shift_inertia(train, d_inertia)
@@ -753,13 +873,13 @@ def steady_state(
         m0 = load.torque(omega_m, 0.0)
         c_l = jax.grad(lambda w: load.torque(w, 0.0))(omega_m) / (2 * omega_m)
         a_lin, c_lin = a_lin + m0 - c_l * omega_m**2, c_lin + c_l
-    E_g, _, x_g, _ = _closed_kernel(train, 0.0, s, a_lin, c_lin, omega_m, balance, False)
+    E_g, _, x_g, _, _ = _closed_kernel(train, 0.0, s, a_lin, c_lin, omega_m, balance, False)
     if balance == "load":
         x_g = x_g + a_lin - fr[0]  # the balancing load on top of the real friction law
     scene = Scene(train, s[None, :], fr, speed_load)
     x, E, t, E_end, ok, arrays = _shooting_kernel(scene, omega_m, E_g[0], x_g, balance)
     return _finish(
-        engine, train, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays, throw, checks
+        engine, train, E, t, x, ok, balance, "shooting", fidelity, omega_m, start, E_end, arrays, throw, checks, note
     )
 
 
@@ -845,7 +965,9 @@ def _finish_arrays(scene, E, t, omega_m, d_inertia):
     }
 
 
-def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays, throw, checks):
+def _finish(
+    engine, train, E, t, x, ok, balance, method, fidelity, omega_m, start, E_end, arrays, throw, checks, note=None
+):
     a = arrays
     checkable = not isinstance(a["e_ratio"], jax.core.Tracer)
     if checkable:  # NumPy where the closed form's packed vector came back; else one transfer
@@ -911,6 +1033,7 @@ def _finish(engine, train, E, t, x, ok, balance, method, fidelity, omega_m, star
         textbook_delta=a["textbook_delta"],
         periodicity_error=None if E_end is None else jnp.abs(E_end - E[0]) / E[0],
         converged=converged,
+        note=note,
         _known_delta=(a["omega"], a["period_s"], train.cycle_rad, a["delta"]) if "delta" in a else None,
     )
     # concrete values only (under jit/vmap ``converged`` says it); the closed form's program

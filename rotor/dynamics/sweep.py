@@ -50,12 +50,20 @@ from .equation import friction_coefficients
 from .loads import ConstantLoad
 from .prepared import PreparedEngine, checked_on_host, checked_reference, prepare
 from .result import parabola_peak
-from .steady import STOP_FRACTION, coarse_stride, flat_balance, flat_energy, steady_state, textbook_excess
+from .steady import (
+    SPEED_TERM_TOL,
+    STOP_FRACTION,
+    coarse_stride,
+    flat_fixed_point,
+    steady_state,
+    textbook_excess,
+)
 
 __all__ = ["SteadySweep", "steady_sweep"]
 
 MAX_CHUNK = 4096  # items per compiled call at most: progress is reported after each
 BATCH = 8  # items solved together inside a chunk: their (8 × grid) arrays stay in a core's cache
+SWEEP_PASSES = 2  # of the fixed point on friction's speed-linear term (the sweep needs no derivatives)
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -232,16 +240,20 @@ def default_chunk(n: int, workers: int) -> int:
     return max(1, -(-n // calls))
 
 
-def _flat_item(train, d_inertia, s, a, omega_m, balance):
+def _flat_item(train, d_inertia, s, a, b, omega_m, balance):
     """One item by the flat closed form (:func:`rotor.dynamics.steady.flat_balance`), with
     only the figures of :class:`SteadySweep`: the same definitions as
     :class:`rotor.SpeedResult`'s (δ from the parabola through the extreme node and its
     neighbours; the textbook δ of Shishkov, "Dinamika dvigatelei", §3.2.12), E(0) as
     :func:`rotor.dynamics.steady.flat_energy` finds it. The extreme nodes are those of its
     first pass over the grid: the largest (smallest) at the final E(0) of the nodes in the
-    block it found and two either side; no other pass over the grid."""
-    beta, _, x = flat_balance(train, s, a, balance)
-    E0, ok, (block_hi, block_lo) = flat_energy(train, d_inertia, beta, omega_m)
+    block it found and two either side; no other pass over the grid. Losses a + b·ω [N·m,
+    N·m·s]: b·ω by the fixed point of :func:`rotor.dynamics.steady.flat_fixed_point` (its
+    passes only where ``b`` is not None)."""
+    rest, passes = (None, 0) if b is None else ((lambda w: b * w), SWEEP_PASSES)
+    beta, _, x, E0, ok, (block_hi, block_lo), change = flat_fixed_point(
+        train, d_inertia, s, a, omega_m, balance, rest, passes
+    )
     k = coarse_stride(train.points)
     inertia = train.values[:, COL_I] + d_inertia
     n = inertia.shape[0]
@@ -261,7 +273,8 @@ def _flat_item(train, d_inertia, s, a, omega_m, balance):
     converged = ok & jnp.isfinite(e_ratio) & (e_ratio >= STOP_FRACTION)
     textbook = textbook_excess(train, s if balance == "load" else x * s, omega_m)
     textbook = textbook / ((train.mean_inertia + d_inertia) * omega_m**2)
-    return delta, lo * RPM_PER_RAD_S, hi * RPM_PER_RAD_S, x, textbook, converged
+    converged = converged & (change <= SPEED_TERM_TOL)  # else the item is solved again by steady_state
+    return delta, lo * RPM_PER_RAD_S, hi * RPM_PER_RAD_S, x, textbook, converged, change
 
 
 @eqx.filter_jit
@@ -280,24 +293,25 @@ def solve_chunk(prepared, rpm, inertia, scale, load, friction, varies):
             prepared.with_inertia(inertia_i), rpm_i, load_obj, imep_scale=s, friction=friction, throw=False
         )  # an item with no steady state is a row with converged False
         x = r.load_torque_Nm if load_i is None else r.fuel_scale
-        return r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged
+        return r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged, jnp.zeros(())
 
     return _batched(one, (rpm, inertia, scale, load), varies)
 
 
 @functools.partial(jax.jit, static_argnames="varies")
-def solve_flat_chunk(train, inertia_ref, loss, rpm, inertia, scale, load, varies):
+def solve_flat_chunk(train, inertia_ref, loss, speed_loss, rpm, inertia, scale, load, varies):
     """Every item of one chunk by the flat closed form (:func:`_flat_item`; no loss grows
-    with ω): the figures of :class:`SteadySweep` per item. ``train``: the prepared tables
+    with ω²): the figures of :class:`SteadySweep` per item. ``train``: the prepared tables
     at crankshaft inertia ``inertia_ref`` [kg·m²]; ``loss``: the constant friction torque
-    [N·m]; ``varies`` as :func:`solve_chunk`'s. Only arrays cross into the compiled call:
+    [N·m]; ``speed_loss``: friction's speed-linear coefficient [N·m·s], or None for none;
+    ``varies`` as :func:`solve_chunk`'s. Only arrays cross into the compiled call:
     the caller checks the prepared engine once (:func:`rotor.dynamics.prepared.checked_reference`)."""
 
     def one(rpm_i, inertia_i, scale_i, load_i):
         s = jnp.broadcast_to(scale_i, (train.cylinders,))
         a = loss + (0.0 if load_i is None else load_i)
         balance = "load" if load_i is None else "fuel"
-        return _flat_item(train, inertia_i - inertia_ref, s, a, rpm_i / RPM_PER_RAD_S, balance)
+        return _flat_item(train, inertia_i - inertia_ref, s, a, speed_loss, rpm_i / RPM_PER_RAD_S, balance)
 
     return _batched(one, (rpm, inertia, scale, load), varies)
 
@@ -414,7 +428,7 @@ def steady_sweep(
     outs: list[list[np.ndarray]] = []
     bar = Progress(n, progress, verb="solving", unit="steady states")
     fr = np.asarray(friction_coefficients(base, friction))
-    flat = bool(prepared.fidelity != "constant" and fr[1] == 0 and fr[2] == 0)  # no loss grows with ω: E = E0 + β(θ)
+    flat = bool(prepared.fidelity != "constant" and fr[2] == 0)  # no loss grows with ω²: E = E0 + β(θ) (+ b·ω's part)
     columns = (rpm_a, inertia_a, scale, load_a)
     varies = tuple(c is not None and bool(np.any(c != c[:1])) for c in columns)
     if not any(varies):  # one item, or the same one many times: a batch over rpm all the same
@@ -427,7 +441,8 @@ def steady_sweep(
 
     t0 = time.perf_counter()
     if flat:  # checked once here: only the tables cross into the compiled call
-        fixed: tuple = (prepared.train, np.float64(checked_reference(prepared)), jnp.asarray(fr[0]))
+        speed_loss = None if fr[1] == 0 else jnp.asarray(fr[1])
+        fixed: tuple = (prepared.train, np.float64(checked_reference(prepared)), jnp.asarray(fr[0]), speed_loss)
         kernel = solve_flat_chunk.lower(*fixed, *chunk_args(0), varies).compile()
     else:
         checked_reference(prepared)
@@ -445,7 +460,20 @@ def steady_sweep(
             outs.append(out)
             bar.update(min(first + size, n))
     bar.close()
-    delta, lo, hi, x, tb, ok = (np.concatenate(c) for c in zip(*outs))
+    delta, lo, hi, x, tb, ok, error = (np.concatenate(c) for c in zip(*outs))
+    for i in np.flatnonzero(error > SPEED_TERM_TOL):  # the fixed point did not converge: shooting, where needed
+        r = steady_state(
+            prepared.with_inertia(inertia_a[i]),
+            rpm_a[i],
+            None if load_a is None else ConstantLoad(load_a[i]),
+            imep_scale=scale[i],
+            friction=friction,
+            throw=False,
+        )
+        xi = r.load_torque_Nm if load_a is None else r.fuel_scale / np.mean(scale[i])
+        delta[i], lo[i], hi[i], x[i], tb[i], ok[i] = (
+            np.asarray(v) for v in (r.delta, r.min_rpm, r.max_rpm, xi, r.textbook_delta, r.converged)
+        )
     if flat and load_a is not None:  # the flat form's factor on imep_scale; the fuel scale is as SpeedResult's
         x = x * np.mean(scale, axis=1)
     return SteadySweep(
