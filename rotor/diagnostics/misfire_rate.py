@@ -16,7 +16,8 @@ catalyst's (:data:`CATALYST_REVOLUTIONS`) and the emission's
 the catalyst's windows are then consecutive increments, the emission's slide over the last
 1000 revolutions by 200 at a time; a step equal to a window gives that window's consecutive
 increments). A window is **exceeded** where its rate (misfires over firings judged, in
-percent) is above its threshold: for the catalyst, the table of :class:`CatalystTable` at
+percent) reaches its threshold (the regulation's monitor detects the rate at which the
+catalyst is damaged or the emissions pass their limit): for the catalyst, the table of :class:`CatalystTable` at
 the window's mean speed and load (its lowest rate over the loads at that speed where the
 load is not known: without an engine file), for the emission a fixed rate. An exceeded
 window carries a **code** (:func:`misfire_code`): a cylinder counts as misfiring where it
@@ -35,8 +36,9 @@ such a table takes (higher rates at low speed and load, where the unburnt mixtur
 catalyst least), not an engine's calibration: an engine's own comes from its catalyst's
 temperature tests.
 
-**Memory**: each window holds its last ``W·2n/strokes`` firings (a V8's 1000 revolutions:
-4000 small entries), the exceeded windows at most :data:`MAX_EXCEEDED`.
+**Memory**: the firings of the longer window (a V8's 1000 revolutions: 4000 firings) in
+rings of fixed size allocated at the start (about 30 bytes a firing), the exceeded windows at
+most :data:`MAX_EXCEEDED`.
 """
 
 from __future__ import annotations
@@ -276,15 +278,12 @@ class MisfireWindow:
 
 
 class _Window:
-    __slots__ = ("kind", "revolutions", "size", "fired", "ends", "imep", "judged_full", "since")
+    __slots__ = ("kind", "revolutions", "size", "judged_full", "at")
 
-    def __init__(self, kind: WindowKind, revolutions: int, size: int, with_imep: bool) -> None:
+    def __init__(self, kind: WindowKind, revolutions: int, size: int) -> None:
         self.kind, self.revolutions, self.size = kind, revolutions, size
-        self.fired: collections.deque = collections.deque(maxlen=size)  # the misfiring cylinder (from 0), or -1
-        self.ends: collections.deque = collections.deque(maxlen=size)  # (cycle, cylinder, cycle end [s])
-        self.imep: collections.deque | None = collections.deque(maxlen=size) if with_imep else None
         self.judged_full = False  # a full window has been judged
-        self.since = 0  # firings since the last judgement
+        self.at = 0  # the firings counted when it was last judged
 
 
 class WindowCounter:
@@ -292,7 +291,9 @@ class WindowCounter:
     an engine of ``cylinders`` cylinders and ``strokes`` strokes; ``full_imep_pa``: its
     full-load IMEP [Pa] (the load of a window is the mean IMEP of its fired firings over
     it; None: the load not known). :meth:`add` takes each judged firing in firing order and
-    returns the windows judged with it; :meth:`close` the last ones (see the module doc)."""
+    returns the windows judged with it; :meth:`close` the last ones (see the module doc).
+    The firings are kept in rings of fixed size, allocated at the start (the longer
+    window's firings): the memory does not grow as the stream goes on."""
 
     def __init__(
         self,
@@ -301,6 +302,8 @@ class WindowCounter:
         thresholds: MisfireThresholds | None = None,
         full_imep_pa: float | None = None,
     ) -> None:
+        from array import array
+
         self.thresholds = MisfireThresholds() if thresholds is None else thresholds
         if not isinstance(self.thresholds, MisfireThresholds):
             raise EngineError(f"thresholds = {thresholds!r}: a MisfireThresholds")
@@ -309,14 +312,22 @@ class WindowCounter:
         self.revs_per_cycle = int(strokes) / 2
         self.full_imep_pa = full_imep_pa if full_imep_pa is not None and full_imep_pa > 0 else None
         th = self.thresholds
-        with_imep = self.full_imep_pa is not None
         self._windows = [
-            _Window(kind, revs, max(1, round(revs * self.firings_per_rev)), with_imep)
+            _Window(kind, revs, max(1, round(revs * self.firings_per_rev)))
             for kind, revs in (
                 (WindowKind.CATALYST, th.catalyst_revolutions),
                 (WindowKind.EMISSION, th.emission_revolutions),
             )
         ]
+        size = max(w.size for w in self._windows)
+        self._size = size
+        # each firing: the misfiring cylinder (from 0) or -1, its cycle, cylinder, cycle end
+        # [s] and IMEP [Pa] (NaN for a misfire or where not known); -2: no firing yet
+        self._fired = array("b", [-2]) * size
+        self._cycle = array("q", [0]) * size
+        self._cyl = array("b", [0]) * size if self.cylinders < 128 else array("q", [0]) * size
+        self._end = array("d", [math.nan]) * size
+        self._imep = array("d", [math.nan]) * size
         self._step = max(1, round(th.step_revolutions * self.firings_per_rev))
         self._count = 0
         self.judged: collections.Counter = collections.Counter()  # windows judged, per kind
@@ -326,44 +337,51 @@ class WindowCounter:
     def add(self, cycle: int, cylinder: int, misfire: bool, cycle_end_s: float, imep_pa: float) -> list[MisfireWindow]:
         """One judged firing (``cylinder`` from 1; ``cycle_end_s`` [s]; ``imep_pa`` [Pa], NaN
         where not known); the windows judged with it."""
-        item = (cycle, cylinder, cycle_end_s)
-        mark = cylinder - 1 if misfire else -1
-        for w in self._windows:
-            w.fired.append(mark)
-            w.ends.append(item)
-            if w.imep is not None and not misfire:
-                w.imep.append(imep_pa)
-            w.since += 1
+        i = self._count % self._size
+        self._fired[i] = cylinder - 1 if misfire else -1
+        self._cycle[i] = cycle
+        self._cyl[i] = cylinder
+        self._end[i] = cycle_end_s
+        self._imep[i] = math.nan if misfire else imep_pa
         self._count += 1
         if self._count % self._step:
             return []
-        return [self._judge(w, partial=False) for w in self._windows if len(w.fired) == w.size]
+        return [self._judge(w, partial=False) for w in self._windows if self._count >= w.size]
 
     def close(self) -> list[MisfireWindow]:
         """The windows that never filled, over what there is (``partial``), and a last full
         window over the revolutions judged since the last one."""
         out = []
         for w in self._windows:
-            if not w.fired:
+            if not self._count:
                 continue
-            if len(w.fired) < w.size and not w.judged_full:
+            if self._count < w.size and not w.judged_full:
                 out.append(self._judge(w, partial=True))
-            elif w.since:
+            elif self._count > w.at:
                 out.append(self._judge(w, partial=False))
         return out
 
+    def _last(self, ring: Any, m: int) -> list:
+        """The last ``m`` values of a ring, oldest first."""
+        end = self._count % self._size
+        if m <= end:
+            return ring[end - m : end].tolist()
+        return ring[self._size - (m - end) :].tolist() + ring[:end].tolist()
+
     def _judge(self, w: _Window, partial: bool) -> MisfireWindow:
-        n = len(w.fired)
-        counts = collections.Counter(w.fired)
+        n = min(self._count, w.size)
+        counts = collections.Counter(self._last(self._fired, n))
         per = tuple(int(counts.get(c, 0)) for c in range(self.cylinders))
         mis = sum(per)
-        (k0, c0, e0), (k1, c1, e1) = w.ends[0], w.ends[-1]
+        first, last = (self._count - n) % self._size, (self._count - 1) % self._size
+        k0, c0, e0 = self._cycle[first], self._cyl[first], self._end[first]
+        k1, c1, e1 = self._cycle[last], self._cyl[last], self._end[last]
         revs = (k1 - k0) * self.revs_per_cycle
         rpm = 60.0 * revs / (e1 - e0) if revs > 0 and e1 > e0 else math.nan
         load = None
-        if w.imep is not None:
-            x = [v for v in w.imep if math.isfinite(v)]
-            if x and self.full_imep_pa is not None:
+        if self.full_imep_pa is not None:
+            x = [v for v in self._last(self._imep, n) if math.isfinite(v)]
+            if x:
                 load = round(max(math.fsum(x) / len(x) / self.full_imep_pa, 0.0), 4)
         th = self.thresholds
         if w.kind is WindowKind.CATALYST:
@@ -371,7 +389,7 @@ class WindowCounter:
         else:
             limit = float(th.emission_pct)
         rate = 100.0 * mis / n
-        exceeded = rate > limit
+        exceeded = rate >= limit
         code, cyls = misfire_code(per, th.min_share)
         window = MisfireWindow(
             kind=w.kind,
@@ -385,14 +403,14 @@ class WindowCounter:
             exceeded=exceeded,
             code=code if exceeded else None,
             cylinders=cyls,
-            first=(k0, c0),
-            last=(k1, c1),
+            first=(int(k0), int(c0)),
+            last=(int(k1), int(c1)),
             end_s=float(e1),
             mean_rpm=float(rpm),
             load=load,
             partial=partial,
         )
-        w.since = 0
+        w.at = self._count
         w.judged_full = w.judged_full or not partial
         self.judged[w.kind.value] += 1
         if exceeded:
