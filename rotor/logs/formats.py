@@ -253,6 +253,7 @@ def _read_mdf(path: str) -> list[ChannelGroup]:
                     )
             if channels:
                 comment = str(getattr(group.channel_group, "comment", "") or "").strip()
+                comment = "" if comment == "Python" else comment  # asammdf's own, where its writer gave none
                 label = f"group {gi + 1}" + (f" ({comment[:40]})" if comment else "")
                 groups.append(ChannelGroup(label, tuple(channels), time))
     finally:
