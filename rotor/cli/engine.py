@@ -105,7 +105,9 @@ def same_table_note(engine: Engine, table: Any, args: argparse.Namespace) -> str
             else crank_table(engine, rpm=args.rpm, step_deg=args.step, kinematics=args.kinematics, cylinder=cylinder)
         )
         if all(
-            np.allclose(np.asarray(other.columns[c], dtype=float), v, rtol=0.0, atol=1e-9 * max(np.abs(v).max(), 1e-300))
+            np.allclose(
+                np.asarray(other.columns[c], dtype=float), v, rtol=0.0, atol=1e-9 * max(np.abs(v).max(), 1e-300)
+            )
             for c, v in ours.items()
         ):
             same.append(cylinder)

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import errno
 import json
-import os
 import math
+import os
 import sys
 from collections.abc import Iterable, Sequence
 from typing import Any

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import plain
+from .common import place_legend, plain, settle_legends
 
 __all__ = ["plot_balance_orders", "plot_balance_ellipses"]
 
@@ -60,7 +60,8 @@ def plot_balance_orders(
         axis.set_ylabel(f"free {quantity} [{_UNITS[quantity]}]")
         axis.set_title(f"{plain(title)}\nfree {quantity}s by order", fontsize=10)
         axis.grid(True, axis="y", alpha=0.3)
-        axis.legend(fontsize=8)
+        place_legend(axis, fontsize=8)
+    settle_legends(axes[0].figure)
     return axes
 
 
@@ -89,7 +90,8 @@ def plot_balance_ellipses(
         axis.set_title(f"{plain(title)}\nfree {quantity} of the low orders (dot: crank angle 0)", fontsize=10)
         axis.grid(True, alpha=0.3)
         if curves.get(quantity):
-            axis.legend(fontsize=8)
+            place_legend(axis, fontsize=8)
         else:
             axis.text(0.5, 0.6, f"no free {quantity} at these orders", transform=axis.transAxes, ha="center")
+    settle_legends(axes[0].figure)
     return axes

@@ -14,9 +14,17 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike
 
-from .common import angle_axis, new_axes, plain
+from .common import angle_axis, new_axes, place_legend, plain, segments_touching, settle_legends
 
-__all__ = ["plot_polar_load", "plot_developed_load", "plot_wear", "plot_running_torques", "plot_bearing_loads"]
+__all__ = [
+    "LABEL_OFFSETS",
+    "angle_labels",
+    "plot_polar_load",
+    "plot_developed_load",
+    "plot_wear",
+    "plot_running_torques",
+    "plot_bearing_loads",
+]
 
 
 def _square_axes(ax: Any, size: float = 5.5) -> Any:
@@ -42,7 +50,8 @@ def plot_polar_load(
     """Polar load diagram: the load's components ``t_N``, ``z_N`` [N] at crank angles
     ``angle_deg`` [deg] (one cycle, endpoint excluded) in kN, t to the right and z
     downward, equal scales, the pole marked, the crank angle written along the curve every
-    ``label_every_deg`` [deg] and the largest load marked. ``ax``: an Axes or None.
+    ``label_every_deg`` [deg] (no two labels overlapping: :func:`angle_labels`) and the
+    largest load marked. ``ax``: an Axes or None.
 
     **Returns:** the Axes.
     """
@@ -54,37 +63,88 @@ def plot_polar_load(
     ax.axhline(0, color="k", lw=0.6)
     ax.axvline(0, color="k", lw=0.6)
     ax.plot([0], [0], "ko", ms=4)
+    q = np.hypot(t, z)
+    i = int(np.argmax(q))
+    ax.plot([0, t[i]], [0, z[i]], color="C3", lw=1.0)
+    ax.plot([t[i]], [z[i]], "o", color="C3", ms=4, label=f"max {q[i]:.2f} kN at {a[i]:g}°")
+    marks: list[tuple[float, float, list[str]]] = []
     if len(a) > 1:
         step = a[1] - a[0]
         cycle = a[-1] + step
         # angles whose points lie within 3 % of the diagram's size of each other share one label
         # ("180, 540"): written apart they overprint each other
         near = 0.03 * max(float(np.ptp(t)), float(np.ptp(z)), 1e-12)
-        marks: list[tuple[float, float, list[str]]] = []
         for target in np.arange(0.0, cycle, label_every_deg):
-            i = int(np.argmin(np.abs(np.mod(a - target + cycle / 2, cycle) - cycle / 2)))
-            ax.plot([t[i]], [z[i]], ".", color="C0", ms=5)
+            k = int(np.argmin(np.abs(np.mod(a - target + cycle / 2, cycle) - cycle / 2)))
+            ax.plot([t[k]], [z[k]], ".", color="C0", ms=5)
             for mt, mz, names in marks:
-                if np.hypot(t[i] - mt, z[i] - mz) < near:
+                if np.hypot(t[k] - mt, z[k] - mz) < near:
                     names.append(f"{target:g}")
                     break
             else:
-                marks.append((float(t[i]), float(z[i]), [f"{target:g}"]))
-        for mt, mz, names in marks:
-            ax.annotate(", ".join(names), (mt, mz), textcoords="offset points", xytext=(3, 3), fontsize=7)
-    q = np.hypot(t, z)
-    i = int(np.argmax(q))
-    ax.plot([0, t[i]], [0, z[i]], color="C3", lw=1.0)
-    ax.plot([t[i]], [z[i]], "o", color="C3", ms=4, label=f"max {q[i]:.2f} kN at {a[i]:g}°")
+                marks.append((float(t[k]), float(z[k]), [f"{target:g}"]))
     ax.set_aspect("equal", adjustable="datalim")
     if not ax.yaxis_inverted():
         ax.invert_yaxis()
     ax.set_xlabel(t_label)
     ax.set_ylabel(z_label + " (downward)")
     ax.set_title(plain(title), fontsize=10)
-    ax.legend(fontsize=8, loc="best")
     ax.grid(True, alpha=0.3)
+    legend = place_legend(ax, fontsize=8)
+    angle_labels(ax, marks, [] if legend is None else [legend])
     return ax
+
+
+LABEL_OFFSETS = ((3, 3), (3, -11), (-3, 3), (-3, -11), (8, -4), (-8, -4), (3, 12), (-3, 12), (3, -20), (-3, -20))
+"""Where an angle label of a polar diagram is tried, in points from its point ((x, y), y
+up; a negative x puts the label's right end there), in this order."""
+
+
+def angle_labels(ax: Any, marks: list[tuple[float, float, list[str]]], avoid: list[Any]) -> list[Any]:
+    """Write each mark's angles (``(t, z, names)``: data coordinates and the angles there)
+    beside its point, at the first of :data:`LABEL_OFFSETS` whose box overlaps no label
+    written before it and none of the artists ``avoid`` (a legend), preferring a place the
+    diagram's curve (the first line of ``ax``) does not cross; a label with no free place
+    joins the text of the nearest one. The labels stay out of the figure's layout, so that
+    writing them moves nothing. **Returns:** the labels (Annotations)."""
+    fig = ax.figure
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    curve = ax.get_lines()[0]
+    curve_px = curve.get_transform().transform(np.asarray(curve.get_xydata(), dtype=float))
+    taken = [artist.get_window_extent(renderer).padded(2) for artist in avoid]
+    placed: list[tuple[Any, list[str]]] = []
+    for mt, mz, names in marks:
+        free = []  # (crosses the curve, label, box) of every place no other label takes
+        for dx, dy in LABEL_OFFSETS:
+            label = ax.annotate(
+                ", ".join(names),
+                (mt, mz),
+                textcoords="offset points",
+                xytext=(dx, dy),
+                ha="left" if dx >= 0 else "right",
+                fontsize=7,
+            )
+            label.set_in_layout(False)
+            box = label.get_window_extent(renderer).padded(1)
+            if any(box.overlaps(other) for other in taken):
+                label.remove()
+                continue
+            free.append((segments_touching(box, curve_px) > 0, label, box))
+            if not free[-1][0]:
+                break
+        if not free:  # every place taken: the nearest label names these angles too
+            nearest = min(placed, key=lambda p: float(np.hypot(p[0].xy[0] - mt, p[0].xy[1] - mz)))
+            nearest[1].extend(names)
+            nearest[0].set_text(", ".join(nearest[1]))
+            continue
+        _, label, box = min(free, key=lambda f: f[0])  # the first that the curve leaves free, else the first
+        for _, other, _ in free:
+            if other is not label:
+                other.remove()
+        taken.append(box)
+        placed.append((label, list(names)))
+    return [p[0] for p in placed]
 
 
 def plot_developed_load(angle_deg: ArrayLike, q_N: ArrayLike, *, title: str, cycle_deg: float, ax: Any = None) -> Any:
@@ -105,8 +165,8 @@ def plot_developed_load(angle_deg: ArrayLike, q_N: ArrayLike, *, title: str, cyc
     ax.set_ylabel("load [kN]")
     ax.set_ylim(bottom=0)
     ax.set_title(plain(title), fontsize=10)
-    ax.legend(fontsize=8)
     angle_axis(ax, cycle_deg)
+    place_legend(ax, fontsize=8)
     return ax
 
 
@@ -171,8 +231,8 @@ def plot_running_torques(
     ax.set_xlabel("crank angle [deg]")
     ax.set_ylabel("running torque [N·m]")
     ax.set_title(plain(title), fontsize=10)
-    ax.legend(fontsize=7, ncol=2)
     angle_axis(ax, cycle_deg)
+    place_legend(ax, fontsize=7, ncol=2)
     return ax
 
 
@@ -196,4 +256,5 @@ def plot_bearing_loads(result: Any, ax: Any = None) -> Any:
     result.plot_wear(ax=axes[3], throw=1)
     result.plot_main_journal(ax=axes[4])
     result.plot_running_torques(ax=axes[5])
+    settle_legends(axes[0].figure)
     return ax

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import Float
 
-from .common import plain
+from .common import place_legend, plain, settle_legends, speed_axis
 
 __all__ = ["plot_flywheel_design", "plot_textbook_flywheel", "plot_disc_flywheel"]
 
@@ -65,9 +65,10 @@ def plot_flywheel_design(
             fontsize=7,
         )
     left.set_xlabel("mean speed [rpm] (fuelling interpolated between the points)")
+    speed_axis(left, "x")
     left.set_ylabel("δ = (ω_max − ω_min)/ω_mean")
     left.grid(True, alpha=0.3)
-    left.legend(fontsize=8)
+    place_legend(left, fontsize=8)
     if bx is not None:
         x = np.arange(len(rpms))
         bx.bar(x - 0.2, [p.inertia_kgm2 for p in design.points], 0.4, label="Newton through the steady state")
@@ -79,9 +80,10 @@ def plot_flywheel_design(
         )
         bx.set_xticks(x, [f"{r:g} rpm" + (f" #{i + 1}" if list(rpms).count(r) > 1 else "") for i, r in enumerate(rpms)])
         bx.set_ylabel("[crankshaft] inertia for δ target [kg·m²]")
-        bx.legend(fontsize=8)
         bx.grid(True, axis="y", alpha=0.3)
+        place_legend(bx, fontsize=8)
     left.set_title(plain(design.engine_name), fontsize=10)
+    settle_legends(left.figure)
     return ax
 
 

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..units import PA_PER_BAR, RPM_PER_RAD_S
-from .common import new_axes, plain
+from .common import cycle_axis, new_axes, place_legend, plain, settle_legends, speed_axis
 
 __all__ = [
     "CALIBRATION_PANELS",
@@ -65,11 +65,13 @@ def plot_identification(
         ax_w.plot(x, omega.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C0", label="measured")
         ax_w.plot(x, omega_model.reshape(-1) * RPM_PER_RAD_S, lw=0.8, color="C1", ls="--", label="model (identified)")
         ax_w.set_ylabel("speed [rpm]")
+        speed_axis(ax_w)
         ax_w.set_xlabel("cycle (from 1; cycle k spans k … k + 1)")
         ax_w.set_xlim(1, C + 1)
+        cycle_axis(ax_w)
         ax_w.grid(True, alpha=0.3)
-        ax_w.legend(fontsize=8)
         ax_w.set_title(plain(title))
+        place_legend(ax_w, fontsize=8)
 
     def torque(ax_m: Any) -> None:
         m = np.asarray(cylinder_torques)
@@ -77,11 +79,12 @@ def plot_identification(
             ax_m.plot(x, m[:, :, c].reshape(-1), lw=0.8, label=f"cylinder {c + 1}")
         ax_m.set_ylabel("gas torque [N·m]")
         ax_m.set_title("identified gas torque per cylinder (motored + scale × combustion)")
-        if m.shape[2] <= 8:
-            ax_m.legend(fontsize=8, ncol=min(4, m.shape[2]))
         ax_m.set_xlim(1, C + 1)
+        cycle_axis(ax_m)
         ax_m.set_xlabel("cycle (from 1; cycle k spans k … k + 1)")
         ax_m.grid(True, alpha=0.3)
+        if m.shape[2] <= 8:
+            place_legend(ax_m, fontsize=8, ncol=min(4, m.shape[2]))
 
     def imep(ax_i: Any) -> None:
         k = np.arange(1, C + 1)  # cycles count from 1
@@ -112,10 +115,11 @@ def plot_identification(
         if mk.size:
             ax_i.plot(mk + 1, imep_pa[mk, mc] / PA_PER_BAR, "x", color="red", ms=10, mew=2, label="misfire")
         ax_i.set_xlabel("cycle (from 1)")
+        cycle_axis(ax_i)
         ax_i.set_ylabel("IMEP [bar]")
         ax_i.grid(True, alpha=0.3)
         ax_i.set_title(f"IMEP per cylinder and cycle ({mk.size} misfire{'s' if mk.size != 1 else ''})")
-        ax_i.legend(fontsize=8, ncol=min(5, cylinders + 2))
+        place_legend(ax_i, fontsize=8, ncol=min(5, cylinders + 2))
 
     draw = {"speed": speed, "torque": torque, "imep": imep}
     if kind is not None:
@@ -130,6 +134,7 @@ def plot_identification(
     axes = np.asarray(axes).ravel()
     for panel, axis in zip(IDENTIFICATION_PANELS, axes[:3]):
         draw[panel](axis)
+    settle_legends(axes[0].figure)
     return axes
 
 
@@ -165,13 +170,15 @@ def plot_calibration(
         if imep_file_pa is not None:
             ax_p.axhline(imep_file_pa / PA_PER_BAR, color="0.4", ls="--", lw=1, label="engine file")
         ax_p.set_ylabel("IMEP [bar]")
+        cycle_axis(ax_p)
         ax_p.grid(True, alpha=0.3)
-        ax_p.legend(fontsize=8)
         ax_p.set_title(plain(title))
+        place_legend(ax_p, fontsize=8)
 
     def loss_panel(ax_l: Any) -> None:
         ax_l.plot(np.arange(1, loss.size + 1), loss, "s-", ms=4, color="C3")
         ax_l.set_xlabel("cycle (from 1)")
+        cycle_axis(ax_l)
         ax_l.set_ylabel("friction + load [N·m]")
         ax_l.grid(True, alpha=0.3)
 
@@ -189,6 +196,7 @@ def plot_calibration(
     axes = np.asarray(axes).ravel()
     imep_panel(axes[0])
     loss_panel(axes[1])
+    settle_legends(axes[0].figure)
     return axes
 
 
@@ -207,11 +215,12 @@ def plot_indicated_torque(*, theta: Any, torque: Any, net_torque: Any, title: st
     ax.plot(x, torque.reshape(-1), lw=0.9, color="C0", label="indicated (gas) torque")
     ax.plot(x, net.reshape(-1), lw=0.7, color="C1", alpha=0.8, label="net torque d(½Iω²)/dθ")
     ax.set_xlim(0, C)
+    cycle_axis(ax)
     ax.set_xlabel(f"cycle (of {np.rad2deg(theta[-1] + theta[1] - theta[0]):.0f}° each)")
     ax.set_ylabel("torque [N·m]")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
     ax.set_title(plain(title))
+    place_legend(ax, fontsize=8)
     return ax
 
 
@@ -265,7 +274,7 @@ def plot_speed_tdc(
     ax.set_xlabel("offset of cylinder 1's TDC from the cycle grid's start [deg]")
     ax.set_ylabel("residual [-]")
     ax.set_title(f"TDC from the speed: {offset_deg:.1f}° ± {std_deg:.2f}°, R² {r2:.3f}")
-    ax.legend(loc="best", fontsize="small")
+    place_legend(ax, fontsize="small")
     return ax
 
 
@@ -294,6 +303,6 @@ def plot_motored_gain(
     ax.set_xlabel("V / V_BDC [-]")
     ax.set_ylabel("pressure [bar]")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
     ax.set_title(plain(title), fontsize=9)
+    place_legend(ax, fontsize=8)
     return ax

@@ -12,7 +12,7 @@ from typing import Any
 
 from jaxtyping import ArrayLike
 
-from .common import angle_axis, new_axes, plain
+from .common import angle_axis, new_axes, place_legend, plain
 
 __all__ = ["plot_table", "plot_torque", "plot_inertia"]
 
@@ -38,18 +38,18 @@ def plot_table(table: Any, which: str = "forces", ax: Any = None) -> Any:
         return axes
     axis = new_axes(ax)
     if which == "forces":
-        for col, label in (
-            ("pg_N", "$P_g$"),
-            ("pj_N", "$P_j$"),
-            ("psum_N", "$P_Σ$"),
-            ("n_N", "N"),
-            ("k_N", "K"),
-            ("z_N", "Z"),
-            ("t_N", "T"),
+        # K = PΣ/cos β differs from PΣ by a few per cent: PΣ is drawn broad and K dashed on it
+        for col, label, style in (
+            ("pg_N", "$P_g$", {}),
+            ("pj_N", "$P_j$", {}),
+            ("psum_N", "$P_Σ$", {"lw": 3.2, "alpha": 0.55}),
+            ("n_N", "N", {}),
+            ("k_N", "K (dashed: ≈ $P_Σ$)", {"ls": "--"}),
+            ("z_N", "Z", {}),
+            ("t_N", "T", {}),
         ):
-            axis.plot(a, c[col] / 1e3, lw=1.3, label=label)
+            axis.plot(a, c[col] / 1e3, **{"lw": 1.3, **style}, label=label)
         axis.set_ylabel("force [kN]")
-        axis.legend(ncol=4, fontsize=8)
         axis.set_title(f"{plain(table.engine_name)}: forces of cylinder {table.cylinder} at {table.rpm:g} rpm")
     elif which == "torque":
         axis.plot(a, c["m_Nm"], lw=1.5)
@@ -60,6 +60,7 @@ def plot_table(table: Any, which: str = "forces", ax: Any = None) -> Any:
     axis.axhline(0, color="k", lw=0.6)
     axis.set_xlabel("crank angle [deg]")
     angle_axis(axis, cycle)
+    place_legend(axis, ncol=4, fontsize=8)
     return axis
 
 
@@ -95,8 +96,8 @@ def plot_torque(
     axis.set_xlabel(xlabel)
     axis.set_ylabel("torque [N·m]")
     axis.set_title(plain(title))
-    axis.legend(fontsize=8, ncol=2)
     angle_axis(axis, cycle_deg)
+    place_legend(axis, fontsize=8, ncol=2)
     return axis
 
 
@@ -118,6 +119,6 @@ def plot_inertia(angle_deg: ArrayLike, curves: Mapping[str, ArrayLike], title: s
     axis.set_xlabel("crank angle [deg]")
     axis.set_ylabel("I(θ) [kg·m²]")
     axis.set_title(plain(title))
-    axis.legend(fontsize=8)
     angle_axis(axis, 360)
+    place_legend(axis, fontsize=8)
     return axis

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from ..units import RPM_PER_RAD_S
-from .common import angle_axis, new_axes, plain
+from .common import angle_axis, cycle_axis, new_axes, place_legend, plain, settle_legends, speed_axis
 
 __all__ = ["LOG_ANALYSIS_PANELS", "plot_log_analysis", "plot_reading", "plot_tooth_errors"]
 
@@ -58,15 +58,18 @@ def plot_log_analysis(analysis: Any, ax: Any = None, kind: str | None = None) ->
         else:
             ax_w.set_xlabel("cycle angle [deg] (360 = firing TDC)" if a.strokes == 4 else "crank angle from TDC [deg]")
         ax_w.set_ylabel("speed [rpm]")
-        ax_w.legend(fontsize=8)
+        speed_axis(ax_w)
         angle_axis(ax_w, cycle_deg)
         ax_w.set_title(f"{plain(a.source)}: speed over the cycle")
+        place_legend(ax_w, fontsize=8)
 
     def cycles(ax_c: Any) -> None:
         k = np.arange(1, a.cycles + 1)  # cycles count from 1
         ax_c.plot(k, a.mean_rpm, "o-", color="C0", ms=4)
         ax_c.set_xlabel("cycle (from 1)")
+        cycle_axis(ax_c)
         ax_c.set_ylabel("mean speed [rpm]", color="C0")
+        speed_axis(ax_c)
         twin = ax_c.twinx()
         twin.plot(k, a.delta, "s--", color="C3", ms=4)
         twin.set_ylabel("δ per cycle, trend removed [-]", color="C3")
@@ -111,6 +114,7 @@ def plot_log_analysis(analysis: Any, ax: Any = None, kind: str | None = None) ->
     axes = np.asarray(axes)
     for panel, axis in zip(LOG_ANALYSIS_PANELS, axes.ravel()[:4]):
         draw[panel](axis)
+    settle_legends(axes.ravel()[0].figure)
     return axes
 
 
@@ -126,8 +130,9 @@ def plot_reading(
     steps: bool = False,
     ax: Any = None,
 ) -> Any:
-    """The wheel signal as read (``steps``: a capture's levels, held from one transition to the next): the samples ``t_s`` [s], ``v`` (volts, or 0/1 levels), the
-    levels found (``levels_v``: name → value [V], drawn as horizontal lines), the edges taken
+    """The wheel signal as read (``steps``: a capture's 0/1 levels, held from one transition
+    to the next, labelled as levels): the samples ``t_s`` [s], ``v`` (volts, or 0/1 levels), the
+    levels found (``levels_v``: name → value [V], or a level of a capture, drawn as horizontal lines), the edges taken
     (``edge_times_s`` [s], markers on the signal) and every repair (each with ``time_s`` and
     ``kind``: a vertical line, labelled by kind), within ``span_s`` (start, end) [s] (default:
     the whole record). **Returns:** the Axes."""
@@ -141,7 +146,8 @@ def plot_reading(
         t[a:b:step], v[a:b:step], lw=0.6, color="0.4", label="signal", drawstyle="steps-post" if steps else "default"
     )
     for k, (name, level) in enumerate(levels_v.items()):
-        ax.axhline(level, ls="--", lw=0.8, color=f"C{k + 1}", label=plain(f"{name} {level:.3g} V"))
+        unit = "" if steps else " V"
+        ax.axhline(level, ls="--", lw=0.8, color=f"C{k + 1}", label=plain(f"{name} {level:.3g}{unit}"))
     e = np.asarray(edge_times_s, dtype=np.float64)
     e = e[(e >= lo) & (e <= hi)]
     at = v[np.clip(np.searchsorted(t, e, side="right") - 1, 0, v.size - 1)] if steps else np.interp(e, t, v)
@@ -153,8 +159,12 @@ def plot_reading(
             seen.add(r.kind)
     ax.set_xlim(lo, hi)
     ax.set_xlabel("time [s]")
-    ax.set_ylabel("signal [V]")
+    if steps:  # a logic analyser's channel: levels, not volts
+        ax.set_ylabel("level (0 = low, 1 = high)")
+        ax.set_yticks([0, 1])
+    else:
+        ax.set_ylabel("signal [V]")
     ax.set_title(plain(title))
-    ax.legend(fontsize=7, loc="upper right")
     ax.grid(True, alpha=0.3)
+    place_legend(ax, fontsize=7)
     return ax

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import angle_axis, new_axes, plain
+from .common import angle_axis, new_axes, place_legend, plain
 
 __all__ = ["plot_curves", "plot_tangential_forces", "plot_turning_moment"]
 
@@ -28,8 +28,8 @@ def plot_curves(
     ax.set_xlabel("crank angle [deg]")
     ax.set_ylabel(ylabel)
     ax.set_title(plain(title), fontsize=10)
-    ax.legend(fontsize=8, ncol=3)
     angle_axis(ax, cycle)
+    place_legend(ax, fontsize=8, ncol=3)
     return ax
 
 
@@ -65,8 +65,8 @@ def plot_turning_moment(
     top.axhline(0, color="k", lw=0.5)
     top.set_ylabel("torque [N·m]")
     top.set_title(plain(title), fontsize=10)
-    top.legend(fontsize=8, ncol=2)
     angle_axis(top, cycle)
+    place_legend(top, fontsize=8, ncol=2)
     bottom.plot(angle, work, color="C4", lw=1.5, label="∫(M_Σ − M_mean)dθ")
     i_lo, i_hi = int(np.argmin(work)), int(np.argmax(work))
     bottom.plot([angle[i_lo], angle[i_hi]], [work[i_lo], work[i_hi]], "o", color="C3")
@@ -82,6 +82,6 @@ def plot_turning_moment(
     )
     bottom.set_xlabel("crank angle [deg]")
     bottom.set_ylabel("work [J]")
-    bottom.legend(fontsize=8)
     angle_axis(bottom, cycle)
+    place_legend(bottom, fontsize=8)
     return np.array([top, bottom])

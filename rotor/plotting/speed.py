@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike
 
-from .common import angle_axis, new_axes, plain
+from .common import angle_axis, new_axes, place_legend, plain, speed_axis
 
 __all__ = ["plot_speed", "plot_speed_time", "plot_cycle_torque", "plot_orders"]
 
@@ -31,10 +31,11 @@ def plot_speed(
     ax.plot(angle_deg, rpm, lw=1.5)
     ax.axhline(mean_rpm, color="0.5", lw=0.8, ls="--", label="time mean")
     ax.set_ylabel("speed [rpm]")
-    ax.legend()
+    speed_axis(ax)
     ax.set_title(plain(title))
     ax.set_xlabel("crank angle in the cycle [deg]")
     angle_axis(ax, cycle_deg)
+    place_legend(ax)
     return ax
 
 
@@ -52,11 +53,12 @@ def plot_speed_time(
     ax.plot(t_s, rpm, lw=1.0)
     if stall_time_s is not None:
         ax.axvline(stall_time_s, color="C3", ls="--", label="stall")
-        ax.legend()
     ax.set_xlabel("time [s]")
     ax.set_ylabel("speed [rpm]")
+    speed_axis(ax)
     ax.grid(True, alpha=0.3)
     ax.set_title(plain(title))
+    place_legend(ax)
     return ax
 
 
@@ -87,10 +89,10 @@ def plot_cycle_torque(
         ax.plot(angle_deg, total_Nm, lw=1.5, color="C0", label="total torque (gas + inertia of the moving masses)")
     ax.plot(angle_deg, load_Nm, lw=1.2, color="C1", label="load + friction")
     ax.set_ylabel("torque [N·m]")
-    ax.legend()
     ax.set_title(plain(title))
     ax.set_xlabel("crank angle in the cycle [deg]")
     angle_axis(ax, cycle_deg)
+    place_legend(ax)
     return ax
 
 

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import plain
+from .common import place_legend, plain, settle_legends, speed_axis
 
 __all__ = ["plot_mode_shapes", "plot_campbell"]
 
@@ -55,11 +55,12 @@ def plot_mode_shapes(
         axis.set_ylim(-1.15, 1.15)
         axis.set_ylabel("amplitude [-]")
         axis.grid(True, alpha=0.3)
-        axis.legend(loc="upper right", fontsize=8)
+        place_legend(axis, fontsize=8)
     last = axes[-1] if not single else axes[0]
     last.set_xticks(x)
     last.set_xticklabels([plain(n) for n in mass_names], rotation=30, ha="right", fontsize=8)
     axes[0].set_title(plain(title) + ("  (shaded: crank throws)" if len(throw_masses) else ""))
+    settle_legends(axes[0].figure)
     return axes[0] if single else axes
 
 
@@ -118,11 +119,12 @@ def plot_campbell(
     if cr.size:
         ax.plot(cr[~cm], cf[~cm], "o", mfc="none", mec="C3", ms=6, label="critical speed")
         ax.plot(cr[cm], cf[cm], "o", color="C3", ms=7, label="critical speed, major order")
-        ax.legend(loc="upper left", fontsize=8)
     ax.set_xlim(lo, hi)
     ax.set_ylim(0, top)
     ax.set_xlabel("engine speed [rpm]")
+    speed_axis(ax, "x")
     ax.set_ylabel("frequency [Hz]")
     ax.set_title(plain(title))
     ax.grid(True, alpha=0.3)
+    place_legend(ax, fontsize=8)
     return ax

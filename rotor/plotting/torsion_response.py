@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import Float
 
-from .common import angle_axis, plain
+from .common import angle_axis, place_legend, plain, settle_legends, speed_axis
 
 __all__ = ["plot_torsional_response", "plot_torsional_sweep", "plot_torsional_run"]
 
@@ -51,8 +51,8 @@ def plot_torsional_response(
     if names[1] != names[0]:
         a0.plot(angle_deg, rpm_front, lw=1.0, label=plain(names[1]))
     a0.set_ylabel("speed [rpm]")
+    speed_axis(a0)
     a0.set_title(plain(title))
-    a0.legend(fontsize=8)
     many = len(section_names) > 10
     for i, name in enumerate(section_names):
         a1.plot(angle_deg, np.asarray(twist_rad[i]) * 1e3, lw=0.9, label=None if many else plain(name))
@@ -60,10 +60,12 @@ def plot_torsional_response(
     a1.set_ylabel("twist θᵢ − θᵢ₊₁ [mrad]")
     a2.set_ylabel("vibratory torque [N·m]")
     a2.set_xlabel("crank angle of the reference mass [deg]")
-    if not many:
-        a1.legend(fontsize=7, ncol=2)
     for a in (a0, a1, a2):
         angle_axis(a, cycle)
+    place_legend(a0, fontsize=8)
+    if not many:
+        place_legend(a1, fontsize=7, ncol=2)
+    settle_legends(a0.figure)
     return axes
 
 
@@ -90,11 +92,12 @@ def plot_torsional_sweep(
     if finite.size and np.all(finite > 0):
         ax.set_yscale("log")
     ax.set_xlabel("mean speed [rpm]" + (" (dotted: critical speeds of the strong orders)" if critical_rpm else ""))
+    speed_axis(ax, "x")
     ax.set_ylabel("vibratory torque, peak to peak [N·m]")
     ax.set_title(plain(title))
     ax.grid(True, alpha=0.3)
     if len(section_names) <= 12:
-        ax.legend(fontsize=7, ncol=2)
+        place_legend(ax, fontsize=7, ncol=2)
     return ax
 
 
@@ -118,11 +121,13 @@ def plot_torsional_run(
     for i, name in enumerate(section_names):
         a1.plot(t_s, torque_Nm[:, i], lw=0.8, label=None if len(section_names) > 10 else name)
     a0.set_ylabel("speed [rpm]")
+    speed_axis(a0)
     a0.set_title(plain(title))
     a1.set_ylabel("shaft torque [N·m]")
     a1.set_xlabel("time [s]")
     for a in (a0, a1):
         a.grid(True, alpha=0.3)
     if not many:
-        a0.legend(fontsize=7, ncol=2)
+        place_legend(a0, fontsize=7, ncol=2)
+    settle_legends(a0.figure)
     return axes
