@@ -1,17 +1,20 @@
-"""The code of README.md and of the how-to guides runs as written, and their text speaks to users.
+"""The code of README.md and of the documentation runs as written, and their text speaks to users.
 
-- Every ```python block of README.md, of the getting-started tutorial and of each page of
-  docs/how-to/ runs, in order, in one namespace per page (a later block may use names
-  from an earlier one), in a temporary working directory of its own, with matplotlib's
-  Agg backend. A ```toml block
+- Every ```python and ```sh block of README.md and of the pages of docs/ runs, in order,
+  in one namespace per page (a later block may use names from an earlier one), in a
+  temporary working directory of its own, with matplotlib's Agg backend. Each command of
+  a shell block runs and must exit with 0: ``rotor …`` in this process (what the pages
+  before compiled is reused), anything else in bash. A synopsis is a ```text block, not
+  run. A ```toml block
   right after ``<!-- file: NAME -->`` is written to NAME there first, so that a page can
   show a whole engine file and then load it. A block right after ``<!-- no-test -->`` is
-  skipped (use it only with a reason written next to it). A failure names the page's own
-  line. All pages run in one process, so that a kernel compiled for one is reused by the
-  next (the pages keep to the same presets and small cycle counts for that reason).
+  skipped (use it only with a reason written next to it: an install, a command that needs
+  a server). A failure names the page's own line. All pages run in one process, so that a
+  kernel compiled for one is reused by the next (the pages keep to the same presets and
+  small cycle counts for that reason).
 - A few figures the pages' comments quote are checked against what the blocks computed.
-- Every ``rotor …`` command line of their ```sh blocks is parsed by the ``rotor`` parser
-  (a real command, options it takes), not run.
+- Every ``rotor …`` command line of their ```sh blocks, those left out of the run too, is
+  parsed by the ``rotor`` parser (a real command, options it takes).
 - The README stays a landing page (at most 300 lines) that keeps `make demo` and
   `make test`, and every figure it shows exists.
 - No text in README.md, docs/, the package or benchmarks/README.md cites the project's
