@@ -25,6 +25,11 @@ Measured in one run, on one engine (4chn15 at 1250 rpm unless ``--engine``):
    (10⁶ with ``--full``) on every core, and 10⁵ on one thread: steady states per second
    after compiling, the chunk size and the process's peak resident memory after each
    size.
+5. Speed-dependent friction (the docs' ``[friction]`` table with its speed-linear term b)
+   against the same friction without b, taken in turn: the default steady state, the
+   compiled call, ``steady_sweep`` of 10⁴ items and ``rotor flywheel`` (an engine file
+   with the table, fresh processes, the compilation cache warm); ``--only-friction`` runs
+   this part alone.
 
 Compile time is kept apart (the first call); every time is the median of repeats after it,
 at least as many as fill half a second for each call timed alone.
@@ -258,6 +263,93 @@ def bench_plain_vmap(engine, items, repeats):
     }
 
 
+SPEED_FRICTION = {"fmep_pa": 0.8e5, "fmep_per_speed_pa_s_per_m": 2000.0}
+"""The ``[friction]`` table of docs/how-to/write-an-engine-file.md: its speed-linear term
+(b) is what the closed form takes by a fixed point."""
+
+
+def _engine_file(preset, friction, folder):
+    """A copy of the ``preset``'s engine file with ``friction`` (a dict, or None: none) as its
+    ``[friction]`` table, in ``folder``: what ``rotor flywheel`` reads."""
+    text = (Path(rotor.__file__).parent / "presets" / f"{preset}.toml").read_text()
+    path = Path(folder) / f"{preset}-{'b' if friction and friction.get('fmep_per_speed_pa_s_per_m') else 'a'}.toml"
+    if friction:
+        text += "\n[friction]\n" + "".join(f"{k} = {v!r}\n" for k, v in friction.items())
+    path.write_text(text)
+    return path
+
+
+def bench_speed_friction(preset, engine, repeats, items=10**4, flywheel_runs=3):
+    """The engine with the docs' friction (speed-linear term b) against the same friction
+    without b, in turn, each case the same calls: one ``steady_state(engine, friction=…)``
+    (the default call; its method), one compiled call of the prepared engine closed over,
+    ``steady_sweep`` of ``items`` speeds × inertias, and ``rotor flywheel`` (an engine file
+    with the ``[friction]`` table, a fresh process each, the compilation cache warm: the
+    medians of ``flywheel_runs`` after one to fill it)."""
+    import subprocess
+    import tempfile
+
+    with_b = rotor.Friction(**SPEED_FRICTION)
+    without_b = rotor.Friction(fmep_pa=SPEED_FRICTION["fmep_pa"])
+    prepared = rotor.prepare(engine)
+    rpm0, J0 = float(engine.operating.rpm), float(engine.crankshaft.inertia_kgm2)
+    side = int(np.ceil(np.sqrt(items)))
+    rpm = np.repeat(np.linspace(0.6 * rpm0, 1.6 * rpm0, side), side)[:items]
+    J = np.tile(np.linspace(0.5 * J0, 3.0 * J0, side), side)[:items]
+    rpm_a = jax.numpy.asarray(rpm0)
+    calls, methods, sweeps = {}, {}, {}
+    for name, fr in (("without b", without_b), ("with b", with_b)):
+        methods[name] = rotor.steady_state(engine, friction=fr).method
+        closed_over = jax.jit(lambda r, fr=fr: rotor.steady_state(prepared, r, friction=fr).delta)
+        closed_over = closed_over.lower(rpm_a).compile()
+        key = "default" if name == "without b" else f"steady_state(engine, friction), {name}"
+        calls[key] = lambda fr=fr: float(rotor.steady_state(engine, friction=fr).delta)
+        calls[f"compiled call, prepared engine closed over, delta, {name}"] = lambda f=closed_over: f(
+            rpm_a
+        ).block_until_ready()
+        sweeps[name] = lambda fr=fr: rotor.steady_sweep(prepared, rpm=rpm, inertia_kgm2=J, friction=fr, progress=False)
+    paired_calls = paired(calls, max(50, repeats))
+    sweep_runs = {name: [] for name in sweeps}
+    for fn in sweeps.values():
+        fn()  # compile
+    for _ in range(3):
+        for name, fn in sweeps.items():
+            r = fn()
+            sweep_runs[name].append(r.wall_s - r.compile_s)
+            assert r.converged.all(), name
+    with tempfile.TemporaryDirectory() as folder:
+        files = {"without b": _engine_file(preset, {"fmep_pa": SPEED_FRICTION["fmep_pa"]}, folder)}
+        files["with b"] = _engine_file(preset, SPEED_FRICTION, folder)
+        command = [str(Path(sys.executable).parent / "rotor"), "flywheel", "--delta", "0.01", "--rpm", "800,1250,2000"]
+        flywheel = {name: [] for name in files}
+        for path in files.values():  # the compilation cache filled for each
+            subprocess.run([*command, str(path)], check=True, capture_output=True)
+        for _ in range(flywheel_runs):
+            for name, path in files.items():
+                t0 = time.perf_counter()
+                subprocess.run([*command, str(path)], check=True, capture_output=True)
+                flywheel[name].append(time.perf_counter() - t0)
+    med = {k: statistics.median(v) for k, v in sweep_runs.items()}
+    fly = {k: statistics.median(v) for k, v in flywheel.items()}
+    return {
+        "friction": SPEED_FRICTION,
+        "methods": methods,
+        "paired": paired_calls,
+        "steady_state_with_over_without": 1.0 / paired_calls["default_over"]["steady_state(engine, friction), with b"],
+        "compiled_with_over_without": paired_calls["median_s"][
+            "compiled call, prepared engine closed over, delta, with b"
+        ]
+        / paired_calls["median_s"]["compiled call, prepared engine closed over, delta, without b"],
+        "sweep_items": items,
+        "sweep_run_s": med,
+        "sweep_with_over_without": med["with b"] / med["without b"],
+        "flywheel_command": "rotor " + " ".join(command[1:]) + " ENGINE.toml",
+        "flywheel_s": fly,
+        "flywheel_with_over_without": fly["with b"] / fly["without b"],
+        "load_average": os.getloadavg(),
+    }
+
+
 def plot(res, path):
     import matplotlib
 
@@ -285,6 +377,21 @@ def plot(res, path):
     fig.savefig(path, dpi=110)
 
 
+def print_speed_friction(f):
+    pair = f["paired"]
+    print(f"speed-dependent friction {f['friction']} against the same without b (methods {f['methods']}):")
+    print("  ('default': steady_state(engine, friction) without b)")
+    for name, t in pair["median_s"].items():
+        print(f"  {name:<70} {t * 1e6:10.1f} µs")
+    print(
+        f"  with over without: steady_state {f['steady_state_with_over_without']:.2f}×, compiled call "
+        f"{f['compiled_with_over_without']:.2f}×, steady_sweep of {f['sweep_items']} "
+        f"{f['sweep_run_s']['with b']:.3f} s / {f['sweep_run_s']['without b']:.3f} s = {f['sweep_with_over_without']:.2f}×, "
+        f"rotor flywheel {f['flywheel_s']['with b']:.2f} s / {f['flywheel_s']['without b']:.2f} s = "
+        f"{f['flywheel_with_over_without']:.2f}× (load average {f['load_average'][0]:.1f})"
+    )
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--engine", default="4chn15")
@@ -294,6 +401,9 @@ def main():
         "--sync-dispatch",
         action="store_true",
         help="run JAX's programs in the calling thread (jax_cpu_enable_async_dispatch off)",
+    )
+    ap.add_argument(
+        "--only-friction", action="store_true", help="only the speed-dependent friction case (writes its own JSON)"
     )
     args = ap.parse_args()
     if args.sync_dispatch:  # before JAX's CPU backend starts
@@ -308,6 +418,13 @@ def main():
         "versions": versions(),
         "notes": __doc__,
     }
+    if args.only_friction:
+        res["speed_friction"] = bench_speed_friction(args.engine, engine, repeats)
+        print_speed_friction(res["speed_friction"])
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(RESULTS / "steady_limit_friction.json", json.dumps(res, indent=2, ensure_ascii=False))
+        print(f"wrote {RESULTS / 'steady_limit_friction.json'}")
+        return
     res["single"] = bench_single(engine, repeats)
     rk = res["single"]["scipy_rk45_one_cycle"]["median_s"]
     print(f"{args.engine} at {res['single']['rpm']:g} rpm; one cycle of scipy RK45 (rtol 1e-8): {rk * 1e3:.2f} ms")
@@ -340,6 +457,8 @@ def main():
     )
     print("throughput of rotor.steady_sweep (speed × inertia grid):")
     res["batches"] = bench_batches(engine, sizes, 3)
+    res["speed_friction"] = bench_speed_friction(args.engine, engine, repeats)
+    print_speed_friction(res["speed_friction"])
     RESULTS.mkdir(parents=True, exist_ok=True)
     write_text_atomic(RESULTS / "steady_limit.json", json.dumps(res, indent=2, ensure_ascii=False))
     plot(res, RESULTS / "steady_limit.png")
