@@ -38,7 +38,7 @@ import importlib
 import math
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 
 import numpy as np
 
@@ -56,6 +56,7 @@ __all__ = [
     "SPEED_UNITS",
     "detect_format",
     "read_channels",
+    "channels_to_read",
     "columns_from_groups",
 ]
 
@@ -83,10 +84,9 @@ FORMATS = {
 """Format key → :class:`Format`. ``.dat`` is read as MDF only when its first bytes say so
 (a text ``.dat`` is a text log)."""
 
-READ_BYTES_PER_FILE_BYTE = 24
-"""Memory that reading a measurement file takes per byte of the file [bytes]: its channels
-as float64 beside the library's copy; a compressed file (Parquet, MDF4 with zipped blocks)
-takes more, checked again on the channels' sizes."""
+READ_BYTES_PER_VALUE_BYTE = 3
+"""Memory that reading a channel takes per byte of its values as float64 [bytes]: the
+library's copy, the float64 array and the log's own."""
 
 _HDF5 = b"\x89HDF\r\n\x1a\n"
 _MAGIC: tuple[tuple[int, bytes, str], ...] = (
@@ -153,11 +153,13 @@ class Channel:
 class ChannelGroup:
     """Channels sampled on one time base: ``name`` (for messages), ``channels`` and
     ``time``, the group's time base as a channel (an MDF master, a TDMS waveform's timing),
-    or None where one of the channels is the time."""
+    or None where one of the channels is the time; ``others``: the names of its channels
+    not read (a spec named none of them)."""
 
     name: str
     channels: tuple[Channel, ...]
     time: Channel | None = None
+    others: tuple[str, ...] = ()
 
     @property
     def rows(self) -> int:
@@ -225,7 +227,7 @@ def _as_float(values, name: str, source: str) -> np.ndarray | None:
 
 
 # ---------------------------------------------------------------------------- the readers
-def _read_mdf(path: str) -> list[ChannelGroup]:
+def _read_mdf(path: str, wanted: frozenset[str] | None) -> list[ChannelGroup]:
     asammdf = _library(path, "mdf", "asammdf")
     try:
         mdf = asammdf.MDF(path)
@@ -233,16 +235,18 @@ def _read_mdf(path: str) -> list[ChannelGroup]:
         raise LogError(f"{path}: not a readable MDF file ({type(e).__name__}: {e})") from None
     groups = []
     try:
+        plan = []
         for gi, group in enumerate(mdf.groups):
             master = mdf.masters_db.get(gi)
             names = [ch.name for ch in group.channels]
-            wanted = [(None, gi, ci) for ci in range(len(names)) if ci != master]
-            if not wanted:
-                continue
-            signals = mdf.select(wanted)
+            take = [ci for ci in range(len(names)) if ci != master and _wanted(names[ci], wanted)]
+            rest = tuple(names[ci] for ci in range(len(names)) if ci != master and ci not in take)
+            plan.append((gi, group, master, names, take, rest))
+        _budget(path, "mdf", sum(8.0 * int(g.channel_group.cycles_nr) * (len(t) + 1) for _, g, _, _, t, _ in plan))
+        for gi, group, master, names, take, rest in plan:
             channels = []
             time = None
-            for sig in signals:
+            for sig in mdf.select([(None, gi, ci) for ci in take]) if take else ():
                 v = _as_float(sig.samples, sig.name, path)
                 if v is None:
                     continue
@@ -251,51 +255,60 @@ def _read_mdf(path: str) -> list[ChannelGroup]:
                     time = Channel(
                         names[master] if master is not None else "time", np.asarray(sig.timestamps, np.float64), "s"
                     )
-            if channels:
-                comment = str(getattr(group.channel_group, "comment", "") or "").strip()
-                comment = "" if comment == "Python" else comment  # asammdf's own, where its writer gave none
-                label = f"group {gi + 1}" + (f" ({comment[:40]})" if comment else "")
-                groups.append(ChannelGroup(label, tuple(channels), time))
+            comment = str(getattr(group.channel_group, "comment", "") or "").strip()
+            comment = "" if comment == "Python" else comment  # asammdf's own, where its writer gave none
+            label = f"group {gi + 1}" + (f" ({comment[:40]})" if comment else "")
+            groups.append(ChannelGroup(label, tuple(channels), time, rest))
     finally:
         mdf.close()
     return groups
 
 
-def _read_tdms(path: str) -> list[ChannelGroup]:
+def _read_tdms(path: str, wanted: frozenset[str] | None) -> list[ChannelGroup]:
     nptdms = _library(path, "tdms", "nptdms")
     try:
-        tdms = nptdms.TdmsFile.read(path)
+        tdms = nptdms.TdmsFile.open(path)  # the channels' data read on access
     except Exception as e:
         raise LogError(f"{path}: not a readable TDMS file ({type(e).__name__}: {e})") from None
     groups = []
-    for g in tdms.groups():
-        by_base: dict[tuple, list[Channel]] = {}
-        times: dict[tuple, Channel | None] = {}
-        for ch in g.channels():
-            v = _as_float(ch[:], ch.name, path)
-            if v is None:
-                continue
-            props = ch.properties
-            inc = props.get("wf_increment")
-            base = (v.size, float(props.get("wf_start_offset", 0.0)), float(inc) if inc else None)
-            if base not in times:
-                times[base] = None
-                if inc:
-                    unit = str(props.get("wf_xunit_string", "s") or "s")
-                    times[base] = Channel("time", base[1] + float(inc) * np.arange(v.size, dtype=np.float64), unit)
-            by_base.setdefault(base, []).append(Channel(str(ch.name), v, str(props.get("unit_string", "") or "")))
-        for k, (base, chans) in enumerate(by_base.items()):
-            label = f"group {g.name!r}" + (f" ({k + 1})" if len(by_base) > 1 else "")
-            groups.append(ChannelGroup(label, tuple(chans), times[base]))
+    with tdms:
+        chosen = [(g, ch) for g in tdms.groups() for ch in g.channels() if _wanted(ch.name, wanted)]
+        _budget(path, "tdms", sum(8.0 * len(ch) for _, ch in chosen))
+        for g in tdms.groups():
+            by_base: dict[tuple, list[Channel]] = {}
+            times: dict[tuple, Channel | None] = {}
+            rest = []
+            for ch in g.channels():
+                if not _wanted(ch.name, wanted):
+                    rest.append(str(ch.name))
+                    continue
+                v = _as_float(ch[:], ch.name, path)
+                if v is None:
+                    continue
+                props = ch.properties
+                inc = props.get("wf_increment")
+                base = (v.size, float(props.get("wf_start_offset", 0.0)), float(inc) if inc else None)
+                if base not in times:
+                    times[base] = None
+                    if inc:
+                        unit = str(props.get("wf_xunit_string", "s") or "s")
+                        times[base] = Channel("time", base[1] + float(inc) * np.arange(v.size, dtype=np.float64), unit)
+                by_base.setdefault(base, []).append(Channel(str(ch.name), v, str(props.get("unit_string", "") or "")))
+            for k, (base, chans) in enumerate(by_base.items()):
+                label = f"group {g.name!r}" + (f" ({k + 1})" if len(by_base) > 1 else "")
+                groups.append(ChannelGroup(label, tuple(chans), times[base], tuple(rest) if k == 0 else ()))
+            if not by_base and rest:
+                groups.append(ChannelGroup(f"group {g.name!r}", (), None, tuple(rest)))
     return groups
 
 
-def _read_mat(path: str) -> list[ChannelGroup]:
+def _read_mat(path: str, wanted: frozenset[str] | None) -> list[ChannelGroup]:
     sio = _library(path, "mat", "scipy.io")
+    _budget(path, "mat", float(os.path.getsize(path)) * 2)  # read whole, then copied as float64
     try:
         data = sio.loadmat(path, simplify_cells=True)
     except NotImplementedError:  # a v7.3 file without the text header SciPy looks for
-        return _read_hdf5(path, "mat73")
+        return _read_hdf5(path, wanted, "mat73")
     except Exception as e:
         raise LogError(f"{path}: not a readable MATLAB file ({type(e).__name__}: {e})") from None
     flat: list[tuple[str, object]] = []
@@ -312,11 +325,12 @@ def _read_mat(path: str) -> list[ChannelGroup]:
     return _vectors(path, flat)
 
 
-def _read_hdf5(path: str, key: str = "hdf5") -> list[ChannelGroup]:
+def _read_hdf5(path: str, wanted: frozenset[str] | None, key: str = "hdf5") -> list[ChannelGroup]:
     h5py = _library(path, key, "h5py")
     flat: list[tuple[str, object]] = []
     try:
         with h5py.File(path, "r") as f:
+            found = []
 
             def visit(name: str, obj: object) -> None:
                 if isinstance(obj, h5py.Dataset) and not name.startswith("#"):
@@ -324,13 +338,19 @@ def _read_hdf5(path: str, key: str = "hdf5") -> list[ChannelGroup]:
                     cls = cls.decode() if isinstance(cls, bytes) else str(cls)
                     if cls in ("char", "cell", "struct", "function_handle") or obj.dtype.kind not in "biuf":
                         return
-                    a = obj[()]
-                    flat.append((name.replace("/", "."), a.T if key == "mat73" else a))  # MATLAB writes column-major
+                    found.append((name.replace("/", "."), obj))
 
             f.visititems(visit)
+            # a matrix's columns are named name[j]: it is read where its own name or a column's is wanted
+            chosen = [(n, d) for n, d in found if wanted is None or _wanted(n, wanted) or n.lower() in _stems(wanted)]
+            _budget(path, key, sum(8.0 * d.size for _, d in chosen))
+            for name, d in chosen:
+                a = d[()]
+                flat.append((name, a.T if key == "mat73" else a))  # MATLAB writes column-major
+            rest = tuple(n for n, _ in found if all(n != c for c, _ in chosen))
     except OSError as e:
         raise LogError(f"{path}: not a readable HDF5 file ({e})") from None
-    return _vectors(path, flat)
+    return _vectors(path, flat) + ([ChannelGroup("arrays not read", (), None, rest)] if rest else [])
 
 
 def _vectors(path: str, flat: list[tuple[str, object]]) -> list[ChannelGroup]:
@@ -350,13 +370,23 @@ def _vectors(path: str, flat: list[tuple[str, object]]) -> list[ChannelGroup]:
     return [ChannelGroup(f"arrays of {n} values", tuple(ch)) for n, ch in by_len.items()]
 
 
-def _read_arrow(path: str, key: str) -> list[ChannelGroup]:
+def _read_arrow(path: str, wanted: frozenset[str] | None, key: str) -> list[ChannelGroup]:
     module = "pyarrow.parquet" if key == "parquet" else "pyarrow.feather"
     pa = _library(path, key, module)
     try:
-        table = pa.read_table(path)
+        if key == "parquet":
+            meta = pa.ParquetFile(path)
+            names, rows = list(meta.schema_arrow.names), int(meta.metadata.num_rows)
+        else:
+            names, rows = _arrow_names(path), None
+        take = [n for n in names if _wanted(n, wanted)]
+        _budget(path, key, 8.0 * (rows if rows is not None else os.path.getsize(path) / 8) * max(len(take), 1))
+        table = pa.read_table(path, columns=take)
+    except LogError:
+        raise
     except Exception as e:
         raise LogError(f"{path}: not a readable {FORMATS[key].name} file ({type(e).__name__}: {e})") from None
+    rest = tuple(n for n in names if n not in take)
     channels = []
     for field, column in zip(table.schema, table.columns):
         meta = {
@@ -375,33 +405,75 @@ def _read_arrow(path: str, key: str) -> list[ChannelGroup]:
             v = v.copy()
             v[np.asarray(column.is_null(), dtype=bool)] = np.nan  # refused by the log's checks, naming the row
         channels.append(Channel(str(field.name), v, meta.get("unit", meta.get("units", "")).strip()))
-    return [ChannelGroup("the table", tuple(channels))] if channels else []
+    return [ChannelGroup("the table", tuple(channels), None, rest)] if channels or rest else []
 
 
-_READERS: dict[str, Callable[[str], list[ChannelGroup]]] = {
+def _arrow_names(path: str) -> list[str]:
+    """The column names of an Arrow IPC / Feather file, from its schema alone."""
+    import pyarrow.ipc as ipc
+
+    try:
+        with ipc.open_file(path) as reader:
+            return list(reader.schema.names)
+    except Exception:  # Feather version 1: the whole table is read to learn its names
+        import pyarrow.feather as feather
+
+        return list(feather.read_table(path).schema.names)
+
+
+def _wanted(name: str, wanted: frozenset[str] | None) -> bool:
+    """Whether the channel ``name`` is to be read: every channel without a spec, else the
+    ones it names (in any case)."""
+    return wanted is None or str(name).lower() in wanted
+
+
+def _stems(wanted: frozenset[str]) -> set[str]:
+    """The matrices whose columns ``wanted`` names (``data[2]`` → ``data``)."""
+    return {w.rsplit("[", 1)[0] for w in wanted if w.endswith("]")}
+
+
+def _budget(path: str, key: str, n_bytes: float) -> None:
+    """Refuse reading ``n_bytes`` of channels (float64) beyond the memory budget, before reading."""
+    check_size(
+        float(n_bytes) * READ_BYTES_PER_VALUE_BYTE,
+        f"{path}: reading the channels of this {os.path.getsize(path) / 1e6:.3g} MB {FORMATS[key].name} file",
+        "name only the channels needed (columns='time=…,encoder_v=…'), export the part of the recording needed, or "
+        "set ROTOR_MEMORY_LIMIT_GB [GB] higher on a machine with the memory",
+        error=LogError,
+    )
+
+
+_READERS: dict[str, Callable[[str, frozenset[str] | None], list[ChannelGroup]]] = {
     "mdf": _read_mdf,
     "tdms": _read_tdms,
     "mat": _read_mat,
-    "mat73": lambda p: _read_hdf5(p, "mat73"),
+    "mat73": lambda p, w: _read_hdf5(p, w, "mat73"),
     "hdf5": _read_hdf5,
-    "parquet": lambda p: _read_arrow(p, "parquet"),
-    "arrow": lambda p: _read_arrow(p, "arrow"),
+    "parquet": lambda p, w: _read_arrow(p, w, "parquet"),
+    "arrow": lambda p, w: _read_arrow(p, w, "arrow"),
 }
 
 
-def read_channels(path: str, key: str) -> list[ChannelGroup]:
+def channels_to_read(key: str, spec: dict[str, str] | None) -> list[str] | None:
+    """The channel names a spec (role → name) needs read from a file of format ``key``:
+    those it names; every channel (None) without a spec, or where it names no time and
+    the format has no time base of its own (a table's time is found among its columns)."""
+    if spec is None:
+        return None
+    timed = any(UNIT_COLUMNS.get(role, (role,))[0] in ("time", "tooth_time_s") for role in spec)
+    if not timed and key not in ("mdf", "tdms"):
+        return None
+    return list(spec.values())
+
+
+def read_channels(path: str, key: str, names: Collection[str] | None = None) -> list[ChannelGroup]:
     """The channel groups of the file at ``path`` of format ``key`` (:func:`detect_format`),
-    read through its library; a LogError naming the file where it cannot be read, holds no
-    numeric channel, or is too large for the memory budget."""
-    size = os.path.getsize(path)
-    check_size(
-        float(size) * READ_BYTES_PER_FILE_BYTE,
-        f"{path}: reading this {size / 1e6:.3g} MB {FORMATS[key].name} file",
-        "export the part of the recording needed, or set ROTOR_MEMORY_LIMIT_GB [GB] higher on a machine with the memory",
-        error=LogError,
-    )
-    groups = [g for g in _READERS[key](path) if g.channels and g.rows > 0]
-    if not groups:
+    read through its library: every channel, or with ``names`` only those (in any case;
+    the others' names are kept for messages). A LogError naming the file where it cannot
+    be read, holds no numeric channel, or its channels would not fit the memory budget."""
+    wanted = frozenset(str(n).lower() for n in names) if names is not None else None
+    groups = [g for g in _READERS[key](path, wanted) if (g.channels and g.rows > 0) or g.others]
+    if not any(g.channels for g in groups) and wanted is None:
         raise LogError(f"{path}: a {FORMATS[key].name} file without a channel of numbers")
     return groups
 
@@ -411,7 +483,7 @@ def _listing(groups: list[ChannelGroup]) -> str:
     """The file's channel names, group by group, for a message."""
     parts, shown = [], 0
     for g in groups:
-        names = [c.name for c in g.channels]
+        names = [c.name for c in g.channels] + list(g.others)
         room = max(0, _MAX_LISTED - shown)
         text = ", ".join(repr(n) for n in names[:room]) + (
             f", … ({len(names) - room} more)" if len(names) > room else ""

@@ -479,7 +479,7 @@ def read_log(
     spec = channel_map(columns)
     fmt = _measurement_format(path)
     if fmt is not None:
-        from .formats import columns_from_groups, read_channels
+        from .formats import channels_to_read, columns_from_groups, read_channels
 
         if columns is not None and spec is None:
             raise LogError(
@@ -488,9 +488,8 @@ def read_log(
             )
         notes: list[str] = []
         source = os.path.basename(path)
-        return Log(
-            columns_from_groups(source, read_channels(path, fmt), spec, notes), source=source, notes=tuple(notes)
-        )
+        groups = read_channels(path, fmt, channels_to_read(fmt, spec))
+        return Log(columns_from_groups(source, groups, spec, notes), source=source, notes=tuple(notes))
     text = _read_text(path)
     notes = []
     lines = _data_lines(text)

@@ -339,7 +339,7 @@ def test_a_file_over_the_memory_budget_is_refused_before_reading(recording, monk
     folder, t, v, _ = recording
     write_tdms(folder / "big.tdms", t, v)
     monkeypatch.setenv("ROTOR_MEMORY_LIMIT_GB", "1e-6")
-    with pytest.raises(LogError, match=r"big.tdms: reading this .* MB TDMS \(NI LabVIEW\) file needs"):
+    with pytest.raises(LogError, match=r"big.tdms: reading the channels of this .* MB TDMS \(NI LabVIEW\) file needs"):
         read_log(folder / "big.tdms")
 
 
@@ -364,3 +364,16 @@ def test_a_binary_file_of_no_known_format_names_the_formats_read(tmp_path):
         LogError, match=r"NUL bytes .* or a measurement file \(MDF, TDMS, MATLAB .mat, Parquet, Arrow\)"
     ):
         read_log(tmp_path / "blob.bin")
+
+
+def test_a_spec_reads_only_the_channels_it_names_and_lists_the_others(recording):
+    from rotor.logs.formats import read_channels
+
+    folder, t, v, _ = recording
+    write_mdf(folder / "some.mf4", t, v)
+    groups = read_channels(str(folder / "some.mf4"), "mdf", ["crank"])
+    assert [c.name for g in groups for c in g.channels] == ["CRANK"]
+    assert [n for g in groups for n in g.others] == ["coolant"]
+    pq.write_table(arrow_table(t, v), folder / "some.parquet")
+    (table,) = read_channels(str(folder / "some.parquet"), "parquet", ["CRANK"])
+    assert [c.name for c in table.channels] == ["CRANK"] and table.others == ("t_ms",)
