@@ -38,6 +38,7 @@ __all__ = [
     "fidelity_option",
     "nonnegative_float",
     "positive_float",
+    "pressure_pa",
     "scale_list",
     "speed",
     "speed_list",
@@ -225,6 +226,27 @@ def angle_deg(text: str) -> float:
 
 speed = nonnegative_float
 """A crank speed [rev/min]: zero allowed (from rest)."""
+
+
+def pressure_pa(quantity: str) -> Callable[[str], float]:
+    """The type of a pressure option [Pa] (``--intake-pa``): a number within the plausible
+    range of ``quantity`` (a key of :data:`rotor.engine.plausible.EDGE_RANGES`, e.g.
+    ``"intake_pa"``), else a usage error naming the unit it reads as (``0.95``: bar)."""
+
+    def convert(text: str) -> float:
+        from ..errors import EngineError
+
+        v = _number(text)
+        from ..engine.plausible import check_edge  # imports JAX: only when the option is given
+
+        try:
+            check_edge(repr(text), v, quantity)
+        except EngineError as e:
+            raise argparse.ArgumentTypeError(str(e).replace(f"{text!r} = {v:g} ", f"{text!r} ", 1)) from None
+        return v
+
+    convert.__name__ = f"pressure_pa_{quantity}"
+    return convert
 
 
 def whole(text: str) -> int:

@@ -117,6 +117,7 @@ __all__ = [
     "check_edge",
     "check_pressure_table",
     "check_engine_file_units",
+    "check_inertia_kgm2",
 ]
 
 _PRESSURE = (
@@ -617,3 +618,20 @@ def _per_bore(where_: str, value: float, scale: float, limit: float, unit: str, 
     raise EngineError(
         f"{where_} = {value:g} is {value / scale:.3g} × {per}, over the {limit:g} of any piston engine{hint}"
     )
+
+
+def check_inertia_kgm2(where_: str, value: Any, *, bore_m: float | None = None, cylinders: int = 1) -> None:
+    """Raise :class:`rotor.EngineError` where a crankshaft inertia ``value`` [kg·m²] (a
+    calibration's) lies outside :data:`EDGE_RANGES` ``"inertia_kgm2"``, or, with the
+    engine's ``bore_m`` [m] and ``cylinders``, over :data:`MAX_INERTIA_PER_BORE5` ×
+    cylinders × bore⁵, naming the unit it reads as (kg·cm²)."""
+    check_edge(where_, value, "inertia_kgm2")
+    if bore_m is not None and float(bore_m) > 0 and cylinders > 0:
+        _per_bore(
+            where_,
+            float(value),
+            cylinders * float(bore_m) ** 5,
+            MAX_INERTIA_PER_BORE5,
+            "kg·m²",
+            "cylinders × bore⁵ [kg·m²/m⁵]",
+        )

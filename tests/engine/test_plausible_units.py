@@ -138,3 +138,15 @@ def test_the_likelier_unit_comes_first():
 @pytest.mark.parametrize("name", rotor.preset_names())
 def test_every_preset_is_within_the_ranges(name):
     rotor.load_engine(name)
+
+
+def test_a_calibrated_inertia_in_kg_cm2_is_refused_beside_its_engines_bore():
+    from rotor.engine.plausible import check_inertia_kgm2
+
+    check_inertia_kgm2("cal.json: inertia_kgm2", 0.0161, bore_m=0.0677, cylinders=1)
+    with pytest.raises(
+        rotor.EngineError, match=r"cal.json: inertia_kgm2 = 161 .* reads as kg·cm² \(161 kg·cm² = 0.0161"
+    ):
+        check_inertia_kgm2("cal.json: inertia_kgm2", 161.0, bore_m=0.0677, cylinders=1)
+    with pytest.raises(rotor.EngineError, match=r"cal.json: inertia_kgm2 = -1 lies outside"):
+        check_inertia_kgm2("cal.json: inertia_kgm2", -1.0)
