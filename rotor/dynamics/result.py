@@ -36,6 +36,30 @@ TORQUE_PARTS_NOTE = (
     "−I′ω²/2 = the varying inertia's term; total = gas − I′ω²/2, the torque that drives the speed"
 )
 
+#: the heading and the note's words of the reciprocating inertia torque and the varying
+#: inertia's term where their amplitudes are the same at every order (one column for both)
+_SAME_HEAD = "recip.=I′ω²/2"
+_SAME_NOTE = (
+    "torque amplitudes: gas; recip.=I′ω²/2 = the reciprocating masses' inertia torque (textbook, at the speed), "
+    "the same amplitude as the varying inertia's term −I′ω²/2 at every order; total = gas − I′ω²/2, the torque "
+    "that drives the speed"
+)
+
+
+def distinct_parts(rows: list[dict], parts: list[tuple[str, str]]) -> tuple[list[tuple[str, str]], str]:
+    """The torque columns (key, heading) of a summary's order table, one per distinct
+    quantity: the reciprocating inertia torque and the varying inertia's term as one column
+    where their amplitudes agree at every order of ``rows`` (to 1e-9 of the largest; the
+    same function of θ where I(θ) carries the reciprocating inertia), and the note that says
+    what the columns are."""
+    keys = dict(parts)
+    a, b = "reciprocating_torque_amplitude_Nm", "inertia_term_amplitude_Nm"
+    if a in keys and b in keys and rows:
+        x, y = (np.asarray([r[k] for r in rows]) for k in (a, b))
+        if np.all(np.abs(x - y) <= 1e-9 * max(float(np.max(np.abs(x))), 1e-300)):
+            return [(k, _SAME_HEAD if k == a else h) for k, h in parts if k != b], _SAME_NOTE
+    return parts, TORQUE_PARTS_NOTE
+
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
 class Orders(Result):
@@ -81,11 +105,13 @@ class Orders(Result):
         """The orders as a table: speed amplitude [rad/s and rpm] and the torque amplitudes
         [N·m], each column named (gas, reciprocating inertia, −I′ω²/2, total where known)."""
         parts = [(k, head) for _, k, head in TORQUE_PARTS if getattr(self, k) is not None]
+        rows = self.to_list()
+        parts, note = distinct_parts(rows, parts)
         if parts:
             heads = "".join(f"  {head:>14}" for _, head in parts)
             lines = [
                 f"{self.engine_name + ': ' if self.engine_name else ''}speed and torque harmonics by engine order",
-                f"  ({TORQUE_PARTS_NOTE})",
+                f"  ({note})",
                 f"  order  speed amplitude [rad/s]      [rpm]{heads}",
             ]
         else:
@@ -93,7 +119,6 @@ class Orders(Result):
                 f"{self.engine_name + ': ' if self.engine_name else ''}speed and torque harmonics by engine order",
                 "  order  speed amplitude [rad/s]  [rpm]      engine (gas) torque amplitude [N·m]",
             ]
-        rows = self.to_list()
         shown = rows if len(rows) <= 50 else rows[:50]
         for o in shown:
             line = f"  {o['order']:5.1f}  {o['speed_amplitude_rad_s']:24.5f}  {o['speed_amplitude_rad_s'] * RPM_PER_RAD_S:9.4f}"
@@ -689,9 +714,10 @@ class SpeedResult(Result):
             )
         if s["orders"]:
             parts = [(k, head) for _, k, head in TORQUE_PARTS if k in s["orders"][0]]
+            parts, note = distinct_parts(s["orders"], parts)
             lines.append("  orders of the last cycle (trend removed):")
             if parts:
-                lines.append(f"  ({TORQUE_PARTS_NOTE})")
+                lines.append(f"  ({note})")
                 lines.append("  order  speed amplitude [rad/s]" + "".join(f"  {head:>14}" for _, head in parts))
             else:
                 lines.append("  order  speed amplitude [rad/s]  engine (gas) torque amplitude [N·m]")

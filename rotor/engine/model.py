@@ -555,6 +555,31 @@ def _peak_pressure_input(pressure: PressureSource) -> float | None:
     return max(values) if values else None
 
 
+def _number_text(x: Any) -> str:
+    """A field's value as text: numbers as numbers (a long array's first values and its
+    length), a traced value as its shape and type (``f64[4]``), anything else as its repr."""
+    if isinstance(x, jax.core.Tracer):
+        return f"{np.dtype(x.dtype).name}{list(x.shape)} (traced)"
+    if isinstance(x, (jax.Array, np.ndarray, np.generic)):
+        a = np.asarray(x)
+        if a.ndim == 0:
+            return f"{a.item():.6g}" if a.dtype.kind == "f" else repr(a.item())
+        flat = [f"{v:.6g}" if a.dtype.kind == "f" else repr(v) for v in a.ravel()[:8].tolist()]
+        more = f", … ({a.size} values)" if a.size > 8 else ""
+        return "[" + ", ".join(flat) + more + "]"
+    return repr(x)
+
+
+def engine_text(x: Any, indent: str = "") -> str:
+    """``x`` (an engine or one of its tables) as readable text with its numbers, one field a line."""
+    if not (dataclasses.is_dataclass(x) and isinstance(x, eqx.Module)):
+        return _number_text(x)
+    inner = indent + "  "
+    fields = [f for f in dataclasses.fields(x) if not f.name.startswith("_")]
+    lines = [f"{inner}{f.name}={engine_text(getattr(x, f.name), inner)}," for f in fields]
+    return f"{type(x).__name__}(\n" + "\n".join(lines) + f"\n{indent})"
+
+
 class Engine(eqx.Module):
     """An engine: the whole engine file as one pytree.
 
@@ -577,6 +602,9 @@ class Engine(eqx.Module):
     friction: Friction | None = None
     counterweights: Counterweights | None = None
     torsion: Torsion | None = None
+
+    def __repr__(self) -> str:
+        return engine_text(self)
 
     def __check_init__(self):
         self._check_types()

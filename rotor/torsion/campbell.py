@@ -116,6 +116,19 @@ mass [(c,) ints]. Returns a dict: ``frequencies_hz`` (modes,), ``relative_amplit
 ``nearest_order`` (s,)."""
 
 
+def shown_critical(amplitude: np.ndarray, most: int) -> np.ndarray:
+    """The indices of the critical speeds a summary lists: the ``most`` with the largest
+    relative ``amplitude`` (an unknown one, NaN, counted as 1) and every other whose
+    amplitude ties with the smallest of those (to 1e-9 of it), so that what is left out is
+    smaller than all that is shown."""
+    a = np.nan_to_num(np.asarray(amplitude, dtype=np.float64), nan=1.0)
+    order = np.argsort(-a, kind="stable")
+    if len(order) <= most:
+        return order
+    floor = a[order[most - 1]]
+    return order[a[order] >= floor - 1e-9 * abs(floor)]
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class Campbell(Result):
     """A Campbell diagram (:func:`rotor.campbell`).
@@ -191,7 +204,7 @@ class Campbell(Result):
         lines.append(f"  {n} critical speed{'s' if n != 1 else ''} in the range" + (":" if n else ""))
         if n:
             lines.append(f"  {'rpm':>9} {'order':>6} {'mode':>5} {'f [Hz]':>9} {'rel. amplitude':>15}")
-            order = np.argsort(-np.nan_to_num(self.critical_relative_amplitude, nan=1.0), kind="stable")[:30]
+            order = shown_critical(self.critical_relative_amplitude, 30)
             for i in sorted(order, key=lambda i: self.critical_rpm[i]):
                 amp = self.critical_relative_amplitude[i]
                 amp_s = f"{amp:.3f}" if np.isfinite(amp) else "-"
@@ -200,8 +213,8 @@ class Campbell(Result):
                     f"  {self.critical_rpm[i]:9.0f} {self.critical_order[i]:6g} {self.critical_mode[i]:5d} "
                     f"{self.critical_frequency_hz[i]:9.1f} {amp_s:>15}{mark}"
                 )
-            if n > 30:
-                lines.append(f"  … {n - 30} more with smaller amplitudes (critical_speeds lists them all)")
+            if n > len(order):
+                lines.append(f"  … {n - len(order)} more with smaller amplitudes (critical_speeds lists them all)")
         worst = int(np.argmin(self.separation_margin))
         sampled = (
             f"{100 * self.separation_margin[worst]:.2f} % at {self.rpm[worst]:.0f} rpm "
