@@ -383,7 +383,9 @@ def _refine_inertia(engines, analyses, J_e, imep_means, load_per) -> tuple[float
     def g(logJ):
         means = []
         for eng, a in zip(engines, analyses):
-            ident = identify(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, eng, float(np.exp(logJ))), a, load_per=load_per)
+            ident = identify(
+                eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, eng, float(np.exp(logJ))), a, load_per=load_per
+            )
             means.append(float(np.mean(ident.imep_pa[:, 0])))
         errs = [math.log(max(m, 1.0)) - math.log(max(t, 1.0)) for m, t in zip(means, imep_means)]
         return float(np.mean(errs)), means

@@ -158,8 +158,9 @@ class Calibration(Result):
             return None
         return {"rpm": (min(rpm), max(rpm)), "imep_pa": (min(imep), max(imep)), "recordings": len(rec)}
 
-    def outside(self, rpm: float, imep_pa: float) -> str:
-        """Why a diagnosis at mean speed ``rpm`` [rpm] and mean IMEP ``imep_pa`` [Pa] lies
+    def outside(self, rpm: float, imep_pa: float | None) -> str:
+        """Why a diagnosis at mean speed ``rpm`` [rpm] and mean IMEP ``imep_pa`` [Pa] (None: a
+        record without firing, whose motored IMEP no calibration's load range bounds) lies
         outside what the calibration covers (:data:`COVERAGE_RPM_MARGIN`,
         :data:`COVERAGE_IMEP_MARGIN`), or "" where it lies inside (or the calibration states
         no coverage)."""
@@ -170,7 +171,9 @@ class Calibration(Result):
         why = []
         if not (r_lo * (1 - COVERAGE_RPM_MARGIN) <= rpm <= r_hi * (1 + COVERAGE_RPM_MARGIN)):
             why.append(f"{rpm:.0f} rpm, the calibration's recordings {r_lo:.0f}–{r_hi:.0f} rpm")
-        if not (p_lo * (1 - COVERAGE_IMEP_MARGIN) <= imep_pa <= p_hi * (1 + COVERAGE_IMEP_MARGIN)):
+        if imep_pa is not None and not (
+            p_lo * (1 - COVERAGE_IMEP_MARGIN) <= imep_pa <= p_hi * (1 + COVERAGE_IMEP_MARGIN)
+        ):
             why.append(
                 f"IMEP {imep_pa / PA_PER_BAR:.3g} bar, the calibration's recordings "
                 f"{p_lo / PA_PER_BAR:.3g}–{p_hi / PA_PER_BAR:.3g} bar"

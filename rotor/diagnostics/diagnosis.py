@@ -710,7 +710,7 @@ def _conclude(engine, charge: ChargeFit, phased: _Phased, calibration, cal_sourc
     if calibration is not None and ident.cycles:
         ok = ident.identified & ~np.asarray(misfire)
         imep = float(np.mean(ident.imep_pa[ok])) if ok.any() else float(np.mean(ident.imep_pa))
-        coverage = calibration.outside(float(np.mean(_time_mean_rpm(ident))), imep)
+        coverage = calibration.outside(float(np.mean(_time_mean_rpm(ident))), None if no_firing else imep)
     flags = _cycle_flags(ident, misfire)
     if coverage:
         flags = tuple(f"{f}; {coverage}" if f else coverage for f in flags)

@@ -178,7 +178,9 @@ class MisfireThresholds:
             if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 1):
                 raise EngineError(f"{name} = {v!r}: a whole number of revolutions, 1 or more")
         if not (isinstance(self.emission_pct, (int, float)) and 0 < self.emission_pct <= 100):
-            raise EngineError(f"emission_pct = {self.emission_pct!r}: a percentage of the firings, above 0 and up to 100")
+            raise EngineError(
+                f"emission_pct = {self.emission_pct!r}: a percentage of the firings, above 0 and up to 100"
+            )
         if not (isinstance(self.min_share, (int, float)) and 0 < self.min_share <= 0.5):
             raise EngineError(f"min_share = {self.min_share!r}: a share of a window's misfires, above 0 and up to 0.5")
 

@@ -115,6 +115,8 @@ __all__ = [
     "TdcBias",
     "KAPPA_REL",
     "tdc_bias_of",
+    "BIAS_LEFT_DEG",
+    "BIAS_FIRING_MIN",
 ]
 
 R2_MIN = 0.5
@@ -824,6 +826,16 @@ about their mean; a calibration from one recording has no spread of its own, and
 taken to ±15 % (three times that)."""
 
 
+BIAS_LEFT_DEG = 1.0
+"""What the bias model leaves of the speed's TDC error, at most [deg]: calibrated on one of the
+three tue-4gb10 recordings and read on another, the speed's TDC less the bias lay 0.3–2.1°
+from the pressure's (rms 1.1°). A bias smaller than this is uncertain by itself: where the
+engine model fits (a simulated recording), the speed's TDC has no load bias to remove."""
+BIAS_FIRING_MIN = 0.1
+"""The bias is applied to records whose mean fitted combustion (1 = the engine file's) exceeds
+this [-]: a coast-down's or motored run's signature has no combustion to be late."""
+
+
 @dataclasses.dataclass(frozen=True)
 class TdcBias:
     """The speed-based TDC's bias, measured by a calibration on recordings whose TDC the
@@ -875,15 +887,19 @@ def tdc_bias_of(pairs: list[tuple[float, float]]) -> TdcBias | None:
 
 
 def _bias_and_sigma(fit: SpeedTdc, bias: TdcBias | None) -> tuple[float, float]:
-    """The speed's TDC bias at this recording [deg] (0 without a calibration's :class:`TdcBias`)
-    and the σ of the speed's TDC less it [deg]: the fit's ``std_deg`` without a bias; with
-    one, the cycles' scatter and the bias factor's uncertainty times the model term (the
-    model term itself is what the bias removes)."""
-    if bias is None or not math.isfinite(fit.std_model_deg):
+    """The speed's TDC bias at this recording [deg] (0 without a calibration's :class:`TdcBias`,
+    or for a record that does not fire: the bias is the fired shape's) and the σ of the
+    speed's TDC less it [deg]: the fit's ``std_deg`` without a bias; with one, the cycles'
+    scatter, the bias factor's uncertainty times the model term and what the bias model
+    leaves, the bias itself up to :data:`BIAS_LEFT_DEG` (the model term itself is what the
+    bias removes)."""
+    firing = fit.cycle_combustion.size > 0 and float(np.mean(fit.cycle_combustion)) > BIAS_FIRING_MIN
+    if bias is None or not math.isfinite(fit.std_model_deg) or not firing:
         return 0.0, float(fit.std_deg)
     stat = fit.std_statistical_deg if math.isfinite(fit.std_statistical_deg) else 0.0
-    b = bias.kappa * fit.std_model_deg
-    sigma = math.sqrt(stat**2 + (bias.kappa_std * fit.std_model_deg) ** 2)
+    m = float(fit.std_model_deg)
+    b = bias.kappa * m
+    sigma = math.sqrt(stat**2 + (bias.kappa_std * m) ** 2 + min(abs(b), BIAS_LEFT_DEG) ** 2)
     if not fit.determined:  # the fit's own σ then holds what leaves every offset possible
         sigma = max(sigma, float(fit.std_deg))
     return float(b), float(sigma)

@@ -62,7 +62,11 @@ def test_version_2_round_trip_and_version_1_still_read(tmp_path):
 
 @pytest.mark.parametrize(
     "key, value, message",
-    [("reading", 3, "key 'reading'"), ("tdc_bias", {"kappa": "x"}, "key 'tdc_bias'"), ("recordings", [1], "recordings")],
+    [
+        ("reading", 3, "key 'reading'"),
+        ("tdc_bias", {"kappa": "x"}, "key 'tdc_bias'"),
+        ("recordings", [1], "recordings"),
+    ],
 )
 def test_malformed_version_2_keys_are_named(tmp_path, key, value, message):
     d = _record().to_json_dict()
@@ -95,7 +99,9 @@ def test_the_bias_factor_from_the_recordings():
 def full_load_calibration():
     if not TUE.is_dir():
         pytest.skip(f"shared data not found at {TUE}")
-    return rotor.calibrate(ENGINE, TUE / "full_load.txt", wheel="60-2", columns="time,pressure_v,encoder_v", pressure_gain=GAIN)
+    return rotor.calibrate(
+        ENGINE, TUE / "full_load.txt", wheel="60-2", columns="time,pressure_v,encoder_v", pressure_gain=GAIN
+    )
 
 
 def _pressure_tdc(name):
