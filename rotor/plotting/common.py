@@ -64,21 +64,29 @@ CORNERS = ("upper right", "upper left", "lower left", "lower right")
 """The corners a legend is tried in, in this order (:func:`place_legend`)."""
 
 
-def _points_px(ax: Any) -> list[Any]:
+def _points_px(ax: Any) -> list[tuple[Any, bool]]:
     """The display coordinates [px] of every line's vertices and every collection's points
-    (scatter markers) of ``ax``, one (n, 2) array each."""
+    (scatter markers) of ``ax``: (an (n, 2) array, whether its points are joined by
+    segments), one per line or collection."""
     out = []
     for line in ax.get_lines():
         if not line.get_visible():
             continue
         xy = np.asarray(line.get_xydata(), dtype=float)
         if xy.size:
-            out.append(line.get_transform().transform(xy))
+            joined = line.get_linestyle() not in ("None", "none", "", " ")
+            out.append((line.get_transform().transform(xy), joined))
     for coll in ax.collections:
         offsets = np.asarray(coll.get_offsets(), dtype=float)
         if coll.get_visible() and offsets.size and offsets.ndim == 2:
-            out.append(coll.get_offset_transform().transform(offsets))
+            out.append((coll.get_offset_transform().transform(offsets), False))
     return out
+
+
+def _points_inside(box: Any, xy: Any) -> int:
+    """How many of the points ``xy`` [px] lie in the rectangle ``box`` (a Bbox in px)."""
+    inside = (xy[:, 0] >= box.x0) & (xy[:, 0] <= box.x1) & (xy[:, 1] >= box.y0) & (xy[:, 1] <= box.y1)
+    return int(np.count_nonzero(inside))
 
 
 def segments_touching(box: Any, xy: Any) -> int:
@@ -112,9 +120,8 @@ def legend_overlap(ax: Any, legend: Any, renderer: Any = None) -> int:
     renderer = renderer or ax.figure.canvas.get_renderer()
     box = legend.get_window_extent(renderer).padded(3)
     bars = [patch for container in ax.containers if hasattr(container, "patches") for patch in container.patches]
-    return sum(segments_touching(box, xy) for xy in _points_px(ax)) + sum(
-        bool(box.overlaps(bar.get_window_extent(renderer))) for bar in bars
-    )
+    lines = sum(segments_touching(box, xy) if joined else _points_inside(box, xy) for xy, joined in _points_px(ax))
+    return lines + sum(bool(box.overlaps(bar.get_window_extent(renderer))) for bar in bars)
 
 
 _LEGENDS: weakref.WeakKeyDictionary[Any, dict[str, Any]] = weakref.WeakKeyDictionary()
