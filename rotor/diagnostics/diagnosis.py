@@ -664,6 +664,9 @@ def _checked_phase(eng, analysis, read, given_deg, firing, te, phase_note, bias=
     (``given_deg`` None), and the recording re-read at the TDC and firing revolution used:
     a firing revolution from a cam or pressure channel, or given, stands."""
     check = _speed_check(eng, analysis, given_deg, te, read, bias)
+    if check is None:
+        note = f"TDC {given_deg:.1f}° after the gap kept unchecked: the engine has no steady state at this record's mean speed"
+        return _Phased(analysis, None, "", "; ".join(n for n in (phase_note, note) if n))
     own_phase = firing not in ("auto", "speed") or analysis.firing_source in CHANNELS
     moved = check.verdict in (TdcVerdict.DISAGREES, TdcVerdict.FOUND)
     if own_phase and moved:
@@ -833,7 +836,7 @@ def _speed_check(eng, analysis, given_deg, te, read, bias=None):
     """Check (or find, ``given_deg`` None) TDC from the speed of ``analysis``: the fit on the
     recording's own tooth-error estimate where the given ones are another wheel's."""
     from ..logs.wheel import ToothErrors
-    from .phase import check_tdc, tdc_from_speed, tooth_error_mismatch
+    from .phase import NoSignature, check_tdc, tdc_from_speed, tooth_error_mismatch
 
     fit_on, te_mismatch = analysis, float("nan")
     if isinstance(te, ToothErrors):
@@ -845,7 +848,12 @@ def _speed_check(eng, analysis, given_deg, te, read, bias=None):
             te_mismatch = tooth_error_mismatch(te, own.tooth_errors)
             if not te_mismatch <= TOOTH_MISMATCH:
                 fit_on = own
-    fit = tdc_from_speed(eng, fit_on)
+    try:
+        fit = tdc_from_speed(eng, fit_on)
+    except NoSignature:
+        if given_deg is None:
+            raise
+        return None  # a transient: the given TDC kept, unchecked
     return check_tdc(fit, given_deg, what="the calibration's", tooth_mismatch=te_mismatch, bias=bias)
 
 

@@ -84,7 +84,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..cycles import cycle_spectrum
-from ..errors import LogError
+from ..errors import LogError, NoSteadyStateError
 from ..logs.analysis import LogAnalysis
 from ..logs.wheel import ToothErrors
 from ..results import Result, json_safe
@@ -96,6 +96,7 @@ if TYPE_CHECKING:
 __all__ = [
     "SpeedTdc",
     "TdcNotDetermined",
+    "NoSignature",
     "tdc_from_speed",
     "R2_MIN",
     "SEPARATION_MIN",
@@ -139,6 +140,11 @@ TWO_PI = 2.0 * math.pi
 
 class TdcNotDetermined(LogError):
     """The recording's speed cannot determine TDC (or cannot check a given one)."""
+
+
+class NoSignature(TdcNotDetermined):
+    """The engine has no steady state at the recording's mean speed (a cranking, a coast-down
+    to a stop): no speed signature to fit, so TDC can be neither found nor checked."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -574,7 +580,15 @@ def tdc_from_speed(
     E = np.exp(1j * m[:, None] * d[None, :] / revs)  # (K, D): harmonic m is order m/revs
     power = np.sum(np.abs(Y) ** 2, axis=1)  # (C,)
     total = float(np.sum(power))
-    fit, charge = _charge_fit(engine, rpm, K, Y, E, power)
+    try:
+        fit, charge = _charge_fit(engine, rpm, K, Y, E, power)
+    except NoSteadyStateError as e:
+        raise NoSignature(
+            f"{source + ': ' if source else ''}the engine has no steady state at the record's mean speed, "
+            f"{rpm:.0f} rpm, to take its speed signature from ({str(e).split(':')[1].strip()}): "
+            "a transient (a cranking, a coast-down to a stop)"
+        ) from None
+
     B, explained, beta, S = fit
     i = int(np.argmin(S))
     s0, s1, s2 = S[(i - 1) % D], S[i], S[(i + 1) % D]
@@ -942,7 +956,7 @@ def check_tdc(
         f"from the cycles' scatter, {fit.std_model_deg:.1f}° from the engine model; R² {fit.r2:.2f}, next best "
         f"{fit.separation:.0f} σ worse)"
     )
-    if bias is not None:
+    if b_deg != 0.0:
         measured += (
             f", {speed_deg:.1f}° ± {sigma:.1f}° less the bias this load gives the speed's TDC ({b_deg:+.1f}°: "
             f"{bias.kappa:.2f} ± {bias.kappa_std:.2f} times the model term, as the calibration measured it)"

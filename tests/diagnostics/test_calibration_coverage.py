@@ -196,3 +196,24 @@ def test_a_calibration_from_several_recordings_covers_their_loads():
     d = rotor.diagnose(ENGINE, TUE / "half_load.txt", cal, columns="time,-,encoder_v")
     assert d.coverage == "" and d.tdc_check.verdict is TdcVerdict.AGREES
     assert abs(float(np.rad2deg(d.analysis.tdc_rad)) - _pressure_tdc("half_load")) < 2.0
+
+
+def test_a_transient_without_a_steady_state_keeps_the_calibration_tdc(tmp_path, monkeypatch):
+    """Where the engine has no steady state at the record's mean speed (a cranking, a coast-down
+    to a stop: the kinetic energy would reach zero in the compression), the speed has no
+    signature to check TDC with: the calibration's is kept, unchecked, a note says why, and the
+    record is diagnosed (it was an error); TDC from the speed alone is refused by name."""
+    import rotor.diagnostics.phase as phase
+    from rotor.diagnostics.synthetic import simulated_recording
+
+    path = simulated_recording(tmp_path / "sim.txt", cycles=4)
+
+    def stalls(*a, **k):
+        raise rotor.errors.NoSteadyStateError("no steady state at 400 rpm: the kinetic energy would reach zero")
+
+    monkeypatch.setattr(phase, "_charge_fit", stalls)
+    d = rotor.diagnose(ENGINE, path, "preset", columns="time,-,encoder_v")
+    assert d.tdc_check is None and float(np.rad2deg(d.analysis.tdc_rad)) == pytest.approx(29.4, abs=0.01)
+    assert any("kept unchecked: the engine has no steady state" in n for n in d.notes)
+    with pytest.raises(phase.NoSignature, match="no steady state at the record's mean speed"):
+        rotor.diagnose(ENGINE, path, "preset", columns="time,-,encoder_v", tdc_deg="speed")
