@@ -215,10 +215,12 @@ def test_a_text_file_takes_the_same_spec_by_its_header_or_its_column_numbers(tmp
         read_log(bare, "encoder_v=CRANK")
 
 
-@pytest.mark.parametrize("module, extra", [("asammdf", "mdf"), ("nptdms", "tdms"), ("pyarrow.parquet", "parquet")])
+@pytest.mark.parametrize(
+    "module, extra", [("asammdf", "mdf"), ("nptdms", "tdms"), ("h5py", "mat"), ("pyarrow.parquet", "parquet")]
+)
 def test_a_missing_library_names_its_extra_and_the_install_command(recording, monkeypatch, module, extra):
     folder, t, v, _ = recording
-    name = {"mdf": "run.mf4", "tdms": "run.tdms", "parquet": "run.parquet"}[extra]
+    name = {"mdf": "run.mf4", "tdms": "run.tdms", "mat": "run73.mat", "parquet": "run.parquet"}[extra]
     WRITERS[name](folder / f"missing-{name}", t, v)
     monkeypatch.setitem(sys.modules, module, None)  # an import of it raises ImportError
     with pytest.raises(LogError) as err:
