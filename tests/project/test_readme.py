@@ -182,13 +182,45 @@ OUTPUTS = "__commands__"
 """The namespace's key of what each shell command printed: {command: (stdout, stderr)}."""
 
 
+_RAN: dict[str, tuple[int, str, str, dict[str, bytes]]] = {}
+"""The commands run so far that read no file of their page (presets only): their exit
+status, output and the files they wrote (path relative to the page's folder: content)."""
+
+
+def _files() -> dict[str, float]:
+    return {p.as_posix(): p.stat().st_mtime for p in Path().rglob("*") if p.is_file()}
+
+
+def run_once(command: str) -> tuple[int, str, str]:
+    """:func:`run_command`, except that a command which reads no file of the page's folder
+    (its engine a preset, say) and ran on an earlier page as written is not run again:
+    its output is the same, and the files it wrote then are written here (a page may read
+    them)."""
+    import shlex
+
+    reads_a_file = any(Path(w).exists() for w in shlex.split(command)[1:] if not w.startswith("-"))
+    if not reads_a_file and command in _RAN:
+        rc, out, err, written = _RAN[command]
+        for rel, content in written.items():
+            Path(rel).parent.mkdir(parents=True, exist_ok=True)
+            Path(rel).write_bytes(content)
+        return rc, out, err
+    before = _files()
+    rc, out, err = run_command(command)
+    if not reads_a_file:
+        after = _files()
+        written = {rel: Path(rel).read_bytes() for rel, mtime in after.items() if before.get(rel) != mtime}
+        _RAN[command] = (rc, out, err, written)
+    return rc, out, err
+
+
 def _run_block(block: Block, path: Path, ns: dict) -> None:
     name = _id(path)
     if block.kind == "file":
         Path(block.file).write_text(block.source, encoding="utf-8")
     elif block.kind == "sh":
         for line, command in shell_commands(block.source, block.line):
-            rc, out, err = run_command(command)
+            rc, out, err = run_once(command)
             if rc != 0:
                 tail = "\n".join((err or out).strip().splitlines()[-5:])
                 raise AssertionError(f"{name}:{line}: `{command}` exits with {rc}:\n{tail}")
