@@ -37,7 +37,7 @@ import numpy as np
 from jaxtyping import Float
 
 from ..dynamics.loads import Load, parse_load
-from ..dynamics.prepared import PreparedEngine, checked_on_host, prepare, resolve_engine
+from ..dynamics.prepared import PreparedEngine, checked_on_host, nameless, prepare, resolve_engine
 from ..dynamics.steady import steady_state
 from ..engine.friction import Friction
 from ..engine.inertia import mean_reduced_inertia
@@ -358,7 +358,8 @@ class DeltaOfInertia:
         self.friction = friction
         # the tables are built once, outside the compiled search: the crankshaft inertia only
         # shifts I(θ), so every inertia the search tries reuses them
-        self.prepared = prepare(engine, fidelity, grid_deg)
+        # its name left out: another engine of the same shape runs the same compiled search
+        self.prepared = nameless(prepare(engine, fidelity, grid_deg))
         self.mechanism_kgm2 = float(mean_reduced_inertia(engine)) - float(engine.crankshaft.inertia_kgm2)
 
     def _args(self, point: OperatingPoint) -> tuple[Any, Any, Any]:

@@ -28,6 +28,7 @@ the same engine reuses them as ``rotor.prepare`` would.
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import equinox as eqx
@@ -169,6 +170,18 @@ def checked_on_host(prepared: PreparedEngine) -> PreparedEngine:
     ``eqx.error_if`` host callback, and a program holding one is not stored in JAX's
     persistent compilation cache: it would be compiled again in every process."""
     return eqx.tree_at(lambda p: p.source, prepared, table_inputs(prepared.engine))
+
+
+def nameless(prepared: PreparedEngine) -> PreparedEngine:
+    """``prepared`` with its engine's name left out (""): what a compiled call of it is
+    keyed by is then its structure and shapes alone (the name is a static field, part of
+    the key), so that another engine of the same shape (cylinders, tables, grid) runs the
+    same program with its own numbers as arguments."""
+    if prepared.engine.name == "":
+        return prepared
+    engine = copy.copy(prepared.engine)
+    object.__setattr__(engine, "name", "")  # a static field: no numbers change, nothing is checked again
+    return eqx.tree_at(lambda p: p.engine, prepared, engine)
 
 
 def resolve_engine(engine: Engine | PreparedEngine) -> Engine:

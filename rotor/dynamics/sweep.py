@@ -48,7 +48,7 @@ from ..units import RPM_PER_RAD_S
 from .crank_train import COL_I
 from .equation import friction_coefficients
 from .loads import ConstantLoad
-from .prepared import PreparedEngine, checked_on_host, checked_reference, prepare
+from .prepared import PreparedEngine, checked_on_host, checked_reference, nameless, prepare
 from .result import parabola_peak
 from .steady import (
     SPEED_TERM_TOL,
@@ -446,8 +446,8 @@ def steady_sweep(
         kernel = solve_flat_chunk.lower(*fixed, *chunk_args(0), varies).compile()
     else:
         checked_reference(prepared)
-        fixed = (prepared,)
-        kernel = solve_chunk.lower(prepared, *chunk_args(0), friction, varies).compile()  # type: ignore[attr-defined]
+        fixed = (nameless(prepared),)  # the program keyed by the engine's shapes, not its name
+        kernel = solve_chunk.lower(*fixed, *chunk_args(0), friction, varies).compile()  # type: ignore[attr-defined]
     compile_s = time.perf_counter() - t0
     extra = () if flat else (friction, varies)
 
