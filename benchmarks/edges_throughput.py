@@ -3,7 +3,7 @@ single-gap path) and a 36-2-1 wheel (the pattern follower, rotor.logs.pattern), 
 logic-analyser transitions (digital edges with glitch removal); the wheel-track stage
 (:func:`rotor.logs.track.read_track`) on 10⁶ tooth times (wheel given and ``auto``) and on
 an analog signal of 3×10⁷ samples (10⁶ edges at 30 samples a tooth; file parsing excluded)
-with both edges tried.
+with both edges tried, the wheel given and found (the level search).
 
     .venv/bin/python benchmarks/edges_throughput.py [--repeats 5]
 
@@ -98,6 +98,10 @@ def main(argv=None):
     med, walls, cpu = time_it(lambda: read_track(alog, "60-2"), max(1, min(args.repeats, 3)))
     res["read_track_analog"] = {"samples": n, "median_s": med, "runs_s": walls, "median_cpu_s": cpu}
     print(f"read_track (analog, both edges): {n:.3g} samples in {med:.3f} s wall, {cpu:.3f} s CPU")
+    # the same signal with its wheel found: every level of the level search tried on both edges
+    med, walls, cpu = time_it(lambda: read_track(alog, "auto"), max(1, min(args.repeats, 3)))
+    res["read_track_analog_auto"] = {"samples": n, "median_s": med, "runs_s": walls, "median_cpu_s": cpu}
+    print(f"read_track (analog, wheel found, level search): {n:.3g} samples in {med:.3f} s wall, {cpu:.3f} s CPU")
     t = edges(Wheel(36, 3, (2, 1), (16, 17)), 500_000)
     tt = np.sort(np.concatenate([t, t + 0.4 * np.median(np.diff(t))]))
     lv = (np.arange(tt.size) % 2 == 0).astype(float)

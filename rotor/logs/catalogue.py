@@ -707,6 +707,18 @@ def rank_patterns(t, v, patterns=None, *, name: str = "encoder_d", partial: bool
     return out if partial else [r for r in out if _clearly(r)]
 
 
+def catalogue_layout(wheel) -> bool:
+    """Whether a missing-tooth wheel as placed (:class:`rotor.logs.wheel.Wheel`, its gaps'
+    layout found from a log) has the layout of the catalogue pattern of its spec, read round
+    from any tooth; True where the catalogue has no such pattern or the layout is not known."""
+    p = CATALOGUE.get(wheel.spec)
+    if p is None or wheel.layout is None:
+        return True
+    mine = pattern_from_wheel(wheel.teeth, wheel.gaps, wheel.layout).intervals_deg()
+    theirs = p.intervals_deg()
+    return mine.size == theirs.size and any(np.allclose(np.roll(mine, k), theirs) for k in range(mine.size))
+
+
 def _clearly(ranked: tuple) -> bool:
     """Whether a ranked (score, fit, label) explains the channel clearly enough to be taken."""
     score, fit, _ = ranked

@@ -468,6 +468,7 @@ def find_weak_edges(
     level: float = 0.32,
     reach: float = 0.35,
     noise_v: float | None = None,
+    dt_s: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Look for a weak tooth (one that does not reach the Schmitt trigger's levels, or
     whose low before it does not drop below them: two teeth merged) where the wheel's
@@ -480,7 +481,8 @@ def find_weak_edges(
     [-] and at least 8 × the signal's noise rms (``noise_v`` [V], default
     :func:`noise_rms`); ``level``: the fraction of the tooth's own swing at which its
     edge is placed [-] (as :func:`find_edges`' ``level``); ``reach``: how far from the
-    guess the edge may lie [tooth periods].
+    guess the edge may lie [tooth periods]; ``dt_s``: the sampling interval [s] (default: the
+    median of ``t``'s, for a caller that probes many times and has it).
 
     The tooth's rising flank is the steepest rise (over about 1/20 of a tooth period)
     within ``reach`` of the guess; its own levels are the minimum over the half period
@@ -492,8 +494,11 @@ def find_weak_edges(
     """
     t = np.asarray(t, dtype=np.float64)
     v = np.asarray(v, dtype=np.float64)
-    if inverted:
-        v = -v
+    sign = -1.0 if inverted else 1.0  # the samples gathered are negated, not the whole signal
+
+    def at(i):
+        return sign * v[i]
+
     guess = np.atleast_1d(np.asarray(guess_s, dtype=np.float64))
     pitch = np.broadcast_to(np.asarray(pitch_s, dtype=np.float64), guess.shape)
     full = abs(float(high_v) - float(low_v))
@@ -503,7 +508,8 @@ def find_weak_edges(
         return out, swing
     noise = noise_rms(v) if noise_v is None else float(noise_v)
     need = max(min_swing * full, 8.0 * noise)
-    dt_s = float(np.median(np.diff(t)))
+    if dt_s is None:
+        dt_s = float(np.median(np.diff(t)))
     for sl in _chunks(guess.size, pitch, dt_s):
         g, p = guess[sl], pitch[sl]
         spp = np.maximum(p / dt_s, 1.0)  # samples per pitch
@@ -515,7 +521,7 @@ def find_weak_edges(
         k = c[:, None] - rch[:, None] + np.arange(L)[None, :]  # candidate flank starts
         inside = (k <= (c + rch)[:, None]) & (k >= 0) & (k + s[:, None] < v.size)
         kk = np.clip(k, 0, v.size - 1)
-        rise = v[np.clip(kk + s[:, None], 0, v.size - 1)] - v[kk]
+        rise = at(np.clip(kk + s[:, None], 0, v.size - 1)) - at(kk)
         rise = np.where(inside, rise, -np.inf)
         best = np.argmax(rise, axis=1)
         f = kk[np.arange(g.size), best]  # the flank starts at sample f, ends at f + s
@@ -525,8 +531,8 @@ def find_weak_edges(
         before = np.clip(f[:, None] - off, 0, v.size - 1)
         after = np.clip(f[:, None] + s[:, None] + off, 0, v.size - 1)
         m = off <= half[:, None]
-        lo = np.min(np.where(m, v[before], np.inf), axis=1)
-        hi = np.max(np.where(m, v[after], -np.inf), axis=1)
+        lo = np.min(np.where(m, at(before), np.inf), axis=1)
+        hi = np.max(np.where(m, at(after), -np.inf), axis=1)
         sw = hi - lo
         swing[sl] = np.where(ok, sw / full, 0.0)
         ok &= sw >= need
@@ -536,13 +542,13 @@ def find_weak_edges(
         j = f[:, None] - s[:, None] + np.arange(W)[None, :]
         jm = (j >= 0) & (j + 1 < v.size) & (j <= (f + 2 * s)[:, None])
         jc = np.clip(j, 0, v.size - 2)
-        up = jm & (v[jc] < lev[:, None]) & (v[jc + 1] >= lev[:, None])
+        up = jm & (at(jc) < lev[:, None]) & (at(jc + 1) >= lev[:, None])
         dist = np.where(up, np.abs(jc - f[:, None] - s[:, None] // 2), np.iinfo(np.int64).max)
         q = np.argmin(dist, axis=1)
         ok &= up[np.arange(g.size), q]
         jj = jc[np.arange(g.size), q]
         with np.errstate(divide="ignore", invalid="ignore"):  # a flat pair of samples: no crossing there (NaN)
-            x = t[jj] + (lev - v[jj]) / (v[jj + 1] - v[jj]) * (t[jj + 1] - t[jj])
+            x = t[jj] + (lev - at(jj)) / (at(jj + 1) - at(jj)) * (t[jj + 1] - t[jj])
         ok &= np.abs(x - g) <= reach * p
         out[sl] = np.where(ok, x, np.nan)
     return out, swing

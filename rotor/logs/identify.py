@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import LogError
+from .catalogue import catalogue_layout
 from .pattern import END_REVS, locate_teeth, pitches, place, remove_extra_edges
 from .wheel import Repair, ToothTrack, Wheel, parse_wheel
 from .windows import running
@@ -95,7 +96,9 @@ class WheelFit:
     revolutions placed; ``inferred``: edges inferred from the pattern; ``removed``: extra
     edges removed; ``interior``: of those, the ones away from the first and last revolution (an
     engine starting or stopping makes edges no pattern proves); ``found``: weak edges found in the signal where the pattern has a
-    tooth; ``budget``: inferred edges allowed; ``gap_misfit`` [-]: rms relative misfit of
+    tooth; ``signature``: the teeth (0 = the first after gap 1) the signal lacks in most
+    revolutions, a property of the wheel and sensor (:data:`SIGNATURE_SHARE`): their edges,
+    placed from the pattern, are not counted as inferred; ``budget``: inferred edges allowed; ``gap_misfit`` [-]: rms relative misfit of
     the gap windows; ``jitter`` [-]: rms relative change of the tooth period from one
     regular tooth to the next; ``reason``: in words, why it does not fit (empty if it
     does); ``track``: the placed edges (``None`` if it does not fit).
@@ -115,6 +118,7 @@ class WheelFit:
     track: ToothTrack | None = None
     standard: bool = False
     interior: int = 0
+    signature: tuple = ()
 
     @property
     def repairs(self) -> int:
@@ -149,6 +153,7 @@ class WheelFit:
             "gap_misfit": num(self.gap_misfit),
             "jitter": num(self.jitter),
             "reason": self.reason or None,
+            "signature": list(self.signature),
         }
 
 
@@ -234,9 +239,11 @@ def fit_wheel(
             track = locate_teeth(times, w, index_times=index_times, repair=True, probe=probe)
         except LogError as e2:
             return WheelFit(w.spec, edge, FitStatus.NO_FIT, reason=str(e2), standard=std)
-    track = _ends_dropped(np.asarray(times, dtype=np.float64), track, w, index_times, probe)
+    signature = _signature(track)
+    track = _ends_dropped(np.asarray(times, dtype=np.float64), track, w, index_times, probe, signature)
+    std = std and catalogue_layout(track.wheel)  # a standard spec with its gaps elsewhere is another wheel
     kinds = Counter(r.kind for r in track.repairs)
-    inferred = kinds.get("missed edge inferred", 0)
+    inferred = kinds.get("missed edge inferred", 0) - _at_teeth(track, signature)
     removed = kinds.get("extra edge removed", 0)
     found = kinds.get("missed edge found", 0)
     revs = max(track.revolutions, 0)
@@ -269,15 +276,64 @@ def fit_wheel(
         track if status.ok else None,
         std,
         interior,
+        signature,
     )
 
 
-def _ends_dropped(t: np.ndarray, track: ToothTrack, w: Wheel, index_times, probe) -> ToothTrack:
+SIGNATURE_SHARE = 0.8
+"""A tooth whose edge had to be inferred in this share of the revolutions or more (and in
+:data:`SIGNATURE_REVOLUTIONS` or more) is a signature of the wheel and its sensor [-]: missing
+at the same place in most revolutions, it is no repair of random faults."""
+SIGNATURE_REVOLUTIONS = 3
+
+
+def _at_teeth(track: ToothTrack, teeth: tuple[int, ...]) -> int:
+    """The edges inferred at ``teeth``."""
+    if not teeth:
+        return 0
+    inferred = [r.time_s for r in track.repairs if r.kind == "missed edge inferred"]
+    at = np.clip(np.searchsorted(track.t, inferred), 0, track.t.size - 1)
+    exact = np.isclose(track.t[at], inferred, rtol=0.0, atol=1e-12)
+    return int(np.isin(track.tooth[at[exact]], teeth).sum())
+
+
+def _signature(track: ToothTrack) -> tuple[int, ...]:
+    """The teeth (0 = the first after gap 1) that are a signature of the wheel and sensor
+    (:data:`SIGNATURE_SHARE`), where each lies next to a gap: the signal lacks them in most
+    revolutions, so their edges, placed from the pattern, are no repairs of random faults. A
+    tooth lacking away from the gaps is a gap of another wheel, not a signature."""
+    inferred = [r.time_s for r in track.repairs if r.kind == "missed edge inferred"]
+    if len(inferred) < SIGNATURE_REVOLUTIONS:
+        return ()
+    at = np.clip(np.searchsorted(track.t, inferred), 0, track.t.size - 1)
+    exact = np.isclose(track.t[at], inferred, rtol=0.0, atol=1e-12)
+    teeth = Counter(int(k) for k in track.tooth[at[exact]])
+    need = max(SIGNATURE_REVOLUTIONS, SIGNATURE_SHARE * max(track.revolutions, 1))
+    lacking = sorted(k for k, c in teeth.items() if c >= need)
+    w = track.wheel
+    nominal = w.tooth_angles_rad
+    pitch = w.pitch_rad
+    n = nominal.size
+    # next to a gap: the angle to the tooth before or after is more than a pitch
+    beside = {
+        k
+        for k in lacking
+        if (nominal[k] - nominal[k - 1]) % (2 * np.pi) > 1.5 * pitch
+        or (nominal[(k + 1) % n] - nominal[k]) % (2 * np.pi) > 1.5 * pitch
+    }
+    return tuple(lacking) if lacking and set(lacking) <= beside else ()
+
+
+def _ends_dropped(t: np.ndarray, track: ToothTrack, w: Wheel, index_times, probe, signature=()) -> ToothTrack:
     """``track`` with the edges of its first and last :data:`rotor.logs.pattern.END_REVS`
     revolutions dropped from the first (last) edge that had to be inferred there: a starter
     engaging, an engine coming to a stop (its speed changing by half within a tooth) make periods
-    no pattern proves, and an edge guessed there is no measurement. Unchanged where none is."""
+    no pattern proves, and an edge guessed there is no measurement. Unchanged where none is.
+    The edges inferred at the teeth of the wheel's ``signature`` (:func:`_signature`) do not count."""
     inferred = np.array([r.time_s for r in track.repairs if r.kind == "missed edge inferred"])
+    if signature and inferred.size:
+        at = np.clip(np.searchsorted(track.t, inferred), 0, track.t.size - 1)
+        inferred = inferred[~np.isin(track.tooth[at], signature)]
     E = w.edges_per_rev
     if inferred.size == 0 or t.size < 2 * END_REVS * E + E + 3:
         return track
@@ -423,6 +479,16 @@ def candidates(times: ArrayLike) -> list[Wheel]:
     return out
 
 
+def _plainest(ok: list[WheelFit]) -> list[WheelFit]:
+    """The fits a wheel found from the signal is chosen from: a wheel with a signature (a tooth
+    the signal lacks in most revolutions) only where it is a standard one and no standard wheel
+    fits without one (a 60-1 whose second tooth after the gap never shows is a 60-2)."""
+    plain = [f for f in ok if not f.signature]
+    if any(f.standard for f in plain):
+        return plain
+    return plain + [f for f in ok if f.signature and f.standard]
+
+
 def rank(fits: Sequence[WheelFit]) -> tuple[WheelFit | None, WheelFit | None, str]:
     """The best fit of ``fits``, the runner-up, and why in words; ``(None, runner-up, why)``
     where the signal does not tell the two best apart (both standard patterns, or neither)."""
@@ -464,6 +530,7 @@ def rank(fits: Sequence[WheelFit]) -> tuple[WheelFit | None, WheelFit | None, st
                 ),
             )
         return None, None, "no wheel fits"
+    ok = _plainest(ok)
     ok.sort(key=lambda f: (f.inferred, f.gap_misfit))
     best = ok[0]
     if len(ok) == 1:

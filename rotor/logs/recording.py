@@ -30,11 +30,13 @@ from .catalogue import (
     RANKING_ROWS,
     AmbiguousPattern,
     best_pattern,
+    catalogue_layout,
     decode_channel,
     find_pattern,
     pattern_ways,
     rank_patterns,
 )
+from .edges import GLOBAL_LEVELS
 from .identify import MAX_GAP_MISFIT, MIN_REVOLUTIONS
 from .patterns import PatternFit, TriggerPattern, channel_edges, decode_edges, pattern_from_wheel
 from .reader import Log
@@ -117,15 +119,23 @@ class ReadingRecord:
     edges read (``"rising"``, ``"falling"``, a pattern's ``"falling (inverted)"``, …, or None
     for tooth times); ``channel``: the column read (``encoder_v``, ``encoder_d``, ``cam_d``,
     ``tooth_time_s``); ``levels``: how an analog signal's edges were found (``"global
-    levels"``, ``"adaptive levels"``, ``"zero crossings"``), else None."""
+    levels"``, ``"adaptive levels"``, ``"zero crossings (VR)"``), else None; ``level``: the
+    fraction of the swing its edges were timed at [-] (global levels), else None."""
 
     wheel: str
     edge: str | None
     channel: str
     levels: str | None = None
+    level: float | None = None
 
     def to_json_dict(self) -> dict:
-        return {"wheel": self.wheel, "edge": self.edge, "channel": self.channel, "levels": self.levels}
+        return {
+            "wheel": self.wheel,
+            "edge": self.edge,
+            "channel": self.channel,
+            "levels": self.levels,
+            "level": None if self.level is None else round(float(self.level), 4),
+        }
 
     @classmethod
     def from_json_dict(cls, d: object) -> ReadingRecord:
@@ -134,20 +144,29 @@ class ReadingRecord:
             raise LogError(
                 f"a reading record needs the wheel and the channel read (strings); got {d!r:.120}", argument="reading"
             )
-        edge, levels = d.get("edge"), d.get("levels")
+        edge, levels, level = d.get("edge"), d.get("levels"), d.get("level")
         if not (edge is None or isinstance(edge, str)) or not (levels is None or isinstance(levels, str)):
             raise LogError(
                 f"a reading record's edge and levels are strings or null; got {d!r:.120}", argument="reading"
             )
-        return cls(d["wheel"], edge, d["channel"], levels)
+        if level is not None and not (
+            isinstance(level, (int, float)) and not isinstance(level, bool) and 0.0 < level < 1.0
+        ):
+            raise LogError(
+                f"a reading record's level is a fraction of the swing, 0 … 1, or null; got {level!r}",
+                argument="reading",
+            )
+        return cls(d["wheel"], edge, d["channel"], levels, None if level is None else float(level))
 
     def differences(self, other: ReadingRecord) -> list[str]:
         """What ``other`` reads otherwise than this record, in words (empty where the same)."""
-        out = []
-        for field, what in (("wheel", "wheel"), ("channel", "channel"), ("edge", "edges"), ("levels", "levels")):
-            a, b = getattr(self, field), getattr(other, field)
-            if a != b and not (field == "levels" and (a is None or b is None)):
-                out.append(f"{what} {a} there, {b} here")
+        out = [
+            f"{what} {getattr(self, field)} there, {getattr(other, field)} here"
+            for field, what in (("wheel", "wheel"), ("channel", "channel"), ("edge", "edges"), ("levels", "levels"))
+            if getattr(self, field) != getattr(other, field)
+        ]
+        if self.level is not None and other.level is not None and abs(self.level - other.level) > 0.02:
+            out.append(f"edges timed at {self.level:.0%} of the swing there, {other.level:.0%} here")
         return out
 
 
@@ -155,11 +174,14 @@ def reading_record(reading: WheelReading | PatternReading) -> ReadingRecord:
     """The :class:`ReadingRecord` of a reading."""
     if isinstance(reading, PatternReading):
         return ReadingRecord(reading.pattern.name, reading.edges, reading.channel)
-    channel = {"teeth": "tooth_time_s", "digital": "encoder_d", "encoder": "encoder_v"}.get(
-        reading.log.kind, reading.log.kind
-    )
-    levels = reading.edges.method if reading.edges is not None and reading.log.kind == "encoder" else None
-    return ReadingRecord(reading.wheel.spec, reading.edge, channel, levels)
+    kind = reading.log.kind
+    channel = {"teeth": "tooth_time_s", "digital": "encoder_d", "encoder": "encoder_v"}.get(kind, kind)
+    e = reading.edges
+    if e is None or kind != "encoder":
+        return ReadingRecord(reading.wheel.spec, reading.edge, channel)
+    swing = e.high_v - e.low_v  # low, high and level of the signal as read (negated for falling edges)
+    level = (e.level_v - e.low_v) / swing if swing > 0 and e.method == GLOBAL_LEVELS else None
+    return ReadingRecord(reading.wheel.spec, reading.edge, channel, e.method, level)
 
 
 def _catalogue_only(spec: object) -> TriggerPattern | None:
@@ -335,7 +357,12 @@ def read_wheel(
 def _read_as_recorded(log: Log, record: ReadingRecord, name: str) -> WheelReading | PatternReading:
     edge = record.edge if record.edge in ("rising", "falling") else "auto"
     try:
-        reading = read_wheel(log, record.wheel, edge=edge, name=name)
+        if record.level is not None and log.kind == "encoder" and _catalogue_only(record.wheel) is None:
+            reading: WheelReading | PatternReading = read_track(
+                log, record.wheel, edge=edge, name=name, level=record.level
+            )
+        else:
+            reading = read_wheel(log, record.wheel, edge=edge, name=name)
     except LogError as e:
         raise LogError(
             f"{name}: not read as the calibration's recording was ({record.wheel}, {record.edge} edges of "
@@ -365,14 +392,9 @@ def _known_wheel(wheel: Wheel) -> bool:
     are, read round from any tooth) or a standard one the catalogue does not list."""
     from .identify import STANDARD_WHEELS
 
-    p = CATALOGUE.get(wheel.spec)
-    if p is None:
+    if wheel.spec not in CATALOGUE:
         return wheel.spec in STANDARD_WHEELS
-    if wheel.layout is None:
-        return True
-    mine = pattern_from_wheel(wheel.teeth, wheel.gaps, wheel.layout).intervals_deg()
-    theirs = p.intervals_deg()
-    return mine.size == theirs.size and any(np.allclose(np.roll(mine, k), theirs) for k in range(mine.size))
+    return catalogue_layout(wheel)
 
 
 def _refuse_a_loose_counted_wheel(reading: WheelReading, name: str) -> None:

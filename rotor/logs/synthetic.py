@@ -56,6 +56,7 @@ __all__ = [
     "STANDARD_LAYOUTS",
     "wheel_with_layout",
     "pattern_capture",
+    "bench_capture",
     "SpeedProfile",
     "speed_profile",
     "SimulatedSignal",
@@ -1039,3 +1040,56 @@ def pattern_capture(
     if invert:
         lev = 1 - lev
     return Log.from_arrays(time=np.r_[0.0, te], encoder_d=np.r_[1 - lev[0], lev])
+
+
+def bench_capture(
+    wheel: str = "60-2",
+    *,
+    rpm: float = 3000.0,
+    revolutions: int = 20,
+    sample_rate_hz: float = 100e3,
+    noise_v: float = 0.01,
+    faint: float = 1.0,
+    faint_share: float = 1.0,
+    late_pitch: tuple[float, float] = (0.0, 0.0),
+    wide_pitch: float = 0.45,
+    gap_level: float = 0.0,
+    swing: float = 0.02,
+    invert: bool = False,
+    seed: int = 0,
+) -> Log:
+    """An analog two-level wheel signal of a bench (``time``, ``encoder_v``, as a
+    :class:`rotor.logs.reader.Log`) with the defects a real installation's sensor shows near the
+    gap of a missing-tooth wheel: high for 45 % of each pitch from its rising edge, low −0.73 V,
+    high 4.0 V, each edge a ramp of four samples, white noise ``noise_v`` [V].
+
+    **Arguments:** ``wheel``: an ``N-M`` spec (one gap); ``rpm`` [rev/min] with a swing of
+    ``swing`` [-] twice a revolution; ``revolutions``; ``sample_rate_hz`` [Hz]; ``faint``: the
+    swing of the first tooth after the gap, a share of the others' [-] (it crosses a low level
+    only), in ``faint_share`` of the revolutions (drawn from ``seed``) [-]; ``late_pitch``: the
+    first and second teeth after the gap start this late [pitches]; ``wide_pitch``: the last
+    tooth before the gap stays high this long [pitches] (1.5: its falling edge merges with the
+    gap on that polarity); ``gap_level``: the signal's level in the gap above the low level
+    between teeth, a share of the swing [-]; ``invert``: negated; ``seed``."""
+    from .wheel import parse_wheel
+
+    w = parse_wheel(wheel)
+    if len(w.gaps) != 1:
+        raise LogError(f"wheel={wheel!r}: a wheel of one gap (N-M)")
+    n, teeth = w.teeth, w.teeth - w.missing  # positions a revolution, teeth present
+    rng = np.random.default_rng(seed)
+    omega = rpm * TWO_PI / 60.0
+    t = np.arange(0.0, revolutions * TWO_PI / omega, 1.0 / sample_rate_hz)
+    x = (omega * t + swing / 2.0 * np.sin(2.0 * omega * t) + 0.3) / TWO_PI * n  # in pitches
+    rev = np.floor(x / n).astype(np.int64)
+    faint_rev = rng.random(int(rev.max()) + 1) < faint_share
+    p = np.mod(x, n)
+    v = np.where((p >= teeth) | (p < late_pitch[0]), gap_level, 0.0)
+    for k in range(teeth):
+        start = k + (late_pitch[0] if k == 0 else late_pitch[1] if k == 1 else 0.0)
+        inside = np.mod(p - start, n) < (wide_pitch if k == teeth - 1 else 0.45)
+        amp = np.where(faint_rev[rev], faint, 1.0) if k == 0 else 1.0
+        v = np.where(inside, amp, v)
+    v = np.convolve(v, np.ones(4) / 4.0, mode="same")
+    v = -0.73 + 4.73 * v + noise_v * rng.standard_normal(t.size)
+    return Log.from_arrays(time=t, encoder_v=-v if invert else v)

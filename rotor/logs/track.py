@@ -117,10 +117,20 @@ def weak_edge_probe(log: Log, edges: Edges):
     noise = noise_rms(vv)
     span = edges.high_v - edges.low_v
     frac = float(np.clip((edges.level_v - edges.low_v) / span, 0.05, 0.95)) if span > 0 else 0.5
+    dt = float(np.median(np.diff(tt[: min(tt.size, 100_000)])))  # the sampling interval [s]
 
     def probe(guess_s, pitch_s):
         return find_weak_edges(
-            tt, vv, guess_s, pitch_s, edges.low_v, edges.high_v, inverted=edges.inverted, level=frac, noise_v=noise
+            tt,
+            vv,
+            guess_s,
+            pitch_s,
+            edges.low_v,
+            edges.high_v,
+            inverted=edges.inverted,
+            level=frac,
+            noise_v=noise,
+            dt_s=dt,
         )
 
     return probe
@@ -257,13 +267,17 @@ def read_track(
     *,
     edge: str = "auto",
     name: str | None = None,
+    level: float | None = None,
 ) -> WheelReading:
     """Read the wheel signal of ``log``: its edges, placed on its wheel (see the module notes).
 
     **Arguments:** ``log``: a :class:`rotor.logs.reader.Log` with a tooth-time, analog or
     digital wheel channel; ``wheel``: a spec (``"60-2"``, ``"36-2-1"``), a wheel file, a
     :class:`rotor.logs.wheel.Wheel`, or ``"auto"``; ``edge``: ``"auto"`` (default: both
-    tried), ``"rising"`` or ``"falling"``; ``name``: the log's name in messages.
+    tried), ``"rising"`` or ``"falling"``; ``name``: the log's name in messages; ``level``:
+    an analog signal's edges timed at this fraction of its swing, its global levels, and no
+    other (as another recording of the installation was read) [-]; None: the levels that
+    read the wheel best.
 
     **Returns:** :class:`WheelReading`. Raises :class:`LogError` (naming the file, what was
     expected and what to try) where no edge fits the wheel, or where two wheels fit alike.
@@ -286,7 +300,7 @@ def read_track(
     edge_errors: dict = {}
     level_notes: dict = {}
     for pol in polarities:
-        read = _read_edge(log, name, pol, w, index_times, auto, tried, edge_errors, level_notes)
+        read = _read_edge(log, name, pol, w, index_times, auto, tried, edge_errors, level_notes, level)
         if read is not None:
             per_edge.append(read)
     ok = [p for p in per_edge if p[0] is not None]
@@ -328,24 +342,37 @@ def read_track(
         notes.append(resolution)
     choices = _choices(best, second, why, edges, edge, ok, auto, tried)
     if best.edge in level_notes:
-        notes.append(
-            "edges found with adaptive levels (the running minimum and maximum of the signal over each tooth period "
-            f"and two either side): {level_notes[best.edge]}"
-        )
+        notes.append(level_notes[best.edge])
     if track.placement:
         notes.append(f"the wheel's placement: {track.placement}")
+    if best.signature:
+        which = ", ".join(f"tooth {k} ({_ordinal(k + 1)} after the gap)" for k in best.signature)
+        notes.append(
+            f"signature: {which} missing from the signal in most revolutions, a property of this wheel and its "
+            "sensor: the wheel keeps its geometry, and the edge there is placed from the pattern, not measured"
+        )
     if edges is not None and edges.repairs:
         track = dataclasses.replace(track, repairs=tuple(place(track.repairs + edges.repairs, track.t, track.rev)))
     return WheelReading(name, log, track, edges, best, tuple(tried), tuple(choices), tuple(notes))
 
 
-def _read_edge(log, name, pol, w, index_times, auto, tried: list, edge_errors: dict, level_notes: dict):
+def _read_edge(log, name, pol, w, index_times, auto, tried: list, edge_errors: dict, level_notes: dict, level=None):
     """The edges of polarity ``pol`` (None: tooth times) fitted to the wheel: (best fit,
     runner-up, why, edges, times, fits), or None where no edges are found (the error in
     ``edge_errors``); every fit tried added to ``tried``, and why adaptive levels were taken
     (where they were) to ``level_notes``."""
     if pol is None:
         edges, times = None, log["tooth_time_s"]
+    elif level is not None and log.kind == "encoder":
+        try:
+            edges = named(name, find_edges, log["time"], log["encoder_v"], edge=pol, band=_band(level), level=level)
+        except LogError as e:
+            edge_errors[pol] = e
+            tried.append(WheelFit(w.spec if w else "auto", pol, FitStatus.NO_EDGES, reason=str(e)))
+            return None
+        fits, best, second, why = _fit_edges(log, name, edges, edges.times, w, pol, index_times, auto)
+        tried += fits
+        return (best, second, why, edges, edges.times, fits)
     else:
         try:
             edges = edges_of(log, pol, name=name)
@@ -375,14 +402,111 @@ def _read_edge(log, name, pol, w, index_times, auto, tried: list, edge_errors: d
                 or (best_a.repairs == best.repairs and best_a.track.t.size > best.track.t.size)
             ):
                 if best is None:
-                    level_notes[pol] = "with its global levels the edges did not fit the wheel"
+                    level_notes[pol] = _ADAPTIVE + "with its global levels the edges did not fit the wheel"
                 elif best.repairs > best_a.repairs:
-                    level_notes[pol] = f"with its global levels {best.repairs} edges were guessed"
+                    level_notes[pol] = _ADAPTIVE + f"with its global levels {best.repairs} edges were guessed"
                 else:
-                    level_notes[pol] = f"with its global levels {_uncovered(log, best.track)}"
+                    level_notes[pol] = _ADAPTIVE + f"with its global levels {_uncovered(log, best.track)}"
                 fits, best, second, why, edges, times = fits_a, best_a, second_a, why_a, adaptive, adaptive.times
+    if log.kind == "encoder" and edges is not None and pol is not None and _worth_another_level(best, auto):
+        found = _level_search(log, name, pol, w, index_times, auto, best)
+        if found is not None:
+            fits_l, best, second, why, edges, note = found
+            fits = fits + fits_l
+            times = edges.times
+            level_notes[pol] = note
     tried += fits
     return (best, second, why, edges, times, fits)
+
+
+_ADAPTIVE = (
+    "edges found with adaptive levels (the running minimum and maximum of the signal over each tooth period "
+    "and two either side): "
+)
+
+LEVEL_BANDS = (((0.06, 0.22), 0.14), ((0.13, 0.3), 0.21), ((0.55, 0.85), 0.7))
+"""The other levels an analog wheel signal is read at, where its default one (a Schmitt trigger
+at 20 % / 45 % of the swing, the edge timed at 32 %) does not read the wheel cleanly: ((off, on),
+timing level) as fractions of the swing [-]. A tooth that swings less than the others (the one
+after the gap of some sensors) crosses a low level only; a tooth that merges with its neighbour
+at the bottom (a wide one before the gap) is told apart at a high one."""
+
+
+def _ordinal(n: int) -> str:
+    return f"{n}{'th' if 10 <= n % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(n % 10, 'th')}"
+
+
+def _band(level: float) -> tuple[float, float]:
+    """The Schmitt trigger's (off, on) band [-] for edges timed at ``level`` of the swing [-]."""
+    for band, at in LEVEL_BANDS:
+        if abs(at - level) < 0.01:
+            return band
+    return (max(0.02, level - 0.12), min(0.98, level + 0.13))
+
+
+def _worth_another_level(best, auto: bool) -> bool:
+    """Whether the signal is read at the other levels: found from the signal (a tooth the
+    default level misses makes a wheel of more missing teeth), or no wheel fits, or edges were
+    repaired."""
+    return auto or best is None or best.repairs > 0
+
+
+def _level_rank(fit, auto: bool) -> tuple:
+    """How well a fit at one level reads the wheel, larger better: it fits; a standard wheel
+    (found from the signal); fewer repairs; more teeth seen a revolution (a level that misses a
+    tooth sees fewer, one that catches noise breaks the fit)."""
+    if fit is None:
+        return (False,)
+    w = fit.track.wheel
+    return (True, fit.standard if auto else True, -fit.repairs, w.teeth - w.missing)
+
+
+def _better_level(new, old, auto: bool) -> bool:
+    """Whether the fit at another level reads the wheel better than ``old`` (:func:`_level_rank`)."""
+    return new is not None and _level_rank(new, auto) > _level_rank(old, auto)
+
+
+LEVEL_HEAD = 1_500_000
+"""A record of more samples than this chooses its level on its first ones [-], and is read
+whole at the level chosen only (the search's cost bounded whatever the record's length)."""
+
+
+def _level_search(log, name, pol, w, index_times, auto, best):
+    """The signal read at each of :data:`LEVEL_BANDS`: (fits, best, runner-up, why, edges, the
+    note) of the level that reads the wheel best, where one reads it better than ``best`` (on a
+    long record: than the default level on its head, :data:`LEVEL_HEAD`); else None."""
+    t, v = log["time"], log["encoder_v"]
+    head = t.size > LEVEL_HEAD
+    if head:
+        t, v = t[:LEVEL_HEAD], v[:LEVEL_HEAD]
+        part = Log({"time": t, "encoder_v": v}, log.lines, log.source, log.notes)
+        try:
+            e0 = named(name, find_edges, t, v, edge=pol)
+            ref = _fit_edges(part, name, e0, e0.times, w, pol, index_times, auto)[1]
+        except LogError:
+            ref = None
+    else:
+        part, ref = log, best
+    chosen = None
+    for band, level in LEVEL_BANDS:
+        try:
+            e = named(name, find_edges, t, v, edge=pol, band=band, level=level)
+        except LogError:
+            continue
+        found = _fit_edges(part, name, e, e.times, w, pol, index_times, auto)
+        if _better_level(found[1], ref if chosen is None else chosen[1][1], auto):
+            chosen = ((band, level), found, e)
+    if chosen is None:
+        return None
+    (band, level), (fits, b, second, why), e = chosen
+    if head:  # the whole record at the level chosen
+        e = named(name, find_edges, log["time"], log["encoder_v"], edge=pol, band=band, level=level)
+        fits, b, second, why = _fit_edges(log, name, e, e.times, w, pol, index_times, auto)
+        if not _better_level(b, best, auto):
+            return None
+    before = "no wheel fitted" if best is None else f"{best.spec} with {best.repairs} repairs"
+    note = f"{pol} edges timed at {level:.0%} of the swing: at the default level (32 %) {before}"
+    return (fits, b, second, why, e, note)
 
 
 def _choices(best, second, why, edges, edge, ok, auto, tried) -> list[Choice]:
