@@ -625,6 +625,7 @@ def condition_eval(n, rpm, load_name, wheel, sizes, seed, variation):
         out.append(row)
     return out
 
+
 # ---------------------------------------------------------------------- throughput
 def _feed_all(m, t, size=58):
     verdicts = 0
@@ -870,7 +871,6 @@ def print_throughput(tp):
     )
 
 
-
 def _condition(task):
     return condition_eval(*task)
 
@@ -946,7 +946,11 @@ def main():
     tasks = [
         (n, rpm, load, wheel, sizes, 100 + 20 * i, variation)
         for i, (wheel, n, rpm, load) in enumerate(
-            (w, n, r, ld) for w in grid["wheels"] for n in grid["cylinders"] for r in grid["speeds"] for ld in grid["loads"]
+            (w, n, r, ld)
+            for w in grid["wheels"]
+            for n in grid["cylinders"]
+            for r in grid["speeds"]
+            for ld in grid["loads"]
         )
     ]
     rows = []

@@ -82,8 +82,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--catalyst-table",
         metavar="FILE",
-        help="the catalyst-damage misfire rate over speed and load, a JSON file {\"rpm\": [...], \"load\": [...], "
-        "\"rate_pct\": [[...], ...]} (a row per speed, load 0 … 1 of full; default an example table, not an "
+        help='the catalyst-damage misfire rate over speed and load, a JSON file {"rpm": [...], "load": [...], '
+        '"rate_pct": [[...], ...]} (a row per speed, load 0 … 1 of full; default an example table, not an '
         "engine's calibration)",
     )
     p.add_argument(
@@ -159,9 +159,9 @@ def _thresholds(args: argparse.Namespace) -> Any:
     return dataclasses.replace(MisfireThresholds(), **given)
 
 
-def _truth_cycles(path: str) -> tuple[int, str] | None:
+def _truth_cycles(path: str) -> int | None:
     """The run's last cycle from the truth file ``rotor simulate --record`` writes beside its
-    log (cycles counted from 1), and the file's name; None where there is none."""
+    log (cycles counted from 1); None where there is none (or it is another log's)."""
     import json
 
     from ..diagnostics.record import truth_path
@@ -174,8 +174,16 @@ def _truth_cycles(path: str) -> tuple[int, str] | None:
         return None
     cycles, first = d.get("cycles"), d.get("cycles_counted_from", 1)
     if isinstance(cycles, int) and cycles >= 1 and first == 1 and d.get("log") == os.path.basename(path):
-        return cycles, os.fspath(truth)
+        return cycles
     return None
+
+
+def _last_cycle(args: argparse.Namespace) -> int | None:
+    """The log's last cycle: ``--last-cycle``, else the run's cycles by the truth file beside
+    a recorded log (the summary says how many firings after it were not judged), else None."""
+    if args.last_cycle is not None or args.log == "-" or not os.path.isfile(args.log):
+        return args.last_cycle
+    return _truth_cycles(args.log)
 
 
 def _cylinders(text: str) -> int:
@@ -363,11 +371,8 @@ def _monitor(args: argparse.Namespace) -> None:
     name = "standard input" if args.log == "-" else args.log
     thresholds = _thresholds(args)
     show = _Notes()
-    last_cycle = args.last_cycle
-    if last_cycle is None and args.log != "-" and os.path.isfile(args.log):
-        stated = _truth_cycles(args.log)
-        if stated is not None:  # the summary says how many firings after it were not judged
-            last_cycle = stated[0]    # the wheel and the firings checked before anything is read (a wheel too coarse for the
+    last_cycle = _last_cycle(args)
+    # the wheel and the firings checked before anything is read (a wheel too coarse for the
     # monitor refused at once, not at the first edges)
     auto = args.wheel.strip().lower() == "auto"
     if not auto:

@@ -366,7 +366,6 @@ def cmd_simulate(args: argparse.Namespace) -> None:
     from ..dynamics.loads import ConstantLoad, Governor
     from ..dynamics.transient import simulate
     from ..engine.file import load_engine
-
     from ..errors import EngineError
 
     if args.record and args.cycles < 2:

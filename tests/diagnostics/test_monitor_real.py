@@ -153,7 +153,15 @@ def test_yanmar_motored_cycles_inserted_among_its_fired_ones_are_all_found():
     load = float(fired.mean() * YANMAR_VD_M3 / (FULL_IMEP_PA * VD_M3))
     for insert, want in ((True, set(real.YANMAR_INSERTED)), (False, set())):
         t = simulate(
-            1, 1800.0, load, real.YANMAR_CYCLES, "60-2", yanmar_variation(), False, real.YANMAR_DRAW, work_of=work_of(insert)
+            1,
+            1800.0,
+            load,
+            real.YANMAR_CYCLES,
+            "60-2",
+            yanmar_variation(),
+            False,
+            real.YANMAR_DRAW,
+            work_of=work_of(insert),
         )[0]
         out, result, windows = monitored(t, "60-2", 58, tdc_deg=TDC_DEG, cylinders=1)
         assert {k for k, _ in result.misfire_list} == want
