@@ -104,11 +104,14 @@ class CatalystTable:
     rate_pct: tuple[tuple[float, ...], ...]
 
     def __post_init__(self) -> None:
-        rpm = np.asarray(self.rpm, dtype=np.float64)
-        load = np.asarray(self.load, dtype=np.float64)
+        try:
+            rpm = np.asarray(self.rpm, dtype=np.float64)
+            load = np.asarray(self.load, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise EngineError("catalyst table: rpm and load must be lists of numbers") from None
         try:
             rate = np.asarray(self.rate_pct, dtype=np.float64)
-        except ValueError:
+        except (TypeError, ValueError):
             raise EngineError("catalyst table: rate_pct must be a table of numbers, one row per speed") from None
         for name, x in (("rpm", rpm), ("load", load)):
             if x.ndim != 1 or x.size == 0 or not np.isfinite(x).all() or (np.diff(x) <= 0).any():

@@ -138,9 +138,15 @@ def test_the_thresholds_are_options_and_bad_ones_are_refused(rate_runs, capsys, 
     _, windows, _ = lines_of(out)
     assert all(w["threshold_pct"] == 2.0 and w["exceeded"] for w in windows if w["kind"] == "catalyst")
     assert not any(w["exceeded"] for w in windows if w["kind"] == "emission")
-    table.write_text(json.dumps({"rpm": [1000], "load": [0, 1], "rate_pct": [[2]]}))
-    rc, out, err = run_cli(capsys, *argv, "--catalyst-table", str(table))
-    assert rc == 2 and out == "" and "catalyst table" in err and str(table) in err and "Traceback" not in err
+    for bad in (
+        {"rpm": [1000], "load": [0, 1], "rate_pct": [[2]]},
+        {"rpm": ["fast"], "load": [0], "rate_pct": [[2]]},
+        {"rpm": [1000], "load": [0], "rate_pct": [[None]]},
+        [1, 2],
+    ):
+        table.write_text(json.dumps(bad))
+        rc, out, err = run_cli(capsys, *argv, "--catalyst-table", str(table))
+        assert rc == 2 and out == "" and "catalyst table" in err and str(table) in err and len(err.splitlines()) == 1
 
 
 def test_a_recording_shorter_than_the_windows_is_judged_over_what_it_has(tmp_path, capsys):
