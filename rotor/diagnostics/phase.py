@@ -67,10 +67,17 @@ pressure channel's polytropic-fit TDC of 29.4°, 30.7°, 28.9°): the speed puts
 later at full load, 11° at half load and 19° at no load (R² 0.97 / 0.94 / 0.80): the
 engine file's Wiebe cycle is not the engine's at part load, and the harmonics say so —
 σ 2.9°, 4.5° and 8.5°, nearly all of it the model's, so the pressure's TDC lies 2.2–2.5σ
-from the speed's and a right calibration agrees. So the speed corrects a gross error
-(another installation's mounting, a wrong firing revolution) but does not replace a
-pressure channel; :func:`check_tdc` says "agrees" within :data:`AGREE_SIGMA` stated σ
-and "disagrees" beyond, as a :class:`TdcVerdict`.
+from the speed's. That bias follows the model term: κ = bias / model term came out 2.41,
+2.61 and 2.36. A calibration measures κ on its recordings (:class:`TdcBias`), and
+:func:`check_tdc` with it compares the given TDC with the speed's less κ times the model
+term, within σ = √(scatter² + (σ_κ·model term)² + min(|bias|, 1°)²): calibrated on one of
+the three, the others' speed TDC less the bias lay 0.3–2.1° from their pressure TDC, and a
+right calibration agrees at most 3.9° apart (at 1.2σ) where it agreed 17° apart before.
+So the speed corrects a gross error (another installation's mounting, a wrong firing
+revolution) but does not replace a pressure channel; :func:`check_tdc` says "agrees" within
+:data:`AGREE_SIGMA` σ and "disagrees" beyond, as a :class:`TdcVerdict`. Where the engine
+has no steady state at the record's mean speed (a cranking, a coast-down to a stop) there
+is no signature to fit: :class:`NoSignature`.
 """
 
 from __future__ import annotations
@@ -956,7 +963,7 @@ def check_tdc(
         f"from the cycles' scatter, {fit.std_model_deg:.1f}° from the engine model; R² {fit.r2:.2f}, next best "
         f"{fit.separation:.0f} σ worse)"
     )
-    if b_deg != 0.0:
+    if bias is not None and b_deg != 0.0:
         measured += (
             f", {speed_deg:.1f}° ± {sigma:.1f}° less the bias this load gives the speed's TDC ({b_deg:+.1f}°: "
             f"{bias.kappa:.2f} ± {bias.kappa_std:.2f} times the model term, as the calibration measured it)"
