@@ -126,7 +126,7 @@ def angle_labels(ax: Any, marks: list[tuple[float, float, list[str]]], avoid: li
                 fontsize=7,
             )
             label.set_in_layout(False)
-            box = label.get_window_extent(renderer).padded(1)
+            box = label.get_window_extent(renderer).padded(3)  # a gap between two labels: read apart
             if any(box.overlaps(other) for other in taken):
                 label.remove()
                 continue
