@@ -23,6 +23,13 @@ Each run's CPU time (user + system) is recorded beside its wall time.
     .venv/bin/python benchmarks/cli_latency.py            # 7 repeats, every command (about an hour)
     .venv/bin/python benchmarks/cli_latency.py --quick    # 3 repeats, light commands only
     .venv/bin/python benchmarks/cli_latency.py --repeats 5 --no-cold --only steady --only modes
+    .venv/bin/python benchmarks/cli_latency.py --new-engine --repeats 3   # a second engine file, warm
+
+``--new-engine``: ``steady``, ``flywheel``, ``report`` and ``diagnose`` on a preset (engine A,
+warm) and on another engine file of the same shape (engine B, first call in a fresh
+process, the cache filled by A), in turn, and a first ``jax.grad`` of δ in a fresh process
+for B against A's second; B over A (target 1.5×). Engine B of ``diagnose`` has no shipped
+calibration (A, the tue-single preset, has one).
 
 Writes benchmarks/results/cli_latency.json (cli_latency_quick.json with --quick).
 """
@@ -199,15 +206,131 @@ def summarize(runs: list[tuple[float, float]]) -> dict:
     }
 
 
+NEW_ENGINE = {  # command -> (the preset it derives from, argv with {engine} and {tmp})
+    "steady": ("4chn15", ["steady", "{engine}"]),
+    "flywheel --delta 0.01": ("4chn15", ["flywheel", "{engine}", "--delta", "0.01"]),
+    "report": ("4chn15", ["report", "{engine}", "--out", "{tmp}/report"]),
+    "diagnose tue-4gb10": (
+        "tue-single",
+        ["diagnose", str(TUE), "--engine", "{engine}", *TUE_ARGS, "--pressure-gain", "1"],
+    ),
+}
+"""``--new-engine``: each command on its preset (engine A, warm) and on another engine file
+of the same shape (engine B: another name, bore, reciprocating mass and flywheel (not where a
+torsion chain must sum to it); a new
+file in every repeat, so that its tables and programs are never its own from before)."""
+
+GRAD = r"""
+import sys
+import rotor
+rotor.enable_compilation_cache()
+import equinox as eqx, jax
+engine = rotor.load_engine(sys.argv[1])
+def delta(j):
+    return rotor.steady_state(eqx.tree_at(lambda e: e.crankshaft.inertia_kgm2, engine, j)).delta
+print(float(jax.grad(delta)(float(engine.crankshaft.inertia_kgm2))))
+"""
+"""A first ``jax.grad`` of δ with respect to the flywheel inertia in a fresh process, as a
+user writes it (the compilation cache on, as ``rotor.enable_compilation_cache()`` does)."""
+
+
+def engine_b(preset: str, folder: Path, r: int) -> str:
+    """A new engine file of ``preset``'s shape for repeat ``r``: its numbers changed a little
+    in every repeat (another engine for the table folder and the compiled programs alike)."""
+    import re
+
+    text = (ROOT / "rotor" / "presets" / f"{preset}.toml").read_text()
+    changes = [("bore_m", 0.97), ("reciprocating_kg", 0.92)]
+    if "[torsion]" not in text:  # a torsion chain's inertias sum to the crankshaft's: left as they are
+        changes.append(("inertia_kgm2", 0.75))
+    for key, factor in changes:
+        text, n = re.subn(
+            rf"^{key} = ([0-9.eE+-]+)",
+            lambda m: f"{key} = {float(m.group(1)) * (factor - 0.001 * r):.6g}",
+            text,
+            count=1,
+            flags=re.M,
+        )
+        assert n == 1, (preset, key)
+    text = re.sub(r"^name = .*$", f'name = "engine B {r}"', text, count=1, flags=re.M)
+    path = folder / f"{preset}-b{r}.toml"
+    path.write_text(text)
+    return str(path)
+
+
+def new_engine(rotor: list[str], repeats: int, only: list[str] | None) -> dict:
+    """``--new-engine``: engine A (the preset) warm and engine B (:func:`engine_b`) first, in
+    turn, in fresh processes sharing a compilation cache that engine A filled; and the
+    ``jax.grad`` of δ (:data:`GRAD`) for engine A run a second time and engine B."""
+    commands = {k: v for k, v in NEW_ENGINE.items() if (TUE.exists() or "tue-4gb10" not in k)}
+    if only:
+        commands = {k: v for k, v in commands.items() if any(o in k for o in only)}
+    top = Path(tempfile.mkdtemp(prefix="rotor-new-engine-"))
+    cache = str(top / "cache")
+    times: dict[str, list[tuple[float, float]]] = {}
+    try:
+        cases = {
+            f"rotor {k} [A, warm]": ([*rotor, *(a.replace("{tmp}", str(top)) for a in argv)], preset, False)
+            for k, (preset, argv) in commands.items()
+        }
+        cases |= {
+            f"rotor {k} [B, first]": ([*rotor, *(a.replace("{tmp}", str(top)) for a in argv)], preset, True)
+            for k, (preset, argv) in commands.items()
+        }
+        cases["jax.grad of delta [A, second]"] = ([sys.executable, "-c", GRAD, "{engine}"], "4chn15", False)
+        cases["jax.grad of delta [B, first]"] = ([sys.executable, "-c", GRAD, "{engine}"], "4chn15", True)
+        times = {name: [] for name in cases}
+        for argv, preset, is_b in cases.values():  # engine A fills the cache (untimed), twice
+            if not is_b:
+                for _ in range(2):
+                    wall([a.replace("{engine}", preset) for a in argv], cache)
+        for r in range(repeats):
+            for name, (argv, preset, is_b) in cases.items():
+                engine = engine_b(preset, top, r) if is_b else preset
+                times[name].append(wall([a.replace("{engine}", engine) for a in argv], cache))
+            print(f"repeat {r + 1}/{repeats} done", flush=True)
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+    results = {name: summarize(t) for name, t in times.items()}
+    ratios = {}
+    for name in results:
+        if name.endswith("[B, first]"):
+            base = name.replace("[B, first]", "[A, warm]" if name.startswith("rotor") else "[A, second]")
+            ratios[name.replace(" [B, first]", "")] = results[name]["median_s"] / results[base]["median_s"]
+    return {"results": results, "b_over_a": ratios, "target": 1.5}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="3 repeats, the light commands only")
     ap.add_argument("--repeats", type=int, help="repeats of each command (default 7, 3 with --quick)")
     ap.add_argument("--only", action="append", metavar="NAME", help="only the commands whose name contains NAME")
     ap.add_argument("--no-cold", action="store_true", help="the warm calls only (the cold ones take minutes)")
+    ap.add_argument(
+        "--new-engine",
+        action="store_true",
+        help="a second engine file of the same shape against the first, warm (writes cli_latency_new_engine.json)",
+    )
     args = ap.parse_args()
     repeats = args.repeats or (3 if args.quick else 7)
     rotor = rotor_exe()
+    if args.new_engine:
+        load_before = loadavg()
+        res = new_engine(rotor, repeats, args.only)
+        res |= {"versions": versions(), "repeats": repeats, "loadavg_before": load_before, "loadavg_after": loadavg()}
+        for name, r in res["results"].items():
+            print(f"{name:45s} {r['median_s']:6.2f}s (CPU {r['cpu_median_s']:6.2f}s)")
+        for name, x in res["b_over_a"].items():
+            print(
+                f"  {name}: engine B first over engine A (warm; the grad: its second run) {x:.2f}× (target {res['target']}×)"
+            )
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        sys.path.insert(0, str(ROOT))
+        from rotor.fileio import write_text_atomic
+
+        write_text_atomic(RESULTS / "cli_latency_new_engine.json", json.dumps(res, indent=1))
+        print(f"wrote {RESULTS / 'cli_latency_new_engine.json'}")
+        return
     light = dict(LIGHT)
     compiled = {} if args.quick else {k: v for k, v in COMPILED.items() if TUE.exists() or "tue-4gb10" not in k}
     if args.only:

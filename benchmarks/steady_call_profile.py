@@ -66,8 +66,8 @@ def program_alone(engine, repeats: int) -> dict[str, float]:
     finally:
         setattr(steady, KERNEL, program)
     (args, _), fn = seen[0], program.fn  # fn: the kernel's Python, before jax.jit
-    train, numbers, load, balance, flat = args  # numbers: ..., the mean speed last
-    static = {"balance": balance, "flat": flat}
+    train, numbers, load, balance, flat, passes = args  # numbers: ..., the mean speed last
+    static = {"balance": balance, "flat": flat, "passes": passes}
     constants = jax.tree_util.tree_map(lambda v: jnp.asarray(v) if eqx.is_array(v) else v, (train, numbers, load))
     as_arguments = jax.jit(lambda *d: fn(*d, **static))
     closed = jax.jit(lambda omega: fn(constants[0], constants[1].at[-1].set(omega), constants[2], **static))
