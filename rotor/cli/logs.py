@@ -68,14 +68,16 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "log",
         metavar="LOG",
         nargs="+",
-        help="CSV/TSV log: tooth times, a sampled wheel signal, or time and rpm" + BULK_HELP,
+        help="log (CSV/TSV text, or an MDF, TDMS, MATLAB .mat, Parquet or Arrow file): tooth times, a sampled "
+        "wheel signal, logic-analyser transitions, or time and rpm" + BULK_HELP,
     )
     p.add_argument(
         "--wheel",
         metavar="SPEC",
-        help="trigger wheel: N-M (60-2, 36-1), N-g1-g2… (36-2-1, 36-2-2-2: N positions, the missing teeth of "
-        "each gap; where they lie is found from the log), a wheel file (.toml), auto (found from the log), or "
-        "N alone with an index_v column; angle 0 = the first tooth after gap 1",
+        help="trigger wheel: a catalogue name (`rotor wheels` lists them: mazda-nb-crank, gm-24x, …), N-M (60-2, "
+        "36-1), N-g1-g2… (36-2-1, 36-2-2-2: N positions, the missing teeth of each gap; where they lie is found "
+        "from the log), a wheel file (.toml), or N alone with an index_v column; default auto: found from the "
+        "log, every catalogue pattern tried; angle 0 = the first tooth after gap 1",
     )
     p.add_argument(
         "--columns",
@@ -83,7 +85,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, encoder_d, cam_d "
         "(digital 0/1 channels, one row per transition), tooth_time_s, rpm, - (skip), e.g. "
         "time,pressure_v,encoder_v or time,encoder_d,-; a time in ms or µs: time_ms, time_us, tooth_time_ms, "
-        "tooth_time_us; a logic analyser's Time[s], Channel 0, Channel 1 header reads as time,encoder_d,cam_d",
+        "tooth_time_us; or the file's channels by role, time=t,crank=CRANK (any format; roles crank, cam, "
+        "pressure, speed besides the names above); default: recognised by their content",
     )
     p.add_argument(
         "--strokes", type=int, choices=(2, 4), default=4, help="strokes per cycle of the engine logged (default 4)"

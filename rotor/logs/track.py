@@ -322,8 +322,14 @@ def read_track(
                 f"edge={other!r}, or leave the edge out (edge='auto')"
             )
     usual = _tooth_edge(log, ok[0][0].track, ok[0][3]) if len(ok) > 1 else None
-    ok.sort(key=lambda p: (p[0].interior, (not p[0].standard) if auto else False, p[0].edge != usual))
-    if len(ok) > 1 and ok[1][0].interior == ok[0][0].interior and ok[1][0].standard == ok[0][0].standard:
+    # found from the signal, the polarity whose wheel has more teeth has seen a tooth the other missed
+    ok.sort(key=lambda p: (p[0].interior, (not p[0].standard) if auto else False, -_present(p[0]), p[0].edge != usual))
+    if (
+        len(ok) > 1
+        and ok[1][0].interior == ok[0][0].interior
+        and ok[1][0].standard == ok[0][0].standard
+        and _present(ok[1][0]) == _present(ok[0][0])
+    ):
         # alike but for the jitter: the other edge only where it is clearly steadier
         if ok[1][0].jitter < JITTER_MARGIN * ok[0][0].jitter:
             ok = [ok[1], ok[0], *ok[2:]]
@@ -430,6 +436,12 @@ at 20 % / 45 % of the swing, the edge timed at 32 %) does not read the wheel cle
 timing level) as fractions of the swing [-]. A tooth that swings less than the others (the one
 after the gap of some sensors) crosses a low level only; a tooth that merges with its neighbour
 at the bottom (a wide one before the gap) is told apart at a high one."""
+
+
+def _present(fit) -> int:
+    """The teeth a revolution of a fit's wheel (its positions less its missing ones)."""
+    w = fit.track.wheel
+    return int(w.teeth - w.missing)
 
 
 def _ordinal(n: int) -> str:
