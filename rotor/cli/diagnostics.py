@@ -202,7 +202,13 @@ def _add_calibrate(sub: argparse._SubParsersAction) -> None:
         "calibrate",
         help="inertia, TDC, tooth errors and the pressure sensor's offset of an installation, from a log with pressure",
     )
-    p.add_argument("log", metavar="LOG", help="CSV/TSV log with a wheel signal (or tooth times) and a pressure channel")
+    p.add_argument(
+        "log",
+        metavar="LOG",
+        nargs="+",
+        help="CSV/TSV log with a wheel signal (or tooth times) and a pressure channel; several logs of one "
+        "installation (other loads or speeds) make one calibration that states what they cover",
+    )
     p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
     p.add_argument("--wheel", metavar="SPEC", help="trigger wheel, e.g. 60-2")
     p.add_argument("--columns", metavar="NAMES", help="column names in file order, as for analyze")
@@ -234,7 +240,7 @@ def cmd_calibrate(args: argparse.Namespace) -> None:
     try:
         cal = calibrate(
             engine,
-            args.log,
+            args.log[0] if len(args.log) == 1 else list(args.log),
             wheel=args.wheel,
             columns=args.columns,
             pressure_gain=args.pressure_gain,
@@ -243,13 +249,13 @@ def cmd_calibrate(args: argparse.Namespace) -> None:
             edge=args.edge,
         )
     except ArithmeticError as e:
-        raise EngineError(f"{args.log}: the calibration failed ({e})") from None
+        raise EngineError(f"{', '.join(args.log)}: the calibration failed ({e})") from None
     written = []
     if args.output:
         cal.save(args.output)
         written.append(args.output)
     if args.plot:
-        written.append(log_plot(cal.plot(), args.plot, args.log, "calibration"))
+        written.append(log_plot(cal.plot(), args.plot, args.log[0], "calibration"))
     if args.json:
         print_json({**cal.to_json_dict(), "written": written}, indent=1)
     else:

@@ -217,3 +217,23 @@ def test_a_transient_without_a_steady_state_keeps_the_calibration_tdc(tmp_path, 
     assert any("kept unchecked: the engine has no steady state" in n for n in d.notes)
     with pytest.raises(phase.NoSignature, match="no steady state at the record's mean speed"):
         rotor.diagnose(ENGINE, path, "preset", columns="time,-,encoder_v", tdc_deg="speed")
+
+
+def test_rotor_calibrate_takes_several_logs(tmp_path, capsys):
+    """``rotor calibrate A B``: one calibration of both recordings (full and about half load),
+    stating each and the IMEPs they cover; diagnosed in between, supported."""
+    from rotor.cli import main
+    from rotor.diagnostics.synthetic import BENCH_GAIN_PA_PER_V, simulated_recording
+
+    logs = [str(simulated_recording(tmp_path / f"{s}.txt", imep_scale=s, cycles=6)) for s in (1.0, 0.6)]
+    out = tmp_path / "cal.json"
+    argv = ["calibrate", *logs, "--engine", "tue-single", "--wheel", "60-2", "--columns", "time,pressure_v,encoder_v"]
+    assert main([*argv, "--pressure-gain", str(BENCH_GAIN_PA_PER_V), "--output", str(out), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["coverage"]["recordings"] == 2 and len(d["recordings"]) == 2
+    lo, hi = d["coverage"]["imep_pa"]
+    assert hi > 1.5 * lo
+    cal = rotor.Calibration.load(out)
+    mid = simulated_recording(tmp_path / "mid.txt", imep_scale=0.8, cycles=6)
+    diag = rotor.diagnose(ENGINE, mid, cal, columns="time,-,encoder_v")
+    assert diag.coverage == "" and diag.to_json_dict()["supported"] is True
