@@ -73,3 +73,29 @@ def test_five_files_of_one_bench_read_as_one_wheel_and_as_the_first_was():
     assert len({(r.wheel, r.edge, r.channel) for r in records}) == 1 and records[0].wheel == "60-2"
     for log in files[1:]:
         assert reading_record(read_wheel(log, None, as_read=records[0])) == records[0]
+
+
+def test_a_wheel_found_from_the_signal_never_misfits_its_gaps_beyond_the_bound():
+    from rotor.logs.catalogue import find_pattern
+    from rotor.logs.identify import MAX_GAP_MISFIT
+    from rotor.logs.synthetic import pattern_capture
+    from rotor.logs.track import WheelReading
+
+    logs = [
+        bench_capture(faint=faint, late_pitch=late, wide_pitch=wide, gap_level=gap, invert=neg, seed=i)
+        for i, (faint, late, wide, gap, neg) in enumerate(DEFECTS[1::6])
+    ]
+    logs += [
+        pattern_capture(find_pattern(name), jitter_deg=0.5, displace=0.3, invert=inv, seed=k)
+        for k, (name, inv) in enumerate(itertools.product(("60-2", "36-1", "36-2-1", "36-2-2-2", "24-1"), (False, True)))
+    ]
+    misfits = []
+    for log in logs:
+        try:
+            r = read_wheel(log, None)
+        except LogError:
+            continue
+        if isinstance(r, WheelReading):
+            misfits.append(r.fit.gap_misfit)
+    assert len(misfits) >= 8  # the bench signals, and the captures read through the tracker
+    assert max(misfits) <= MAX_GAP_MISFIT
