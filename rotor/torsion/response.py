@@ -849,6 +849,7 @@ def torsional_response(
     dc = driven_chain(engine, ch, imep_scale=imep_scale, friction=friction, grid_deg=grid_deg, call=call)
     P = _check_grid(grid_deg, engine, call, dc.size)
     omega_m = rpm / RPM_PER_RAD_S
+    _refuse_undamped_resonance(dc, ch, load, rpm, P)
     balance = _balance_for(dc, load, omega_m, call)
     out = _response_kernel(dc, jnp.asarray(omega_m), balance, P)
     traced = any(isinstance(a, jax.core.Tracer) for a in jax.tree_util.tree_leaves(out))
@@ -862,6 +863,43 @@ def torsional_response(
             "speed may be too low for the flywheel; give the chain damping or try another speed"
         )
     return _response(engine, dc, ch, load, rpm, out, start)
+
+
+RESONANCE_GAP = 2e-4
+"""How close (relative) an engine order's frequency may come to a natural frequency of a
+chain without damping before :func:`torsional_response` says there is no steady state,
+without solving: there the response grows as 1/(2·gap) and the harmonic balance finds no
+solution (on the MWM six without its damping, at 10⁻⁴ of its first critical speed it
+stops after its steps; at 10⁻³ it converges)."""
+
+
+def _refuse_undamped_resonance(dc: DrivenChain, ch: TorsionalChain, load: Load | None, rpm: float, P: int) -> None:
+    """:class:`rotor.NoSteadyStateError` before any solving where nothing damps the chain
+    (no absolute, relative or modal damping, no speed term in friction or the load) and an
+    engine order that the grid of ``P`` nodes resolves excites a natural frequency at
+    ``rpm`` [rpm] within :data:`RESONANCE_GAP`. Traced values are not judged."""
+    damping, friction = concrete(dc.damping), concrete(dc.friction)
+    if damping is None or friction is None or np.any(damping != 0) or np.any(friction[1:] != 0):
+        return
+    if load is not None and not isinstance(load, ConstantLoad):
+        return
+    natural = concrete(natural_frequencies(ch))
+    if natural is None:
+        return
+    revs = dc.strokes / 2  # revolutions a cycle: orders come in steps of 1/revs
+    orders = np.arange(1, P // 2) / revs
+    excited = orders[None, :] * rpm / 60.0  # [Hz]
+    gap = np.abs(excited / np.asarray(natural)[:, None] - 1.0)
+    mode, k = np.unravel_index(int(np.argmin(gap)), gap.shape)
+    if gap[mode, k] < RESONANCE_GAP:
+        critical = float(natural[mode]) * 60.0 / orders[k]
+        raise NoSteadyStateError(
+            f"no torsional steady state at {rpm:g} rpm: order {orders[k]:g} excites mode {mode + 1} "
+            f"({float(natural[mode]):.1f} Hz, critical at {critical:.2f} rpm) of a chain with no damping, whose "
+            "response there has no finite amplitude; give the chain damping ([torsion] absolute_damping_Nms_per_rad, "
+            f"relative_damping_Nms_per_rad or modal_damping_ratio) or a speed more than {100 * RESONANCE_GAP:g} % "
+            "away (rotor.campbell lists the critical speeds)"
+        )
 
 
 def _response(engine, dc, ch, load, rpm, out, start) -> TorsionalResponse:
