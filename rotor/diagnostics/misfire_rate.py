@@ -366,17 +366,17 @@ class WindowCounter:
                 out.append(self._judge(w, partial=False))
         return out
 
-    def _last(self, ring: Any, m: int) -> list:
-        """The last ``m`` values of a ring, oldest first."""
+    def _last(self, ring: Any, m: int) -> Any:
+        """The last ``m`` values of a ring, oldest first (an array of its type: a few bytes a value)."""
         end = self._count % self._size
         if m <= end:
-            return ring[end - m : end].tolist()
-        return ring[self._size - (m - end) :].tolist() + ring[:end].tolist()
+            return ring[end - m : end]
+        return ring[self._size - (m - end) :] + ring[:end]
 
     def _judge(self, w: _Window, partial: bool) -> MisfireWindow:
         n = min(self._count, w.size)
-        counts = collections.Counter(self._last(self._fired, n))
-        per = tuple(int(counts.get(c, 0)) for c in range(self.cylinders))
+        fired = self._last(self._fired, n)
+        per = tuple(fired.count(c) for c in range(self.cylinders))
         mis = sum(per)
         first, last = (self._count - n) % self._size, (self._count - 1) % self._size
         k0, c0, e0 = self._cycle[first], self._cyl[first], self._end[first]
@@ -385,9 +385,10 @@ class WindowCounter:
         rpm = 60.0 * revs / (e1 - e0) if revs > 0 and e1 > e0 else math.nan
         load = None
         if self.full_imep_pa is not None:
-            x = [v for v in self._last(self._imep, n) if math.isfinite(v)]
-            if x:
-                load = round(max(math.fsum(x) / len(x) / self.full_imep_pa, 0.0), 4)
+            x = np.frombuffer(self._last(self._imep, n), dtype=np.float64)
+            x = x[np.isfinite(x)]
+            if x.size:
+                load = round(max(float(x.mean()) / self.full_imep_pa, 0.0), 4)
         th = self.thresholds
         if w.kind is WindowKind.CATALYST:
             limit = th.catalyst.rate_at(rpm, load) if math.isfinite(rpm) else min(min(r) for r in th.catalyst.rate_pct)
