@@ -214,7 +214,10 @@ def run_once(command: str) -> tuple[int, str, str]:
     return rc, out, err
 
 
-def _run_block(block: Block, path: Path, ns: dict) -> None:
+def run_block(block: Block, path: Path, ns: dict) -> None:
+    """Run one block of the page ``path`` in the working directory: a Python block in the
+    namespace ``ns``, each command of a shell block (its output kept in ``ns[OUTPUTS]``),
+    a file block written; a failure names the page's line."""
     name = _id(path)
     if block.kind == "file":
         Path(block.file).write_text(block.source, encoding="utf-8")
@@ -246,7 +249,7 @@ def run_page(path: Path, tmp_path_factory) -> dict:
     try:
         for block in blocks(path.read_text(encoding="utf-8"), _id(path)):
             try:
-                _run_block(block, path, ns)
+                run_block(block, path, ns)
             finally:
                 plt.close("all")
     finally:
