@@ -64,9 +64,7 @@ def test_a_wheel_with_fewer_gaps_is_never_taken_for_one_with_a_signature():
 
 def test_five_files_of_one_bench_read_as_one_wheel_and_as_the_first_was():
     files = [
-        bench_capture(
-            rpm=rpm, noise_v=noise, faint=0.35, late_pitch=(0.2, 0.1), wide_pitch=1.5, gap_level=0.05, seed=k
-        )
+        bench_capture(rpm=rpm, noise_v=noise, faint=0.35, late_pitch=(0.2, 0.1), wide_pitch=1.5, gap_level=0.05, seed=k)
         for k, (rpm, noise) in enumerate([(3000, 0.01), (2400, 0.03), (3300, 0.02), (1800, 0.01), (2800, 0.05)])
     ]
     records = [reading_record(read_wheel(log, None)) for log in files]
@@ -87,7 +85,9 @@ def test_a_wheel_found_from_the_signal_never_misfits_its_gaps_beyond_the_bound()
     ]
     logs += [
         pattern_capture(find_pattern(name), jitter_deg=0.5, displace=0.3, invert=inv, seed=k)
-        for k, (name, inv) in enumerate(itertools.product(("60-2", "36-1", "36-2-1", "36-2-2-2", "24-1"), (False, True)))
+        for k, (name, inv) in enumerate(
+            itertools.product(("60-2", "36-1", "36-2-1", "36-2-2-2", "24-1"), (False, True))
+        )
     ]
     misfits = []
     for log in logs:
