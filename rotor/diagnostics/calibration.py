@@ -298,7 +298,16 @@ def _reading_of(analysis) -> dict | None:
     if reading is None or isinstance(reading, dict):
         return reading
     to_json = getattr(reading, "to_json_dict", None)
-    return json_safe(to_json()) if callable(to_json) else None
+    if not callable(to_json):
+        return None
+    full = to_json()
+    choices = full.get("choices") if isinstance(full, dict) else None
+    if not isinstance(choices, dict):
+        return None
+    # the choices made and where each came from; their evidence is text for a reader, not a record
+    return json_safe(
+        {k: {"value": c.get("value"), "source": c.get("source")} for k, c in choices.items() if isinstance(c, dict)}
+    )
 
 
 def _check_gain_type(pressure_gain, motored: bool) -> None:
