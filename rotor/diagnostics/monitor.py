@@ -372,7 +372,7 @@ class Verdict:
             f"{self.index_std:.2f}{imep}  decided at {self.decided_at_s:.6f} s, cycle end {end}"
             + ("  (engine doubtful: its firings are not seen in the speed)" if self.engine_doubt else "")
             + (
-                f"  (below -threshold, not called: the {self.claimed_by} firing lost more than twice as much, "
+                f"  (below the threshold, not called: the {self.claimed_by} firing lost more than twice as much, "
                 f"index {self.neighbour_index:+.2f}: the loss is that firing's, spilt into this segment)"
                 if self.claimed_by
                 else ""
