@@ -719,6 +719,42 @@ def _shooting_kernel(scene, omega_m, guess_E0, guess_x, balance):
     return x, E, t, y_end[0], ok, _finish_arrays(scene, E, t, omega_m, 0.0)
 
 
+def _fuelling(imep_scale: Any, n: int, load: Any, train: Any, xp: Any) -> Any:
+    """The fuelling of each of the ``n`` cylinders [-] (NumPy or JAX, as ``xp``); a fuel
+    scale given with no load is refused or warned about here (:func:`check_fuel_scale`, the
+    IMEP named where the tables are concrete)."""
+    s: Any
+    if isinstance(imep_scale, (float, int)) and not isinstance(imep_scale, bool) and xp is np:  # one number: no array
+        s, given = np.full(n, float(imep_scale)), None
+        if load is None and not 0.0 <= imep_scale <= FUEL_SCALE_WARN:
+            given = s[:1]
+    else:
+        s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
+        given = concrete(s)
+        given = None if given is None or np.all((given >= 0) & (given <= FUEL_SCALE_WARN)) else given
+    if given is not None and load is None:
+        imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
+        for value in np.unique(given):
+            check_fuel_scale(float(value), imep_m, imep_c, solved=False)
+    return s
+
+
+def _fixed_point_note(method: str, error: Any, passes: int) -> str | None:
+    """None where the closed form's fixed point on the speed-dependent losses converged
+    (or is traced: its flag is in ``converged``), else why the steady state is shot instead;
+    a :class:`rotor.SolverError` where ``method="closed"`` was asked for."""
+    if is_tracer(error) or not error > SPEED_TERM_TOL:
+        return None
+    why = (
+        f"the closed form's fixed point on the speed-dependent losses (friction's speed-linear term, the load's) "
+        f"left an estimated error of {float(error):.1e} of the kinetic energy after {passes} passes (they are large "
+        "against the engine's inertia torque at this speed)"
+    )
+    if method == "closed":
+        raise SolverError(f"method='closed': {why}; use method='auto' or 'shooting'")
+    return f"found by shooting: {why}"
+
+
 def steady_state(
     engine: Engine | PreparedEngine,
     rpm: ArrayLike | None = None,
@@ -811,20 +847,7 @@ def steady_state(
     load = arrays_only(load)  # the engine itself enters no compiled call: its tables and numbers do
     n = engine.cylinders
     xp = array_module(rpm, imep_scale)  # numpy where concrete: no dispatch
-    s: Any
-    if isinstance(imep_scale, (float, int)) and not isinstance(imep_scale, bool) and xp is np:  # one number: no array
-        s, given = np.full(n, float(imep_scale)), None
-        if load is None and not 0.0 <= imep_scale <= FUEL_SCALE_WARN:
-            given = s[:1]
-    else:
-        s = xp.broadcast_to(xp.asarray(imep_scale, dtype=xp.float64), (n,))
-        given = concrete(s)
-        given = None if given is None or np.all((given >= 0) & (given <= FUEL_SCALE_WARN)) else given
-    if given is not None and load is None:
-        # the fuel scale given: refused or warned about here (the IMEP named where the tables are concrete)
-        imep_m, imep_c = concrete(train.imep_motored_pa), concrete(train.imep_combustion_pa)
-        for value in np.unique(given):
-            check_fuel_scale(float(value), imep_m, imep_c, solved=False)
+    s = _fuelling(imep_scale, n, load, train, xp)
     fr = friction_coefficients(engine, friction)
     omega_m = (np.float64(rpm) if isinstance(rpm, (float, int)) else xp.asarray(rpm, dtype=xp.float64)) / RPM_PER_RAD_S
     balance = "load" if load is None else "fuel"  # a given load is carried, never replaced
@@ -848,22 +871,11 @@ def steady_state(
         pack = _closed_steady(train, numbers, speed_load, balance, flat, passes)
         t, x, ok, arrays = _unpack(pack, points, n)
         _check_combustion(train, balance)
-        error = arrays.pop("fixed_point_error")
-        if method == "closed" and not is_tracer(error) and error > SPEED_TERM_TOL:
-            raise SolverError(
-                f"method='closed': the fixed point on the speed-dependent losses left an estimated error of "
-                f"{float(error):.1e} of the kinetic energy after {passes} passes (the losses are large against "
-                "the engine's inertia torque at this speed); use method='auto' or 'shooting'"
-            )
-        if method == "closed" or is_tracer(error) or not error > SPEED_TERM_TOL:
+        note = _fixed_point_note(method, arrays.pop("fixed_point_error"), passes)
+        if note is None:
             return _finish(
                 engine, train, None, t, x, ok, balance, "closed", fidelity, omega_m, start, None, arrays, throw, checks
             )
-        note = (
-            f"found by shooting: the closed form's fixed point on the speed-dependent losses (friction's "
-            f"speed-linear term, the load's) left an estimated error of {float(error):.1e} of the kinetic "
-            f"energy after {passes} passes (they are large against the engine's inertia torque at this speed)"
-        )
     _check_combustion(train, balance)
     train = shift_inertia(train, d_inertia)
     # start from the closed form with the losses linearised about ω_m

@@ -332,6 +332,27 @@ def _batched(one, args, varies):
     return tuple(jax.lax.map(batch, items, batch_size=BATCH))
 
 
+def _solve_apart(prepared, friction, items, columns, outs) -> None:
+    """The ``items`` whose fixed point on friction's speed-linear term did not converge in
+    the chunk's passes, each solved by :func:`rotor.steady_state` (more passes, or shooting,
+    as it finds needed), written into ``outs`` (δ, min and max rpm, the balancing figure as
+    the flat form's, textbook δ, converged). ``columns``: the items' rpm, inertia, fuelling
+    and load (or None)."""
+    rpm, inertia, scale, load = columns
+    for i in items:
+        r = steady_state(
+            prepared.with_inertia(inertia[i]),
+            rpm[i],
+            None if load is None else ConstantLoad(load[i]),
+            imep_scale=scale[i],
+            friction=friction,
+            throw=False,
+        )
+        x = r.load_torque_Nm if load is None else r.fuel_scale / np.mean(scale[i])
+        for out, v in zip(outs, (r.delta, r.min_rpm, r.max_rpm, x, r.textbook_delta, r.converged), strict=True):
+            out[i] = np.asarray(v)
+
+
 def steady_sweep(
     engine: Engine | PreparedEngine,
     rpm: ArrayLike | None = None,
@@ -414,9 +435,8 @@ def steady_sweep(
     scale = np.broadcast_to(scale, (n, n_cyl))
     load_a = None if load_a is None else np.broadcast_to(load_a, (n,))
     _check_values(rpm_a, inertia_a, scale)
-    if threads is not None and not (
-        isinstance(threads, (int, np.integer)) and not isinstance(threads, bool) and threads >= 1
-    ):
+    whole = isinstance(threads, (int, np.integer)) and not isinstance(threads, bool) and threads >= 1
+    if threads is not None and not whole:
         raise EngineError(f"threads = {threads!r}: must be a whole number, 1 or more")
     workers = (os.cpu_count() or 1) if threads is None else int(threads)
     if chunk is None:
@@ -461,19 +481,7 @@ def steady_sweep(
             bar.update(min(first + size, n))
     bar.close()
     delta, lo, hi, x, tb, ok, error = (np.concatenate(c) for c in zip(*outs))
-    for i in np.flatnonzero(error > SPEED_TERM_TOL):  # the fixed point did not converge: shooting, where needed
-        r = steady_state(
-            prepared.with_inertia(inertia_a[i]),
-            rpm_a[i],
-            None if load_a is None else ConstantLoad(load_a[i]),
-            imep_scale=scale[i],
-            friction=friction,
-            throw=False,
-        )
-        xi = r.load_torque_Nm if load_a is None else r.fuel_scale / np.mean(scale[i])
-        delta[i], lo[i], hi[i], x[i], tb[i], ok[i] = (
-            np.asarray(v) for v in (r.delta, r.min_rpm, r.max_rpm, xi, r.textbook_delta, r.converged)
-        )
+    _solve_apart(prepared, friction, np.flatnonzero(error > SPEED_TERM_TOL), columns, (delta, lo, hi, x, tb, ok))
     if flat and load_a is not None:  # the flat form's factor on imep_scale; the fuel scale is as SpeedResult's
         x = x * np.mean(scale, axis=1)
     return SteadySweep(
