@@ -73,7 +73,6 @@ import numpy as np
 from ..errors import EngineError
 from ..logs.analysis import LogAnalysis, PhaseSource
 from ..logs.wheel import ToothErrors
-from ..results import json_safe
 from ..units import PA_PER_BAR
 from .calibration_record import Calibration, check_argument_types, engine_geometry
 from .charge import check_scaling, scaled
@@ -293,21 +292,10 @@ def _speed_tdc_bias(engine, analysis) -> tuple[float, float] | None:
 
 
 def _reading_of(analysis) -> dict | None:
-    """How the wheel of ``analysis`` was read, as a JSON-safe dict (None where not stated)."""
-    reading = getattr(analysis, "reading", None)
-    if reading is None or isinstance(reading, dict):
-        return reading
-    to_json = getattr(reading, "to_json_dict", None)
-    if not callable(to_json):
-        return None
-    full = to_json()
-    choices = full.get("choices") if isinstance(full, dict) else None
-    if not isinstance(choices, dict):
-        return None
-    # the choices made and where each came from; their evidence is text for a reader, not a record
-    return json_safe(
-        {k: {"value": c.get("value"), "source": c.get("source")} for k, c in choices.items() if isinstance(c, dict)}
-    )
+    """How the wheel of ``analysis`` was read (:class:`rotor.logs.recording.ReadingRecord`), as
+    JSON; None for a speed log."""
+    record = analysis.reading_record
+    return None if record is None else record.to_json_dict()
 
 
 def _check_gain_type(pressure_gain, motored: bool) -> None:

@@ -77,8 +77,8 @@ class Calibration(Result):
     calibration recording (its IMEP over the engine file's) [-]; ``wheel`` (spec);
     ``tooth_errors``: a :class:`rotor.ToothErrors` or None; ``source``: the recording;
     ``fit``: figures of the fit (energy-balance inertia, residuals, IMEP measured).
-    Version 2 adds: ``reading``: how the wheel signal was read (a JSON-safe dict, the
-    recording's :attr:`rotor.LogAnalysis.reading`; None where unknown), which
+    Version 2 adds: ``reading``: how the wheel signal was read (the recording's
+    :attr:`rotor.LogAnalysis.reading_record` as JSON; None where unknown), which
     :func:`rotor.diagnose` reads its logs with; ``tdc_bias``: the speed-based TDC's bias as
     the calibration recordings measured it (:class:`rotor.diagnostics.phase.TdcBias`, or
     None); ``recordings``: one dict per calibration recording (``source``, ``mean_rpm``,

@@ -62,7 +62,7 @@ import numpy as np
 from ..errors import EngineError, LogError
 from ..logs.analysis import LogAnalysis, PhaseSource, analyze_log
 from ..logs.reader import read_log
-from ..logs.recording import PatternReading, read_wheel
+from ..logs.recording import PatternReading, ReadingRecord, read_wheel
 from ..logs.track import WheelReading
 from ..logs.wheel import TooFewOrders, ToothErrors, parse_wheel
 from ..results import Result, json_safe
@@ -96,10 +96,6 @@ PISTON_SPEED_MAX_M_S = 25.0  # mean piston speed beyond racing engines [m/s]
 PATTERN_FACTOR = 3.0  # a lower order this many times the firing order's amplitude: the pattern is not seen
 PATTERN_R2 = 0.9  # … looked for only where the fit explains less than this of the speed fluctuation
 CHANNELS = (PhaseSource.CAM, PhaseSource.PRESSURE)  # a firing revolution from a recorded channel
-READ_AS_CALIBRATED = False
-"""Whether :func:`diagnose` passes a calibration's wheel reading (``Calibration.reading``) to
-:func:`rotor.analyze_log` (``reading=``: the log read as the calibration recording was, or
-a clear error naming the difference). Off until :func:`rotor.analyze_log` takes the argument."""
 RESIDUAL_STRUCTURE_MAX = 2.0
 """A fit's residual whose power per harmonic at the engine's low orders (0.5 … 4) is more than
 this many times that at the higher ones is the model's misfit, not the wheel's noise (whose
@@ -547,7 +543,6 @@ class _Reader:
     wheel: Any
     columns: str | Sequence[str] | None
     edge: str
-    calibrated_reading: dict | None = None
 
     def __call__(self, tdc: float | None, fire: str | int, teeth: Any) -> LogAnalysis:
         engine = self.engine
@@ -575,15 +570,7 @@ class _Reader:
             compression_ratio=None if cr is None else float(cr),
             rod_ratio=None if cr is None else rod_ratio,
             edge=self.edge,
-            **self._as_calibrated(),
         )
-
-    def _as_calibrated(self) -> dict:
-        """``reading=`` for :func:`rotor.analyze_log`: the calibration's wheel reading, where
-        :data:`READ_AS_CALIBRATED` switches it on (see there)."""
-        if READ_AS_CALIBRATED and self.calibrated_reading is not None:
-            return {"reading": self.calibrated_reading}
-        return {}
 
 
 def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan) -> _Phased:
@@ -610,7 +597,7 @@ def _phased_analysis(engine, eng, log, calibration, cal_source, plan: _ReadPlan)
     try:
         read = _open_log(engine, log, w, te, plan, cal_source, None if calibration is None else calibration.reading)
     except LogError as e:
-        if plan.wheel is None and calibration is not None and calibration.wheel:
+        if plan.wheel is None and calibration is not None and calibration.wheel and e.argument != "as_read":
             origin = f"the calibration{f' ({cal_source})' if cal_source else ''}"
             raise LogError(
                 f"{os.path.basename(os.fspath(log))}: {origin} was made on a {calibration.wheel} wheel, which this "
@@ -635,8 +622,12 @@ def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source, calibrated_re
     """The log file read and its wheel signal placed, once; refused where the calibration's
     tooth errors are another wheel's."""
     source_log = read_log(log, plan.columns)
+    # read as the calibration's recording was, unless the wheel or the edge is given
+    as_read = _recorded(calibrated_reading) if plan.wheel is None and plan.edge == "auto" else None
+    if as_read is not None and wheel is not None and as_read.wheel != getattr(wheel, "spec", wheel):
+        as_read = None  # the calibration's wheel is not the one its reading records: the wheel decides
     reading = (
-        read_wheel(source_log, wheel, edge=plan.edge, name=os.path.basename(os.fspath(log)))
+        read_wheel(source_log, wheel, edge=plan.edge, name=os.path.basename(os.fspath(log)), as_read=as_read)
         if source_log.kind != "speed"
         else None
     )
@@ -656,7 +647,15 @@ def _open_log(engine, log, wheel, te, plan: _ReadPlan, cal_source, calibrated_re
             f"{reading.wheel.spec}: give a calibration made on this wheel (calibration=FILE) or "
             f"none (calibration=None)"
         )
-    return _Reader(engine, source_log, reading, wheel, plan.columns, plan.edge, calibrated_reading)
+    return _Reader(engine, source_log, reading, wheel, plan.columns, plan.edge)
+
+
+def _recorded(reading: dict | None) -> ReadingRecord | None:
+    """A calibration's reading as a :class:`rotor.logs.recording.ReadingRecord`; None where it
+    holds none (a calibration written before readings were recorded states its choices only)."""
+    if not isinstance(reading, dict) or "channel" not in reading:
+        return None
+    return ReadingRecord.from_json_dict(reading)
 
 
 def _checked_phase(eng, analysis, read, given_deg, firing, te, phase_note, bias=None) -> _Phased:
