@@ -448,15 +448,7 @@ def analyze_log(
     if as_read is not None and not isinstance(as_read, ReadingRecord):
         raise TypeError(f"as_read: a ReadingRecord (a LogAnalysis's reading_record), not {type(as_read).__name__}")
     _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle)
-    reading: WheelReading | None = source if isinstance(source, WheelReading) else None
-    pattern_reading: PatternReading | None = source if isinstance(source, PatternReading) else None
-    if reading is not None:
-        log, name = reading.log, reading.source
-    elif pattern_reading is not None:
-        log, name = pattern_reading.log, pattern_reading.source
-    else:
-        log = source if isinstance(source, Log) else read_log(source, columns)
-        name = log.source if isinstance(source, Log) else os.path.basename(os.fspath(source))
+    reading, pattern_reading, log, name = _source(source, columns)
     revs = strokes // 2
     if log.kind == "speed":
         angle = speed_angle(log, name, revs)
@@ -513,6 +505,18 @@ def analyze_log(
         reading=angle.reading,
         pattern=pattern_reading,
     )
+
+
+def _source(source, columns) -> tuple[WheelReading | None, PatternReading | None, Log, str]:
+    """(the wheel reading given, the pattern reading given, the log, its name) of
+    :func:`analyze_log`'s ``source``: a reading, a :class:`Log` or a file read here."""
+    if isinstance(source, WheelReading):
+        return source, None, source.log, source.source
+    if isinstance(source, PatternReading):
+        return None, source, source.log, source.source
+    if isinstance(source, Log):
+        return None, None, source, source.source
+    return None, None, read_log(source, columns), os.path.basename(os.fspath(source))
 
 
 def _check_values(strokes, cylinders, tdc_deg, max_order, points_per_cycle) -> None:
