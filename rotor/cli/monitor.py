@@ -463,6 +463,7 @@ def _monitor(args: argparse.Namespace) -> None:
             emit(monitor.feed(times))
 
     if args.log != "-" and not args.follow and os.path.isfile(args.log) and _a_recording(args.log):
+        # (also a measurement file: MDF, TDMS, MATLAB, Parquet, Arrow)
         # a capture or bench file (several columns): read through the stages `rotor analyze` uses,
         # and its wheel's edges, as placed, followed as tooth times
         from ..logs.reader import read_log
@@ -470,19 +471,26 @@ def _monitor(args: argparse.Namespace) -> None:
 
         recording = read_log(args.log)
         reading = read_wheel(recording, args.wheel, name=os.path.basename(args.log))
-        if isinstance(reading, PatternReading):
-            raise LogError(
-                f"{name}: the recording's wheel is the {reading.pattern.name} pattern; the monitor follows "
-                f"missing-tooth wheels (--wheel N-M, e.g. 60-2)"
-            )
         for note in recording.notes:
             show("reading", note, "note")
-        spec = reading.wheel.spec
+        if isinstance(reading, PatternReading):
+            # a catalogue pattern: its edges as the tooth times of a 60-2 wheel whose first tooth is
+            # at the pattern's angle 0, the angle between its edges linear in time
+            spec, teeth = "60-2", reading.fit.tooth_times(60, 2)
+            show(
+                "wheel",
+                f"wheel {reading.pattern.name} ({reading.fit.pattern.edges_per_turn} edges a turn), as `rotor analyze` "
+                f"reads the file, followed as a 60-2 wheel at its angle 0 (--tdc-deg from the pattern's angle 0; the "
+                "speed between its edges taken as steady)",
+                "note",
+            )
+        else:
+            spec, teeth = reading.wheel.spec, np.asarray(reading.track.t, dtype=np.float64)
+            show("wheel", f"wheel {spec}, {reading.edge or 'tooth'} edges, as `rotor analyze` reads the file", "note")
         check_wheel(spec, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes)
-        show("wheel", f"wheel {spec}, {reading.edge or 'tooth'} edges, as `rotor analyze` reads the file", "note")
         monitor = start(spec)
         source.close()
-        emit(monitor.feed(np.asarray(reading.track.t, dtype=np.float64)))
+        emit(monitor.feed(teeth))
         _close(monitor, args, lines, name, emit)
         return
     try:
@@ -506,9 +514,15 @@ def _monitor(args: argparse.Namespace) -> None:
 
 
 def _a_recording(path: str) -> bool:
-    """Whether the file's first row of numbers holds several columns (a capture or a bench
-    recording), not tooth times one per line."""
+    """Whether the file is a measurement file (:func:`rotor.logs.formats.detect_format`) or its
+    first row of numbers holds several columns (a capture or a bench recording), not tooth times
+    one per line."""
     import re
+
+    from ..logs.formats import detect_format
+
+    if detect_format(path) is not None:
+        return True
 
     with open(path, "rb") as f:
         head = f.read(65536).decode("utf-8", "replace")

@@ -1676,6 +1676,12 @@ class _ModelIndex:
             J = np.interp(u, nodes, root_i).mean(axis=1) ** 2
             centre = 0.5 * (edges[1:] + edges[:-1]) - th0
             A = np.stack([np.ones(K), mean_cols[:, 1 + c0], -centre], axis=1)
+            if not np.ptp(mean_cols[:, 1 + c0]) > 1e-12 * max(float(np.max(np.abs(mean_cols))), 1e-300):
+                raise EngineError(
+                    f"engine {engine.name!r}: its cylinder {c0 + 1} does no combustion work in the model (no [pressure] "
+                    "section, or a motored one): the monitor's model weighs each firing by its combustion torque; "
+                    "give an engine file with the engine's cycle, or none"
+                )
             AtA_inv = np.linalg.inv(A.T @ A)
             self.span.append(edges - th0)
             self.pinv.append(AtA_inv @ A.T)

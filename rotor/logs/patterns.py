@@ -282,6 +282,18 @@ class PatternFit:
         dt = self.t[end] - self.t[j[ok]]
         return self.t[end], 60.0 * (period / (2 * math.pi)) / dt
 
+    def tooth_times(self, teeth: int = 60, missing: int = 2) -> np.ndarray:
+        """The times [s] the teeth of an ``teeth``-``missing`` wheel would pass, its first tooth
+        after the gap at the pattern's angle 0 (a cam pattern's: of the turn of two
+        revolutions), the angle between two kept edges taken as linear in time: the pattern as
+        a missing-tooth wheel's tooth times, within the kept edges (for a reader that follows
+        such wheels, e.g. the streaming monitor)."""
+        pitch = 2 * math.pi / teeth
+        a = self.angle_rad
+        k = np.arange(math.ceil(a[0] / pitch - 1e-9), math.floor(a[-1] / pitch + 1e-9) + 1)
+        k = k[np.mod(k, teeth) < teeth - missing]
+        return np.interp(k * pitch, a, self.t)
+
 
 def channel_edges(
     t: ArrayLike, v: ArrayLike, polarity: str, *, name: str = "encoder_d"
