@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import errno
 import json
-import math
 import os
 import sys
 from collections.abc import Iterable, Sequence
@@ -31,28 +30,10 @@ __all__ = [
 ]
 
 
-ROUND_OFF = 1e-12
-"""A number within this share of the largest magnitude of its column is the round-off of a
-zero (float64 carries about 16 digits; the kinematics of a throw at TDC give 5.7e-18 m
-for a stroke of 0.2 m) and is written as 0."""
-
-
-def zeros_as_zero(rows: Iterable[Sequence[float]]) -> list[list[float]]:
-    """The rows of a table with every value within :data:`ROUND_OFF` of its column's largest
-    magnitude set to 0 (a column of zeros and round-off reads as zeros; NaN and infinities
-    are kept, for the writer to refuse by name)."""
-    table = [[float(v) for v in row] for row in rows]
-    if not table:
-        return table
-    scale = [max((abs(v) for v in column if math.isfinite(v)), default=0.0) for column in zip(*table)]
-    return [[0.0 if abs(v) <= ROUND_OFF * s else v for v, s in zip(row, scale)] for row in table]
-
-
 def csv_text(header: Sequence[str], rows: Iterable[Sequence[float]], what: str = "the table") -> str:
-    """A table as CSV text (:func:`rotor.fileio.csv_text`: 10 significant digits, NaN and
-    infinities refused by name), its zeros written as 0 where the computation left
-    round-off (:func:`zeros_as_zero`)."""
-    return exact_csv_text(header, zeros_as_zero(rows), what=what)
+    """A table as CSV text (:func:`rotor.fileio.csv_text`: 10 significant digits, zeros
+    written as 0 where the computation left round-off, NaN and infinities refused by name)."""
+    return exact_csv_text(header, rows, what=what)
 
 
 def print_text(text: str) -> None:

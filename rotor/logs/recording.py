@@ -142,19 +142,19 @@ class ReadingRecord:
         """The record from its JSON (:meth:`to_json_dict`); LogError naming what is missing."""
         if not isinstance(d, dict) or not isinstance(d.get("wheel"), str) or not isinstance(d.get("channel"), str):
             raise LogError(
-                f"a reading record needs the wheel and the channel read (strings); got {d!r:.120}", argument="reading"
+                f"a reading record needs the wheel and the channel read (strings); got {d!r:.120}", argument="as_read"
             )
         edge, levels, level = d.get("edge"), d.get("levels"), d.get("level")
         if not (edge is None or isinstance(edge, str)) or not (levels is None or isinstance(levels, str)):
             raise LogError(
-                f"a reading record's edge and levels are strings or null; got {d!r:.120}", argument="reading"
+                f"a reading record's edge and levels are strings or null; got {d!r:.120}", argument="as_read"
             )
         if level is not None and not (
             isinstance(level, (int, float)) and not isinstance(level, bool) and 0.0 < level < 1.0
         ):
             raise LogError(
                 f"a reading record's level is a fraction of the swing, 0 … 1, or null; got {level!r}",
-                argument="reading",
+                argument="as_read",
             )
         return cls(d["wheel"], edge, d["channel"], levels, None if level is None else float(level))
 
@@ -367,14 +367,14 @@ def _read_as_recorded(log: Log, record: ReadingRecord, name: str) -> WheelReadin
         raise LogError(
             f"{name}: not read as the calibration's recording was ({record.wheel}, {record.edge} edges of "
             f"{record.channel}): {e}",
-            argument="reading",
+            argument="as_read",
         ) from None
     diff = record.differences(reading_record(reading))
     if diff:
         raise LogError(
             f"{name}: read otherwise than the calibration's recording ({'; '.join(diff)}): another installation, "
             "or another sensor; calibrate on a recording of this one",
-            argument="reading",
+            argument="as_read",
         )
     return reading
 

@@ -10,7 +10,8 @@ import pytest
 from conftest import run_cli
 
 from rotor.cli.demo import DEMO_CYCLES, STEP_CYCLE, load_step_line, load_step_time_s
-from rotor.cli.output import csv_text, zeros_as_zero
+from rotor.cli.output import csv_text
+from rotor.fileio import zeros_as_zero
 
 
 def test_round_off_of_a_zero_is_written_as_zero():
