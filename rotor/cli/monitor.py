@@ -466,27 +466,7 @@ def _monitor(args: argparse.Namespace) -> None:
         # (also a measurement file: MDF, TDMS, MATLAB, Parquet, Arrow)
         # a capture or bench file (several columns): read through the stages `rotor analyze` uses,
         # and its wheel's edges, as placed, followed as tooth times
-        from ..logs.reader import read_log
-        from ..logs.recording import PatternReading, read_wheel
-
-        recording = read_log(args.log)
-        reading = read_wheel(recording, args.wheel, name=os.path.basename(args.log))
-        for note in recording.notes:
-            show("reading", note, "note")
-        if isinstance(reading, PatternReading):
-            # a catalogue pattern: its edges as the tooth times of a 60-2 wheel whose first tooth is
-            # at the pattern's angle 0, the angle between its edges linear in time
-            spec, teeth = "60-2", reading.fit.tooth_times(60, 2)
-            show(
-                "wheel",
-                f"wheel {reading.pattern.name} ({reading.fit.pattern.edges_per_turn} edges a turn), as `rotor analyze` "
-                f"reads the file, followed as a 60-2 wheel at its angle 0 (--tdc-deg from the pattern's angle 0; the "
-                "speed between its edges taken as steady)",
-                "note",
-            )
-        else:
-            spec, teeth = reading.wheel.spec, np.asarray(reading.track.t, dtype=np.float64)
-            show("wheel", f"wheel {spec}, {reading.edge or 'tooth'} edges, as `rotor analyze` reads the file", "note")
+        spec, teeth = _recording_teeth(args, show)
         check_wheel(spec, engine=engine, cylinders=args.cylinders, firing_order=args.firing_order, strokes=args.strokes)
         monitor = start(spec)
         source.close()
@@ -511,6 +491,34 @@ def _monitor(args: argparse.Namespace) -> None:
     if monitor is None:
         raise LogError(f"{name}: no tooth time in the input")
     _close(monitor, args, lines, name, emit)
+
+
+def _recording_teeth(args, show) -> tuple[str, Any]:
+    """A capture or bench file's wheel read as `rotor analyze` reads it: (the wheel the monitor
+    follows, its tooth times [s]). A catalogue pattern's edges are followed as the tooth times
+    of a 60-2 wheel whose first tooth is at the pattern's angle 0, the angle between its edges
+    linear in time."""
+    import numpy as np
+
+    from ..logs.reader import read_log
+    from ..logs.recording import PatternReading, read_wheel
+
+    recording = read_log(args.log)
+    reading = read_wheel(recording, args.wheel, name=os.path.basename(args.log))
+    for note in recording.notes:
+        show("reading", note, "note")
+    if isinstance(reading, PatternReading):
+        show(
+            "wheel",
+            f"wheel {reading.pattern.name} ({reading.fit.pattern.edges_per_turn} edges a turn), as `rotor analyze` "
+            f"reads the file, followed as a 60-2 wheel at its angle 0 (--tdc-deg from the pattern's angle 0; the "
+            "speed between its edges taken as steady)",
+            "note",
+        )
+        return "60-2", reading.fit.tooth_times(60, 2)
+    spec = reading.wheel.spec
+    show("wheel", f"wheel {spec}, {reading.edge or 'tooth'} edges, as `rotor analyze` reads the file", "note")
+    return spec, np.asarray(reading.track.t, dtype=np.float64)
 
 
 def _a_recording(path: str) -> bool:
