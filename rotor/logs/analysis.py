@@ -558,9 +558,15 @@ def _max_order(angle: CrankAngle, max_order: float | None) -> float:
     return max_order
 
 
+MIN_POINTS_PER_CYCLE = 16
+"""The fewest points of a cycle's uniform angle grid by default [-] (a cam pattern of four
+edges gives eight a cycle at two a pitch; the identification of a diagnosis needs 16)."""
+
+
 def _points_per_cycle(name, angle: CrankAngle, strokes, max_order, points_per_cycle) -> int:
     """The grid's points per cycle: given (enough for ``max_order``), or two per tooth pitch
-    and 8 per period of ``max_order``; checked against the memory budget."""
+    and 8 per period of ``max_order``, at least :data:`MIN_POINTS_PER_CYCLE`; checked against
+    the memory budget."""
     revs = strokes // 2
     need = int(np.ceil(8 * max_order * revs))
     if points_per_cycle:
@@ -571,7 +577,7 @@ def _points_per_cycle(name, angle: CrankAngle, strokes, max_order, points_per_cy
                 argument="points_per_cycle",
             )
     else:
-        P = max(angle.pitch_points * revs, need + need % 2)
+        P = max(angle.pitch_points * revs, need + need % 2, MIN_POINTS_PER_CYCLE)
     fine_est = max(16 * int(np.floor(max_order * revs + 1e-9)), P)
     cycles_est = int(np.ceil((angle.phi_hi - angle.phi_lo) / (TWO_PI * revs))) + 1
     check_size(
