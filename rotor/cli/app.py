@@ -135,7 +135,7 @@ def _join_columns(argv: list[str]) -> list[str]:
     i = 0
     while i < len(argv):
         if (
-            argv[i] == "--columns"
+            argv[i] in ("--columns", "--channel")
             and i + 1 < len(argv)
             and argv[i + 1].startswith("-")
             and argv[i + 1]
@@ -144,7 +144,7 @@ def _join_columns(argv: list[str]) -> list[str]:
                 "--help",
             )
         ):
-            out.append(f"--columns={argv[i + 1]}")
+            out.append(f"{argv[i]}={argv[i + 1]}")
             i += 2
         else:
             out.append(argv[i])

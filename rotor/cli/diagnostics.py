@@ -27,8 +27,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--wheel", metavar="N-M", help="trigger wheel, e.g. 60-2 (default: the calibration's)")
     p.add_argument(
         "--columns",
+        "--channel",
         metavar="NAMES",
-        help="column names in file order, as for analyze; - skips a column (time,-,encoder_v: speed only)",
+        help="column names in file order, or the file's channels by role (time=t,crank=CRANK), as for analyze; "
+        "- skips a column (time,-,encoder_v: speed only)",
     )
     p.add_argument(
         "--calibration",
@@ -211,7 +213,7 @@ def _add_calibrate(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--engine", required=True, metavar="ENGINE", help="engine file (.toml) or preset name")
     p.add_argument("--wheel", metavar="SPEC", help="trigger wheel, e.g. 60-2")
-    p.add_argument("--columns", metavar="NAMES", help="column names in file order, as for analyze")
+    p.add_argument("--columns", "--channel", metavar="NAMES", help="column names in file order, as for analyze")
     _add_pressure_scale(p)
     p.add_argument(
         "--scaling",

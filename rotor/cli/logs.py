@@ -81,12 +81,14 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--columns",
+        "--channel",
         metavar="NAMES",
         help="column names in file order: time, encoder_v, pressure_v, cam_v, index_v, encoder_d, cam_d "
         "(digital 0/1 channels, one row per transition), tooth_time_s, rpm, - (skip), e.g. "
         "time,pressure_v,encoder_v or time,encoder_d,-; a time in ms or µs: time_ms, time_us, tooth_time_ms, "
         "tooth_time_us; or the file's channels by role, time=t,crank=CRANK (any format; roles crank, cam, "
-        "pressure, speed besides the names above); default: recognised by their content",
+        "pressure, speed besides the names above); --channel is the same option; default: recognised by "
+        "their content",
     )
     p.add_argument(
         "--strokes", type=int, choices=(2, 4), default=4, help="strokes per cycle of the engine logged (default 4)"
