@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import equinox as eqx
 import numpy as np
 
+from ..engine.plausible import check_edge, check_inertia_kgm2
 from ..errors import EngineError
 from ..fileio import load_json, save_json
 from ..logs.analysis import LogAnalysis
@@ -285,6 +286,14 @@ class Calibration(Result):
             for k, v in geo.items()
         ):
             raise EngineError(f"{where}: key 'geometry' must be an object of numbers ({', '.join(GEOMETRY_KEYS)})")
+        # a value that fits another unit better (a gain in bar a unit, an inertia in kg·cm²) refused naming it
+        check_edge(f"{where}: key 'pressure_gain_pa'", num("pressure_gain_pa", True), "pressure_gain_pa")
+        check_inertia_kgm2(
+            f"{where}: key 'inertia_kgm2'",
+            num("inertia_kgm2", True),
+            bore_m=geo.get("bore_m"),
+            cylinders=max(whole("cylinders"), 1),
+        )
         return cls(
             engine=text("engine"),
             inertia_kgm2=num("inertia_kgm2", True),
