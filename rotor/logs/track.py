@@ -322,13 +322,14 @@ def read_track(
                 f"edge={other!r}, or leave the edge out (edge='auto')"
             )
     usual = _tooth_edge(log, ok[0][0].track, ok[0][3]) if len(ok) > 1 else None
-    # found from the signal, the polarity whose wheel has more teeth has seen a tooth the other missed
-    ok.sort(key=lambda p: (p[0].interior, (not p[0].standard) if auto else False, -_present(p[0]), p[0].edge != usual))
+    # found from a two-level signal, the polarity whose wheel has more teeth has seen a tooth the other
+    # missed (a VR signal's other crossings are no teeth of their own)
+    ok.sort(key=lambda p: (p[0].interior, (not p[0].standard) if auto else False, -_seen(p), p[0].edge != usual))
     if (
         len(ok) > 1
         and ok[1][0].interior == ok[0][0].interior
         and ok[1][0].standard == ok[0][0].standard
-        and _present(ok[1][0]) == _present(ok[0][0])
+        and _seen(ok[1]) == _seen(ok[0])
     ):
         # alike but for the jitter: the other edge only where it is clearly steadier
         if ok[1][0].jitter < JITTER_MARGIN * ok[0][0].jitter:
@@ -438,8 +439,13 @@ after the gap of some sensors) crosses a low level only; a tooth that merges wit
 at the bottom (a wide one before the gap) is told apart at a high one."""
 
 
-def _present(fit) -> int:
-    """The teeth a revolution of a fit's wheel (its positions less its missing ones)."""
+def _seen(read) -> int:
+    """The teeth a revolution of a polarity's wheel (its positions less its missing ones), where
+    its edges are a two-level signal's (0 for a variable-reluctance signal's crossings and tooth
+    times: no reading's count tells there)."""
+    fit, edges = read[0], read[3]
+    if edges is None or edges.method == VR_CROSSINGS:
+        return 0
     w = fit.track.wheel
     return int(w.teeth - w.missing)
 
