@@ -287,13 +287,13 @@ class Calibration(Result):
         ):
             raise EngineError(f"{where}: key 'geometry' must be an object of numbers ({', '.join(GEOMETRY_KEYS)})")
         # a value that fits another unit better (a gain in bar a unit, an inertia in kg·cm²) refused naming it
-        check_edge(f"{where}: key 'pressure_gain_pa'", num("pressure_gain_pa", True), "pressure_gain_pa")
         check_inertia_kgm2(
             f"{where}: key 'inertia_kgm2'",
             num("inertia_kgm2", True),
             bore_m=geo.get("bore_m"),
             cylinders=max(whole("cylinders"), 1),
         )
+        check_edge(f"{where}: key 'pressure_gain_pa'", num("pressure_gain_pa", True), "pressure_gain_pa")
         return cls(
             engine=text("engine"),
             inertia_kgm2=num("inertia_kgm2", True),
