@@ -94,7 +94,8 @@ exactly the threshold rate is flagged only where every misfire in it is counted 
 calls make up the missing ones): the rate at which 95 % of windows are flagged tells more.
 
 Writes ``benchmarks/published/misfire_detection_quick.json`` and ``.png`` (``--quick``,
-marked as quick) or ``benchmarks/published/misfire_detection.json`` and ``.png``: one row
+marked as quick) or ``benchmarks/published/misfire_detection.json`` and ``.png`` (their rows,
+several MB, in ``benchmarks/results/…_rows.json``, which ``--replot`` draws from): one row
 per detector and condition (threshold, false alarms per run, per pattern the detection rate
 and its interval and the windows), the methods, a summary per condition and pattern, the
 conditions where rotor's 1000-revolution windows at 1 % are flagged in 95 % of cases and
@@ -111,6 +112,7 @@ import hashlib
 import json
 import math
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -924,8 +926,13 @@ def main():
     if args.replot:
         path = PUBLISHED / ("misfire_detection_quick.json" if args.quick else "misfire_detection.json")
         d = json.loads(path.read_text())
+        rows_path = _rows_path(path)
+        if not rows_path.is_file():
+            sys.exit(f"{rows_path.relative_to(ROOT)} is not here: the figure is drawn from a run's rows (run the grid)")
         methods = {name: m for m in d["methods"] for name in m.split(" = ")}
-        figure(d["rows"], methods, path.with_suffix(".png"), FIGURE_TITLE.format(grid=d["grid"]))
+        figure(
+            json.loads(rows_path.read_text()), methods, path.with_suffix(".png"), FIGURE_TITLE.format(grid=d["grid"])
+        )
         print(f"drew {path.with_suffix('.png').relative_to(ROOT)}")
         return
     global WORK_SHAPE
@@ -940,7 +947,7 @@ def main():
         out = json.loads(path.read_text()) if path.is_file() else {}
         out["throughput"] = tp
         PUBLISHED.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(out, indent=1, allow_nan=False) + "\n")
+        write_published(path, out)
         print(f"wrote the throughput into {path.relative_to(ROOT)}")
         return
     print(f"cycle-to-cycle variation: CoV {100 * variation['cov']:.2f} % of IMEP ({variation['source']})", flush=True)
@@ -1050,8 +1057,27 @@ def main():
             path.with_suffix(".png"),
             FIGURE_TITLE.format(grid=out["grid"]),
         )
-    path.write_text(json.dumps(out, indent=1, allow_nan=False) + "\n")
-    print(f"wrote {path.relative_to(ROOT)}")
+    write_published(path, out)
+
+
+def _rows_path(path: Path) -> Path:
+    """Where a run's rows (every detector × condition, several MB) go: the results folder, which
+    the repository does not keep; the published JSON keeps the summaries."""
+    return RESULTS / f"{path.stem}_rows.json"
+
+
+def write_published(path: Path, out: dict) -> None:
+    """``out`` at ``path`` without its rows, and the rows beside the other results."""
+    rows = out.get("rows")
+    kept = {k: v for k, v in out.items() if k != "rows"}
+    if rows is not None:
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        _rows_path(path).write_text(json.dumps(rows, separators=(",", ":"), allow_nan=False) + "\n")
+        kept["rows_written_to"] = str(_rows_path(path).relative_to(ROOT))
+    path.write_text(json.dumps(kept, indent=1, allow_nan=False) + "\n")
+    print(
+        f"wrote {path.relative_to(ROOT)}" + (f" and {_rows_path(path).relative_to(ROOT)}" if rows is not None else "")
+    )
 
 
 if __name__ == "__main__":
