@@ -7,60 +7,17 @@ from __future__ import annotations
 import json
 
 import pytest
+from capture_engines import SIX, engine_toml
 from conftest import SHARED_DATA, run_cli
 
 TRIGGERS = SHARED_DATA / "ecu-triggers"
 
-# the 3000GT's 6G72: a 3.0 l V6, four-stroke (the capture's README); 91.1 x 76 mm, the rod, the
-# masses and the inertia estimates of an engine of that size
-ENGINE = """
-name = "6G72"
-strokes = 4
-cylinders = 6
-
-[geometry]
-bore_m = 0.0911
-stroke_m = 0.076
-rod_length_m = 0.137
-
-[masses]
-reciprocating_kg = 0.6
-rotating_kg = 0.4
-
-[crankshaft]
-inertia_kgm2 = 0.2
-
-[layout]
-throw_angles_deg = [0, 0, 120, 120, 240, 240]
-bank_angles_deg = [0, 60, 0, 60, 0, 60]
-firing_order = [1, 2, 3, 4, 5, 6]
-
-[operating]
-rpm = 200
-"""
-
-CYCLE = """
-[pressure]
-kind = "wiebe"
-compression_ratio = 10.0
-intake_pa = 90000
-exhaust_pa = 105000
-imep_pa = 3.0e5
-start_deg = 350.0
-duration_deg = 60.0
-form_factor = 2.0
-compression_exponent = 1.33
-expansion_exponent = 1.28
-exhaust_open_deg = 500.0
-blowdown_deg = 60.0
-overlap_deg = 30.0
-crankcase_pa = 101325
-"""
+ENGINE = engine_toml("6G72 3.0 l V6", 0.0911, 0.076, SIX)  # the 3000GT's (its README)
 
 
 @pytest.mark.skipif(not TRIGGERS.is_dir(), reason=f"shared data not found at {TRIGGERS}")
 def test_a_cam_pattern_capture_is_monitored(tmp_path, capsys):
-    (tmp_path / "6g72.toml").write_text(ENGINE + CYCLE)
+    (tmp_path / "6g72.toml").write_text(ENGINE)
     rc, out, err = run_cli(
         capsys,
         "monitor",
@@ -97,7 +54,8 @@ def test_a_patterns_edges_as_tooth_times_keep_its_speed():
 
 @pytest.mark.skipif(not TRIGGERS.is_dir(), reason=f"shared data not found at {TRIGGERS}")
 def test_an_engine_without_combustion_is_refused_by_the_monitor_in_one_line(tmp_path, capsys):
-    (tmp_path / "6g72.toml").write_text(ENGINE)  # no [pressure]: the model has no firing torque
+    # no [pressure]: the model has no firing torque
+    (tmp_path / "6g72.toml").write_text(engine_toml("6G72 3.0 l V6", 0.0911, 0.076, SIX, cycle=False))
     rc, _, err = run_cli(
         capsys, "monitor", str(TRIGGERS / "3000gt.csv"), "--engine", str(tmp_path / "6g72.toml"), "--tdc-deg", "0"
     )
