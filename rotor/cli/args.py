@@ -21,6 +21,7 @@ from collections.abc import Callable
 from typing import Any, NoReturn
 
 __all__ = [
+    "percent_of_firings",
     "EXIT_INTERNAL",
     "EXIT_INTERRUPTED",
     "EXIT_SOLVER",
@@ -190,6 +191,17 @@ def _number(text: str) -> float:
         return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def percent_of_firings(text: str) -> float:
+    """An option's value as a percentage of the firings, above 0 and up to 100."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (0 < v <= 100):
+        raise argparse.ArgumentTypeError(f"{text!r}: a percentage of the firings, above 0 and up to 100")
+    return v
 
 
 def positive_float(text: str) -> float:

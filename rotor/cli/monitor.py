@@ -8,7 +8,7 @@ import sys
 import time
 from typing import Any
 
-from .args import add_json, angle_deg, positive_float, whole
+from .args import add_json, angle_deg, percent_of_firings, positive_float, whole
 
 __all__ = ["add_parsers", "cmd_monitor", "CHUNK_BYTES", "FOLLOW_POLL_S"]
 
@@ -75,7 +75,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--emission-rate",
-        type=_percent,
+        type=percent_of_firings,
         metavar="PCT",
         help="the emission threshold: misfires in %% of the firings over an emission window (default 1)",
     )
@@ -117,16 +117,6 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     add_json(p)
     p.set_defaults(func=cmd_monitor)
-
-
-def _percent(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (0 < v <= 100):
-        raise argparse.ArgumentTypeError(f"{text!r}: a percentage of the firings, above 0 and up to 100")
-    return v
 
 
 def _thresholds(args: argparse.Namespace) -> Any:

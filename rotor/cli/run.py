@@ -6,7 +6,7 @@ import argparse
 import warnings
 from typing import Any
 
-from .args import Parser, add_dynamics_options, add_engine, add_quiet, positive_float, speed, whole
+from .args import Parser, add_dynamics_options, add_engine, add_quiet, percent_of_firings, positive_float, speed, whole
 from .output import plot_folder, print_json, print_text, print_written, save_plot
 
 __all__ = [
@@ -105,7 +105,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--misfire-rate",
-        type=_percent,
+        type=percent_of_firings,
         metavar="PCT",
         help="random misfires on PCT %% of all the firings of cycles 1 … --cycles (the rate an OBD monitor counts): "
         "on --misfire-cylinder alone, else on any cylinder; with --misfire's firings",
@@ -242,16 +242,6 @@ def cmd_steady(args: argparse.Namespace) -> None:
     scale = 1.0 if args.fuel_scale is None else args.fuel_scale
     res = steady_state(engine, rpm=args.rpm, load=load, fidelity=args.fidelity, method=args.method, imep_scale=scale)
     _report(res, args, "steady")
-
-
-def _percent(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (0 < v <= 100):
-        raise argparse.ArgumentTypeError(f"{text!r}: a percentage of the firings, above 0 and up to 100")
-    return v
 
 
 def random_misfires(
