@@ -287,14 +287,19 @@ at the same place in most revolutions, it is no repair of random faults."""
 SIGNATURE_REVOLUTIONS = 3
 
 
-def _at_teeth(track: ToothTrack, teeth: tuple[int, ...]) -> int:
-    """The edges inferred at ``teeth``."""
-    if not teeth:
-        return 0
+def _inferred_teeth(track: ToothTrack) -> np.ndarray:
+    """The teeth (0 = the first after gap 1) whose edges ``track`` inferred from the pattern."""
     inferred = [r.time_s for r in track.repairs if r.kind == "missed edge inferred"]
+    if not inferred:
+        return np.zeros(0, np.int64)
     at = np.clip(np.searchsorted(track.t, inferred), 0, track.t.size - 1)
     exact = np.isclose(track.t[at], inferred, rtol=0.0, atol=1e-12)
-    return int(np.isin(track.tooth[at[exact]], teeth).sum())
+    return np.asarray(track.tooth[at[exact]], dtype=np.int64)
+
+
+def _at_teeth(track: ToothTrack, teeth: tuple[int, ...]) -> int:
+    """The edges inferred at ``teeth``."""
+    return int(np.isin(_inferred_teeth(track), teeth).sum()) if teeth else 0
 
 
 def _signature(track: ToothTrack) -> tuple[int, ...]:
@@ -302,12 +307,10 @@ def _signature(track: ToothTrack) -> tuple[int, ...]:
     (:data:`SIGNATURE_SHARE`), where each lies next to a gap: the signal lacks them in most
     revolutions, so their edges, placed from the pattern, are no repairs of random faults. A
     tooth lacking away from the gaps is a gap of another wheel, not a signature."""
-    inferred = [r.time_s for r in track.repairs if r.kind == "missed edge inferred"]
-    if len(inferred) < SIGNATURE_REVOLUTIONS:
+    inferred = _inferred_teeth(track)
+    if inferred.size < SIGNATURE_REVOLUTIONS:
         return ()
-    at = np.clip(np.searchsorted(track.t, inferred), 0, track.t.size - 1)
-    exact = np.isclose(track.t[at], inferred, rtol=0.0, atol=1e-12)
-    teeth = Counter(int(k) for k in track.tooth[at[exact]])
+    teeth = Counter(int(k) for k in inferred)
     need = max(SIGNATURE_REVOLUTIONS, SIGNATURE_SHARE * max(track.revolutions, 1))
     lacking = sorted(k for k, c in teeth.items() if c >= need)
     w = track.wheel
